@@ -1,0 +1,46 @@
+// shadowlab: builds the CLI from the registered subcommands, parses, dispatches.
+#include <algorithm>
+#include <cstdio>
+#include <exception>
+#include <map>
+
+#include "command.h"
+#include "shadowlab/scenes/error.h"
+
+namespace shadowlab::app {
+std::vector<CommandEntry>& commandRegistry() {
+  static std::vector<CommandEntry> registry;
+  return registry;
+}
+}  // namespace shadowlab::app
+
+int main(int argc, char** argv) {
+  using namespace shadowlab;
+  CLI::App cli{"shadowlab: how wrong are your shadow maps, and why"};
+  cli.require_subcommand(1);
+  auto& registry = app::commandRegistry();
+  // Registration order follows static initialisation order: sort for stable help text.
+  std::sort(registry.begin(), registry.end(),
+            [](const app::CommandEntry& a, const app::CommandEntry& b) { return a.name < b.name; });
+  std::map<std::string, std::function<int()>> runners;
+  for (auto& entry : registry) runners[entry.name] = entry.setup(cli);
+  try {
+    cli.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    int code = cli.exit(e);
+    return code == 0 ? 0 : 2;
+  }
+  try {
+    for (auto* sub : cli.get_subcommands()) return runners.at(sub->get_name())();
+    return 2;
+  } catch (const InputError& e) {
+    std::fprintf(stderr, "%s\n", e.what());
+    return 2;
+  } catch (const DriverError& e) {
+    std::fprintf(stderr, "shadowlab: internal error: %s\n", e.what());
+    return 3;
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "shadowlab: internal error: %s\n", e.what());
+    return 3;
+  }
+}

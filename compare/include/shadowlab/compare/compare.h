@@ -1,0 +1,65 @@
+#pragma once
+// Per-pixel classification of shadow errors and the metrics built on it. Documented in
+// compare/METRICS.md (numerator, denominator, exclusions, sources). compare reads only Frames.
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "shadowlab/scenes/frame.h"
+
+namespace shadowlab {
+
+// Per-pixel class codes (stable: they are written to files).
+enum class PixelClass : uint8_t {
+  NotCompared = 0,       // background in either frame
+  GeometryMismatch = 1,  // the two renderers see different objects
+  Correct = 2,
+  Acne = 3,
+  Leak = 4,
+  Aliasing = 5,
+  Coverage = 6,
+  Other = 7,
+};
+const char* toString(PixelClass c);
+
+struct CompareOptions {
+  std::string light;            // empty: the light the raster frame rendered (meta "light")
+  float boundaryTexels = 2.0f;  // aliasing: within this many map texels of a reference boundary
+};
+
+struct Metrics {
+  uint64_t pixelsCompared = 0;
+  uint64_t geometryMismatch = 0;
+  uint64_t errors = 0, acne = 0, leak = 0, aliasing = 0, coverage = 0, other = 0;  // counts
+  double errorRate = 0, acneRate = 0, leakRate = 0, aliasingRate = 0, coverageRate = 0, otherRate = 0;
+  double shadowIou = 1;
+  double mae = 0, rmse = 0;
+  double mMedian = 0, mP95 = 0, mMax = 0;
+  // projectors (first projector, when the scene has one; otherwise 0 / absent in JSON)
+  bool hasProjector = false;
+  double projectorCoverageIou = 1;
+  uint64_t reverseProjectionPixels = 0;
+  double projectorColorMae = 0;
+
+  nlohmann::json toJson() const;  // stable keys: pixels_compared, geometry_mismatch, error_rate, ...
+};
+
+struct Classification {
+  int width = 0, height = 0;
+  std::vector<PixelClass> classes;  // width*height
+};
+
+// Throws InputError on mismatched sizes, scene hashes or missing channels.
+Metrics compareFrames(const Frame& reference, const Frame& raster, const CompareOptions& options = {},
+                      Classification* classification = nullptr);
+
+// Pictures (8-bit RGB, width*height*3): each class in its own color with a legend drawn in;
+// the triptych is reference | raster | errors side by side.
+std::vector<uint8_t> errorsPicture(const Classification& c, int* outWidth, int* outHeight);
+void writeErrorsPng(const std::string& path, const Classification& c);
+void writeTriptychPng(const std::string& path, const Frame& reference, const Frame& raster,
+                      const Classification& c);
+
+}  // namespace shadowlab

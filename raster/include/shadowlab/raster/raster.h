@@ -1,0 +1,54 @@
+#pragma once
+// Vulkan 1.3 headless shadow-mapping rasterizer (lavapipe by default).
+// No Vulkan header leaks through this interface.
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "shadowlab/scenes/frame.h"
+#include "shadowlab/scenes/method.h"
+#include "shadowlab/scenes/scene.h"
+
+namespace shadowlab {
+
+struct RasterDeviceOptions {
+  std::string device;       // substring of the device name; empty = lavapipe ("llvmpipe"), else first
+  bool validation = false;  // enable VK_LAYER_KHRONOS_validation when installed
+};
+
+struct RasterTimings {
+  double shadowMs = 0;    // GPU timestamps of the shadow pass (all maps)
+  double cameraMs = 0;    // GPU timestamps of the camera pass
+  double readbackMs = 0;  // CPU wall time to copy the outputs back into the Frame
+  double totalMs = 0;     // CPU wall time of render()
+};
+
+class Rasterizer {
+ public:
+  explicit Rasterizer(const RasterDeviceOptions& options = {});
+  ~Rasterizer();
+  Rasterizer(Rasterizer&&) noexcept;
+  Rasterizer& operator=(Rasterizer&&) noexcept;
+
+  std::string deviceName() const;
+  int maxMapSize() const;  // the device's largest 2D image size
+  // Number of validation-layer messages (warnings and errors) seen so far (validation only).
+  int validationMessages() const;
+
+  // Renders `scene` with `method` for the light named `light` (empty: the scene's first light)
+  // and all projectors. The GPU copy of the scene is kept and reused while the scene hash is the
+  // same, so a sweep uploads geometry once. A warm-up frame runs before the timed one the first
+  // time a pipeline is used. Throws InputError for an impossible method (map larger than the
+  // device allows, unknown light) and DriverError for Vulkan failures.
+  Frame render(const Scene& scene, const Method& method, const std::string& light = "",
+               RasterTimings* timings = nullptr);
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+// A readable picture of a raster frame (same look as referencePicture).
+std::vector<uint8_t> rasterPicture(const Scene& scene, const Frame& frame);
+
+}  // namespace shadowlab

@@ -1,0 +1,27 @@
+#pragma once
+// Small file helpers shared by every writer: outputs are never left half-written.
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+namespace shadowlab {
+
+// Writes `bytes` to `path` through a temporary file in the same folder and a rename,
+// so a reader (or an interrupted run) sees the old file or the whole new one.
+// Throws InputError naming the path when the folder is missing or not writable.
+void writeFileAtomic(const std::string& path, const std::string& bytes);
+void writeJsonAtomic(const std::string& path, const nlohmann::json& j);  // pretty, 2 spaces, trailing \n
+
+// Reads a whole file; throws InputError "<path>: error: cannot open file ..." when missing.
+std::string readFile(const std::string& path);
+
+// Creates `dir` and its parents; throws InputError naming it when that fails.
+void makeDirs(const std::string& dir);
+
+// 64-bit FNV-1a, printed as 16 lowercase hex digits. Used for scene and camera hashes.
+uint64_t fnv1a64(const void* data, size_t size, uint64_t seed = 1469598103934665603ull);
+std::string hashHex(uint64_t h);
+
+}  // namespace shadowlab

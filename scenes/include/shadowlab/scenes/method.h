@@ -1,0 +1,60 @@
+#pragma once
+// A shadow-mapping method: every parameter a sweep can vary, as runtime data.
+// Method files are flat JSON objects whose keys are the same dotted keys that --set and
+// --grid take (documented with defaults in raster/METHODS.md), e.g.
+//   { "name": "pcf5", "map.size": 2048, "bias.slope": 1.5, "filter": "pcf", "filter.size": 5 }
+// Comments are allowed. Unknown keys, wrong types and out-of-range values are InputErrors.
+#include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+namespace shadowlab {
+
+enum class DepthFormat { D16, D24, D32F };
+enum class CullMode { Back, Front, None };
+enum class Fit { Sphere, Tight };
+enum class Filter { None, Hw2x2, Bilinear4, Pcf, Poisson };
+
+struct Method {
+  std::string name = "default";
+  int mapSize = 2048;                    // map.size: texels per side, 16..16384 (and the device limit)
+  DepthFormat mapFormat = DepthFormat::D24;  // map.format: d16 | d24 | d32f
+  CullMode cull = CullMode::Back;        // cull: back | front | none (shadow pass)
+  Fit fit = Fit::Sphere;                 // fit: sphere | tight
+  float biasConstant = 0.0f;             // bias.constant: Vulkan depthBiasConstantFactor (units of r)
+  float biasSlope = 1.5f;                // bias.slope: Vulkan depthBiasSlopeFactor
+  float biasClamp = 0.0f;                // bias.clamp: Vulkan depthBiasClamp (0 = no clamp)
+  float biasCompare = 0.0005f;           // bias.compare: added in the comparison, normalized depth
+  float biasNormal = 0.0f;               // bias.normal: normal-offset of the lookup, in map texels
+  bool biasReceiverPlane = false;        // bias.receiver_plane: receiver-plane depth bias per tap
+  Filter filter = Filter::None;          // filter: none | hw2x2 | bilinear4 | pcf | poisson
+  int filterSize = 3;                    // filter.size: pcf grid N (odd, 3..15)
+  int filterTaps = 16;                   // filter.taps: poisson taps (1..64)
+  float filterRadius = 1.5f;             // filter.radius: poisson radius in texels (> 0, <= 32)
+  bool projectorReverseGuard = true;     // projector.reverse_guard: only project where w >= 0
+};
+
+// All keys, in documentation order ("name" excluded).
+const std::vector<std::string>& methodKeys();
+
+// Parses a method file (throws InputError naming the file and the JSON pointer / line:col).
+Method loadMethodFile(const std::string& path);
+// Applies one key=value (value as text, e.g. "pcf", "4096", "true"). `origin` names where it came
+// from for the error message (e.g. "--set" or "sweep.json: /grid/map.size/2").
+void applyMethodSetting(Method& m, const std::string& key, const std::string& value,
+                        const std::string& origin);
+// Applies a JSON value (number, string or bool) for one key; same validation.
+void applyMethodJson(Method& m, const std::string& key, const nlohmann::json& value,
+                     const std::string& origin);
+// Flat JSON with every key (and "name"); round-trips through applyMethodJson.
+nlohmann::json methodToJson(const Method& m);
+// Checks cross-field rules (e.g. odd pcf size); throws InputError prefixed by origin.
+void validateMethod(const Method& m, const std::string& origin);
+
+std::string toString(DepthFormat f);
+std::string toString(CullMode c);
+std::string toString(Fit f);
+std::string toString(Filter f);
+
+}  // namespace shadowlab

@@ -1,0 +1,115 @@
+#pragma once
+// The scene both renderers draw. The loader (loader.h) resolves everything a renderer
+// needs: every object is a world-space triangle mesh (procedural primitives are tessellated
+// here, once, so the reference and the rasterizer see the very same triangles and the same
+// primitive ids), materials carry their decoded alpha textures, projectors their images.
+//
+// Conventions (both renderers): right-handed world, y up. Camera pixel (i, j): i = column from
+// the left, j = row from the top (row 0 is the top row); its ray passes through the pixel center
+// (i + 0.5, j + 0.5). Image textures: texel (0, 0) is the top-left, u grows right, v grows down.
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include <glm/glm.hpp>
+
+namespace shadowlab {
+
+// A decoded single- or multi-channel float image, row 0 at the top.
+struct Image {
+  int width = 0;
+  int height = 0;
+  int channels = 0;
+  std::vector<float> pixels;  // width * height * channels, row-major, top row first
+  float at(int x, int y, int c) const { return pixels[(size_t(y) * width + x) * channels + c]; }
+};
+
+struct Material {
+  std::string name;
+  bool twoSided = true;      // false: back faces (seen from the camera or light) are culled
+  float alphaCutoff = 0.5f;  // texels with alpha < cutoff are holes (both renderers)
+  bool hasAlpha = false;     // true when alphaTexture is loaded
+  Image alphaTexture;        // 1 channel, alpha in [0, 1]; sampled NEAREST with REPEAT addressing
+  glm::vec3 albedo{0.8f};    // only for readable pictures
+};
+
+// The alpha lookup both renderers use (nearest texel, repeat addressing), so that the
+// reference and the rasterizer agree on which points are holes.
+float sampleAlphaNearest(const Image& alpha, glm::vec2 uv);
+
+struct Object {
+  std::string name;
+  uint32_t id = 0;                       // stable object id, >= 1 (0 means "nothing")
+  std::vector<glm::vec3> positions;      // world space
+  std::vector<glm::vec2> uvs;            // empty, or one per position
+  std::vector<glm::uvec3> triangles;     // indices into positions; triangle index = primitive id
+  std::vector<uint32_t> triangleMaterial;  // one per triangle, index into Scene::materials
+  bool castsShadow = true;
+};
+
+enum class LightType { Directional, Spot, Point };
+
+struct Light {
+  std::string name;
+  LightType type = LightType::Directional;
+  glm::vec3 direction{0, -1, 0};  // unit; the way the light travels (from the light into the scene)
+  glm::vec3 position{0};          // spot and point lights, world space
+  float coneDeg = 60.0f;          // spot: full apex angle; lit only where angle(p - position, direction) <= coneDeg / 2
+  float nearPlane = 0.05f;        // spot and point: depth-map near plane, world units
+};
+
+struct Projector {
+  std::string name;
+  glm::vec3 position{0};
+  glm::vec3 direction{0, 0, -1};  // unit
+  glm::vec3 up{0, 1, 0};
+  float fovDeg = 45.0f;  // vertical
+  float aspect = 1.0f;   // width / height
+  float nearPlane = 0.1f;
+  float farPlane = 100.0f;
+  Image image;  // RGB (3 channels), sampled NEAREST at (u, v) in [0,1]^2, v = 0 at the image's top row
+  // Projective texture matrix: world -> (u*w, v*w, depth*w, w), u,v in [0,1] inside the frustum,
+  // depth in [0,1] from near to far (Vulkan depth range), v = 0 at the top. Points with w <= 0
+  // are behind the projector (reverse projection).
+  glm::mat4 texFromWorld() const;
+};
+
+struct Camera {
+  glm::vec3 position{0, 1, 5};
+  glm::vec3 lookAt{0};
+  glm::vec3 up{0, 1, 0};
+  float vfovDeg = 45.0f;
+  int width = 640;
+  int height = 480;
+  float nearPlane = 0.01f;   // rasterizer only
+  float farPlane = 1000.0f;  // rasterizer only
+  glm::mat4 viewFromWorld() const;  // right-handed look-at, camera looks down -z
+  // Vulkan clip space (y down, depth 0..1), so pixel (i, j) centers match rayDirection(i, j).
+  glm::mat4 clipFromView() const;
+  // Unit world-space direction through the point (x, y) of the image plane, in pixels
+  // (x = i + 0.5, y = j + 0.5 is the center of pixel (i, j)).
+  glm::vec3 rayDirection(float x, float y) const;
+};
+
+struct Scene {
+  std::string path;       // the scene file as given
+  std::string name;       // file stem, e.g. "sphere_on_plane"
+  std::string hash;       // 16 hex digits over the resolved content (JSON + geometry + textures)
+  Camera camera;
+  std::vector<Material> materials;  // index 0 is the default material
+  std::vector<Object> objects;
+  std::vector<Light> lights;
+  std::vector<Projector> projectors;
+  // The scene parameter that provokes this scene's failure, if declared ("failure" in the file):
+  // a JSON pointer into the scene file and the values to sweep.
+  std::string failurePointer;
+  std::vector<double> failureValues;
+
+  // World-space axis-aligned bounds of all objects.
+  glm::vec3 boundsMin() const;
+  glm::vec3 boundsMax() const;
+  const Light* findLight(const std::string& name) const;  // nullptr when absent
+  size_t triangleCount() const;
+};
+
+}  // namespace shadowlab

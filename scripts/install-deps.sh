@@ -1,0 +1,19 @@
+#!/usr/bin/env bash
+# Installs the Debian 12 packages shadowlab builds and tests with, only those missing.
+# Usage: scripts/install-deps.sh [--with-report]   (--with-report adds matplotlib and chromium)
+set -euo pipefail
+pkgs=(build-essential cmake pkg-config libembree-dev libglm-dev libopenimageio-dev libtinyobjloader-dev
+      mesa-vulkan-drivers libvulkan-dev glslang-dev glslang-tools spirv-tools vulkan-validationlayers
+      nlohmann-json3-dev libcli11-dev libtbb-dev libgtest-dev libbenchmark-dev
+      python3-matplotlib chromium)
+missing=()
+for p in "${pkgs[@]}"; do
+  dpkg-query -W -f='${Status}\n' "$p" 2>/dev/null | grep -q '^install ok installed' || missing+=("$p")
+done
+if [ ${#missing[@]} -eq 0 ]; then exit 0; fi
+echo "install-deps: installing ${missing[*]}"
+sudo_cmd=()
+[ "$(id -u)" -eq 0 ] || sudo_cmd=(sudo)
+export DEBIAN_FRONTEND=noninteractive
+"${sudo_cmd[@]}" apt-get update -qq
+"${sudo_cmd[@]}" apt-get install -y -qq --no-install-recommends "${missing[@]}"
