@@ -1,0 +1,42 @@
+#pragma once
+// reference + raster + compare in one process, with the reference cached on disk by content hash.
+// Used by `shadowlab run` and `shadowlab sweep`.
+#include <string>
+
+#include "shadowlab/compare/compare.h"
+#include "shadowlab/raster/raster.h"
+#include "shadowlab/reference/reference.h"
+#include "shadowlab/scenes/method.h"
+#include "shadowlab/scenes/scene.h"
+
+namespace shadowlab {
+
+// Reference frames stored as DIR/<referenceHash>.exr. Default DIR: $SHADOWLAB_CACHE, else
+// ".shadowlab-cache" in the current folder. Writes are atomic, so concurrent or interrupted runs
+// never leave a truncated entry.
+class ReferenceCache {
+ public:
+  explicit ReferenceCache(std::string dir = "");
+  const std::string& dir() const { return dir_; }
+  // Loads the cached frame or traces it (and stores it). `traced` tells which happened.
+  Frame get(const Scene& scene, const ReferenceOptions& options, bool* traced = nullptr,
+            ReferenceStats* stats = nullptr);
+
+ private:
+  std::string dir_;
+};
+
+struct RunResult {
+  Frame reference;
+  Frame raster;
+  Classification classification;
+  Metrics metrics;
+  RasterTimings timings;
+  double compareMs = 0;
+};
+
+RunResult runPipeline(const Scene& scene, const Method& method, Rasterizer& rasterizer,
+                      ReferenceCache& cache, const std::string& light = "",
+                      const ReferenceOptions& referenceOptions = {});
+
+}  // namespace shadowlab

@@ -1,0 +1,38 @@
+#pragma once
+// Result rows: what `shadowlab run`/`compare` (metrics.json, one row) and `shadowlab sweep`
+// (results.json, many rows; results.csv, the same flattened) write, and what `shadowlab gate` reads.
+//
+// metrics.json:  { "schema": "shadowlab.metrics/1", "scene": S, "config": C, "light": L,
+//                  "method": {...}, "metrics": {...}, "timings": {...} }
+// results.json:  { "schema": "shadowlab.results/1", "rows": [ {same keys as metrics.json minus schema} ],
+//                  "total_seconds": T, "configurations": N, ... }
+// `config` is the canonical text of the swept method keys, sorted by key: "bias.slope=1,map.size=512"
+// ("default" when nothing was swept). Rows are matched by (scene, config, light).
+// `metrics` holds Metrics::toJson(); `timings` holds shadow_ms, camera_ms, readback_ms, compare_ms,
+// total_ms (milliseconds).
+#include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+namespace shadowlab {
+
+struct ResultRow {
+  std::string scene;
+  std::string config;
+  std::string light;
+  nlohmann::json method = nlohmann::json::object();
+  nlohmann::json metrics = nlohmann::json::object();
+  nlohmann::json timings = nlohmann::json::object();
+
+  std::string key() const { return scene + " | " + config + " | " + light; }
+  nlohmann::json toJson() const;
+  static ResultRow fromJson(const nlohmann::json& j, const std::string& origin);  // InputError on bad shape
+};
+
+// Reads a metrics.json (one row) or results.json (many rows). InputError naming the file and
+// JSON pointer on anything malformed.
+std::vector<ResultRow> loadResultRows(const std::string& path);
+void writeMetricsJson(const std::string& path, const ResultRow& row);  // atomic
+
+}  // namespace shadowlab
