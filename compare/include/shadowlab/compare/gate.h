@@ -1,0 +1,119 @@
+#pragma once
+// The regression gate: compares a current metrics.json / results.json against a baseline, row by
+// row (matched by scene, config, light) and metric by metric, under tolerances that are data
+// (compare/GATE.md documents the tolerance file with examples).
+//
+// Exit codes of `shadowlab gate`: 0 every check passed, 1 at least one regression, 2 bad input
+// (missing file, malformed tolerance file, a baseline row or metric absent from the current file,
+// duplicate rows, NaN). A baseline row absent from the current results is an error, never a pass;
+// a row new in the current results is reported and does not fail.
+#include <map>
+#include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "shadowlab/compare/results.h"
+
+namespace shadowlab {
+
+// Parses JSON text (comments allowed). Syntax errors throw InputError "file:line:col: error: ...".
+nlohmann::json parseJsonDocument(const std::string& text, const std::string& file);
+
+// A loaded metrics.json or results.json with what the gate needs to name places in it.
+struct ResultFile {
+  std::string path;
+  std::string schema;                 // "shadowlab.metrics/1" or "shadowlab.results/1"
+  std::vector<ResultRow> rows;
+  std::vector<std::string> pointers;  // JSON pointer of each row in the file ("" or "/rows/3")
+  nlohmann::json document;            // the whole file as read
+};
+ResultFile loadResultFile(const std::string& path);  // InputError naming file and pointer
+
+enum class Direction {
+  LowerIsBetter,   // error metrics: a rise beyond tolerance fails, a fall is an improvement
+  HigherIsBetter,  // shadow_iou and the like: a fall beyond tolerance fails
+  Equal,           // any move beyond tolerance fails (e.g. pixels_compared: the scene changed)
+  Ignore,          // reported, never fails
+};
+std::string toString(Direction d);
+
+struct MetricTolerance {
+  Direction direction = Direction::Equal;
+  double absTolerance = 0;  // in the metric's own unit
+  double relTolerance = 0;  // fraction of |baseline|; the allowed move is max(abs, rel * |baseline|)
+  double allowed(double baseline) const;
+};
+
+enum class TimingMode { Report, Fail };
+
+// Timings are noisy on shared machines: compared as the ratio current / baseline, reported
+// by default; with Fail, a ratio above maxRatio fails. Baselines under minMs are only reported
+// (a 0.2 ms pass doubling is noise, not a regression).
+struct TimingTolerance {
+  TimingMode mode = TimingMode::Report;
+  double maxRatio = 1.5;
+  double minMs = 1.0;
+};
+
+struct Tolerances {
+  std::string origin = "built-in defaults";   // the file they came from
+  // Per metric; fields left out of a file's entry fall back to `fallback` / the built-in direction.
+  std::map<std::string, MetricTolerance> metrics;
+  MetricTolerance fallback;       // "default": metrics not listed (direction: built-in, else equal)
+  bool fallbackHasDirection = false;
+  TimingTolerance timing;
+
+  // The tolerance for `metric`: its entry, else the default with the metric's built-in direction.
+  MetricTolerance forMetric(const std::string& metric) const;
+};
+
+// Built-in direction of the metrics Metrics::toJson writes (error counts and rates, mae, rmse,
+// m_*: lower is better; *_iou: higher; pixels_compared: equal). Unknown names: Equal.
+Direction builtinDirection(const std::string& metric, bool* known = nullptr);
+
+// Built-in tolerances used without --tolerances: built-in directions, exact up to 1e-9 relative
+// (the pipeline is deterministic), timings reported.
+Tolerances defaultTolerances();
+Tolerances parseTolerances(const nlohmann::json& j, const std::string& file);
+Tolerances loadTolerances(const std::string& path);
+
+enum class Verdict { Regressed, Missing, New, Improved, Pass, Reported };
+std::string toString(Verdict v);
+
+struct GateCheck {
+  std::string rowKey;        // "scene | config | light"
+  std::string scene, config, light;
+  std::string metric;        // metric name, or timing name for kind "timing"
+  std::string kind;          // "metric" | "timing" | "row"
+  nlohmann::json baseline;   // the values as found (number, string, bool)
+  nlohmann::json current;
+  std::string tolerance;     // printable: "+0.005", "±1%", "x1.50", "report"
+  Verdict verdict = Verdict::Pass;
+  std::string message;       // for regressions: the one-line error (without "shadowlab gate: error: ")
+};
+
+struct GateResult {
+  std::vector<GateCheck> checks;  // regressions first, then the rest in row/metric order
+  int rowsCompared = 0, rowsNew = 0;
+  int regressions = 0, improvements = 0, passes = 0, reported = 0;
+  bool passed() const { return regressions == 0; }
+  std::string summary() const;  // one line
+};
+
+// Compares every baseline row with its current row. InputError (exit 2) for a baseline row or
+// metric missing from current, duplicate rows, NaN (null) values, or a tolerance naming a metric
+// no row has (a typo would otherwise never apply).
+GateResult runGate(const ResultFile& current, const ResultFile& baseline, const Tolerances& tolerances);
+
+// Outputs; the writers are atomic.
+std::string formatGateTable(const GateResult& result, bool brief);
+nlohmann::json gateToJson(const GateResult& result, const ResultFile& current, const ResultFile& baseline,
+                          const Tolerances& tolerances);
+std::string gateToJunitXml(const GateResult& result);
+
+// `--update-baseline`: what would change from `baseline` (may have no rows: a new file) to `current`,
+// one line per changed row/metric. Used to print the change before rewriting the baseline.
+std::vector<std::string> describeBaselineUpdate(const ResultFile& current, const ResultFile& baseline);
+
+}  // namespace shadowlab

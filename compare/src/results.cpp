@@ -1,0 +1,157 @@
+// Result rows: metrics.json (one row) and results.json (rows) in and out. The gate reads these
+// files from CI artifacts and user checkouts, so every shape error names the file and the JSON
+// pointer of the offending value.
+#include "shadowlab/compare/results.h"
+
+#include <regex>
+#include <set>
+
+#include "shadowlab/compare/gate.h"
+#include "shadowlab/scenes/error.h"
+#include "shadowlab/scenes/io.h"
+
+namespace shadowlab {
+namespace {
+
+constexpr const char* kMetricsSchema = "shadowlab.metrics/1";
+constexpr const char* kResultsSchema = "shadowlab.results/1";
+
+std::string typeName(const nlohmann::json& v) {
+  if (v.is_number()) return "a number";
+  if (v.is_string()) return "a string";
+  if (v.is_boolean()) return "a boolean";
+  if (v.is_null()) return "null";
+  if (v.is_array()) return "an array";
+  return "an object";
+}
+
+// Escapes a key for use in a JSON pointer (RFC 6901).
+std::string pointerToken(const std::string& key) {
+  std::string out;
+  for (char c : key) {
+    if (c == '~') out += "~0";
+    else if (c == '/') out += "~1";
+    else out += c;
+  }
+  return out;
+}
+
+ResultRow rowFromJson(const nlohmann::json& j, const std::string& file, const std::string& pointer) {
+  auto fail = [&](const std::string& place, const std::string& what) {
+    throw InputError(formatError(file, place.empty() ? "/" : place, what));
+  };
+  if (!j.is_object()) fail(pointer, "got " + typeName(j) + "; expected a result row (an object)");
+  ResultRow row;
+  auto text = [&](const char* key, std::string& out) {
+    auto it = j.find(key);
+    if (it == j.end()) fail(pointer, std::string("missing \"") + key + "\"; expected a string");
+    if (!it->is_string())
+      fail(pointer + "/" + key, "got " + typeName(*it) + "; expected a string");
+    out = it->get<std::string>();
+  };
+  text("scene", row.scene);
+  text("config", row.config);
+  text("light", row.light);
+  if (row.scene.empty()) fail(pointer + "/scene", "got an empty string; expected the scene name");
+  if (row.config.empty()) fail(pointer + "/config", "got an empty string; expected a config (\"default\" when nothing was swept)");
+  auto object = [&](const char* key, nlohmann::json& out, bool required) {
+    auto it = j.find(key);
+    if (it == j.end()) {
+      if (required) fail(pointer, std::string("missing \"") + key + "\"; expected an object");
+      return;
+    }
+    if (!it->is_object()) fail(pointer + "/" + key, "got " + typeName(*it) + "; expected an object");
+    out = *it;
+  };
+  object("method", row.method, false);
+  object("metrics", row.metrics, true);
+  object("timings", row.timings, false);
+  // Timings are milliseconds; anything else there would make the ratio rule meaningless.
+  for (auto it = row.timings.begin(); it != row.timings.end(); ++it) {
+    if (!it.value().is_number() && !it.value().is_null())
+      fail(pointer + "/timings/" + pointerToken(it.key()),
+           "got " + typeName(it.value()) + "; expected a number (milliseconds)");
+  }
+  return row;
+}
+
+}  // namespace
+
+nlohmann::json parseJsonDocument(const std::string& text, const std::string& file) {
+  try {
+    return nlohmann::json::parse(text, nullptr, /*allow_exceptions=*/true, /*ignore_comments=*/true);
+  } catch (const nlohmann::json::parse_error& e) {
+    // nlohmann says "[json.exception.parse_error.101] parse error at line L, column C: what";
+    // reshape it into "file:L:C: error: what" so editors and CI jump to the spot.
+    std::string message = e.what();
+    static const std::regex kWhere(R"(at line (\d+), column (\d+): (.*))");
+    std::smatch m;
+    if (std::regex_search(message, m, kWhere)) {
+      std::string what = m[3].str();
+      // nlohmann joins "while parsing X - detail" with a dash; the house style uses "; ".
+      auto dash = what.find(" - ");
+      if (dash != std::string::npos) what.replace(dash, 3, "; ");
+      throw InputError(file + ":" + m[1].str() + ":" + m[2].str() + ": error: " + what);
+    }
+    // No line information (e.g. empty input): say where by byte, never invent a line.
+    throw InputError(formatError(file, "", "cannot parse JSON at byte " + std::to_string(e.byte) + ": " +
+                                               message));
+  }
+}
+
+nlohmann::json ResultRow::toJson() const {
+  nlohmann::json j = nlohmann::json::object();
+  j["scene"] = scene;
+  j["config"] = config;
+  j["light"] = light;
+  j["method"] = method;
+  j["metrics"] = metrics;
+  j["timings"] = timings;
+  return j;
+}
+
+ResultRow ResultRow::fromJson(const nlohmann::json& j, const std::string& origin) {
+  return rowFromJson(j, origin, "");
+}
+
+ResultFile loadResultFile(const std::string& path) {
+  ResultFile file;
+  file.path = path;
+  file.document = parseJsonDocument(readFile(path), path);
+  const nlohmann::json& doc = file.document;
+  if (!doc.is_object())
+    throw InputError(formatError(path, "/", "got " + typeName(doc) + "; expected an object with \"schema\""));
+  auto schema = doc.find("schema");
+  if (schema == doc.end())
+    throw InputError(formatError(path, "/", std::string("missing \"schema\"; expected \"") + kMetricsSchema +
+                                                "\" (metrics.json) or \"" + kResultsSchema + "\" (results.json)"));
+  if (!schema->is_string() || (*schema != kMetricsSchema && *schema != kResultsSchema))
+    throw InputError(formatError(path, "/schema", "got " + schema->dump() + "; expected \"" + kMetricsSchema +
+                                                      "\" or \"" + kResultsSchema + "\""));
+  file.schema = schema->get<std::string>();
+  if (file.schema == kMetricsSchema) {
+    file.rows.push_back(rowFromJson(doc, path, ""));
+    file.pointers.push_back("");
+    return file;
+  }
+  auto rows = doc.find("rows");
+  if (rows == doc.end()) throw InputError(formatError(path, "/", "missing \"rows\"; expected an array of result rows"));
+  if (!rows->is_array())
+    throw InputError(formatError(path, "/rows", "got " + typeName(*rows) + "; expected an array of result rows"));
+  for (size_t i = 0; i < rows->size(); ++i) {
+    std::string pointer = "/rows/" + std::to_string(i);
+    file.rows.push_back(rowFromJson((*rows)[i], path, pointer));
+    file.pointers.push_back(pointer);
+  }
+  return file;
+}
+
+std::vector<ResultRow> loadResultRows(const std::string& path) { return loadResultFile(path).rows; }
+
+void writeMetricsJson(const std::string& path, const ResultRow& row) {
+  nlohmann::json j = row.toJson();
+  j["schema"] = kMetricsSchema;
+  writeJsonAtomic(path, j);
+}
+
+}  // namespace shadowlab
