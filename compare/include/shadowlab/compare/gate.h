@@ -8,6 +8,7 @@
 // duplicate rows, NaN). A baseline row absent from the current results is an error, never a pass;
 // a row new in the current results is reported and does not fail.
 #include <map>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -56,15 +57,21 @@ struct TimingTolerance {
   double minMs = 1.0;
 };
 
-struct Tolerances {
-  std::string origin = "built-in defaults";   // the file they came from
-  // Per metric; fields left out of a file's entry fall back to `fallback` / the built-in direction.
-  std::map<std::string, MetricTolerance> metrics;
-  MetricTolerance fallback;       // "default": metrics not listed (direction: built-in, else equal)
-  bool fallbackHasDirection = false;
-  TimingTolerance timing;
+// One entry of a tolerance file; what it leaves out falls back (see Tolerances::forMetric).
+struct ToleranceSpec {
+  std::optional<Direction> direction;
+  std::optional<double> absTolerance;
+  std::optional<double> relTolerance;
+};
 
-  // The tolerance for `metric`: its entry, else the default with the metric's built-in direction.
+struct Tolerances {
+  std::string origin = "built-in defaults";  // the file they came from
+  std::map<std::string, ToleranceSpec> metrics;  // "metrics": per metric name
+  ToleranceSpec fallback;                        // "default"
+  TimingTolerance timing;                        // "timing"
+
+  // direction: the entry's, else the default's, else builtinDirection(metric);
+  // abs / rel: the entry's, else the default's, else 0.
   MetricTolerance forMetric(const std::string& metric) const;
 };
 

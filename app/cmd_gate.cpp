@@ -1,0 +1,87 @@
+// `shadowlab gate`: fails a CI run when shadows got measurably worse than a baseline.
+// Exit 0 pass, 1 regression, 2 bad input (InputError, mapped by main). compare/GATE.md documents
+// the tolerance file.
+#include <cstdio>
+#include <filesystem>
+#include <memory>
+
+#include "command.h"
+#include "shadowlab/compare/gate.h"
+#include "shadowlab/scenes/error.h"
+#include "shadowlab/scenes/io.h"
+
+namespace {
+
+struct Options {
+  std::string current;
+  std::string baseline;
+  std::string tolerances;
+  std::string jsonOut;
+  std::string junitOut;
+  bool updateBaseline = false;
+  bool brief = false;
+};
+
+int updateBaseline(const Options& o, const shadowlab::ResultFile& current) {
+  using namespace shadowlab;
+  ResultFile baseline;
+  baseline.path = o.baseline;
+  bool existed = std::filesystem::exists(o.baseline);
+  // An existing baseline that does not load is an error: overwriting it blindly would hide
+  // whatever wrote it wrong.
+  if (existed) baseline = loadResultFile(o.baseline);
+  // The rows are about to become the reference: refuse duplicates and NaN as the gate would.
+  GateResult self = runGate(current, current, defaultTolerances());
+  (void)self;
+  std::vector<std::string> changes = describeBaselineUpdate(current, baseline);
+  writeJsonAtomic(o.baseline, current.document);
+  std::printf("shadowlab gate: %s baseline %s from %s (%zu rows)\n", existed ? "updated" : "created",
+              o.baseline.c_str(), o.current.c_str(), current.rows.size());
+  for (const std::string& line : changes) std::printf("  %s\n", line.c_str());
+  if (changes.empty()) std::printf("  no metric changed (timings may have)\n");
+  return 0;
+}
+
+int run(const Options& o) {
+  using namespace shadowlab;
+  // Everything is read and checked before anything is written: a bad input never leaves a
+  // half-updated baseline or a report of a gate that did not run.
+  Tolerances tolerances = o.tolerances.empty() ? defaultTolerances() : loadTolerances(o.tolerances);
+  ResultFile current = loadResultFile(o.current);
+  if (o.updateBaseline) return updateBaseline(o, current);
+  if (!std::filesystem::exists(o.baseline))
+    throw InputError(formatError(o.baseline, "",
+                                 "baseline file not found; expected a metrics.json or results.json "
+                                 "(create it on purpose with --update-baseline)"));
+  ResultFile baseline = loadResultFile(o.baseline);
+  GateResult result = runGate(current, baseline, tolerances);
+
+  if (!o.jsonOut.empty()) writeJsonAtomic(o.jsonOut, gateToJson(result, current, baseline, tolerances));
+  if (!o.junitOut.empty()) writeFileAtomic(o.junitOut, gateToJunitXml(result));
+
+  std::fputs(formatGateTable(result, o.brief).c_str(), stdout);
+  std::printf("shadowlab gate: %s (baseline %s, current %s, tolerances %s)\n", result.summary().c_str(),
+              o.baseline.c_str(), o.current.c_str(), tolerances.origin.c_str());
+  std::fflush(stdout);
+  for (const GateCheck& c : result.checks)
+    if (c.verdict == Verdict::Regressed) std::fprintf(stderr, "shadowlab gate: error: %s\n", c.message.c_str());
+  return result.passed() ? 0 : 1;
+}
+
+shadowlab::app::Registrar reg{"gate", [](CLI::App& app) {
+  auto* sub = app.add_subcommand("gate",
+                                 "Compare results against a baseline under tolerances; exit 1 on a regression");
+  auto o = std::make_shared<Options>();
+  sub->add_option("current", o->current, "Current metrics.json or results.json")->required();
+  sub->add_option("--baseline", o->baseline, "Baseline metrics.json or results.json")->required();
+  sub->add_option("--tolerances", o->tolerances,
+                  "Tolerance file (JSON, see compare/GATE.md); default: exact metrics, timings reported");
+  sub->add_option("--json", o->jsonOut, "Write the verdicts as JSON here");
+  sub->add_option("--junit", o->junitOut, "Write JUnit XML here (one testcase per row x metric)");
+  sub->add_flag("--update-baseline", o->updateBaseline,
+                "Rewrite the baseline from the current results (prints what changed) instead of gating");
+  sub->add_flag("--brief", o->brief, "Table shows only regressions, improvements and new entries");
+  return std::function<int()>([o] { return run(*o); });
+}};
+
+}  // namespace

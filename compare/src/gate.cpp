@@ -1,0 +1,688 @@
+// The regression gate: tolerances as data, row matching, verdicts, and the three outputs (table,
+// JSON, JUnit XML). compare/GATE.md is the user-facing description; keep the two in step.
+#include "shadowlab/compare/gate.h"
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <cstdio>
+#include <set>
+#include <sstream>
+
+#include "shadowlab/scenes/error.h"
+#include "shadowlab/scenes/io.h"
+
+namespace shadowlab {
+namespace {
+
+constexpr const char* kTolerancesSchema = "shadowlab.tolerances/1";
+constexpr const char* kGateSchema = "shadowlab.gate/1";
+
+std::string typeName(const nlohmann::json& v) {
+  if (v.is_number()) return "a number";
+  if (v.is_string()) return "a string";
+  if (v.is_boolean()) return "a boolean";
+  if (v.is_null()) return "null";
+  if (v.is_array()) return "an array";
+  return "an object";
+}
+
+std::string pointerToken(const std::string& key) {
+  std::string out;
+  for (char c : key) {
+    if (c == '~') out += "~0";
+    else if (c == '/') out += "~1";
+    else out += c;
+  }
+  return out;
+}
+
+// %.6g reads well; when two different values would print the same (an exact-equality tolerance
+// failing on the 9th digit), more digits until they differ, so a message never says "0.1 > 0.1".
+std::string formatNumber(double v, int digits = 6) {
+  char buf[64];
+  std::snprintf(buf, sizeof buf, "%.*g", digits, v);
+  return buf;
+}
+std::pair<std::string, std::string> formatPair(double a, double b) {
+  for (int digits = 6; digits <= 17; ++digits) {
+    std::string sa = formatNumber(a, digits), sb = formatNumber(b, digits);
+    if (sa != sb || a == b) return {sa, sb};
+  }
+  return {formatNumber(a, 17), formatNumber(b, 17)};
+}
+std::string formatValue(const nlohmann::json& v) {
+  if (v.is_number()) return formatNumber(v.get<double>());
+  if (v.is_string()) return "\"" + v.get<std::string>() + "\"";
+  return v.dump();
+}
+
+// Nested metric objects become dotted names ("per_object.3.acne"), so each leaf is one check.
+void flatten(const nlohmann::json& j, const std::string& prefix, std::map<std::string, nlohmann::json>& out) {
+  for (auto it = j.begin(); it != j.end(); ++it) {
+    std::string name = prefix.empty() ? it.key() : prefix + "." + it.key();
+    if (it.value().is_object()) flatten(it.value(), name, out);
+    else out[name] = it.value();
+  }
+}
+std::string metricPointer(const std::string& rowPointer, const std::string& group, const std::string& name) {
+  // Dotted names came from nesting or contain a dot themselves; for the pointer use the top key
+  // only when the name is nested, which is enough to find it in the file.
+  return rowPointer + "/" + group + "/" + pointerToken(name);
+}
+
+std::optional<Direction> parseDirection(const std::string& s) {
+  if (s == "lower_is_better") return Direction::LowerIsBetter;
+  if (s == "higher_is_better") return Direction::HigherIsBetter;
+  if (s == "equal") return Direction::Equal;
+  if (s == "ignore") return Direction::Ignore;
+  return std::nullopt;
+}
+
+ToleranceSpec parseSpec(const nlohmann::json& j, const std::string& file, const std::string& pointer) {
+  if (!j.is_object())
+    throw InputError(formatError(file, pointer, "got " + typeName(j) +
+                                                    "; expected an object with \"direction\", \"abs\", \"rel\""));
+  ToleranceSpec spec;
+  for (auto it = j.begin(); it != j.end(); ++it) {
+    std::string place = pointer + "/" + pointerToken(it.key());
+    const nlohmann::json& v = it.value();
+    if (it.key() == "direction") {
+      auto d = v.is_string() ? parseDirection(v.get<std::string>()) : std::nullopt;
+      if (!d)
+        throw InputError(formatError(file, place, "got " + v.dump() +
+                                                      "; expected \"lower_is_better\", \"higher_is_better\", "
+                                                      "\"equal\" or \"ignore\""));
+      spec.direction = d;
+    } else if (it.key() == "abs" || it.key() == "rel") {
+      if (!v.is_number())
+        throw InputError(formatError(file, place, "got " + typeName(v) + "; expected a number >= 0"));
+      double x = v.get<double>();
+      if (!(x >= 0) || !std::isfinite(x))
+        throw InputError(formatError(file, place, "got " + v.dump() + "; expected a number >= 0 (a tolerance)"));
+      (it.key() == "abs" ? spec.absTolerance : spec.relTolerance) = x;
+    } else {
+      throw InputError(formatError(file, place, "unknown key \"" + it.key() +
+                                                    "\"; expected \"direction\", \"abs\" or \"rel\""));
+    }
+  }
+  return spec;
+}
+
+TimingTolerance parseTiming(const nlohmann::json& j, const std::string& file) {
+  TimingTolerance t;
+  auto mode = [&](const nlohmann::json& v, const std::string& place) {
+    if (v == "report") return TimingMode::Report;
+    if (v == "fail") return TimingMode::Fail;
+    throw InputError(formatError(file, place, "got " + v.dump() + "; expected \"report\" or \"fail\""));
+  };
+  if (j.is_string()) {
+    t.mode = mode(j, "/timing");
+    return t;
+  }
+  if (!j.is_object())
+    throw InputError(formatError(file, "/timing", "got " + typeName(j) +
+                                                      "; expected \"report\", \"fail\" or an object "
+                                                      "{\"mode\", \"max_ratio\", \"min_ms\"}"));
+  for (auto it = j.begin(); it != j.end(); ++it) {
+    std::string place = "/timing/" + pointerToken(it.key());
+    const nlohmann::json& v = it.value();
+    if (it.key() == "mode") {
+      t.mode = mode(v, place);
+    } else if (it.key() == "max_ratio") {
+      if (!v.is_number() || !(v.get<double>() >= 1.0))
+        throw InputError(formatError(file, place, "got " + v.dump() +
+                                                      "; expected a number >= 1 (current/baseline time)"));
+      t.maxRatio = v.get<double>();
+    } else if (it.key() == "min_ms") {
+      if (!v.is_number() || !(v.get<double>() >= 0.0))
+        throw InputError(formatError(file, place, "got " + v.dump() + "; expected a number >= 0 (milliseconds)"));
+      t.minMs = v.get<double>();
+    } else {
+      throw InputError(formatError(file, place, "unknown key \"" + it.key() +
+                                                    "\"; expected \"mode\", \"max_ratio\" or \"min_ms\""));
+    }
+  }
+  return t;
+}
+
+int verdictRank(Verdict v) {
+  switch (v) {
+    case Verdict::Regressed: return 0;
+    case Verdict::Missing: return 1;
+    case Verdict::Improved: return 2;
+    case Verdict::New: return 3;
+    case Verdict::Reported: return 4;
+    case Verdict::Pass: return 5;
+  }
+  return 6;
+}
+
+std::string xmlEscape(const std::string& s) {
+  std::string out;
+  for (char c : s) {
+    switch (c) {
+      case '&': out += "&amp;"; break;
+      case '<': out += "&lt;"; break;
+      case '>': out += "&gt;"; break;
+      case '"': out += "&quot;"; break;
+      case '\'': out += "&apos;"; break;
+      default:
+        // Control characters other than tab/newline are not allowed in XML 1.0.
+        if (static_cast<unsigned char>(c) < 0x20 && c != '\t' && c != '\n' && c != '\r') out += '?';
+        else out += c;
+    }
+  }
+  return out;
+}
+
+// Throws one InputError listing every problem (at most 20 lines): a CI log should show them all
+// at once rather than one per run.
+void throwProblems(const std::vector<std::string>& problems) {
+  if (problems.empty()) return;
+  std::string message;
+  size_t shown = std::min<size_t>(problems.size(), 20);
+  for (size_t i = 0; i < shown; ++i) message += (i ? "\n" : "") + problems[i];
+  if (problems.size() > shown)
+    message += "\n(" + std::to_string(problems.size() - shown) + " more problems not shown)";
+  throw InputError(message);
+}
+
+void checkDuplicates(const ResultFile& f) {
+  std::map<std::string, size_t> seen;
+  for (size_t i = 0; i < f.rows.size(); ++i) {
+    auto [it, fresh] = seen.emplace(f.rows[i].key(), i);
+    if (!fresh)
+      throw InputError(formatError(f.path, f.pointers[i],
+                                   "row \"" + f.rows[i].key() + "\" appears again (first at " +
+                                       f.pointers[it->second] + "); expected each (scene, config, light) once"));
+  }
+}
+
+GateCheck baseCheck(const ResultRow& row, const std::string& kind, const std::string& metric) {
+  GateCheck c;
+  c.rowKey = row.key();
+  c.scene = row.scene;
+  c.config = row.config;
+  c.light = row.light;
+  c.kind = kind;
+  c.metric = metric;
+  return c;
+}
+
+}  // namespace
+
+std::string toString(Direction d) {
+  switch (d) {
+    case Direction::LowerIsBetter: return "lower_is_better";
+    case Direction::HigherIsBetter: return "higher_is_better";
+    case Direction::Equal: return "equal";
+    case Direction::Ignore: return "ignore";
+  }
+  return "?";
+}
+
+std::string toString(Verdict v) {
+  switch (v) {
+    case Verdict::Regressed: return "REGRESSED";
+    case Verdict::Missing: return "MISSING";
+    case Verdict::New: return "new";
+    case Verdict::Improved: return "improved";
+    case Verdict::Pass: return "pass";
+    case Verdict::Reported: return "report";
+  }
+  return "?";
+}
+
+double MetricTolerance::allowed(double baseline) const {
+  return std::max(absTolerance, relTolerance * std::fabs(baseline));
+}
+
+Direction builtinDirection(const std::string& metric, bool* known) {
+  // The names Metrics::toJson writes (compare/METRICS.md). Counts and rates of wrong pixels, the
+  // mean errors and Lloyd's texel footprint m only get better by going down.
+  static const std::map<std::string, Direction> kBuiltin = {
+      {"pixels_compared", Direction::Equal},
+      {"geometry_mismatch", Direction::LowerIsBetter},
+      {"errors", Direction::LowerIsBetter},
+      {"acne", Direction::LowerIsBetter},
+      {"leak", Direction::LowerIsBetter},
+      {"aliasing", Direction::LowerIsBetter},
+      {"coverage", Direction::LowerIsBetter},
+      {"other", Direction::LowerIsBetter},
+      {"error_rate", Direction::LowerIsBetter},
+      {"acne_rate", Direction::LowerIsBetter},
+      {"leak_rate", Direction::LowerIsBetter},
+      {"aliasing_rate", Direction::LowerIsBetter},
+      {"coverage_rate", Direction::LowerIsBetter},
+      {"other_rate", Direction::LowerIsBetter},
+      {"shadow_iou", Direction::HigherIsBetter},
+      {"mae", Direction::LowerIsBetter},
+      {"rmse", Direction::LowerIsBetter},
+      {"m_median", Direction::LowerIsBetter},
+      {"m_p95", Direction::LowerIsBetter},
+      {"m_max", Direction::LowerIsBetter},
+      {"has_projector", Direction::Equal},
+      {"projector_coverage_iou", Direction::HigherIsBetter},
+      {"reverse_projection_pixels", Direction::LowerIsBetter},
+      {"projector_color_mae", Direction::LowerIsBetter},
+  };
+  auto it = kBuiltin.find(metric);
+  if (known) *known = it != kBuiltin.end();
+  if (it != kBuiltin.end()) return it->second;
+  // Unknown metrics follow the naming convention when they can; otherwise any move is a change.
+  auto endsWith = [&](const char* suffix) {
+    std::string s = suffix;
+    return metric.size() >= s.size() && metric.compare(metric.size() - s.size(), s.size(), s) == 0;
+  };
+  if (endsWith("_iou")) return Direction::HigherIsBetter;
+  if (endsWith("_rate") || endsWith("_mae") || endsWith("_rmse")) return Direction::LowerIsBetter;
+  return Direction::Equal;
+}
+
+MetricTolerance Tolerances::forMetric(const std::string& metric) const {
+  ToleranceSpec entry;
+  if (auto it = metrics.find(metric); it != metrics.end()) entry = it->second;
+  MetricTolerance t;
+  t.direction = entry.direction ? *entry.direction
+                : fallback.direction ? *fallback.direction
+                                     : builtinDirection(metric);
+  t.absTolerance = entry.absTolerance ? *entry.absTolerance : fallback.absTolerance.value_or(0.0);
+  t.relTolerance = entry.relTolerance ? *entry.relTolerance : fallback.relTolerance.value_or(0.0);
+  return t;
+}
+
+Tolerances defaultTolerances() {
+  Tolerances t;
+  // The pipeline is deterministic for any thread count: metrics must match. 1e-9 relative only
+  // absorbs a decimal round trip through another tool.
+  t.fallback.absTolerance = 0.0;
+  t.fallback.relTolerance = 1e-9;
+  return t;
+}
+
+Tolerances parseTolerances(const nlohmann::json& j, const std::string& file) {
+  Tolerances t = defaultTolerances();
+  t.origin = file;
+  if (!j.is_object())
+    throw InputError(formatError(file, "/", "got " + typeName(j) + "; expected an object (a tolerance file)"));
+  for (auto it = j.begin(); it != j.end(); ++it) {
+    const std::string& key = it.key();
+    std::string place = "/" + pointerToken(key);
+    if (key == "schema") {
+      if (it.value() != kTolerancesSchema)
+        throw InputError(formatError(file, place, "got " + it.value().dump() + "; expected \"" +
+                                                      kTolerancesSchema + "\""));
+    } else if (key == "default") {
+      ToleranceSpec spec = parseSpec(it.value(), file, place);
+      if (spec.direction) t.fallback.direction = spec.direction;
+      if (spec.absTolerance) t.fallback.absTolerance = spec.absTolerance;
+      if (spec.relTolerance) t.fallback.relTolerance = spec.relTolerance;
+    } else if (key == "metrics") {
+      if (!it.value().is_object())
+        throw InputError(formatError(file, place, "got " + typeName(it.value()) +
+                                                      "; expected an object of metric name -> tolerance"));
+      for (auto m = it.value().begin(); m != it.value().end(); ++m)
+        t.metrics[m.key()] = parseSpec(m.value(), file, place + "/" + pointerToken(m.key()));
+    } else if (key == "timing") {
+      t.timing = parseTiming(it.value(), file);
+    } else {
+      throw InputError(formatError(file, place, "unknown key \"" + key +
+                                                    "\"; expected \"schema\", \"default\", \"metrics\" or \"timing\""));
+    }
+  }
+  return t;
+}
+
+Tolerances loadTolerances(const std::string& path) {
+  return parseTolerances(parseJsonDocument(readFile(path), path), path);
+}
+
+std::string GateResult::summary() const {
+  std::ostringstream s;
+  s << (passed() ? "PASS" : "FAIL") << ": " << regressions << (regressions == 1 ? " regression" : " regressions")
+    << ", " << improvements << " improved, " << passes << " within tolerance, " << reported
+    << " reported only; " << rowsCompared << (rowsCompared == 1 ? " row" : " rows") << " compared, " << rowsNew
+    << " new";
+  return s.str();
+}
+
+GateResult runGate(const ResultFile& current, const ResultFile& baseline, const Tolerances& tolerances) {
+  checkDuplicates(current);
+  checkDuplicates(baseline);
+
+  // A tolerance for a metric no row has is a typo that would otherwise never apply.
+  {
+    std::set<std::string> present;
+    for (const ResultFile* f : {&current, &baseline})
+      for (const ResultRow& row : f->rows) {
+        std::map<std::string, nlohmann::json> flat;
+        flatten(row.metrics, "", flat);
+        for (auto& [name, value] : flat) present.insert(name);
+      }
+    for (auto& [name, spec] : tolerances.metrics) {
+      bool known = false;
+      builtinDirection(name, &known);
+      if (!known && !present.count(name)) {
+        std::string names;
+        for (auto& p : present) names += (names.empty() ? "" : ", ") + p;
+        throw InputError(formatError(tolerances.origin, "/metrics/" + pointerToken(name),
+                                     "no row has a metric \"" + name + "\"; expected one of: " + names));
+      }
+    }
+  }
+
+  std::map<std::string, size_t> currentIndex;
+  for (size_t i = 0; i < current.rows.size(); ++i) currentIndex[current.rows[i].key()] = i;
+
+  GateResult result;
+  std::vector<std::string> problems;
+  std::set<std::string> matched;
+  for (size_t b = 0; b < baseline.rows.size(); ++b) {
+    const ResultRow& base = baseline.rows[b];
+    auto found = currentIndex.find(base.key());
+    if (found == currentIndex.end()) {
+      problems.push_back(formatError(baseline.path, baseline.pointers[b],
+                                     "row \"" + base.key() + "\" is in the baseline but missing from " + current.path +
+                                         "; expected every baseline row in the current results"));
+      continue;
+    }
+    matched.insert(base.key());
+    const ResultRow& cur = current.rows[found->second];
+    const std::string& curPointer = current.pointers[found->second];
+    ++result.rowsCompared;
+
+    std::map<std::string, nlohmann::json> baseMetrics, curMetrics;
+    flatten(base.metrics, "", baseMetrics);
+    flatten(cur.metrics, "", curMetrics);
+    for (auto& [name, bv] : baseMetrics) {
+      auto ci = curMetrics.find(name);
+      if (ci == curMetrics.end()) {
+        problems.push_back(formatError(current.path, curPointer + "/metrics",
+                                       "row \"" + base.key() + "\" has no metric \"" + name +
+                                           "\"; expected it, as in the baseline " + baseline.path));
+        continue;
+      }
+      const nlohmann::json& cv = ci->second;
+      // JSON has no NaN: nlohmann writes a NaN as null. A NaN can never pass a gate silently.
+      if (bv.is_null())
+        problems.push_back(formatError(baseline.path, metricPointer(baseline.pointers[b], "metrics", name),
+                                       "metric \"" + name + "\" is null (NaN); expected a number"));
+      if (cv.is_null())
+        problems.push_back(formatError(current.path, metricPointer(curPointer, "metrics", name),
+                                       "metric \"" + name + "\" is null (NaN); expected a number"));
+      if (bv.is_null() || cv.is_null()) continue;
+
+      GateCheck c = baseCheck(base, "metric", name);
+      c.baseline = bv;
+      c.current = cv;
+      MetricTolerance tol = tolerances.forMetric(name);
+      const std::string prefix = base.key() + ": metric \"" + name + "\" is ";
+      if (tol.direction == Direction::Ignore) {
+        c.tolerance = "ignore";
+        c.verdict = Verdict::Reported;
+      } else if (bv.is_number() && cv.is_number()) {
+        double bd = bv.get<double>(), cd = cv.get<double>();
+        double allowed = tol.allowed(bd);
+        std::string allowedText = formatNumber(allowed);
+        auto [cs, bs] = formatPair(cd, bd);
+        switch (tol.direction) {
+          case Direction::LowerIsBetter:
+            c.tolerance = "+" + allowedText;
+            if (cd > bd + allowed) {
+              c.verdict = Verdict::Regressed;
+              c.message = prefix + cs + ", above the baseline " + bs + " + tolerance " + allowedText;
+            } else if (cd < bd - allowed) {
+              c.verdict = Verdict::Improved;
+            }
+            break;
+          case Direction::HigherIsBetter:
+            c.tolerance = "-" + allowedText;
+            if (cd < bd - allowed) {
+              c.verdict = Verdict::Regressed;
+              c.message = prefix + cs + ", below the baseline " + bs + " - tolerance " + allowedText;
+            } else if (cd > bd + allowed) {
+              c.verdict = Verdict::Improved;
+            }
+            break;
+          default:
+            c.tolerance = "+/-" + allowedText;
+            if (std::fabs(cd - bd) > allowed) {
+              c.verdict = Verdict::Regressed;
+              c.message = prefix + cs + ", not the baseline " + bs + " +/- tolerance " + allowedText;
+            }
+        }
+      } else {
+        c.tolerance = "equal";
+        if (bv != cv) {
+          c.verdict = Verdict::Regressed;
+          c.message = prefix + formatValue(cv) + ", not the baseline " + formatValue(bv);
+        }
+      }
+      result.checks.push_back(std::move(c));
+    }
+    for (auto& [name, cv] : curMetrics) {
+      if (baseMetrics.count(name)) continue;
+      GateCheck c = baseCheck(cur, "metric", name);
+      c.current = cv;
+      c.verdict = Verdict::New;
+      c.tolerance = "-";
+      result.checks.push_back(std::move(c));
+    }
+
+    for (auto it = base.timings.begin(); it != base.timings.end(); ++it) {
+      const std::string& name = it.key();
+      GateCheck c = baseCheck(base, "timing", name);
+      c.baseline = it.value();
+      auto ct = cur.timings.find(name);
+      if (ct == cur.timings.end() || ct->is_null() || it.value().is_null()) {
+        // Timings are not part of the metric contract: a missing one is reported, not failed,
+        // unless the tolerance file asks for timings to gate.
+        if (ct != cur.timings.end()) c.current = *ct;
+        c.tolerance = "report";
+        c.verdict = tolerances.timing.mode == TimingMode::Fail ? Verdict::Regressed : Verdict::Reported;
+        if (c.verdict == Verdict::Regressed)
+          c.message = base.key() + ": timing \"" + name + "\" has no value in the current results; expected one";
+        result.checks.push_back(std::move(c));
+        continue;
+      }
+      c.current = *ct;
+      double bms = it.value().get<double>(), cms = ct->get<double>();
+      double ratio = bms > 0 ? cms / bms : (cms > 0 ? INFINITY : 1.0);
+      char ratioText[32];
+      std::snprintf(ratioText, sizeof ratioText, "%.2fx", ratio);
+      if (tolerances.timing.mode == TimingMode::Report) {
+        c.tolerance = "report";
+        c.verdict = Verdict::Reported;
+      } else if (bms < tolerances.timing.minMs) {
+        c.tolerance = "report (< " + formatNumber(tolerances.timing.minMs) + " ms)";
+        c.verdict = Verdict::Reported;
+      } else {
+        char limit[32];
+        std::snprintf(limit, sizeof limit, "<= %.2fx", tolerances.timing.maxRatio);
+        c.tolerance = limit;
+        if (ratio > tolerances.timing.maxRatio) {
+          c.verdict = Verdict::Regressed;
+          char maxText[32];
+          std::snprintf(maxText, sizeof maxText, "%.2fx", tolerances.timing.maxRatio);
+          c.message = base.key() + ": timing \"" + name + "\" is " + formatNumber(cms) + " ms, " + ratioText +
+                      " the baseline " + formatNumber(bms) + " ms, above the limit " + maxText;
+        }
+      }
+      result.checks.push_back(std::move(c));
+    }
+  }
+  for (size_t i = 0; i < current.rows.size(); ++i) {
+    if (matched.count(current.rows[i].key())) continue;
+    ++result.rowsNew;
+    GateCheck c = baseCheck(current.rows[i], "row", "(row)");
+    c.verdict = Verdict::New;
+    c.tolerance = "-";
+    c.message = current.rows[i].key() + ": new row (not in the baseline " + baseline.path + ")";
+    result.checks.push_back(std::move(c));
+  }
+  throwProblems(problems);
+
+  std::stable_sort(result.checks.begin(), result.checks.end(), [](const GateCheck& a, const GateCheck& b) {
+    return verdictRank(a.verdict) < verdictRank(b.verdict);
+  });
+  for (const GateCheck& c : result.checks) {
+    switch (c.verdict) {
+      case Verdict::Regressed: ++result.regressions; break;
+      case Verdict::Improved: ++result.improvements; break;
+      case Verdict::Pass: ++result.passes; break;
+      case Verdict::Reported: ++result.reported; break;
+      default: break;
+    }
+  }
+  return result;
+}
+
+std::string formatGateTable(const GateResult& result, bool brief) {
+  std::vector<std::array<std::string, 6>> lines;
+  lines.push_back({"verdict", "row", "metric", "baseline", "current", "tolerance"});
+  for (const GateCheck& c : result.checks) {
+    if (brief && (c.verdict == Verdict::Pass || c.verdict == Verdict::Reported)) continue;
+    std::string metric = c.kind == "timing" ? c.metric + " (ms)" : c.metric;
+    std::string bs = c.baseline.is_null() ? "-" : formatValue(c.baseline);
+    std::string cs = c.current.is_null() ? "-" : formatValue(c.current);
+    if (c.baseline.is_number() && c.current.is_number()) {
+      auto [b2, c2] = formatPair(c.baseline.get<double>(), c.current.get<double>());
+      bs = b2;
+      cs = c2;
+      if (c.kind == "timing" && c.baseline.get<double>() > 0) {
+        char ratio[32];
+        std::snprintf(ratio, sizeof ratio, " (%.2fx)", c.current.get<double>() / c.baseline.get<double>());
+        cs += ratio;
+      }
+    }
+    lines.push_back({toString(c.verdict), c.rowKey, metric, bs, cs, c.tolerance});
+  }
+  std::array<size_t, 6> width{};
+  for (auto& l : lines)
+    for (size_t i = 0; i < 6; ++i) width[i] = std::max(width[i], l[i].size());
+  std::string out;
+  for (auto& l : lines) {
+    std::string line;
+    for (size_t i = 0; i < 6; ++i) {
+      std::string cell = l[i];
+      // Numbers right-aligned, words left-aligned.
+      if (i == 3 || i == 4) cell = std::string(width[i] - cell.size(), ' ') + cell;
+      else if (i < 5) cell += std::string(width[i] - cell.size(), ' ');
+      line += (i ? "  " : "") + cell;
+    }
+    out += line + "\n";
+  }
+  if (brief && lines.size() == 1) out += "(no regressions, improvements or new entries)\n";
+  return out;
+}
+
+nlohmann::json gateToJson(const GateResult& result, const ResultFile& current, const ResultFile& baseline,
+                          const Tolerances& tolerances) {
+  nlohmann::json j;
+  j["schema"] = kGateSchema;
+  j["passed"] = result.passed();
+  j["summary"] = result.summary();
+  j["current"] = current.path;
+  j["baseline"] = baseline.path;
+  j["tolerances"] = tolerances.origin;
+  j["counts"] = {{"regressions", result.regressions}, {"improvements", result.improvements},
+                 {"passes", result.passes},           {"reported", result.reported},
+                 {"rows_compared", result.rowsCompared}, {"rows_new", result.rowsNew}};
+  nlohmann::json checks = nlohmann::json::array();
+  for (const GateCheck& c : result.checks) {
+    nlohmann::json k;
+    k["row"] = c.rowKey;
+    k["scene"] = c.scene;
+    k["config"] = c.config;
+    k["light"] = c.light;
+    k["kind"] = c.kind;
+    k["metric"] = c.metric;
+    k["baseline"] = c.baseline;
+    k["current"] = c.current;
+    k["tolerance"] = c.tolerance;
+    k["verdict"] = toString(c.verdict);
+    if (!c.message.empty()) k["message"] = c.message;
+    checks.push_back(std::move(k));
+  }
+  j["checks"] = std::move(checks);
+  return j;
+}
+
+std::string gateToJunitXml(const GateResult& result) {
+  // One <testsuite> per row, one <testcase> per metric or timing of that row; regressions carry a
+  // <failure> whose message names the metric and both values.
+  std::map<std::string, std::vector<const GateCheck*>> byRow;
+  std::vector<std::string> order;
+  for (const GateCheck& c : result.checks) {
+    if (!byRow.count(c.rowKey)) order.push_back(c.rowKey);
+    byRow[c.rowKey].push_back(&c);
+  }
+  std::sort(order.begin(), order.end());
+  std::ostringstream x;
+  size_t tests = result.checks.size();
+  x << "<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n";
+  x << "<testsuites name=\"shadowlab gate\" tests=\"" << tests << "\" failures=\"" << result.regressions
+    << "\" errors=\"0\">\n";
+  for (const std::string& row : order) {
+    const auto& checks = byRow[row];
+    size_t failures = 0;
+    for (auto* c : checks) failures += c->verdict == Verdict::Regressed;
+    x << "  <testsuite name=\"" << xmlEscape(row) << "\" tests=\"" << checks.size() << "\" failures=\"" << failures
+      << "\" errors=\"0\" skipped=\"0\">\n";
+    for (auto* c : checks) {
+      std::string name = c->kind == "timing" ? "timing." + c->metric : c->metric;
+      x << "    <testcase classname=\"" << xmlEscape(row) << "\" name=\"" << xmlEscape(name) << "\">";
+      if (c->verdict == Verdict::Regressed) {
+        x << "\n      <failure message=\"" << xmlEscape(c->message) << "\" type=\"regression\">"
+          << xmlEscape("baseline " + formatValue(c->baseline) + ", current " + formatValue(c->current) +
+                       ", tolerance " + c->tolerance)
+          << "</failure>\n    ";
+      } else if (c->verdict != Verdict::Pass) {
+        std::string note = toString(c->verdict) + ": baseline " +
+                           (c->baseline.is_null() ? std::string("-") : formatValue(c->baseline)) + ", current " +
+                           (c->current.is_null() ? std::string("-") : formatValue(c->current));
+        x << "<system-out>" << xmlEscape(note) << "</system-out>";
+      }
+      x << "</testcase>\n";
+    }
+    x << "  </testsuite>\n";
+  }
+  x << "</testsuites>\n";
+  return x.str();
+}
+
+std::vector<std::string> describeBaselineUpdate(const ResultFile& current, const ResultFile& baseline) {
+  std::vector<std::string> lines;
+  std::map<std::string, const ResultRow*> baseIndex, curIndex;
+  for (auto& r : baseline.rows) baseIndex[r.key()] = &r;
+  for (auto& r : current.rows) curIndex[r.key()] = &r;
+  for (auto& r : current.rows) {
+    auto b = baseIndex.find(r.key());
+    if (b == baseIndex.end()) {
+      lines.push_back("+ " + r.key() + ": new row");
+      continue;
+    }
+    std::map<std::string, nlohmann::json> bm, cm;
+    flatten(b->second->metrics, "", bm);
+    flatten(r.metrics, "", cm);
+    for (auto& [name, cv] : cm) {
+      auto bi = bm.find(name);
+      if (bi == bm.end()) lines.push_back("~ " + r.key() + ": metric \"" + name + "\" added: " + formatValue(cv));
+      else if (bi->second != cv) {
+        std::string bs = formatValue(bi->second), cs = formatValue(cv);
+        if (bi->second.is_number() && cv.is_number())
+          std::tie(bs, cs) = formatPair(bi->second.get<double>(), cv.get<double>());
+        lines.push_back("~ " + r.key() + ": metric \"" + name + "\" " + bs + " -> " + cs);
+      }
+    }
+    for (auto& [name, bv] : bm)
+      if (!cm.count(name)) lines.push_back("~ " + r.key() + ": metric \"" + name + "\" removed (was " + formatValue(bv) + ")");
+    if (b->second->method != r.method) lines.push_back("~ " + r.key() + ": method changed");
+  }
+  for (auto& r : baseline.rows)
+    if (!curIndex.count(r.key())) lines.push_back("- " + r.key() + ": row removed");
+  return lines;
+}
+
+}  // namespace shadowlab
