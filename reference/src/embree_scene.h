@@ -1,0 +1,73 @@
+#pragma once
+// Private to reference/: the Embree device and scene for one shadowlab::Scene, and the filter
+// function that gives Embree the harness's rules (alpha cutoff, one-sided materials, objects that
+// cast no shadow, and a shadow ray never hitting the primitive it starts on).
+#include <cstdint>
+#include <mutex>
+#include <string>
+#include <vector>
+
+#include <embree3/rtcore.h>
+#include <glm/glm.hpp>
+
+#include "shadowlab/scenes/scene.h"
+
+namespace shadowlab::reference_detail {
+
+// Packet width used everywhere: rtcIntersect8 / rtcOccluded8.
+constexpr int kLanes = 8;
+
+enum TriangleFlags : uint8_t {
+  kOneSided = 1,  // material.twoSided == false
+  kAlpha = 2,     // material has an alpha texture (holes where alpha < cutoff)
+};
+
+// What the filter needs about one Object, reachable from Embree's geometry user pointer.
+struct GeometryData {
+  unsigned geomId = 0;                  // == index into Scene::objects
+  const Object* object = nullptr;
+  const std::vector<Material>* materials = nullptr;
+  std::vector<glm::vec3> normals;       // per triangle, unit, cross(p1 - p0, p2 - p0) (CCW front)
+  std::vector<uint8_t> flags;           // per triangle, TriangleFlags
+  bool castsShadow = true;
+};
+
+enum class RayKind : uint8_t { Camera, Shadow };
+
+// Extended intersect context: Embree passes this pointer to the filter (the RTCIntersectContext
+// must be the first member). Rays carry their lane index (0..7) in ray.id so the filter can find
+// the primitive that lane started on.
+struct TraceContext {
+  RTCIntersectContext rtc;
+  RayKind kind = RayKind::Camera;
+  unsigned ignoreGeom[kLanes];
+  unsigned ignorePrim[kLanes];
+
+  explicit TraceContext(RayKind k);
+};
+
+class EmbreeScene {
+ public:
+  // Builds one triangle geometry per object (geomID = object index, primID = triangle index).
+  // Throws DriverError on any Embree error.
+  explicit EmbreeScene(const Scene& scene);
+  ~EmbreeScene();
+  EmbreeScene(const EmbreeScene&) = delete;
+  EmbreeScene& operator=(const EmbreeScene&) = delete;
+
+  RTCScene handle() const { return scene_; }
+  const GeometryData& geometry(unsigned geomId) const { return geometries_[geomId]; }
+  // Throws DriverError naming `what` and Embree's message when the device holds an error.
+  void check(const char* what) const;
+
+ private:
+  RTCDevice device_ = nullptr;
+  RTCScene scene_ = nullptr;
+  std::vector<GeometryData> geometries_;
+  // Embree's error callback may run on any thread.
+  mutable std::mutex messageMutex_;
+  mutable std::string lastMessage_;
+  static void errorCallback(void* self, RTCError code, const char* message);
+};
+
+}  // namespace shadowlab::reference_detail

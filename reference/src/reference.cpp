@@ -1,0 +1,548 @@
+// renderReference: the Embree ground truth. See reference/README.md for the channels, the
+// shadow-ray origin method and the sample pattern.
+#include "shadowlab/reference/reference.h"
+
+#include <algorithm>
+#include <atomic>
+#include <chrono>
+#include <cmath>
+#include <limits>
+#include <set>
+
+#include <tbb/blocked_range.h>
+#include <tbb/info.h>
+#include <tbb/parallel_for.h>
+#include <tbb/task_arena.h>
+
+#include "detail.h"
+#include "embree_scene.h"
+#include "shadowlab/scenes/error.h"
+#include "shadowlab/scenes/io.h"
+
+namespace shadowlab {
+namespace {
+
+using namespace reference_detail;
+
+static_assert(sizeof(glm::vec3) == 3 * sizeof(float), "positions are copied to Embree as packed float3");
+static_assert(sizeof(glm::uvec3) == 3 * sizeof(unsigned), "triangles are copied to Embree as packed uint3");
+
+constexpr int kTileSize = 16;              // pixels per tile side: the unit of parallel work
+constexpr int kBlockWidth = 4;             // a camera packet is a 4 x 2 pixel block
+constexpr int kBlockHeight = 2;
+static_assert(kBlockWidth * kBlockHeight == kLanes, "one camera packet per block");
+constexpr float kInf = std::numeric_limits<float>::infinity();
+
+// Shadow-ray origins move off the surface by this many units of the largest coordinate magnitude
+// among the hit point and its triangle's vertices: 2^-17, i.e. 128 times float's half-ulp (2^-24).
+// Embree's robust triangle test works on vertex coordinates relative to the ray origin, so its
+// rounding (and the rounding of the barycentric hit point) scale with those magnitudes; 128x
+// keeps the origin on the right side of every coplanar neighbour triangle. The own triangle is
+// excluded by identity in the filter, so the offset does not have to beat it.
+constexpr float kOriginOffsetScale = 1.0f / 131072.0f;
+
+struct LaneHit {
+  bool hit = false;
+  unsigned geom = 0;
+  unsigned prim = 0;
+  glm::vec3 position{0.0f};  // world, on the triangle (barycentric interpolation in double)
+  glm::vec3 normal{0.0f};    // unit geometric normal facing the camera
+  float offset = 0.0f;       // world distance shadow origins move along `normal`
+  glm::vec3 shadowOrigin() const { return position + normal * offset; }
+};
+
+struct PreparedLight {
+  const Light* light = nullptr;
+  double cosHalfCone = -1.0;  // spot: lit where cos(angle to the axis) >= this
+};
+
+struct PreparedProjector {
+  const Projector* projector = nullptr;
+  glm::dmat4 texFromWorld{1.0};
+};
+
+struct ProjectorSample {
+  float coverage = 0.0f;
+  float u = 0.0f, v = 0.0f;
+  glm::vec3 rgb{0.0f};
+};
+
+// The spp > 1 pattern, in pixel units relative to the pixel's top-left corner. A square count
+// is the k x k grid of cell centers; any other count is the Hammersley set ((i + 0.5) / N,
+// radical inverse of i, centred in its 2^ceil(log2 N) strata): one sample per column and per
+// dyadic row stratum. Both are fixed (no random jitter), so results are reproducible.
+std::vector<glm::vec2> samplePattern(int spp) {
+  std::vector<glm::vec2> pattern;
+  const int k = int(std::lround(std::sqrt(double(spp))));
+  if (k * k == spp) {
+    for (int b = 0; b < k; ++b)
+      for (int a = 0; a < k; ++a) pattern.emplace_back((a + 0.5f) / k, (b + 0.5f) / k);
+    return pattern;
+  }
+  int levels = 0;
+  while ((1 << levels) < spp) ++levels;
+  const double rowShift = 0.5 / double(1 << levels);
+  for (int i = 0; i < spp; ++i) {
+    double inverse = 0.0, weight = 0.5;
+    for (unsigned bits = unsigned(i); bits; bits >>= 1, weight *= 0.5)
+      if (bits & 1u) inverse += weight;
+    pattern.emplace_back(float((i + 0.5) / spp), float(inverse + rowShift));
+  }
+  return pattern;
+}
+
+float maxAbs(const glm::vec3& p) { return std::max(std::fabs(p.x), std::max(std::fabs(p.y), std::fabs(p.z))); }
+
+class Tracer {
+ public:
+  Tracer(const Scene& scene, const EmbreeScene& embree, const std::vector<PreparedLight>& lights,
+         const std::vector<PreparedProjector>& projectors)
+      : scene_(scene), embree_(embree), lights_(lights), projectors_(projectors) {}
+
+  // Camera rays through (px + dx, py + dy) for the active lanes.
+  void tracePrimary(const int* px, const int* py, const bool* active, float dx, float dy, LaneHit* hits) {
+    RTCRayHit8 rayHit;
+    alignas(32) int valid[kLanes];
+    const Camera& camera = scene_.camera;
+    for (int lane = 0; lane < kLanes; ++lane) {
+      hits[lane] = LaneHit{};
+      valid[lane] = active[lane] ? -1 : 0;
+      const glm::vec3 dir = active[lane] ? camera.rayDirection(px[lane] + dx, py[lane] + dy) : glm::vec3(0, 0, 1);
+      rayHit.ray.org_x[lane] = camera.position.x;
+      rayHit.ray.org_y[lane] = camera.position.y;
+      rayHit.ray.org_z[lane] = camera.position.z;
+      rayHit.ray.dir_x[lane] = dir.x;
+      rayHit.ray.dir_y[lane] = dir.y;
+      rayHit.ray.dir_z[lane] = dir.z;
+      rayHit.ray.tnear[lane] = 0.0f;
+      rayHit.ray.tfar[lane] = kInf;
+      rayHit.ray.time[lane] = 0.0f;
+      rayHit.ray.mask[lane] = ~0u;
+      rayHit.ray.id[lane] = unsigned(lane);
+      rayHit.ray.flags[lane] = 0;
+      rayHit.hit.geomID[lane] = RTC_INVALID_GEOMETRY_ID;
+      rayHit.hit.primID[lane] = RTC_INVALID_GEOMETRY_ID;
+      if (active[lane]) ++primaryRays;
+    }
+    TraceContext context(RayKind::Camera);
+    rtcIntersect8(valid, embree_.handle(), &context.rtc, &rayHit);
+    for (int lane = 0; lane < kLanes; ++lane) {
+      if (!active[lane] || rayHit.hit.geomID[lane] == RTC_INVALID_GEOMETRY_ID) continue;
+      LaneHit& h = hits[lane];
+      h.hit = true;
+      h.geom = rayHit.hit.geomID[lane];
+      h.prim = rayHit.hit.primID[lane];
+      const GeometryData& geometry = embree_.geometry(h.geom);
+      const Object& object = *geometry.object;
+      const glm::uvec3& tri = object.triangles[h.prim];
+      const glm::vec3& p0 = object.positions[tri.x];
+      const glm::vec3& p1 = object.positions[tri.y];
+      const glm::vec3& p2 = object.positions[tri.z];
+      const double u = rayHit.hit.u[lane], v = rayHit.hit.v[lane];
+      h.position = glm::vec3((1.0 - u - v) * glm::dvec3(p0) + u * glm::dvec3(p1) + v * glm::dvec3(p2));
+      glm::vec3 normal = geometry.normals[h.prim];
+      if (normal == glm::vec3(0.0f)) {
+        normal = glm::normalize(glm::vec3(rayHit.hit.Ng_x[lane], rayHit.hit.Ng_y[lane], rayHit.hit.Ng_z[lane]));
+      }
+      const glm::vec3 dir(rayHit.ray.dir_x[lane], rayHit.ray.dir_y[lane], rayHit.ray.dir_z[lane]);
+      h.normal = glm::dot(normal, dir) > 0.0f ? -normal : normal;
+      const float magnitude = std::max(std::max(maxAbs(h.position), maxAbs(p0)), std::max(maxAbs(p1), maxAbs(p2)));
+      h.offset = kOriginOffsetScale * magnitude;
+    }
+  }
+
+  // Occlusion of the segments from each active lane's shadow origin along dir[lane] up to
+  // tfar[lane]. With wantDistance, occluded lanes are traced again for the nearest occluder.
+  void traceShadow(const LaneHit* hits, const glm::vec3* dir, const float* tfar, const bool* active,
+                   bool wantDistance, bool* occluded, float* distance) {
+    RTCRay8 ray;
+    alignas(32) int valid[kLanes];
+    TraceContext context(RayKind::Shadow);
+    int count = 0;
+    for (int lane = 0; lane < kLanes; ++lane) {
+      occluded[lane] = false;
+      distance[lane] = -1.0f;
+      valid[lane] = active[lane] ? -1 : 0;
+      const glm::vec3 origin = active[lane] ? hits[lane].shadowOrigin() : glm::vec3(0.0f);
+      const glm::vec3 d = active[lane] ? dir[lane] : glm::vec3(0, 1, 0);
+      ray.org_x[lane] = origin.x;
+      ray.org_y[lane] = origin.y;
+      ray.org_z[lane] = origin.z;
+      ray.dir_x[lane] = d.x;
+      ray.dir_y[lane] = d.y;
+      ray.dir_z[lane] = d.z;
+      ray.tnear[lane] = 0.0f;
+      ray.tfar[lane] = active[lane] ? tfar[lane] : 0.0f;
+      ray.time[lane] = 0.0f;
+      ray.mask[lane] = ~0u;
+      ray.id[lane] = unsigned(lane);
+      ray.flags[lane] = 0;
+      if (active[lane]) {
+        context.ignoreGeom[lane] = hits[lane].geom;
+        context.ignorePrim[lane] = hits[lane].prim;
+        ++count;
+      }
+    }
+    if (count == 0) return;
+    shadowRays += count;
+    rtcOccluded8(valid, embree_.handle(), &context.rtc, &ray);
+    int occludedCount = 0;
+    for (int lane = 0; lane < kLanes; ++lane) {
+      // Embree marks an occluded ray by setting tfar to -inf.
+      occluded[lane] = active[lane] && ray.tfar[lane] < 0.0f;
+      if (occluded[lane]) ++occludedCount;
+    }
+    if (!wantDistance || occludedCount == 0) return;
+    // Only the occluded lanes need the closest hit; lit lanes (usually most) stay any-hit rays.
+    RTCRayHit8 rayHit;
+    for (int lane = 0; lane < kLanes; ++lane) {
+      valid[lane] = occluded[lane] ? -1 : 0;
+      const glm::vec3 origin = active[lane] ? hits[lane].shadowOrigin() : glm::vec3(0.0f);
+      const glm::vec3 d = active[lane] ? dir[lane] : glm::vec3(0, 1, 0);
+      rayHit.ray.org_x[lane] = origin.x;
+      rayHit.ray.org_y[lane] = origin.y;
+      rayHit.ray.org_z[lane] = origin.z;
+      rayHit.ray.dir_x[lane] = d.x;
+      rayHit.ray.dir_y[lane] = d.y;
+      rayHit.ray.dir_z[lane] = d.z;
+      rayHit.ray.tnear[lane] = 0.0f;
+      rayHit.ray.tfar[lane] = occluded[lane] ? tfar[lane] : 0.0f;
+      rayHit.ray.time[lane] = 0.0f;
+      rayHit.ray.mask[lane] = ~0u;
+      rayHit.ray.id[lane] = unsigned(lane);
+      rayHit.ray.flags[lane] = 0;
+      rayHit.hit.geomID[lane] = RTC_INVALID_GEOMETRY_ID;
+    }
+    shadowRays += occludedCount;
+    rtcIntersect8(valid, embree_.handle(), &context.rtc, &rayHit);
+    for (int lane = 0; lane < kLanes; ++lane) {
+      if (!occluded[lane]) continue;
+      // Both passes apply the same filter to the same segment, so the closest hit exists.
+      distance[lane] = rayHit.hit.geomID[lane] != RTC_INVALID_GEOMETRY_ID ? rayHit.ray.tfar[lane] : 0.0f;
+    }
+  }
+
+  // Visibility (exactly 0 or 1) of one light at each hit lane; distance to the nearest occluder
+  // (-1 where none; 0 where the visible side of the surface faces away from the light).
+  void evalLight(const PreparedLight& prepared, const LaneHit* hits, bool wantDistance, float* vis,
+                 float* distance) {
+    const Light& light = *prepared.light;
+    glm::vec3 dir[kLanes];
+    float tfar[kLanes];
+    bool active[kLanes];
+    for (int lane = 0; lane < kLanes; ++lane) {
+      active[lane] = false;
+      vis[lane] = 0.0f;
+      distance[lane] = -1.0f;
+      const LaneHit& h = hits[lane];
+      if (!h.hit) continue;
+      glm::vec3 toLight;
+      if (light.type == LightType::Directional) {
+        toLight = -light.direction;
+        tfar[lane] = kInf;
+        dir[lane] = glm::normalize(toLight);
+      } else {
+        toLight = light.position - h.position;
+        if (light.type == LightType::Spot) {
+          const glm::dvec3 fromLight = glm::dvec3(h.position) - glm::dvec3(light.position);
+          const double length = glm::length(fromLight);
+          const double cosAngle = length > 0.0 ? glm::dot(fromLight, glm::dvec3(light.direction)) / length : -1.0;
+          if (cosAngle < prepared.cosHalfCone) continue;  // outside the cone: unlit, no occluder
+        }
+        const glm::vec3 segment = light.position - h.shadowOrigin();
+        tfar[lane] = glm::length(segment);
+        if (!(tfar[lane] > 0.0f)) continue;
+        dir[lane] = segment / tfar[lane];
+      }
+      // The camera sees the side `normal` points to; light arriving from the other side lights
+      // only the hidden side. The surface itself is the occluder, at distance 0.
+      if (!(glm::dot(h.normal, toLight) > 0.0f)) {
+        distance[lane] = 0.0f;
+        continue;
+      }
+      active[lane] = true;
+    }
+    bool occluded[kLanes];
+    float occluderDistance[kLanes];
+    traceShadow(hits, dir, tfar, active, wantDistance, occluded, occluderDistance);
+    for (int lane = 0; lane < kLanes; ++lane) {
+      if (!active[lane]) continue;
+      vis[lane] = occluded[lane] ? 0.0f : 1.0f;
+      distance[lane] = occluded[lane] ? occluderDistance[lane] : -1.0f;
+    }
+  }
+
+  void evalProjector(const PreparedProjector& prepared, const LaneHit* hits, ProjectorSample* out) {
+    const Projector& projector = *prepared.projector;
+    glm::vec3 dir[kLanes];
+    float tfar[kLanes];
+    bool active[kLanes];
+    for (int lane = 0; lane < kLanes; ++lane) {
+      active[lane] = false;
+      out[lane] = ProjectorSample{};
+      const LaneHit& h = hits[lane];
+      if (!h.hit) continue;
+      const glm::dvec4 clip = prepared.texFromWorld * glm::dvec4(glm::dvec3(h.position), 1.0);
+      const double w = clip.w;
+      const double u = w != 0.0 ? clip.x / w : 0.0;
+      const double v = w != 0.0 ? clip.y / w : 0.0;
+      const double depth = w != 0.0 ? clip.z / w : 0.0;
+      out[lane].u = float(u);
+      out[lane].v = float(v);
+      const bool inside = w > 0.0 && u >= 0.0 && u <= 1.0 && v >= 0.0 && v <= 1.0 && depth >= 0.0 && depth <= 1.0;
+      if (!inside) continue;
+      if (!(glm::dot(h.normal, projector.position - h.position) > 0.0f)) continue;  // lights the hidden side
+      const glm::vec3 segment = projector.position - h.shadowOrigin();
+      tfar[lane] = glm::length(segment);
+      if (!(tfar[lane] > 0.0f)) continue;
+      dir[lane] = segment / tfar[lane];
+      active[lane] = true;
+    }
+    bool occluded[kLanes];
+    float unusedDistance[kLanes];
+    traceShadow(hits, dir, tfar, active, false, occluded, unusedDistance);
+    const Image& image = projector.image;
+    for (int lane = 0; lane < kLanes; ++lane) {
+      if (!active[lane] || occluded[lane]) continue;
+      out[lane].coverage = 1.0f;
+      if (image.width > 0 && image.height > 0 && image.channels > 0) {
+        // NEAREST: texel floor(u * W), floor(v * H), with u = 1 (v = 1) in the last column (row).
+        const int x = std::min(image.width - 1, std::max(0, int(std::floor(double(out[lane].u) * image.width))));
+        const int y = std::min(image.height - 1, std::max(0, int(std::floor(double(out[lane].v) * image.height))));
+        for (int c = 0; c < 3; ++c) out[lane].rgb[c] = image.at(x, y, std::min(c, image.channels - 1));
+      }
+    }
+  }
+
+  uint64_t primaryRays = 0;
+  uint64_t shadowRays = 0;
+
+ private:
+  const Scene& scene_;
+  const EmbreeScene& embree_;
+  const std::vector<PreparedLight>& lights_;
+  const std::vector<PreparedProjector>& projectors_;
+};
+
+struct Planes {
+  float* hit;
+  float* objectId;
+  float* primId;
+  float* p[3];
+  float* n[3];
+  std::vector<float*> vis, occluderDist;
+  std::vector<float*> coverage, u, v, rgb[3];
+};
+
+}  // namespace
+
+Frame renderReference(const Scene& scene, const ReferenceOptions& options, ReferenceStats* stats) {
+  if (options.spp < 1 || options.spp > 1024) {
+    throw InputError("reference: error: spp " + std::to_string(options.spp) + "; expected 1..1024");
+  }
+  if (options.threads < 0) {
+    throw InputError("reference: error: threads " + std::to_string(options.threads) + "; expected 0 (all) or more");
+  }
+  const int width = scene.camera.width;
+  const int height = scene.camera.height;
+  if (width < 1 || height < 1) {
+    throw InputError(formatError(scene.path, "/camera", "resolution " + std::to_string(width) + "x" +
+                                                            std::to_string(height) + "; expected at least 1x1"));
+  }
+  {
+    std::set<std::string> lightNames, projectorNames;
+    for (const Light& light : scene.lights) {
+      if (!lightNames.insert(light.name).second)
+        throw InputError(formatError(scene.path, "/lights", "two lights named \"" + light.name + "\"; expected unique names"));
+    }
+    for (const Projector& projector : scene.projectors) {
+      if (!projectorNames.insert(projector.name).second)
+        throw InputError(formatError(scene.path, "/projectors",
+                                     "two projectors named \"" + projector.name + "\"; expected unique names"));
+    }
+  }
+
+  Frame frame;
+  frame.width = width;
+  frame.height = height;
+  Planes planes{};
+  planes.hit = frame.add("hit").data();
+  planes.objectId = frame.add("object_id").data();
+  planes.primId = frame.add("prim_id").data();
+  const char* axes[3] = {"x", "y", "z"};
+  for (int a = 0; a < 3; ++a) planes.p[a] = frame.add(std::string("P.") + axes[a]).data();
+  for (int a = 0; a < 3; ++a) planes.n[a] = frame.add(std::string("N.") + axes[a]).data();
+  std::vector<PreparedLight> lights;
+  for (const Light& light : scene.lights) {
+    planes.vis.push_back(frame.add("light." + light.name + ".vis").data());
+    planes.occluderDist.push_back(frame.add("light." + light.name + ".occluder_dist", -1.0f).data());
+    PreparedLight prepared;
+    prepared.light = &light;
+    if (light.type == LightType::Spot) prepared.cosHalfCone = std::cos(double(light.coneDeg) * 0.5 * M_PI / 180.0);
+    lights.push_back(prepared);
+  }
+  std::vector<PreparedProjector> projectors;
+  for (const Projector& projector : scene.projectors) {
+    const std::string prefix = "proj." + projector.name + ".";
+    planes.coverage.push_back(frame.add(prefix + "coverage").data());
+    planes.u.push_back(frame.add(prefix + "u").data());
+    planes.v.push_back(frame.add(prefix + "v").data());
+    const char* colors[3] = {"R", "G", "B"};
+    for (int c = 0; c < 3; ++c) planes.rgb[c].push_back(frame.add(prefix + colors[c]).data());
+    projectors.push_back({&projector, glm::dmat4(projector.texFromWorld())});
+  }
+  // frame.add may reallocate `data` while planes are added: take the pointers again now.
+  {
+    size_t index = 0;
+    auto next = [&]() { return frame.data[index++].data(); };
+    planes.hit = next();
+    planes.objectId = next();
+    planes.primId = next();
+    for (int a = 0; a < 3; ++a) planes.p[a] = next();
+    for (int a = 0; a < 3; ++a) planes.n[a] = next();
+    for (size_t l = 0; l < lights.size(); ++l) {
+      planes.vis[l] = next();
+      planes.occluderDist[l] = next();
+    }
+    for (size_t p = 0; p < projectors.size(); ++p) {
+      planes.coverage[p] = next();
+      planes.u[p] = next();
+      planes.v[p] = next();
+      for (int c = 0; c < 3; ++c) planes.rgb[c][p] = next();
+    }
+  }
+
+  nlohmann::json lightNames = nlohmann::json::array(), projectorNames = nlohmann::json::array();
+  for (const Light& light : scene.lights) lightNames.push_back(light.name);
+  for (const Projector& projector : scene.projectors) projectorNames.push_back(projector.name);
+  frame.meta = {{"kind", "reference"},
+                {"scene", scene.name},
+                {"scene_hash", scene.hash},
+                {"camera_hash", reference_detail::cameraHash(scene.camera)},
+                {"width", width},
+                {"height", height},
+                {"lights", lightNames},
+                {"projectors", projectorNames},
+                {"spp", options.spp},
+                {"reference_hash", referenceHash(scene, options)}};
+
+  const int threads = options.threads > 0 ? options.threads : std::max(1, tbb::info::default_concurrency());
+  tbb::task_arena arena(threads);
+  const std::vector<glm::vec2> pattern = options.spp > 1 ? samplePattern(options.spp) : std::vector<glm::vec2>{};
+  const int tilesX = (width + kTileSize - 1) / kTileSize;
+  const int tilesY = (height + kTileSize - 1) / kTileSize;
+  std::atomic<uint64_t> primaryRays{0}, shadowRays{0};
+  const size_t lightCount = lights.size(), projectorCount = projectors.size();
+
+  using Clock = std::chrono::steady_clock;
+  const auto buildStart = Clock::now();
+  std::unique_ptr<EmbreeScene> embree;
+  arena.execute([&] { embree = std::make_unique<EmbreeScene>(scene); });
+  const auto traceStart = Clock::now();
+
+  arena.execute([&] {
+    tbb::parallel_for(tbb::blocked_range<int>(0, tilesX * tilesY), [&](const tbb::blocked_range<int>& range) {
+      Tracer tracer(scene, *embree, lights, projectors);
+      LaneHit center[kLanes], sample[kLanes];
+      std::vector<float> centerVis(lightCount * kLanes), centerDist(lightCount * kLanes);
+      std::vector<ProjectorSample> centerProj(projectorCount * kLanes);
+      std::vector<double> visSum(lightCount * kLanes);
+      std::vector<ProjectorSample> projSum(projectorCount * kLanes);
+      float sampleVis[kLanes], sampleDist[kLanes];
+      ProjectorSample sampleProj[kLanes];
+      for (int tile = range.begin(); tile != range.end(); ++tile) {
+        const int x0 = (tile % tilesX) * kTileSize, y0 = (tile / tilesX) * kTileSize;
+        const int x1 = std::min(width, x0 + kTileSize), y1 = std::min(height, y0 + kTileSize);
+        for (int by = y0; by < y1; by += kBlockHeight) {
+          for (int bx = x0; bx < x1; bx += kBlockWidth) {
+            int px[kLanes], py[kLanes];
+            bool active[kLanes];
+            for (int lane = 0; lane < kLanes; ++lane) {
+              px[lane] = bx + lane % kBlockWidth;
+              py[lane] = by + lane / kBlockWidth;
+              active[lane] = px[lane] < x1 && py[lane] < y1;
+            }
+            tracer.tracePrimary(px, py, active, 0.5f, 0.5f, center);
+            for (size_t l = 0; l < lightCount; ++l)
+              tracer.evalLight(lights[l], center, true, &centerVis[l * kLanes], &centerDist[l * kLanes]);
+            for (size_t p = 0; p < projectorCount; ++p) tracer.evalProjector(projectors[p], center, &centerProj[p * kLanes]);
+
+            int sameObject[kLanes] = {};
+            if (!pattern.empty()) {
+              std::fill(visSum.begin(), visSum.end(), 0.0);
+              std::fill(projSum.begin(), projSum.end(), ProjectorSample{});
+              bool sampleActive[kLanes];
+              for (int lane = 0; lane < kLanes; ++lane) sampleActive[lane] = active[lane] && center[lane].hit;
+              for (const glm::vec2& offset : pattern) {
+                tracer.tracePrimary(px, py, sampleActive, offset.x, offset.y, sample);
+                // Only samples on the center's object count: the pixel's fractional visibility
+                // is that of the surface its id and position describe.
+                for (int lane = 0; lane < kLanes; ++lane) {
+                  if (sample[lane].hit && sample[lane].geom != center[lane].geom) sample[lane].hit = false;
+                  if (sample[lane].hit) ++sameObject[lane];
+                }
+                for (size_t l = 0; l < lightCount; ++l) {
+                  tracer.evalLight(lights[l], sample, false, sampleVis, sampleDist);
+                  for (int lane = 0; lane < kLanes; ++lane)
+                    if (sample[lane].hit) visSum[l * kLanes + lane] += sampleVis[lane];
+                }
+                for (size_t p = 0; p < projectorCount; ++p) {
+                  tracer.evalProjector(projectors[p], sample, sampleProj);
+                  for (int lane = 0; lane < kLanes; ++lane) {
+                    if (!sample[lane].hit) continue;
+                    ProjectorSample& sum = projSum[p * kLanes + lane];
+                    sum.coverage += sampleProj[lane].coverage;
+                    sum.rgb += sampleProj[lane].rgb;
+                  }
+                }
+              }
+            }
+
+            for (int lane = 0; lane < kLanes; ++lane) {
+              if (!active[lane]) continue;
+              const size_t pixel = size_t(py[lane]) * width + px[lane];
+              const LaneHit& h = center[lane];
+              planes.hit[pixel] = h.hit ? 1.0f : 0.0f;
+              planes.objectId[pixel] = h.hit ? float(embree->geometry(h.geom).object->id) : 0.0f;
+              planes.primId[pixel] = h.hit ? float(h.prim) : 0.0f;
+              for (int a = 0; a < 3; ++a) {
+                planes.p[a][pixel] = h.position[a];
+                planes.n[a][pixel] = h.normal[a];
+              }
+              const int count = sameObject[lane];
+              for (size_t l = 0; l < lightCount; ++l) {
+                const size_t k = l * kLanes + lane;
+                planes.vis[l][pixel] = count > 0 ? float(visSum[k] / count) : centerVis[k];
+                planes.occluderDist[l][pixel] = centerDist[k];
+              }
+              for (size_t p = 0; p < projectorCount; ++p) {
+                const size_t k = p * kLanes + lane;
+                const ProjectorSample& c = centerProj[k];
+                planes.u[p][pixel] = c.u;
+                planes.v[p][pixel] = c.v;
+                const ProjectorSample value =
+                    count > 0 ? ProjectorSample{projSum[k].coverage / count, 0, 0, projSum[k].rgb / float(count)} : c;
+                planes.coverage[p][pixel] = value.coverage;
+                for (int ch = 0; ch < 3; ++ch) planes.rgb[ch][p][pixel] = value.rgb[ch];
+              }
+            }
+          }
+        }
+        embree->check("tracing a tile");
+      }
+      primaryRays += tracer.primaryRays;
+      shadowRays += tracer.shadowRays;
+    });
+  });
+  const auto traceEnd = Clock::now();
+
+  if (stats) {
+    stats->primaryRays = primaryRays.load();
+    stats->shadowRays = shadowRays.load();
+    stats->buildSeconds = std::chrono::duration<double>(traceStart - buildStart).count();
+    stats->seconds = std::chrono::duration<double>(traceEnd - traceStart).count();
+  }
+  return frame;
+}
+
+}  // namespace shadowlab
