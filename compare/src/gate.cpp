@@ -305,7 +305,7 @@ Tolerances parseTolerances(const nlohmann::json& j, const std::string& file) {
   Tolerances t = defaultTolerances();
   t.origin = file;
   if (!j.is_object())
-    throw InputError(formatError(file, "/", "got " + typeName(j) + "; expected an object (a tolerance file)"));
+    throw InputError(formatError(file, "", "got " + typeName(j) + "; expected an object (a tolerance file)"));
   for (auto it = j.begin(); it != j.end(); ++it) {
     const std::string& key = it.key();
     std::string place = "/" + pointerToken(key);

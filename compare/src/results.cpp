@@ -38,7 +38,7 @@ std::string pointerToken(const std::string& key) {
 
 ResultRow rowFromJson(const nlohmann::json& j, const std::string& file, const std::string& pointer) {
   auto fail = [&](const std::string& place, const std::string& what) {
-    throw InputError(formatError(file, place.empty() ? "/" : place, what));
+    throw InputError(formatError(file, place, what));  // "" = the whole document
   };
   if (!j.is_object()) fail(pointer, "got " + typeName(j) + "; expected a result row (an object)");
   ResultRow row;
@@ -120,10 +120,10 @@ ResultFile loadResultFile(const std::string& path) {
   file.document = parseJsonDocument(readFile(path), path);
   const nlohmann::json& doc = file.document;
   if (!doc.is_object())
-    throw InputError(formatError(path, "/", "got " + typeName(doc) + "; expected an object with \"schema\""));
+    throw InputError(formatError(path, "", "got " + typeName(doc) + "; expected an object with \"schema\""));
   auto schema = doc.find("schema");
   if (schema == doc.end())
-    throw InputError(formatError(path, "/", std::string("missing \"schema\"; expected \"") + kMetricsSchema +
+    throw InputError(formatError(path, "", std::string("missing \"schema\"; expected \"") + kMetricsSchema +
                                                 "\" (metrics.json) or \"" + kResultsSchema + "\" (results.json)"));
   if (!schema->is_string() || (*schema != kMetricsSchema && *schema != kResultsSchema))
     throw InputError(formatError(path, "/schema", "got " + schema->dump() + "; expected \"" + kMetricsSchema +
@@ -135,7 +135,7 @@ ResultFile loadResultFile(const std::string& path) {
     return file;
   }
   auto rows = doc.find("rows");
-  if (rows == doc.end()) throw InputError(formatError(path, "/", "missing \"rows\"; expected an array of result rows"));
+  if (rows == doc.end()) throw InputError(formatError(path, "", "missing \"rows\"; expected an array of result rows"));
   if (!rows->is_array())
     throw InputError(formatError(path, "/rows", "got " + typeName(*rows) + "; expected an array of result rows"));
   for (size_t i = 0; i < rows->size(); ++i) {
