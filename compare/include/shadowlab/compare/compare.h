@@ -27,6 +27,13 @@ const char* toString(PixelClass c);
 struct CompareOptions {
   std::string light;            // empty: the light the raster frame rendered (meta "light")
   float boundaryTexels = 2.0f;  // aliasing: within this many map texels of a reference boundary
+  // leak: the reference occluder counts as "within the bias" when its distance along the shadow
+  // ray is at most leakBiasFactor * bias_world (the slack covers the map's half-texel sampling
+  // offset; METRICS.md explains the value).
+  float leakBiasFactor = 1.5f;
+  // How the two inputs are named in error messages (the CLI passes the file paths).
+  std::string referenceName = "reference frame";
+  std::string rasterName = "raster frame";
 };
 
 struct Metrics {
@@ -49,7 +56,16 @@ struct Metrics {
 struct Classification {
   int width = 0, height = 0;
   std::vector<PixelClass> classes;  // width*height
+  // 1 where the reference decides "lit" (visibility >= 0.5), 0 elsewhere; width*height. Lets the
+  // pictures shade correct pixels as lit or shadowed.
+  std::vector<uint8_t> referenceLit;
 };
+
+// The light compareFrames would use for these frames and options (see CompareOptions::light).
+std::string resolveCompareLight(const Frame& reference, const Frame& raster, const CompareOptions& options);
+
+// RGB color of each class in errors.png (and the legend).
+void classColor(PixelClass c, bool referenceLit, uint8_t rgb[3]);
 
 // Throws InputError on mismatched sizes, scene hashes or missing channels.
 Metrics compareFrames(const Frame& reference, const Frame& raster, const CompareOptions& options = {},

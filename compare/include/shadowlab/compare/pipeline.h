@@ -33,6 +33,8 @@ struct RunResult {
   Metrics metrics;
   RasterTimings timings;
   double compareMs = 0;
+  bool referenceTraced = false;  // false: the reference came from the cache
+  ReferenceStats referenceStats;  // filled only when traced
 };
 
 RunResult runPipeline(const Scene& scene, const Method& method, Rasterizer& rasterizer,

@@ -1,0 +1,134 @@
+// `shadowlab run SCENE [--method M.json] [--set key=value ...] -o DIR`: reference (cached by
+// content hash), raster and compare in one process; writes metrics.json, errors.png, triptych.png.
+#include <algorithm>
+#include <cstdio>
+#include <filesystem>
+#include <map>
+#include <memory>
+
+#include "command.h"
+#include "shadowlab/compare/pipeline.h"
+#include "shadowlab/compare/results.h"
+#include "shadowlab/compare/sweep.h"
+#include "shadowlab/scenes/error.h"
+#include "shadowlab/scenes/io.h"
+#include "shadowlab/scenes/loader.h"
+
+namespace {
+
+namespace fs = std::filesystem;
+using namespace shadowlab;
+
+struct Options {
+  std::string scene;
+  std::string methodFile;
+  std::vector<std::string> sets;
+  std::string light;
+  int spp = 1;
+  std::string outDir;
+  std::string cacheDir;
+  std::string device;
+  bool keepImages = false;
+};
+
+int run(const Options& o) {
+  // ---- inputs: every error surfaces before anything is traced or written -------------------
+  const Scene scene = loadScene(resolveScenePath(o.scene));
+  Method method;
+  if (!o.methodFile.empty()) method = loadMethodFile(o.methodFile);
+  std::map<std::string, std::string> given;  // key -> value text, last --set wins
+  for (const auto& s : o.sets) {
+    const auto eq = s.find('=');
+    if (eq == std::string::npos || eq == 0) {
+      throw InputError("--set " + s + ": error: got \"" + s + "\"; expected key=value (e.g. map.size=4096)");
+    }
+    const std::string key = s.substr(0, eq), value = s.substr(eq + 1);
+    applyMethodSetting(method, key, value, "--set " + s);
+    given[key] = value;
+  }
+  validateMethod(method, o.methodFile.empty() ? "--set" : o.methodFile);
+  if (!o.light.empty() && !scene.findLight(o.light)) {
+    std::string names;
+    for (const auto& l : scene.lights) names += (names.empty() ? "" : ", ") + l.name;
+    throw InputError("--light " + o.light + ": error: scene " + scene.path + " has no light \"" + o.light +
+                     "\"; expected one of: " + (names.empty() ? "(none)" : names));
+  }
+  if (scene.lights.empty()) {
+    throw InputError(formatError(scene.path, "/lights", "the scene has no light; expected at least one to compare"));
+  }
+  if (o.spp < 1) throw InputError("--spp: error: got " + std::to_string(o.spp) + "; expected an integer >= 1");
+  const std::string light = o.light.empty() ? scene.lights.front().name : o.light;
+
+  // `config` names what was set, like a sweep row: the canonical "key=value" of the --set keys,
+  // sorted by key (so a run matches the sweep row of the same configuration); else the method name.
+  std::string config;
+  const nlohmann::json resolved = methodToJson(method);
+  for (const auto& [key, text] : given) {
+    (void)text;
+    config += (config.empty() ? "" : ",") + key + "=" + canonicalValueText(resolved.at(key));
+  }
+  if (config.empty()) config = method.name.empty() ? "default" : method.name;
+
+  // ---- work ----------------------------------------------------------------------------------
+  RasterDeviceOptions deviceOptions;
+  deviceOptions.device = o.device;
+  Rasterizer rasterizer(deviceOptions);
+  ReferenceCache cache(o.cacheDir);
+  ReferenceOptions referenceOptions;
+  referenceOptions.spp = o.spp;
+  const RunResult r = runPipeline(scene, method, rasterizer, cache, light, referenceOptions);
+  if (r.referenceTraced) {
+    std::printf("reference: traced (%.3f s, %.1f Mrays/s) -> %s\n", r.referenceStats.seconds,
+                r.referenceStats.mraysPerS(), cache.dir().c_str());
+  } else {
+    std::printf("reference: cached (%s)\n", cache.dir().c_str());
+  }
+  std::printf("raster: %s, shadow %.2f ms, camera %.2f ms, readback %.2f ms\n", rasterizer.deviceName().c_str(),
+              r.timings.shadowMs, r.timings.cameraMs, r.timings.readbackMs);
+
+  ResultRow row;
+  row.scene = scene.name;
+  row.config = config;
+  row.light = light;
+  row.method = resolved;
+  row.metrics = r.metrics.toJson();
+  row.timings = {{"shadow_ms", r.timings.shadowMs},     {"camera_ms", r.timings.cameraMs},
+                 {"readback_ms", r.timings.readbackMs}, {"compare_ms", r.compareMs},
+                 {"total_ms", r.timings.totalMs + r.compareMs}};
+
+  makeDirs(o.outDir);
+  const fs::path out(o.outDir);
+  if (o.keepImages) {
+    writeFrameExr(r.reference, (out / "reference.exr").string());
+    writeFrameExr(r.raster, (out / "raster.exr").string());
+  }
+  writeErrorsPng((out / "errors.png").string(), r.classification);
+  writeTriptychPng((out / "triptych.png").string(), r.reference, r.raster, r.classification);
+  // metrics.json last: its presence means the run finished.
+  writeMetricsJson((out / "metrics.json").string(), row);
+  const Metrics& m = r.metrics;
+  std::printf("compare: %.1f ms, %llu pixels: error_rate %.4f (acne %.4f, leak %.4f, aliasing %.4f, coverage %.4f, "
+              "other %.4f), shadow_iou %.4f, m_median %.2f\n",
+              r.compareMs, (unsigned long long)m.pixelsCompared, m.errorRate, m.acneRate, m.leakRate, m.aliasingRate,
+              m.coverageRate, m.otherRate, m.shadowIou, m.mMedian);
+  std::printf("wrote %s/metrics.json, errors.png, triptych.png%s\n", o.outDir.c_str(),
+              o.keepImages ? ", reference.exr, raster.exr" : "");
+  return 0;
+}
+
+app::Registrar reg{"run", [](CLI::App& app) {
+  auto opts = std::make_shared<Options>();
+  auto* sub = app.add_subcommand("run", "Reference (cached), raster and compare in one process");
+  sub->add_option("SCENE", opts->scene, "Bundled scene name or path to a scene file")->required();
+  sub->add_option("--method", opts->methodFile, "Method file (JSON, see raster/METHODS.md)");
+  sub->add_option("--set", opts->sets, "Method setting key=value, repeatable (e.g. --set map.size=4096)");
+  sub->add_option("--light", opts->light, "Light to render and compare (default: the scene's first)");
+  sub->add_option("--spp", opts->spp, "Reference samples per pixel")->capture_default_str();
+  sub->add_option("-o,--out", opts->outDir, "Output folder")->required();
+  sub->add_option("--cache", opts->cacheDir, "Reference cache folder (default: $SHADOWLAB_CACHE, else .shadowlab-cache)");
+  sub->add_option("--device", opts->device, "Vulkan device name substring (default: lavapipe)");
+  sub->add_flag("--keep-images", opts->keepImages, "Also write reference.exr and raster.exr");
+  return std::function<int()>([opts] { return run(*opts); });
+}};
+
+}  // namespace

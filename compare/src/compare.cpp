@@ -1,0 +1,520 @@
+// Per-pixel classification of shadow errors and the metrics built on it.
+// The definitions (numerator, denominator, exclusions, sources) are in compare/METRICS.md; this
+// file is their implementation and must stay in step with it.
+//
+// Speed: a 1920x1080 pair is ~2M pixels; the main pass reads 7 float planes (~58 MB) and only
+// touches the evidence channels at disagreeing pixels, so it is memory-bound. Work is split into
+// fixed blocks of rows whose partial sums are reduced in block order: the result is bit-identical
+// for any number of threads.
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <cstring>
+#include <limits>
+
+#include <tbb/enumerable_thread_specific.h>
+#include <tbb/parallel_for.h>
+
+#include "shadowlab/compare/compare.h"
+#include "shadowlab/scenes/error.h"
+
+namespace shadowlab {
+
+const char* toString(PixelClass c) {
+  switch (c) {
+    case PixelClass::NotCompared: return "not_compared";
+    case PixelClass::GeometryMismatch: return "geometry_mismatch";
+    case PixelClass::Correct: return "correct";
+    case PixelClass::Acne: return "acne";
+    case PixelClass::Leak: return "leak";
+    case PixelClass::Aliasing: return "aliasing";
+    case PixelClass::Coverage: return "coverage";
+    case PixelClass::Other: return "other";
+  }
+  return "unknown";
+}
+
+nlohmann::json Metrics::toJson() const {
+  nlohmann::json j;
+  j["pixels_compared"] = pixelsCompared;
+  j["geometry_mismatch"] = geometryMismatch;
+  j["errors"] = errors;
+  j["acne"] = acne;
+  j["leak"] = leak;
+  j["aliasing"] = aliasing;
+  j["coverage"] = coverage;
+  j["other"] = other;
+  j["error_rate"] = errorRate;
+  j["acne_rate"] = acneRate;
+  j["leak_rate"] = leakRate;
+  j["aliasing_rate"] = aliasingRate;
+  j["coverage_rate"] = coverageRate;
+  j["other_rate"] = otherRate;
+  j["shadow_iou"] = shadowIou;
+  j["mae"] = mae;
+  j["rmse"] = rmse;
+  j["m_median"] = mMedian;
+  j["m_p95"] = mP95;
+  j["m_max"] = mMax;
+  if (hasProjector) {
+    j["projector_coverage_iou"] = projectorCoverageIou;
+    j["reverse_projection_pixels"] = reverseProjectionPixels;
+    j["projector_color_mae"] = projectorColorMae;
+  }
+  return j;
+}
+
+namespace {
+
+// Internal per-pixel code for "disagreement not explained by coverage, acne or leak": resolved to
+// Aliasing or Other once the boundary distances are known. Never leaves this file.
+constexpr uint8_t kCandidate = 255;
+// Reference decision per pixel, for the boundary distance transform.
+constexpr uint8_t kDecisionNone = 0, kDecisionLit = 1, kDecisionShadowed = 2;
+constexpr int kBlockRows = 16;
+
+std::string both(const CompareOptions& o) { return o.referenceName + " and " + o.rasterName; }
+
+std::string channelList(const Frame& f, const std::string& prefix, const std::string& suffix) {
+  std::string out;
+  for (const auto& n : f.names) {
+    if (n.size() > prefix.size() + suffix.size() && n.compare(0, prefix.size(), prefix) == 0 &&
+        n.compare(n.size() - suffix.size(), suffix.size(), suffix) == 0) {
+      if (!out.empty()) out += ", ";
+      out += n.substr(prefix.size(), n.size() - prefix.size() - suffix.size());
+    }
+  }
+  return out.empty() ? "none" : out;
+}
+
+const float* optionalPlane(const Frame& f, const std::string& name) {
+  return f.has(name) ? f.get(name).data() : nullptr;
+}
+
+const float* requiredPlane(const Frame& f, const std::string& name, const std::string& frameName,
+                           const std::string& expected) {
+  if (!f.has(name)) {
+    throw InputError(frameName + ": error: no channel \"" + name + "\"; expected " + expected);
+  }
+  const auto& plane = f.get(name);
+  if (plane.size() != f.pixelCount()) {
+    throw InputError(frameName + ": error: channel \"" + name + "\" holds " + std::to_string(plane.size()) +
+                     " values; expected " + std::to_string(f.pixelCount()) + " (width x height)");
+  }
+  return plane.data();
+}
+
+std::string metaString(const Frame& f, const char* key) {
+  auto it = f.meta.find(key);
+  if (it != f.meta.end() && it->is_string()) return it->get<std::string>();
+  return "";
+}
+
+std::string firstName(const Frame& f, const char* key) {
+  auto it = f.meta.find(key);
+  if (it != f.meta.end() && it->is_array() && !it->empty() && (*it)[0].is_string()) return (*it)[0].get<std::string>();
+  return "";
+}
+
+float clamp01(float v) { return v >= 0.0f ? (v <= 1.0f ? v : 1.0f) : 0.0f; }  // NaN -> 0
+
+// Footprint m as a histogram key: non-negative floats order like their bit patterns.
+float sanitizeM(float m) {
+  if (!(m >= 0.0f)) return 0.0f;  // NaN, negative
+  return std::min(m, std::numeric_limits<float>::max());
+}
+uint32_t floatBits(float v) {
+  uint32_t b;
+  std::memcpy(&b, &v, 4);
+  return b;
+}
+float bitsFloat(uint32_t b) {
+  float v;
+  std::memcpy(&v, &b, 4);
+  return v;
+}
+
+struct BlockSums {
+  uint64_t compared = 0, mismatch = 0;
+  uint64_t counts[8] = {};
+  uint64_t refShadow = 0, rasShadow = 0, bothShadow = 0;
+  double sumAbs = 0, sumSq = 0;
+  float mMax = 0;
+  uint64_t candidates = 0;
+  uint64_t projRef = 0, projRas = 0, projBoth = 0, reverse = 0;
+  double projColorAbs = 0;
+};
+
+}  // namespace
+
+std::string resolveCompareLight(const Frame& reference, const Frame& raster, const CompareOptions& options) {
+  if (!options.light.empty()) return options.light;
+  std::string l = metaString(raster, "light");
+  if (!l.empty()) return l;
+  l = firstName(raster, "lights");
+  if (!l.empty()) return l;
+  l = firstName(reference, "lights");
+  if (!l.empty()) return l;
+  // Frames without metadata (built in code): the first light channel of the reference.
+  for (const auto& n : reference.names) {
+    if (n.size() > 10 && n.compare(0, 6, "light.") == 0 && n.compare(n.size() - 4, 4, ".vis") == 0) {
+      return n.substr(6, n.size() - 10);
+    }
+  }
+  throw InputError(both(options) + ": error: no light to compare: no \"light.NAME.vis\" channel and no "
+                   "light named in the metadata; expected a frame rendered with at least one light");
+}
+
+Metrics compareFrames(const Frame& reference, const Frame& raster, const CompareOptions& options,
+                      Classification* classification) {
+  // ---- validate everything before any work -------------------------------------------------
+  if (reference.width != raster.width || reference.height != raster.height) {
+    throw InputError(both(options) + ": error: frame sizes differ: " + std::to_string(reference.width) + "x" +
+                     std::to_string(reference.height) + " vs " + std::to_string(raster.width) + "x" +
+                     std::to_string(raster.height) + "; expected the same camera resolution");
+  }
+  if (reference.width < 0 || reference.height < 0) {
+    throw InputError(both(options) + ": error: negative frame size");
+  }
+  for (const char* key : {"scene_hash", "camera_hash"}) {
+    std::string a = metaString(reference, key), b = metaString(raster, key);
+    if (!a.empty() && !b.empty() && a != b) {
+      throw InputError(both(options) + ": error: " + key + " differs: " + a + " vs " + b +
+                       "; expected frames of the same scene and camera");
+    }
+  }
+  if (!(options.boundaryTexels >= 0.0f && std::isfinite(options.boundaryTexels))) {
+    throw InputError("compare: error: boundaryTexels is " + std::to_string(options.boundaryTexels) +
+                     "; expected a finite number >= 0");
+  }
+  const std::string light = resolveCompareLight(reference, raster, options);
+  const std::string lp = "light." + light + ".";
+  const std::string expectLight = "a light named \"" + light + "\" (lights in this frame: ";
+  const float* refHit = requiredPlane(reference, "hit", options.referenceName, "a renderer's output frame");
+  const float* refObj = requiredPlane(reference, "object_id", options.referenceName, "a renderer's output frame");
+  const float* refVis = requiredPlane(reference, lp + "vis", options.referenceName,
+                                      expectLight + channelList(reference, "light.", ".vis") + ")");
+  const float* rasHit = requiredPlane(raster, "hit", options.rasterName, "a renderer's output frame");
+  const float* rasObj = requiredPlane(raster, "object_id", options.rasterName, "a renderer's output frame");
+  const float* rasVis = requiredPlane(raster, lp + "vis", options.rasterName,
+                                      expectLight + channelList(raster, "light.", ".vis") + ")");
+  // Evidence: optional, so that any two frames can be compared (a reference with itself has none).
+  // Without it the corresponding classes cannot be proven; see METRICS.md.
+  auto optional = [&](const Frame& f, const std::string& name) -> const float* {
+    const float* p = optionalPlane(f, name);
+    if (p && f.get(name).size() != f.pixelCount()) requiredPlane(f, name, "", "");  // throws
+    return p;
+  };
+  const float* refOccDist = optional(reference, lp + "occluder_dist");
+  const float* inMap = optional(raster, lp + "in_map");
+  const float* occId = optional(raster, lp + "occluder_id");
+  const float* recvDepth = optional(raster, lp + "receiver_depth");
+  const float* mapDepth = optional(raster, lp + "map_depth");
+  const float* biasDepth = optional(raster, lp + "bias_depth");
+  const float* biasWorld = optional(raster, lp + "bias_world");
+  const float* mPlane = optional(raster, lp + "m");
+  const bool depthEvidence = recvDepth && mapDepth && biasDepth && occId;
+
+  std::string projector = firstName(reference, "projectors");
+  if (projector.empty()) projector = firstName(raster, "projectors");
+  if (projector.empty()) {
+    // Frames without metadata: the first projector channel of the reference.
+    for (const auto& n : reference.names) {
+      if (n.size() > 14 && n.compare(0, 5, "proj.") == 0 && n.compare(n.size() - 9, 9, ".coverage") == 0) {
+        projector = n.substr(5, n.size() - 14);
+        break;
+      }
+    }
+  }
+  const std::string pp = "proj." + projector + ".";
+  const float* refCov = projector.empty() ? nullptr : optional(reference, pp + "coverage");
+  const float* rasCov = projector.empty() ? nullptr : optional(raster, pp + "coverage");
+  const bool hasProjector = refCov && rasCov;
+  const float* rasReverse = hasProjector ? optional(raster, pp + "reverse") : nullptr;
+  const float* refRgb[3] = {nullptr, nullptr, nullptr};
+  const float* rasRgb[3] = {nullptr, nullptr, nullptr};
+  bool hasColor = hasProjector;
+  for (int c = 0; c < 3 && hasProjector; ++c) {
+    const std::string name = pp + "RGB"[c];
+    refRgb[c] = optional(reference, name);
+    rasRgb[c] = optional(raster, name);
+    hasColor = hasColor && refRgb[c] && rasRgb[c];
+  }
+
+  // ---- pass 1: decisions, classes that need only local evidence, sums ---------------------
+  const int width = reference.width, height = reference.height;
+  const size_t n = reference.pixelCount();
+  Classification local;
+  Classification& cls = classification ? *classification : local;
+  cls.width = width;
+  cls.height = height;
+  cls.classes.assign(n, PixelClass::NotCompared);
+  cls.referenceLit.assign(n, 0);
+  std::vector<uint8_t> decision(n, kDecisionNone);
+  uint8_t* klass = reinterpret_cast<uint8_t*>(cls.classes.data());
+  uint8_t* refLit = cls.referenceLit.data();
+  const float leakFactor = options.leakBiasFactor;
+
+  const int blocks = (height + kBlockRows - 1) / kBlockRows;
+  std::vector<BlockSums> sums(size_t(std::max(blocks, 0)));
+  tbb::enumerable_thread_specific<std::vector<uint64_t>> mHistLocal(
+      [&] { return std::vector<uint64_t>(mPlane ? 65536 : 0, 0); });
+
+  tbb::parallel_for(0, blocks, [&](int b) {
+    BlockSums s;
+    uint64_t* hist = mPlane ? mHistLocal.local().data() : nullptr;
+    const size_t begin = size_t(b) * kBlockRows * width;
+    const size_t end = std::min(n, size_t(b + 1) * kBlockRows * width);
+    for (size_t i = begin; i < end; ++i) {
+      const bool hr = refHit[i] >= 0.5f, hs = rasHit[i] >= 0.5f;
+      if (!hr && !hs) continue;  // NotCompared, already set
+      if (!(hr && hs) || refObj[i] != rasObj[i]) {
+        klass[i] = uint8_t(PixelClass::GeometryMismatch);
+        ++s.mismatch;
+        continue;
+      }
+      ++s.compared;
+      const float rv = clamp01(refVis[i]), sv = clamp01(rasVis[i]);
+      const bool rLit = rv >= 0.5f, sLit = sv >= 0.5f;
+      refLit[i] = rLit;
+      decision[i] = rLit ? kDecisionLit : kDecisionShadowed;
+      const double d = double(rv) - double(sv);
+      s.sumAbs += std::fabs(d);
+      s.sumSq += d * d;
+      s.refShadow += !rLit;
+      s.rasShadow += !sLit;
+      s.bothShadow += !rLit && !sLit;
+      float m = 0.0f;
+      if (mPlane) {
+        m = sanitizeM(mPlane[i]);
+        s.mMax = std::max(s.mMax, m);
+        ++hist[floatBits(m) >> 16];
+      }
+      if (hasProjector) {
+        const float rc = clamp01(refCov[i]), sc = clamp01(rasCov[i]);
+        const bool rIn = rc >= 0.5f, sIn = sc >= 0.5f;
+        s.projRef += rIn;
+        s.projRas += sIn;
+        s.projBoth += rIn && sIn;
+        if (rasReverse && rasReverse[i] >= 0.5f && sc > 0.0f) ++s.reverse;
+        if (hasColor) {
+          double e = 0;
+          for (int c = 0; c < 3; ++c) e += std::fabs(double(refRgb[c][i]) - double(rasRgb[c][i]));
+          s.projColorAbs += std::isfinite(e) ? e / 3.0 : 1.0;
+        }
+      }
+      PixelClass c;
+      if (rLit == sLit) {
+        c = PixelClass::Correct;
+      } else if (inMap && !(inMap[i] >= 0.5f)) {
+        c = PixelClass::Coverage;
+      } else if (rLit && occId && occId[i] == rasObj[i]) {
+        c = PixelClass::Acne;
+      } else if (!rLit && depthEvidence && occId[i] != 0.0f && occId[i] != rasObj[i] &&
+                 recvDepth[i] > mapDepth[i] && recvDepth[i] <= mapDepth[i] + biasDepth[i]) {
+        c = PixelClass::Leak;  // another object was in front in the map; only the bias let it pass
+      } else if (!rLit && refOccDist && biasWorld && refOccDist[i] >= 0.0f &&
+                 refOccDist[i] <= leakFactor * biasWorld[i]) {
+        c = PixelClass::Leak;  // the true occluder lies within the bias distance
+      } else {
+        klass[i] = kCandidate;
+        ++s.candidates;
+        continue;
+      }
+      klass[i] = uint8_t(c);
+    }
+    sums[size_t(b)] = s;
+  });
+
+  BlockSums t;
+  for (const auto& s : sums) {
+    t.compared += s.compared;
+    t.mismatch += s.mismatch;
+    t.refShadow += s.refShadow;
+    t.rasShadow += s.rasShadow;
+    t.bothShadow += s.bothShadow;
+    t.sumAbs += s.sumAbs;
+    t.sumSq += s.sumSq;
+    t.mMax = std::max(t.mMax, s.mMax);
+    t.candidates += s.candidates;
+    t.projRef += s.projRef;
+    t.projRas += s.projRas;
+    t.projBoth += s.projBoth;
+    t.reverse += s.reverse;
+    t.projColorAbs += s.projColorAbs;
+  }
+
+  // ---- pass 2: aliasing = remaining disagreements near a reference shadow boundary -----------
+  // Boundary pixels: compared pixels with a 4-neighbour compared pixel of the other reference
+  // decision. Their exact Euclidean distance transform (Meijster et al. 2000: a column scan, then
+  // the lower envelope of parabolas per row, Felzenszwalb & Huttenlocher 2012), in pixels, is
+  // computed only for the rows that hold candidates.
+  if (t.candidates > 0) {
+    const int32_t far = width + height + 1;  // more than any in-image distance
+    std::vector<int32_t> g(n);
+    auto isBoundary = [&](int x, int y) {
+      const size_t i = size_t(y) * width + x;
+      const uint8_t d = decision[i];
+      if (d == kDecisionNone) return false;
+      auto differs = [&](size_t j) { return decision[j] != kDecisionNone && decision[j] != d; };
+      return (x > 0 && differs(i - 1)) || (x + 1 < width && differs(i + 1)) ||
+             (y > 0 && differs(i - width)) || (y + 1 < height && differs(i + width));
+    };
+    // Column scans, processed row by row over a strip of columns (cache-friendly).
+    constexpr int kStrip = 256;
+    const int strips = (width + kStrip - 1) / kStrip;
+    tbb::parallel_for(0, strips, [&](int sIdx) {
+      const int x0 = sIdx * kStrip, x1 = std::min(width, x0 + kStrip);
+      for (int y = 0; y < height; ++y) {
+        int32_t* row = g.data() + size_t(y) * width;
+        const int32_t* above = y > 0 ? row - width : nullptr;
+        for (int x = x0; x < x1; ++x) {
+          row[x] = isBoundary(x, y) ? 0 : (above ? std::min(far, above[x] + 1) : far);
+        }
+      }
+      for (int y = height - 2; y >= 0; --y) {
+        int32_t* row = g.data() + size_t(y) * width;
+        const int32_t* below = row + width;
+        for (int x = x0; x < x1; ++x) row[x] = std::min(row[x], below[x] + 1);
+      }
+    });
+    const float boundaryTexels = options.boundaryTexels;
+    tbb::parallel_for(0, height, [&](int y) {
+      uint8_t* krow = klass + size_t(y) * width;
+      bool any = false;
+      for (int x = 0; x < width && !any; ++x) any = krow[x] == kCandidate;
+      if (!any) return;
+      const int32_t* grow = g.data() + size_t(y) * width;
+      // Lower envelope of parabolas f(q) = (x - q)^2 + g(q)^2 over the columns q of this row.
+      std::vector<int> v(static_cast<size_t>(width));
+      std::vector<double> z(size_t(width) + 1);
+      auto f = [&](int q) { return double(grow[q]) * double(grow[q]); };
+      int k = 0;
+      v[0] = 0;
+      z[0] = -std::numeric_limits<double>::infinity();
+      z[1] = std::numeric_limits<double>::infinity();
+      auto intersect = [&](int q, int p) { return ((f(q) + double(q) * q) - (f(p) + double(p) * p)) / (2.0 * (q - p)); };
+      for (int q = 1; q < width; ++q) {
+        double sq = intersect(q, v[size_t(k)]);
+        while (sq <= z[size_t(k)]) {  // z[0] = -inf stops this at k = 0
+          --k;
+          sq = intersect(q, v[size_t(k)]);
+        }
+        ++k;
+        v[size_t(k)] = q;
+        z[size_t(k)] = sq;
+        z[size_t(k) + 1] = std::numeric_limits<double>::infinity();
+      }
+      k = 0;
+      for (int x = 0; x < width; ++x) {
+        while (z[size_t(k) + 1] < x) ++k;
+        if (krow[x] != kCandidate) continue;
+        const int p = v[size_t(k)];
+        const double dist2 = double(x - p) * double(x - p) + f(p);
+        const size_t i = size_t(y) * width + x;
+        const double m = mPlane ? double(sanitizeM(mPlane[i])) : 1.0;
+        const double limitPx = double(boundaryTexels) * m;
+        krow[x] = uint8_t(dist2 <= limitPx * limitPx ? PixelClass::Aliasing : PixelClass::Other);
+      }
+    });
+  }
+
+  // ---- counts (integers: order-independent) -------------------------------------------------
+  Metrics out;
+  {
+    std::vector<std::array<uint64_t, 8>> blockCounts(size_t(std::max(blocks, 0)));
+    tbb::parallel_for(0, blocks, [&](int b) {
+      std::array<uint64_t, 8> c{};
+      const size_t begin = size_t(b) * kBlockRows * width;
+      const size_t end = std::min(n, size_t(b + 1) * kBlockRows * width);
+      for (size_t i = begin; i < end; ++i) ++c[klass[i] & 7];
+      blockCounts[size_t(b)] = c;
+    });
+    std::array<uint64_t, 8> c{};
+    for (const auto& bc : blockCounts)
+      for (int k = 0; k < 8; ++k) c[size_t(k)] += bc[size_t(k)];
+    out.acne = c[size_t(PixelClass::Acne)];
+    out.leak = c[size_t(PixelClass::Leak)];
+    out.aliasing = c[size_t(PixelClass::Aliasing)];
+    out.coverage = c[size_t(PixelClass::Coverage)];
+    out.other = c[size_t(PixelClass::Other)];
+  }
+  out.pixelsCompared = t.compared;
+  out.geometryMismatch = t.mismatch;
+  out.errors = out.acne + out.leak + out.aliasing + out.coverage + out.other;
+  const double denom = double(t.compared);
+  auto rate = [&](uint64_t count) { return t.compared ? double(count) / denom : 0.0; };
+  out.errorRate = rate(out.errors);
+  out.acneRate = rate(out.acne);
+  out.leakRate = rate(out.leak);
+  out.aliasingRate = rate(out.aliasing);
+  out.coverageRate = rate(out.coverage);
+  out.otherRate = rate(out.other);
+  const uint64_t shadowUnion = t.refShadow + t.rasShadow - t.bothShadow;
+  out.shadowIou = shadowUnion ? double(t.bothShadow) / double(shadowUnion) : 1.0;
+  out.mae = t.compared ? t.sumAbs / denom : 0.0;
+  out.rmse = t.compared ? std::sqrt(t.sumSq / denom) : 0.0;
+
+  // m quantiles, exact, in linear time: a two-level radix select over the float bits (non-negative
+  // floats order like their bit patterns): 16 high bits in pass 1, then the 16 low bits.
+  if (mPlane && t.compared > 0) {
+    std::vector<uint64_t> high(65536, 0);
+    for (const auto& h : mHistLocal)
+      for (size_t k = 0; k < h.size(); ++k) high[k] += h[k];
+    // Nearest rank: the value at sorted index ceil(p * N) - 1.
+    const double ps[2] = {0.5, 0.95};
+    uint64_t rank[2];
+    uint32_t bin[2];
+    for (int q = 0; q < 2; ++q) {
+      rank[q] = uint64_t(std::ceil(ps[q] * double(t.compared)));
+      rank[q] = rank[q] > 0 ? rank[q] - 1 : 0;
+      uint32_t b = 0;
+      for (; b < 65535; ++b) {
+        if (high[b] > rank[q]) break;
+        rank[q] -= high[b];
+      }
+      bin[q] = b;  // rank[q] is now the rank within that bin
+    }
+    // Second level: histograms of the low 16 bits of the values in those bins.
+    tbb::enumerable_thread_specific<std::vector<uint64_t>> lowLocal([] { return std::vector<uint64_t>(2 * 65536, 0); });
+    tbb::parallel_for(0, blocks, [&](int b) {
+      uint64_t* h = lowLocal.local().data();
+      const size_t begin = size_t(b) * kBlockRows * width;
+      const size_t end = std::min(n, size_t(b + 1) * kBlockRows * width);
+      for (size_t i = begin; i < end; ++i) {
+        if (decision[i] == kDecisionNone) continue;
+        const uint32_t bits = floatBits(sanitizeM(mPlane[i]));
+        if ((bits >> 16) == bin[0]) ++h[bits & 0xffffu];
+        if ((bits >> 16) == bin[1]) ++h[65536 + (bits & 0xffffu)];
+      }
+    });
+    std::vector<uint64_t> low(2 * 65536, 0);
+    for (const auto& h : lowLocal)
+      for (size_t k = 0; k < low.size(); ++k) low[k] += h[k];
+    double value[2];
+    for (int q = 0; q < 2; ++q) {
+      const uint64_t* lq = low.data() + size_t(q) * 65536;
+      uint64_t r = rank[q];
+      uint32_t lo = 0;
+      for (; lo < 65535; ++lo) {
+        if (lq[lo] > r) break;
+        r -= lq[lo];
+      }
+      value[q] = double(bitsFloat((bin[q] << 16) | lo));
+    }
+    out.mMedian = value[0];
+    out.mP95 = value[1];
+    out.mMax = t.mMax;
+  }
+
+  out.hasProjector = hasProjector;
+  if (hasProjector) {
+    const uint64_t u = t.projRef + t.projRas - t.projBoth;
+    out.projectorCoverageIou = u ? double(t.projBoth) / double(u) : 1.0;
+    out.reverseProjectionPixels = t.reverse;
+    out.projectorColorMae = t.compared && hasColor ? t.projColorAbs / denom : 0.0;
+  }
+  return out;
+}
+
+}  // namespace shadowlab

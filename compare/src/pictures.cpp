@@ -1,0 +1,246 @@
+// errors.png and triptych.png. The legend is drawn with a tiny built-in 5x7 bitmap font:
+// OpenImageIO's render_text needs a system font by name (it fails with "Could not set default
+// font face" when none is given), and a built-in font keeps the pictures byte-identical on
+// every machine.
+#include <algorithm>
+#include <array>
+#include <cctype>
+#include <cstdio>
+#include <string>
+
+#include "shadowlab/compare/compare.h"
+#include "shadowlab/scenes/error.h"
+
+namespace shadowlab {
+namespace {
+
+// 5x7 glyphs, one row per byte, bit 4 = leftmost column.
+struct Glyph {
+  char c;
+  std::array<uint8_t, 7> rows;
+};
+constexpr Glyph kFont[] = {
+    {'A', {0x0E, 0x11, 0x11, 0x1F, 0x11, 0x11, 0x11}}, {'B', {0x1E, 0x11, 0x11, 0x1E, 0x11, 0x11, 0x1E}},
+    {'C', {0x0E, 0x11, 0x10, 0x10, 0x10, 0x11, 0x0E}}, {'D', {0x1E, 0x11, 0x11, 0x11, 0x11, 0x11, 0x1E}},
+    {'E', {0x1F, 0x10, 0x10, 0x1E, 0x10, 0x10, 0x1F}}, {'F', {0x1F, 0x10, 0x10, 0x1E, 0x10, 0x10, 0x10}},
+    {'G', {0x0E, 0x11, 0x10, 0x17, 0x11, 0x11, 0x0F}}, {'H', {0x11, 0x11, 0x11, 0x1F, 0x11, 0x11, 0x11}},
+    {'I', {0x0E, 0x04, 0x04, 0x04, 0x04, 0x04, 0x0E}}, {'J', {0x07, 0x02, 0x02, 0x02, 0x02, 0x12, 0x0C}},
+    {'K', {0x11, 0x12, 0x14, 0x18, 0x14, 0x12, 0x11}}, {'L', {0x10, 0x10, 0x10, 0x10, 0x10, 0x10, 0x1F}},
+    {'M', {0x11, 0x1B, 0x15, 0x15, 0x11, 0x11, 0x11}}, {'N', {0x11, 0x11, 0x19, 0x15, 0x13, 0x11, 0x11}},
+    {'O', {0x0E, 0x11, 0x11, 0x11, 0x11, 0x11, 0x0E}}, {'P', {0x1E, 0x11, 0x11, 0x1E, 0x10, 0x10, 0x10}},
+    {'Q', {0x0E, 0x11, 0x11, 0x11, 0x15, 0x12, 0x0D}}, {'R', {0x1E, 0x11, 0x11, 0x1E, 0x14, 0x12, 0x11}},
+    {'S', {0x0F, 0x10, 0x10, 0x0E, 0x01, 0x01, 0x1E}}, {'T', {0x1F, 0x04, 0x04, 0x04, 0x04, 0x04, 0x04}},
+    {'U', {0x11, 0x11, 0x11, 0x11, 0x11, 0x11, 0x0E}}, {'V', {0x11, 0x11, 0x11, 0x11, 0x11, 0x0A, 0x04}},
+    {'W', {0x11, 0x11, 0x11, 0x15, 0x15, 0x15, 0x0A}}, {'X', {0x11, 0x11, 0x0A, 0x04, 0x0A, 0x11, 0x11}},
+    {'Y', {0x11, 0x11, 0x0A, 0x04, 0x04, 0x04, 0x04}}, {'Z', {0x1F, 0x01, 0x02, 0x04, 0x08, 0x10, 0x1F}},
+    {'0', {0x0E, 0x11, 0x13, 0x15, 0x19, 0x11, 0x0E}}, {'1', {0x04, 0x0C, 0x04, 0x04, 0x04, 0x04, 0x0E}},
+    {'2', {0x0E, 0x11, 0x01, 0x02, 0x04, 0x08, 0x1F}}, {'3', {0x1F, 0x02, 0x04, 0x02, 0x01, 0x11, 0x0E}},
+    {'4', {0x02, 0x06, 0x0A, 0x12, 0x1F, 0x02, 0x02}}, {'5', {0x1F, 0x10, 0x1E, 0x01, 0x01, 0x11, 0x0E}},
+    {'6', {0x06, 0x08, 0x10, 0x1E, 0x11, 0x11, 0x0E}}, {'7', {0x1F, 0x01, 0x02, 0x04, 0x08, 0x08, 0x08}},
+    {'8', {0x0E, 0x11, 0x11, 0x0E, 0x11, 0x11, 0x0E}}, {'9', {0x0E, 0x11, 0x11, 0x0F, 0x01, 0x02, 0x0C}},
+    {'.', {0x00, 0x00, 0x00, 0x00, 0x00, 0x0C, 0x0C}}, {'-', {0x00, 0x00, 0x00, 0x1F, 0x00, 0x00, 0x00}},
+    {'_', {0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0x1F}}, {':', {0x00, 0x0C, 0x0C, 0x00, 0x0C, 0x0C, 0x00}},
+    {'%', {0x18, 0x19, 0x02, 0x04, 0x08, 0x13, 0x03}}, {'/', {0x00, 0x01, 0x02, 0x04, 0x08, 0x10, 0x00}},
+    {'(', {0x02, 0x04, 0x08, 0x08, 0x08, 0x04, 0x02}}, {')', {0x08, 0x04, 0x02, 0x02, 0x02, 0x04, 0x08}},
+    {'=', {0x00, 0x00, 0x1F, 0x00, 0x1F, 0x00, 0x00}}, {'|', {0x04, 0x04, 0x04, 0x04, 0x04, 0x04, 0x04}},
+};
+constexpr int kGlyphW = 5, kGlyphH = 7, kAdvance = 6;
+
+const Glyph* findGlyph(char c) {
+  c = char(std::toupper(static_cast<unsigned char>(c)));
+  for (const auto& g : kFont)
+    if (g.c == c) return &g;
+  return nullptr;  // space and anything unknown: blank
+}
+
+struct Canvas {
+  int width = 0, height = 0;
+  std::vector<uint8_t> rgb;
+  Canvas(int w, int h, const uint8_t fill[3]) : width(w), height(h), rgb(size_t(w) * h * 3) {
+    for (size_t i = 0; i < size_t(w) * h; ++i) std::copy(fill, fill + 3, rgb.begin() + i * 3);
+  }
+  void fillRect(int x0, int y0, int w, int h, const uint8_t c[3]) {
+    for (int y = std::max(0, y0); y < std::min(height, y0 + h); ++y)
+      for (int x = std::max(0, x0); x < std::min(width, x0 + w); ++x) std::copy(c, c + 3, &rgb[(size_t(y) * width + x) * 3]);
+  }
+  // Draws text with its top-left at (x, y), each font pixel scale x scale. Clipped at the edges.
+  void text(int x, int y, const std::string& s, int scale, const uint8_t c[3]) {
+    for (char ch : s) {
+      if (const Glyph* g = findGlyph(ch)) {
+        for (int r = 0; r < kGlyphH; ++r)
+          for (int col = 0; col < kGlyphW; ++col)
+            if (g->rows[size_t(r)] & (0x10 >> col)) fillRect(x + col * scale, y + r * scale, scale, scale, c);
+      }
+      x += kAdvance * scale;
+    }
+  }
+  void blit(const std::vector<uint8_t>& src, int w, int h, int x0, int y0) {
+    for (int y = 0; y < h; ++y) {
+      if (y0 + y < 0 || y0 + y >= height) continue;
+      for (int x = 0; x < w; ++x) {
+        if (x0 + x < 0 || x0 + x >= width) continue;
+        std::copy(&src[(size_t(y) * w + x) * 3], &src[(size_t(y) * w + x) * 3] + 3, &rgb[(size_t(y0 + y) * width + x0 + x) * 3]);
+      }
+    }
+  }
+};
+
+constexpr uint8_t kBackground[3] = {18, 20, 40};
+constexpr uint8_t kLegendBackground[3] = {12, 12, 12};
+constexpr uint8_t kText[3] = {235, 235, 235};
+
+// Font scale so the legend stays readable on large frames and fits on small ones.
+int fontScale(int width) { return std::clamp(width / 480, 1, 4); }
+
+struct LegendEntry {
+  PixelClass cls;
+  bool lit;
+  std::string label;
+};
+
+std::string percent(uint64_t count, uint64_t total) {
+  char buf[64];
+  std::snprintf(buf, sizeof buf, "%.2f%%", total ? 100.0 * double(count) / double(total) : 0.0);
+  return buf;
+}
+
+}  // namespace
+
+void classColor(PixelClass c, bool referenceLit, uint8_t rgb[3]) {
+  auto set = [&](uint8_t r, uint8_t g, uint8_t b) {
+    rgb[0] = r;
+    rgb[1] = g;
+    rgb[2] = b;
+  };
+  switch (c) {
+    case PixelClass::NotCompared: set(kBackground[0], kBackground[1], kBackground[2]); break;
+    case PixelClass::GeometryMismatch: set(150, 95, 45); break;   // brown
+    case PixelClass::Correct: referenceLit ? set(190, 190, 190) : set(85, 85, 85); break;
+    case PixelClass::Acne: set(235, 35, 35); break;               // red
+    case PixelClass::Leak: set(30, 120, 255); break;              // blue
+    case PixelClass::Aliasing: set(255, 215, 0); break;           // yellow
+    case PixelClass::Coverage: set(40, 200, 70); break;           // green
+    case PixelClass::Other: set(255, 0, 255); break;              // magenta
+    default: set(0, 0, 0); break;
+  }
+}
+
+std::vector<uint8_t> errorsPicture(const Classification& c, int* outWidth, int* outHeight) {
+  const int w = c.width, h = c.height;
+  if (w <= 0 || h <= 0 || c.classes.size() != size_t(w) * h) {
+    throw InputError("errors picture: error: classification is " + std::to_string(w) + "x" + std::to_string(h) +
+                     " with " + std::to_string(c.classes.size()) + " pixels; expected a non-empty frame");
+  }
+  uint64_t counts[8] = {};
+  for (PixelClass k : c.classes) ++counts[size_t(k) & 7];
+  const uint64_t compared = counts[size_t(PixelClass::Correct)] + counts[size_t(PixelClass::Acne)] +
+                            counts[size_t(PixelClass::Leak)] + counts[size_t(PixelClass::Aliasing)] +
+                            counts[size_t(PixelClass::Coverage)] + counts[size_t(PixelClass::Other)];
+  std::vector<LegendEntry> entries = {
+      {PixelClass::Correct, true, "correct lit"},
+      {PixelClass::Correct, false, "correct shadowed"},
+  };
+  for (PixelClass k : {PixelClass::Acne, PixelClass::Leak, PixelClass::Aliasing, PixelClass::Coverage, PixelClass::Other}) {
+    entries.push_back({k, false, std::string(toString(k)) + " " + std::to_string(counts[size_t(k)]) + " " +
+                                     percent(counts[size_t(k)], compared)});
+  }
+  entries.push_back({PixelClass::GeometryMismatch, false,
+                     "geometry mismatch " + std::to_string(counts[size_t(PixelClass::GeometryMismatch)])});
+
+  // Lay the legend out in rows below the image, wrapping at the image width.
+  const int s = fontScale(w);
+  const int pad = 3 * s, swatch = kGlyphH * s, lineH = swatch + pad;
+  std::vector<std::pair<int, int>> pos;  // top-left of each entry within the legend strip
+  int x = pad, y = pad;
+  for (const auto& e : entries) {
+    const int entryW = swatch + 2 * s + int(e.label.size()) * kAdvance * s;
+    if (x > pad && x + entryW > w - pad) {
+      x = pad;
+      y += lineH;
+    }
+    pos.emplace_back(x, y);
+    x += entryW + 4 * pad;
+  }
+  const int legendH = y + lineH;
+
+  Canvas canvas(w, h + legendH, kLegendBackground);
+  for (int py = 0; py < h; ++py) {
+    for (int px = 0; px < w; ++px) {
+      const size_t i = size_t(py) * w + px;
+      const bool lit = c.referenceLit.size() == c.classes.size() && c.referenceLit[i];
+      classColor(c.classes[i], lit, &canvas.rgb[i * 3]);
+    }
+  }
+  for (size_t k = 0; k < entries.size(); ++k) {
+    uint8_t col[3];
+    classColor(entries[k].cls, entries[k].lit, col);
+    const int ex = pos[k].first, ey = h + pos[k].second;
+    canvas.fillRect(ex, ey, swatch, swatch, col);
+    canvas.text(ex + swatch + 2 * s, ey, entries[k].label, s, kText);
+  }
+  *outWidth = canvas.width;
+  *outHeight = canvas.height;
+  return std::move(canvas.rgb);
+}
+
+void writeErrorsPng(const std::string& path, const Classification& c) {
+  int w = 0, h = 0;
+  std::vector<uint8_t> rgb = errorsPicture(c, &w, &h);
+  writeRgbPng(path, w, h, rgb);
+}
+
+namespace {
+
+// Grey shading from visibility only (compare sees frames, not the scene): lit surfaces light grey,
+// shadowed ones dark grey, background dark blue.
+std::vector<uint8_t> visibilityPicture(const Frame& f, const std::string& light) {
+  std::vector<uint8_t> rgb(f.pixelCount() * 3);
+  const std::string visName = "light." + light + ".vis";
+  const float* hit = f.has("hit") ? f.get("hit").data() : nullptr;
+  const float* vis = f.has(visName) ? f.get(visName).data() : nullptr;
+  for (size_t i = 0; i < f.pixelCount(); ++i) {
+    uint8_t* p = &rgb[i * 3];
+    if (!hit || !(hit[i] >= 0.5f)) {
+      std::copy(kBackground, kBackground + 3, p);
+      continue;
+    }
+    float v = vis ? vis[i] : 1.0f;
+    v = v >= 0.0f ? std::min(v, 1.0f) : 0.0f;
+    const uint8_t g = uint8_t(60.0f + 170.0f * v + 0.5f);
+    p[0] = p[1] = p[2] = g;
+  }
+  return rgb;
+}
+
+}  // namespace
+
+void writeTriptychPng(const std::string& path, const Frame& reference, const Frame& raster,
+                      const Classification& c) {
+  const int w = c.width, h = c.height;
+  if (reference.width != w || reference.height != h || raster.width != w || raster.height != h) {
+    throw InputError(path + ": error: triptych of frames with different sizes (" + std::to_string(reference.width) + "x" +
+                     std::to_string(reference.height) + ", " + std::to_string(raster.width) + "x" +
+                     std::to_string(raster.height) + ", classification " + std::to_string(w) + "x" +
+                     std::to_string(h) + "); expected one size");
+  }
+  CompareOptions none;
+  std::string light;
+  try {
+    light = resolveCompareLight(reference, raster, none);
+  } catch (const InputError&) {
+    light.clear();  // no light: both panels show geometry only
+  }
+  int ew = 0, eh = 0;
+  const std::vector<uint8_t> errors = errorsPicture(c, &ew, &eh);
+  const int s = fontScale(w);
+  const int gap = 4 * s, header = kGlyphH * s + 4 * s;
+  Canvas canvas(3 * w + 2 * gap, header + std::max(h, eh), kLegendBackground);
+  canvas.blit(visibilityPicture(reference, light), w, h, 0, header);
+  canvas.blit(visibilityPicture(raster, light), w, h, w + gap, header);
+  canvas.blit(errors, ew, eh, 2 * (w + gap), header);
+  const std::string titles[3] = {"reference", "raster", "errors"};
+  for (int k = 0; k < 3; ++k) canvas.text(k * (w + gap) + 2 * s, 2 * s, titles[k], s, kText);
+  writeRgbPng(path, canvas.width, canvas.height, canvas.rgb);
+}
+
+}  // namespace shadowlab
