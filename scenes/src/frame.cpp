@@ -1,0 +1,191 @@
+// Frame <-> EXR through OpenImageIO. EXR stores channels sorted by name, so reading goes by
+// name, never by position; the insertion order is kept in a second attribute so a round trip
+// returns the very same Frame.
+#include "shadowlab/scenes/frame.h"
+
+#include <atomic>
+#include <cstdio>
+#include <filesystem>
+#include <map>
+
+#include <OpenImageIO/imageio.h>
+#include <unistd.h>
+
+#include "shadowlab/scenes/error.h"
+
+namespace shadowlab {
+
+namespace fs = std::filesystem;
+
+namespace {
+
+constexpr const char* kMetaAttribute = "shadowlab:meta";
+constexpr const char* kOrderAttribute = "shadowlab:channels";
+
+// Temp file beside `path` with the same extension (OpenImageIO picks the format by extension).
+std::string tempImagePath(const std::string& path) {
+  static std::atomic<unsigned> counter{0};
+  fs::path p(path);
+  std::string name = "." + p.stem().string() + ".tmp" + std::to_string(::getpid()) + "_" +
+                     std::to_string(counter++) + p.extension().string();
+  return (p.parent_path() / name).string();
+}
+
+void checkFolder(const std::string& path) {
+  fs::path parent = fs::path(path).parent_path();
+  if (!parent.empty() && !fs::is_directory(parent))
+    throw InputError(formatError(path, "", "cannot write file: folder " + parent.string() + " does not exist"));
+}
+
+// Writes through `write(tmp)` then renames; the temp file never survives a failure.
+template <class WriteFn>
+void writeImageAtomic(const std::string& path, WriteFn&& write) {
+  checkFolder(path);
+  std::string tmp = tempImagePath(path);
+  std::string err = write(tmp);
+  if (err.empty() && std::rename(tmp.c_str(), path.c_str()) != 0) err = "cannot rename the temporary file";
+  if (!err.empty()) {
+    std::error_code ec;
+    fs::remove(tmp, ec);
+    throw InputError(formatError(path, "", "cannot write image: " + err));
+  }
+}
+
+}  // namespace
+
+bool Frame::has(const std::string& name) const {
+  for (const auto& n : names)
+    if (n == name) return true;
+  return false;
+}
+
+std::vector<float>& Frame::add(const std::string& name, float fill) {
+  for (size_t i = 0; i < names.size(); ++i)
+    if (names[i] == name) return data[i];
+  names.push_back(name);
+  data.emplace_back(pixelCount(), fill);
+  return data.back();
+}
+
+const std::vector<float>& Frame::get(const std::string& name) const {
+  for (size_t i = 0; i < names.size(); ++i)
+    if (names[i] == name) return data[i];
+  throw InputError("frame has no channel " + name);
+}
+
+std::vector<float>& Frame::get(const std::string& name) {
+  return const_cast<std::vector<float>&>(static_cast<const Frame&>(*this).get(name));
+}
+
+void writeFrameExr(const Frame& frame, const std::string& path) {
+  if (frame.width <= 0 || frame.height <= 0)
+    throw InputError(formatError(path, "", "cannot write an empty frame (" + std::to_string(frame.width) + "x" +
+                                               std::to_string(frame.height) + ")"));
+  if (frame.names.empty()) throw InputError(formatError(path, "", "cannot write a frame with no channels"));
+  if (frame.data.size() != frame.names.size())
+    throw DriverError(formatError(path, "", "frame has " + std::to_string(frame.names.size()) + " names but " +
+                                                std::to_string(frame.data.size()) + " planes"));
+  const size_t pixels = frame.pixelCount();
+  const size_t channels = frame.names.size();
+  for (size_t c = 0; c < channels; ++c) {
+    if (frame.data[c].size() != pixels)
+      throw DriverError(formatError(path, "", "channel " + frame.names[c] + " has " +
+                                                  std::to_string(frame.data[c].size()) + " values; expected " +
+                                                  std::to_string(pixels)));
+    for (size_t k = 0; k < c; ++k)
+      if (frame.names[k] == frame.names[c])
+        throw DriverError(formatError(path, "", "duplicate channel " + frame.names[c]));
+  }
+  std::vector<float> interleaved(pixels * channels);
+  for (size_t c = 0; c < channels; ++c)
+    for (size_t i = 0; i < pixels; ++i) interleaved[i * channels + c] = frame.data[c][i];
+
+  OIIO::ImageSpec spec(frame.width, frame.height, int(channels), OIIO::TypeDesc::FLOAT);
+  spec.channelnames = frame.names;
+  spec.alpha_channel = -1;
+  spec.z_channel = -1;
+  spec.attribute("compression", "zip");
+  spec.attribute(kMetaAttribute, frame.meta.dump());
+  spec.attribute(kOrderAttribute, nlohmann::json(frame.names).dump());
+
+  writeImageAtomic(path, [&](const std::string& tmp) -> std::string {
+    auto out = OIIO::ImageOutput::create(tmp);
+    if (!out) return OIIO::geterror();
+    if (!out->open(tmp, spec)) return out->geterror();
+    if (!out->write_image(OIIO::TypeDesc::FLOAT, interleaved.data())) {
+      std::string e = out->geterror();
+      out->close();
+      return e;
+    }
+    if (!out->close()) return out->geterror();
+    return "";
+  });
+}
+
+Frame readFrameExr(const std::string& path) {
+  std::error_code ec;
+  if (!fs::exists(path, ec)) throw InputError(formatError(path, "", "cannot open file: no such file"));
+  auto in = OIIO::ImageInput::open(path);
+  if (!in) throw InputError(formatError(path, "", "cannot read image: " + OIIO::geterror()));
+  const OIIO::ImageSpec& spec = in->spec();
+  if (spec.width <= 0 || spec.height <= 0 || spec.nchannels <= 0)
+    throw InputError(formatError(path, "", "empty image"));
+  const int channels = spec.nchannels;
+  std::vector<float> interleaved(size_t(spec.width) * spec.height * channels);
+  if (!in->read_image(0, 0, 0, channels, OIIO::TypeDesc::FLOAT, interleaved.data()))
+    throw InputError(formatError(path, "", "cannot read image: " + in->geterror()));
+
+  Frame frame;
+  frame.width = spec.width;
+  frame.height = spec.height;
+  std::string metaText = spec.get_string_attribute(kMetaAttribute, "");
+  if (!metaText.empty()) {
+    frame.meta = nlohmann::json::parse(metaText, nullptr, false);
+    if (frame.meta.is_discarded())
+      throw InputError(formatError(path, std::string(kMetaAttribute), "attribute is not valid JSON"));
+  }
+  // The file's order is EXR's sorted order; restore the writer's insertion order when recorded.
+  std::map<std::string, int> fileIndex;
+  for (int c = 0; c < channels; ++c) {
+    std::string name = c < int(spec.channelnames.size()) ? spec.channelnames[c] : "channel" + std::to_string(c);
+    fileIndex[name] = c;
+  }
+  std::vector<std::string> order;
+  nlohmann::json recorded = nlohmann::json::parse(spec.get_string_attribute(kOrderAttribute, ""), nullptr, false);
+  if (recorded.is_array() && recorded.size() == fileIndex.size()) {
+    for (const auto& n : recorded)
+      if (n.is_string() && fileIndex.count(n.get<std::string>())) order.push_back(n.get<std::string>());
+  }
+  if (order.size() != fileIndex.size()) {
+    order.clear();
+    for (int c = 0; c < channels; ++c) order.push_back(spec.channelnames[c]);
+  }
+  const size_t pixels = frame.pixelCount();
+  for (const auto& name : order) {
+    int c = fileIndex.at(name);
+    std::vector<float>& plane = frame.add(name);
+    for (size_t i = 0; i < pixels; ++i) plane[i] = interleaved[i * channels + c];
+  }
+  return frame;
+}
+
+void writeRgbPng(const std::string& path, int width, int height, const std::vector<uint8_t>& rgb) {
+  if (width <= 0 || height <= 0 || rgb.size() != size_t(width) * size_t(height) * 3)
+    throw DriverError(formatError(path, "", "picture is " + std::to_string(width) + "x" + std::to_string(height) +
+                                                " with " + std::to_string(rgb.size()) + " bytes; expected w*h*3"));
+  OIIO::ImageSpec spec(width, height, 3, OIIO::TypeDesc::UINT8);
+  writeImageAtomic(path, [&](const std::string& tmp) -> std::string {
+    auto out = OIIO::ImageOutput::create(tmp);
+    if (!out) return OIIO::geterror();
+    if (!out->open(tmp, spec)) return out->geterror();
+    if (!out->write_image(OIIO::TypeDesc::UINT8, rgb.data())) {
+      std::string e = out->geterror();
+      out->close();
+      return e;
+    }
+    if (!out->close()) return out->geterror();
+    return "";
+  });
+}
+
+}  // namespace shadowlab

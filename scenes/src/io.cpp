@@ -1,0 +1,97 @@
+#include "shadowlab/scenes/io.h"
+
+#include <atomic>
+#include <cerrno>
+#include <cstdio>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <random>
+#include <sstream>
+
+#include <unistd.h>
+
+#include "shadowlab/scenes/error.h"
+
+namespace shadowlab {
+
+namespace fs = std::filesystem;
+
+namespace {
+
+// A temp name in the same folder as `path` (rename is only atomic within one filesystem),
+// unique per process and call so parallel writers of different outputs never collide.
+std::string tempPathFor(const std::string& path) {
+  static std::atomic<unsigned> counter{0};
+  fs::path p(path);
+  std::string stem = "." + p.filename().string() + ".tmp" + std::to_string(::getpid()) + "_" +
+                     std::to_string(counter++);
+  return (p.parent_path() / stem).string();
+}
+
+}  // namespace
+
+void writeFileAtomic(const std::string& path, const std::string& bytes) {
+  fs::path parent = fs::path(path).parent_path();
+  if (!parent.empty() && !fs::is_directory(parent))
+    throw InputError(formatError(path, "", "cannot write file: folder " + parent.string() + " does not exist"));
+  std::string tmp = tempPathFor(path);
+  std::FILE* f = std::fopen(tmp.c_str(), "wb");
+  if (!f) throw InputError(formatError(path, "", std::string("cannot write file: ") + std::strerror(errno)));
+  size_t written = bytes.empty() ? 0 : std::fwrite(bytes.data(), 1, bytes.size(), f);
+  bool ok = written == bytes.size();
+  ok = (std::fflush(f) == 0) && ok;
+  int err = errno;
+  ok = (std::fclose(f) == 0) && ok;
+  if (!ok) {
+    std::remove(tmp.c_str());
+    throw InputError(formatError(path, "", std::string("cannot write file: ") + std::strerror(err)));
+  }
+  if (std::rename(tmp.c_str(), path.c_str()) != 0) {
+    err = errno;
+    std::remove(tmp.c_str());
+    throw InputError(formatError(path, "", std::string("cannot write file: ") + std::strerror(err)));
+  }
+}
+
+void writeJsonAtomic(const std::string& path, const nlohmann::json& j) {
+  writeFileAtomic(path, j.dump(2) + "\n");
+}
+
+std::string readFile(const std::string& path) {
+  std::error_code ec;
+  if (fs::is_directory(path, ec))
+    throw InputError(formatError(path, "", "cannot open file: it is a folder"));
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw InputError(formatError(path, "", std::string("cannot open file: ") + std::strerror(errno)));
+  std::ostringstream ss;
+  ss << in.rdbuf();
+  if (in.bad()) throw InputError(formatError(path, "", "cannot read file"));
+  return ss.str();
+}
+
+void makeDirs(const std::string& dir) {
+  if (dir.empty()) return;
+  std::error_code ec;
+  fs::create_directories(dir, ec);
+  if (ec || !fs::is_directory(dir))
+    throw InputError(formatError(dir, "", "cannot create folder: " + (ec ? ec.message() : std::string("not a folder"))));
+}
+
+uint64_t fnv1a64(const void* data, size_t size, uint64_t seed) {
+  const auto* bytes = static_cast<const unsigned char*>(data);
+  uint64_t h = seed;
+  for (size_t i = 0; i < size; ++i) {
+    h ^= bytes[i];
+    h *= 1099511628211ull;
+  }
+  return h;
+}
+
+std::string hashHex(uint64_t h) {
+  char buf[17];
+  std::snprintf(buf, sizeof buf, "%016llx", static_cast<unsigned long long>(h));
+  return buf;
+}
+
+}  // namespace shadowlab

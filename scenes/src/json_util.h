@@ -1,0 +1,26 @@
+#pragma once
+// Internal helpers for the scene and method parsers: JSON with comments, GCC-style errors with
+// line:col for syntax errors and JSON pointers for everything else, and "got ..." descriptions.
+#include <string>
+
+#include <nlohmann/json.hpp>
+
+namespace shadowlab::detail {
+
+// Parses `text` (comments allowed). A syntax error throws InputError "file:line:col: error: ...".
+nlohmann::json parseJsonText(const std::string& text, const std::string& file);
+// readFile + parseJsonText.
+nlohmann::json parseJsonFile(const std::string& path);
+
+// 1-based line and column of the byte at 1-based offset `byte` (as nlohmann's parse_error::byte).
+void lineColumn(const std::string& text, size_t byte, size_t& line, size_t& column);
+
+// How a value reads in "got ..." messages: "abc" for strings, 1.5, true, null,
+// "an array of 2 values", "an object".
+std::string describe(const nlohmann::json& j);
+
+// "/a/b" + key with RFC 6901 escaping; "" + 0 -> "/0".
+std::string childPointer(const std::string& pointer, const std::string& key);
+std::string childPointer(const std::string& pointer, size_t index);
+
+}  // namespace shadowlab::detail

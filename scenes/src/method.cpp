@@ -1,0 +1,320 @@
+// Method parameters: one table of keys drives files, --set and --grid, so the three can never
+// disagree on names, types or ranges.
+#include "shadowlab/scenes/method.h"
+
+#include <cerrno>
+#include <cmath>
+#include <cstdlib>
+#include <functional>
+
+#include "json_util.h"
+#include "shadowlab/scenes/error.h"
+
+namespace shadowlab {
+
+namespace {
+
+// Every error from one key: "<file>: <place>: error: got X; expected Y".
+[[noreturn]] void fail(const std::string& file, const std::string& place, const std::string& got,
+                       const std::string& expected) {
+  throw InputError(formatError(file, place, "got " + got + "; expected " + expected));
+}
+
+struct Where {
+  std::string file;
+  std::string place;
+};
+
+// A value in either form: JSON (files, grids) or text (--set). Each key's parser asks for the
+// kind it needs and the conversion reports "got ..." in the form the user wrote.
+struct Value {
+  const nlohmann::json* json = nullptr;
+  const std::string* text = nullptr;
+
+  std::string got() const { return json ? detail::describe(*json) : nlohmann::json(*text).dump(); }
+
+  bool asInt(long long& out) const {
+    if (json) {
+      if (json->is_number_integer()) {
+        out = json->get<long long>();
+        return true;
+      }
+      if (json->is_number_float()) {
+        double d = json->get<double>();
+        if (std::isfinite(d) && std::floor(d) == d && std::fabs(d) < 1e15) {
+          out = static_cast<long long>(d);
+          return true;
+        }
+      }
+      return false;
+    }
+    if (text->empty()) return false;
+    errno = 0;
+    char* end = nullptr;
+    long long v = std::strtoll(text->c_str(), &end, 10);
+    if (errno != 0 || end != text->c_str() + text->size()) return false;
+    out = v;
+    return true;
+  }
+
+  bool asDouble(double& out) const {
+    if (json) {
+      if (!json->is_number()) return false;
+      out = json->get<double>();
+      return std::isfinite(out);
+    }
+    if (text->empty()) return false;
+    errno = 0;
+    char* end = nullptr;
+    double v = std::strtod(text->c_str(), &end);
+    // strtod accepts "nan", "inf" and hex floats: only plain finite decimals pass.
+    if (errno != 0 || end != text->c_str() + text->size() || !std::isfinite(v)) return false;
+    for (char c : *text)
+      if (!(std::isdigit(static_cast<unsigned char>(c)) || c == '.' || c == '-' || c == '+' || c == 'e' || c == 'E'))
+        return false;
+    out = v;
+    return true;
+  }
+
+  bool asBool(bool& out) const {
+    if (json) {
+      if (json->is_boolean()) {
+        out = json->get<bool>();
+        return true;
+      }
+      if (json->is_number_integer() && (json->get<long long>() == 0 || json->get<long long>() == 1)) {
+        out = json->get<long long>() == 1;
+        return true;
+      }
+      return false;
+    }
+    if (*text == "true" || *text == "1") {
+      out = true;
+      return true;
+    }
+    if (*text == "false" || *text == "0") {
+      out = false;
+      return true;
+    }
+    return false;
+  }
+
+  bool asString(std::string& out) const {
+    if (json) {
+      if (!json->is_string()) return false;
+      out = json->get<std::string>();
+      return true;
+    }
+    out = *text;
+    return true;
+  }
+};
+
+int intIn(const Value& v, const Where& w, long long lo, long long hi) {
+  long long x = 0;
+  std::string expected = "an integer " + std::to_string(lo) + ".." + std::to_string(hi);
+  if (!v.asInt(x) || x < lo || x > hi) fail(w.file, w.place, v.got(), expected);
+  return int(x);
+}
+
+float floatIn(const Value& v, const Where& w, double lo, double hi, bool loOpen, const std::string& expected) {
+  double x = 0;
+  if (!v.asDouble(x) || x > hi || x < lo || (loOpen && x == lo)) fail(w.file, w.place, v.got(), expected);
+  return float(x);
+}
+
+bool boolOf(const Value& v, const Where& w) {
+  bool b = false;
+  if (!v.asBool(b)) fail(w.file, w.place, v.got(), "true, false, 1 or 0");
+  return b;
+}
+
+template <class E>
+E enumOf(const Value& v, const Where& w, const std::vector<std::pair<const char*, E>>& choices) {
+  std::string s;
+  std::string names;
+  for (const auto& c : choices) names += (names.empty() ? "" : ", ") + std::string(c.first);
+  if (v.asString(s))
+    for (const auto& c : choices)
+      if (s == c.first) return c.second;
+  fail(w.file, w.place, v.got(), "one of " + names);
+}
+
+const std::vector<std::pair<const char*, DepthFormat>> kFormats = {
+    {"d16", DepthFormat::D16}, {"d24", DepthFormat::D24}, {"d32f", DepthFormat::D32F}};
+const std::vector<std::pair<const char*, CullMode>> kCulls = {
+    {"back", CullMode::Back}, {"front", CullMode::Front}, {"none", CullMode::None}};
+const std::vector<std::pair<const char*, Fit>> kFits = {{"sphere", Fit::Sphere}, {"tight", Fit::Tight}};
+const std::vector<std::pair<const char*, Filter>> kFilters = {{"none", Filter::None},
+                                                              {"hw2x2", Filter::Hw2x2},
+                                                              {"bilinear4", Filter::Bilinear4},
+                                                              {"pcf", Filter::Pcf},
+                                                              {"poisson", Filter::Poisson}};
+
+// Depth-bias factors are free in Vulkan (negative ones are legal and a sweep may probe them);
+// the bound only keeps a typo like 1e30 from overflowing the shader's arithmetic.
+constexpr double kBiasLimit = 1e6;
+
+using Setter = std::function<void(Method&, const Value&, const Where&)>;
+
+const std::vector<std::pair<std::string, Setter>>& setters() {
+  static const std::vector<std::pair<std::string, Setter>> table = {
+      {"map.size", [](Method& m, const Value& v, const Where& w) { m.mapSize = intIn(v, w, 16, 16384); }},
+      {"map.format", [](Method& m, const Value& v, const Where& w) { m.mapFormat = enumOf(v, w, kFormats); }},
+      {"cull", [](Method& m, const Value& v, const Where& w) { m.cull = enumOf(v, w, kCulls); }},
+      {"fit", [](Method& m, const Value& v, const Where& w) { m.fit = enumOf(v, w, kFits); }},
+      {"bias.constant",
+       [](Method& m, const Value& v, const Where& w) {
+         m.biasConstant = floatIn(v, w, -kBiasLimit, kBiasLimit, false, "a finite number -1e6..1e6 (units of r)");
+       }},
+      {"bias.slope",
+       [](Method& m, const Value& v, const Where& w) {
+         m.biasSlope = floatIn(v, w, -kBiasLimit, kBiasLimit, false, "a finite number -1e6..1e6");
+       }},
+      {"bias.clamp",
+       [](Method& m, const Value& v, const Where& w) {
+         m.biasClamp = floatIn(v, w, -1.0, 1.0, false, "a number -1..1 (normalized depth; 0 = no clamp)");
+       }},
+      {"bias.compare",
+       [](Method& m, const Value& v, const Where& w) {
+         m.biasCompare = floatIn(v, w, -1.0, 1.0, false, "a number -1..1 (normalized depth)");
+       }},
+      {"bias.normal",
+       [](Method& m, const Value& v, const Where& w) {
+         m.biasNormal = floatIn(v, w, 0.0, 64.0, false, "a number 0..64 (map texels)");
+       }},
+      {"bias.receiver_plane",
+       [](Method& m, const Value& v, const Where& w) { m.biasReceiverPlane = boolOf(v, w); }},
+      {"filter", [](Method& m, const Value& v, const Where& w) { m.filter = enumOf(v, w, kFilters); }},
+      {"filter.size", [](Method& m, const Value& v, const Where& w) { m.filterSize = intIn(v, w, 3, 15); }},
+      {"filter.taps", [](Method& m, const Value& v, const Where& w) { m.filterTaps = intIn(v, w, 1, 64); }},
+      {"filter.radius",
+       [](Method& m, const Value& v, const Where& w) {
+         m.filterRadius = floatIn(v, w, 0.0, 32.0, true, "a number > 0 and <= 32 (map texels)");
+       }},
+      {"projector.reverse_guard",
+       [](Method& m, const Value& v, const Where& w) { m.projectorReverseGuard = boolOf(v, w); }},
+  };
+  return table;
+}
+
+std::string keyList() {
+  std::string s = "name";
+  for (const auto& k : methodKeys()) s += ", " + k;
+  return s;
+}
+
+void apply(Method& m, const std::string& key, const Value& v, const Where& w) {
+  if (key == "name") {
+    std::string s;
+    if (!v.asString(s) || s.empty()) fail(w.file, w.place, v.got(), "a non-empty string");
+    m.name = s;
+    return;
+  }
+  for (const auto& [k, set] : setters())
+    if (k == key) {
+      set(m, v, w);
+      return;
+    }
+  throw InputError(formatError(w.file, w.place, "unknown method key \"" + key + "\"; expected one of " + keyList()));
+}
+
+}  // namespace
+
+const std::vector<std::string>& methodKeys() {
+  static const std::vector<std::string> keys = [] {
+    std::vector<std::string> k;
+    for (const auto& s : setters()) k.push_back(s.first);
+    return k;
+  }();
+  return keys;
+}
+
+Method loadMethodFile(const std::string& path) {
+  nlohmann::json doc = detail::parseJsonFile(path);
+  if (!doc.is_object()) fail(path, "", detail::describe(doc), "a JSON object of method keys");
+  Method m;
+  m.name.clear();
+  for (const auto& [key, value] : doc.items()) {
+    Value v{&value, nullptr};
+    apply(m, key, v, Where{path, detail::childPointer("", key)});
+  }
+  // An unnamed file is named after itself, so results stay distinguishable.
+  if (m.name.empty()) {
+    std::string stem = path.substr(path.find_last_of('/') + 1);
+    if (stem.size() > 5 && stem.compare(stem.size() - 5, 5, ".json") == 0) stem.resize(stem.size() - 5);
+    m.name = stem;
+  }
+  validateMethod(m, path);
+  return m;
+}
+
+void applyMethodSetting(Method& m, const std::string& key, const std::string& value, const std::string& origin) {
+  Value v{nullptr, &value};
+  apply(m, key, v, Where{origin, key});
+}
+
+void applyMethodJson(Method& m, const std::string& key, const nlohmann::json& value, const std::string& origin) {
+  Value v{&value, nullptr};
+  apply(m, key, v, Where{origin, key});
+}
+
+nlohmann::json methodToJson(const Method& m) {
+  nlohmann::json j = nlohmann::json::object();
+  j["name"] = m.name;
+  j["map.size"] = m.mapSize;
+  j["map.format"] = toString(m.mapFormat);
+  j["cull"] = toString(m.cull);
+  j["fit"] = toString(m.fit);
+  j["bias.constant"] = m.biasConstant;
+  j["bias.slope"] = m.biasSlope;
+  j["bias.clamp"] = m.biasClamp;
+  j["bias.compare"] = m.biasCompare;
+  j["bias.normal"] = m.biasNormal;
+  j["bias.receiver_plane"] = m.biasReceiverPlane;
+  j["filter"] = toString(m.filter);
+  j["filter.size"] = m.filterSize;
+  j["filter.taps"] = m.filterTaps;
+  j["filter.radius"] = m.filterRadius;
+  j["projector.reverse_guard"] = m.projectorReverseGuard;
+  return j;
+}
+
+void validateMethod(const Method& m, const std::string& origin) {
+  // A PCF grid is centered on the lookup texel: an even size has no center.
+  if (m.filterSize % 2 == 0)
+    throw InputError(formatError(origin, "filter.size",
+                                 "got " + std::to_string(m.filterSize) + "; expected an odd integer 3..15"));
+  if (m.filterSize < 3 || m.filterSize > 15)
+    throw InputError(formatError(origin, "filter.size",
+                                 "got " + std::to_string(m.filterSize) + "; expected an odd integer 3..15"));
+  if (m.mapSize < 16 || m.mapSize > 16384)
+    throw InputError(formatError(origin, "map.size", "got " + std::to_string(m.mapSize) + "; expected an integer 16..16384"));
+  if (m.filterTaps < 1 || m.filterTaps > 64)
+    throw InputError(formatError(origin, "filter.taps", "got " + std::to_string(m.filterTaps) + "; expected an integer 1..64"));
+  if (!(m.filterRadius > 0.0f && m.filterRadius <= 32.0f))
+    throw InputError(formatError(origin, "filter.radius", "got " + std::to_string(m.filterRadius) + "; expected a number > 0 and <= 32"));
+}
+
+std::string toString(DepthFormat f) {
+  for (const auto& c : kFormats)
+    if (c.second == f) return c.first;
+  return "?";
+}
+std::string toString(CullMode c) {
+  for (const auto& x : kCulls)
+    if (x.second == c) return x.first;
+  return "?";
+}
+std::string toString(Fit f) {
+  for (const auto& x : kFits)
+    if (x.second == f) return x.first;
+  return "?";
+}
+std::string toString(Filter f) {
+  for (const auto& x : kFilters)
+    if (x.second == f) return x.first;
+  return "?";
+}
+
+}  // namespace shadowlab

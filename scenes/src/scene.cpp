@@ -1,0 +1,121 @@
+// Camera, projector and texture conventions shared by the reference (rays) and the rasterizer
+// (matrices). Both renderers must agree to the last pixel, so the formulas live here once.
+#include "shadowlab/scenes/scene.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+#include <glm/gtc/matrix_transform.hpp>
+
+namespace shadowlab {
+
+namespace {
+
+// Right-handed perspective into Vulkan clip space for a camera looking down -z (view space, y up):
+//   clip.x = (f / aspect) * x
+//   clip.y = -f * y                              (Vulkan NDC y points down: +y_view -> top row)
+//   clip.z = far / (near - far) * z + near * far / (near - far)   (z = -near -> 0, z = -far -> 1)
+//   clip.w = -z
+// with f = 1 / tan(vfov / 2). The viewport (x = 0, y = 0, width W, height H) then maps
+// NDC to pixels: px = (ndc.x + 1) / 2 * W, py = (ndc.y + 1) / 2 * H, so pixel centers
+// (i + 0.5, j + 0.5) are the points rayDirection(i + 0.5, j + 0.5) passes through.
+glm::mat4 vulkanPerspective(float vfovDeg, float aspect, float nearPlane, float farPlane) {
+  float f = 1.0f / std::tan(glm::radians(vfovDeg) * 0.5f);
+  glm::mat4 m(0.0f);  // glm is column-major: m[col][row]
+  m[0][0] = f / aspect;
+  m[1][1] = -f;
+  m[2][2] = farPlane / (nearPlane - farPlane);
+  m[2][3] = -1.0f;
+  m[3][2] = nearPlane * farPlane / (nearPlane - farPlane);
+  return m;
+}
+
+}  // namespace
+
+// Alpha test lookup, both renderers: nearest texel with repeat addressing,
+//   x = floor(frac(u) * W), y = floor(frac(v) * H), frac(t) = t - floor(t),
+// clamped to W-1 / H-1 because frac of a value just below an integer can round to 1.0f.
+// v = 0 is the top row of the image.
+float sampleAlphaNearest(const Image& alpha, glm::vec2 uv) {
+  if (alpha.width <= 0 || alpha.height <= 0 || alpha.channels <= 0) return 1.0f;
+  float fu = uv.x - std::floor(uv.x);
+  float fv = uv.y - std::floor(uv.y);
+  int x = std::min(alpha.width - 1, std::max(0, int(std::floor(fu * float(alpha.width)))));
+  int y = std::min(alpha.height - 1, std::max(0, int(std::floor(fv * float(alpha.height)))));
+  return alpha.at(x, y, alpha.channels - 1);
+}
+
+// Projective texture matrix: bias * projection * view, where
+//   view       = lookAt(position, position + direction, up)        (right-handed, looks down -z)
+//   projection = vulkanPerspective(fovDeg, aspect, near, far)       (NDC y down, depth 0..1)
+//   bias       = u = 0.5 * ndc.x + 0.5, v = 0.5 * ndc.y + 0.5, depth unchanged
+// so (u, v, depth) = xyz / w with v = 0 at the image's top row, and w = -z_view: the distance
+// in front of the projector along its axis (w <= 0: behind it).
+glm::mat4 Projector::texFromWorld() const {
+  glm::mat4 view = glm::lookAt(position, position + direction, up);
+  glm::mat4 proj = vulkanPerspective(fovDeg, aspect, nearPlane, farPlane);
+  glm::mat4 bias(1.0f);
+  bias[0][0] = 0.5f;
+  bias[1][1] = 0.5f;
+  bias[3][0] = 0.5f;
+  bias[3][1] = 0.5f;
+  return bias * proj * view;
+}
+
+glm::mat4 Camera::viewFromWorld() const { return glm::lookAt(position, lookAt, up); }
+
+glm::mat4 Camera::clipFromView() const {
+  return vulkanPerspective(vfovDeg, float(width) / float(height), nearPlane, farPlane);
+}
+
+// The inverse of clipFromView for the point at image position (x, y) in pixels:
+//   ndc = (2x / W - 1, 2y / H - 1)
+//   d_view = (ndc.x * aspect * t, -ndc.y * t, -1), t = tan(vfov / 2)
+// expressed in world space with glm::lookAt's basis (right s, up u, forward f), then normalized.
+glm::vec3 Camera::rayDirection(float x, float y) const {
+  glm::vec3 forward = glm::normalize(lookAt - position);
+  glm::vec3 right = glm::normalize(glm::cross(forward, up));
+  glm::vec3 trueUp = glm::cross(right, forward);
+  float t = std::tan(glm::radians(vfovDeg) * 0.5f);
+  float aspect = float(width) / float(height);
+  float ndcX = 2.0f * x / float(width) - 1.0f;
+  float ndcY = 2.0f * y / float(height) - 1.0f;
+  return glm::normalize(forward + (ndcX * aspect * t) * right - (ndcY * t) * trueUp);
+}
+
+glm::vec3 Scene::boundsMin() const {
+  glm::vec3 lo(std::numeric_limits<float>::infinity());
+  bool any = false;
+  for (const auto& o : objects)
+    for (const auto& p : o.positions) {
+      lo = glm::min(lo, p);
+      any = true;
+    }
+  return any ? lo : glm::vec3(0.0f);
+}
+
+glm::vec3 Scene::boundsMax() const {
+  glm::vec3 hi(-std::numeric_limits<float>::infinity());
+  bool any = false;
+  for (const auto& o : objects)
+    for (const auto& p : o.positions) {
+      hi = glm::max(hi, p);
+      any = true;
+    }
+  return any ? hi : glm::vec3(0.0f);
+}
+
+const Light* Scene::findLight(const std::string& lightName) const {
+  for (const auto& l : lights)
+    if (l.name == lightName) return &l;
+  return nullptr;
+}
+
+size_t Scene::triangleCount() const {
+  size_t n = 0;
+  for (const auto& o : objects) n += o.triangles.size();
+  return n;
+}
+
+}  // namespace shadowlab
