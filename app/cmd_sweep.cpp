@@ -1,0 +1,140 @@
+// `shadowlab sweep [SCENES...] [--grid key=v1,v2]... [--sweep FILE] [--set key=value]... -o DIR`:
+// every scene x configuration of the grid, one row each, resumable; ends with results.json,
+// results.csv, figures/ and report.html (compare/SWEEPS.md).
+#include <signal.h>
+#include <unistd.h>
+
+#include <atomic>
+#include <cstdio>
+#include <filesystem>
+#include <memory>
+
+#include "command.h"
+#include "shadowlab/compare/sweep.h"
+#include "shadowlab/scenes/error.h"
+
+namespace {
+
+namespace fs = std::filesystem;
+using namespace shadowlab;
+
+struct Options {
+  std::vector<std::string> scenes;
+  std::vector<std::string> grid;
+  std::string sweepFile;
+  std::vector<std::string> sets;
+  std::string methodFile;
+  std::string outDir;
+  std::string light;
+  int spp = 0;  // 0: not given (the sweep file's, else 1)
+  std::string cacheDir;
+  std::string device;
+  bool keepImages = false;
+  bool noReport = false;
+};
+
+std::atomic<bool> gStop{false};
+static_assert(std::atomic<bool>::is_always_lock_free, "the signal handler needs a lock-free flag");
+
+extern "C" void onInterrupt(int) { gStop.store(true); }
+
+// SA_RESETHAND: the first Ctrl-C asks for a clean stop after the configuration in progress; a
+// second one kills the process the default way (rows already appended are safe either way).
+void installInterruptHandlers() {
+  struct sigaction sa {};
+  sa.sa_handler = onInterrupt;
+  sigemptyset(&sa.sa_mask);
+  sa.sa_flags = SA_RESETHAND;
+  sigaction(SIGINT, &sa, nullptr);
+  sigaction(SIGTERM, &sa, nullptr);
+}
+
+int run(const Options& o) {
+  // ---- inputs: every error surfaces here, before the output folder exists --------------------
+  SweepSpec spec;
+  if (!o.sweepFile.empty()) loadSweepFile(o.sweepFile, spec);
+  if (!o.scenes.empty()) spec.scenes = o.scenes;  // the command line names replace the file's
+  for (const auto& g : o.grid) {
+    SweepAxis axis = parseGridArgument(g);
+    bool replaced = false;
+    for (auto& existing : spec.grid)
+      if (existing.key == axis.key) {
+        existing = axis;
+        replaced = true;
+      }
+    if (!replaced) spec.grid.push_back(std::move(axis));
+  }
+  for (const auto& s : o.sets) {
+    SweepSetting setting = parseSetArgument(s);
+    bool replaced = false;
+    for (auto& existing : spec.fixed)
+      if (existing.key == setting.key) {
+        existing = setting;
+        replaced = true;
+      }
+    if (!replaced) spec.fixed.push_back(std::move(setting));
+  }
+  if (!o.methodFile.empty()) spec.methodFile = o.methodFile;
+  if (!o.light.empty()) spec.light = o.light;
+  if (o.spp != 0) {
+    if (o.spp < 1) throw InputError("--spp: error: got " + std::to_string(o.spp) + "; expected an integer >= 1");
+    spec.spp = o.spp;
+  }
+  if (o.keepImages) spec.keepImages = true;
+  std::error_code ec;
+  if (fs::exists(o.outDir, ec) && !fs::is_directory(o.outDir, ec))
+    throw InputError(formatError(o.outDir, "", "exists and is not a folder; expected an output folder for -o"));
+  const SweepPlan plan = planSweep(spec);
+
+  // ---- work ------------------------------------------------------------------------------------
+  const std::string cacheDir = o.cacheDir.empty() ? defaultSweepCacheDir(o.outDir) : o.cacheDir;
+  auto runner = makePipelineRunner(cacheDir, spec.spp, o.device);
+  SweepOptions options;
+  options.outDir = o.outDir;
+  options.progress = stderr;
+  options.progressBar = ::isatty(STDERR_FILENO) == 1;
+  options.stop = &gStop;
+  options.writeReport = !o.noReport;
+  options.reportScript = defaultReportScript(SHADOWLAB_SOURCE_DIR);
+  std::fprintf(stderr, "sweep: %zu scene(s) x %zu configuration(s) = %zu rows into %s (reference cache %s)\n",
+               plan.sceneNames.size(), plan.configs.size(), plan.jobs.size(), o.outDir.c_str(), cacheDir.c_str());
+  installInterruptHandlers();
+  const SweepSummary summary = runSweep(plan, *runner, options);
+  if (summary.interrupted) {
+    std::fprintf(stderr,
+                 "sweep: interrupted: %zu of %zu rows are saved in %s/rows.jsonl; run the same command again to "
+                 "continue\n",
+                 summary.resumed + summary.ran, summary.configurations, o.outDir.c_str());
+    return 130;
+  }
+  for (const auto& n : summary.notes) std::fprintf(stderr, "sweep: note: %s\n", n.c_str());
+  std::printf("sweep: %zu rows (%zu run, %zu resumed) in %.2f s\n", summary.configurations, summary.ran,
+              summary.resumed, summary.totalSeconds);
+  std::printf("sweep: wrote %s and %s\n", summary.resultsJson.c_str(), summary.resultsCsv.c_str());
+  if (!summary.reportHtml.empty()) std::printf("report: %s\n", fs::absolute(summary.reportHtml).c_str());
+  return 0;
+}
+
+app::Registrar reg{"sweep", [](CLI::App& app) {
+  auto opts = std::make_shared<Options>();
+  auto* sub = app.add_subcommand("sweep", "Sweep scenes x a grid of method settings into a report (compare/SWEEPS.md)");
+  sub->add_option("SCENES", opts->scenes, "Bundled scene names or scene files (default: every bundled scene)");
+  sub->add_option("--grid", opts->grid,
+                  "Swept key and its values, repeatable: key=v1,v2,... (method keys, or scene:/json/pointer)")
+      ->allow_extra_args(false);
+  sub->add_option("--sweep", opts->sweepFile, "Sweep file (JSON: scenes, grid, set, ...); the command line adds to it");
+  sub->add_option("--set", opts->sets, "Method setting for every configuration key=value, repeatable")
+      ->allow_extra_args(false);
+  sub->add_option("--method", opts->methodFile, "Base method file (JSON, see raster/METHODS.md)");
+  sub->add_option("-o,--out", opts->outDir, "Output folder (running again continues an interrupted sweep)")->required();
+  sub->add_option("--light", opts->light, "Light to render and compare (default: each scene's first)");
+  sub->add_option("--spp", opts->spp, "Reference samples per pixel (default 1)");
+  sub->add_option("--cache", opts->cacheDir,
+                  "Reference cache folder (default: $SHADOWLAB_CACHE, else .shadowlab-cache beside the output folder)");
+  sub->add_option("--device", opts->device, "Vulkan device name substring (default: lavapipe)");
+  sub->add_flag("--keep-images", opts->keepImages, "Write raster.exr and errors.png per configuration under DIR/images/");
+  sub->add_flag("--no-report", opts->noReport, "Write results.json/csv only: no charts, triptychs or report.html");
+  return std::function<int()>([opts] { return run(*opts); });
+}};
+
+}  // namespace

@@ -1,0 +1,180 @@
+#pragma once
+// Sweeps: every scene x configuration of a grid of method (and scene) values, one ResultRow each,
+// resumable after an interruption, ending in results.csv / results.json / figures/ / report.html.
+// The command line and the sweep file format are documented in compare/SWEEPS.md.
+//
+// The work is split so that every input error surfaces before anything is written:
+//   SweepSpec  (what the user asked: scenes, grid axes, fixed settings)
+//     -> planSweep()  validates every key and value, loads every scene, expands the grid (no I/O
+//                     besides reading inputs)
+//     -> runSweep()   creates the output folder, runs the missing rows through a SweepRunner and
+//                     regenerates the outputs.
+// The runner is injectable: production uses makePipelineRunner() (reference cache + one Rasterizer
+// + compareFrames, exactly what runPipeline does); tests inject a fake to exercise resume,
+// interruption and grid logic without renderers.
+#include <atomic>
+#include <cstdio>
+#include <memory>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "shadowlab/compare/results.h"
+#include "shadowlab/scenes/loader.h"
+#include "shadowlab/scenes/method.h"
+#include "shadowlab/scenes/scene.h"
+
+namespace shadowlab {
+
+// Swept keys are method keys (methodKeys(), e.g. "map.size") or scene values written
+// "scene:" + a JSON pointer into the scene file (e.g. "scene:/lights/0/elevation_deg").
+inline constexpr const char* kSceneKeyPrefix = "scene:";
+
+struct SweepAxis {
+  std::string key;
+  std::vector<nlohmann::json> values;  // text from the command line, typed values from a sweep file
+  std::string origin;                  // where it came from, for messages: "--grid map.size=..."
+  std::vector<std::string> valueOrigins;  // one per value ("sweep.json: /grid/map.size/2")
+};
+
+struct SweepSetting {
+  std::string key;
+  nlohmann::json value;
+  std::string origin;
+};
+
+struct SweepSpec {
+  std::vector<std::string> scenes;     // bundled names or paths; empty = every bundled scene
+  std::vector<SweepAxis> grid;         // in the order given; the last axis varies fastest
+  std::vector<SweepSetting> fixed;     // --set / "set": applied to every configuration, before the grid
+  std::string methodFile;              // optional base method file (--method / "method")
+  std::string light;                   // empty: each scene's first light
+  int spp = 1;                         // reference samples per pixel
+  bool keepImages = false;             // write raster.exr + errors.png per configuration
+};
+
+// "map.size=256,512" (from --grid). InputError when there is no '=', no key or an empty list;
+// the key and the values are validated by planSweep.
+SweepAxis parseGridArgument(const std::string& text);
+// "filter=pcf" (from --set).
+SweepSetting parseSetArgument(const std::string& text);
+// Reads a sweep file (JSON, comments allowed) into `spec`; what the command line gives is added
+// afterwards by the caller (grid axes given again on the command line replace the file's).
+// InputError naming the file and line:col (syntax) or JSON pointer (shape, keys, values).
+void loadSweepFile(const std::string& path, SweepSpec& spec);
+
+// The canonical text of one value: strings as they are, integers plainly, other numbers with
+// %.6g (so "0.50" and 0.5 are the same configuration), booleans true/false, anything else as
+// compact JSON.
+std::string canonicalValueText(const nlohmann::json& value);
+
+struct SweepConfig {
+  // Canonical "key=value,..." of the swept keys sorted by key ("default" when nothing is swept):
+  // the row's `config`, also the resume key.
+  std::string config;
+  std::vector<std::pair<std::string, std::string>> values;  // swept key -> canonical value, sorted
+  Method method;                                            // base + fixed + this point of the grid
+  std::vector<SceneOverride> sceneOverrides;                // the scene: keys of this point
+};
+
+struct SweepJob {
+  size_t sceneIndex = 0;   // into SweepPlan::scenePaths
+  size_t configIndex = 0;  // into SweepPlan::configs
+  size_t variantIndex = 0; // into SweepPlan::variants: the scene as loaded for this point
+  std::string light;       // resolved light name
+  std::string key() const; // ResultRow::key() of its row
+  std::string sceneName;
+  std::string config;
+};
+
+struct SweepPlan {
+  SweepSpec spec;
+  std::vector<std::string> scenePaths;        // resolved, one per requested scene
+  std::vector<std::string> sceneNames;
+  std::vector<SweepConfig> configs;           // the expanded grid (same for every scene)
+  std::vector<Scene> variants;                // each scene under each distinct set of scene: values
+  std::vector<SweepJob> jobs;                 // scene-major, then configuration in grid order
+};
+
+// Validates everything (keys, every value of every axis, cross-field rules of every configuration,
+// scenes, lights) and expands the grid. Reads the inputs; writes nothing.
+SweepPlan planSweep(const SweepSpec& spec);
+
+// What one configuration produced (the renderer-independent part of a ResultRow).
+struct SweepRunOutput {
+  nlohmann::json metrics = nlohmann::json::object();  // Metrics::toJson()
+  nlohmann::json timings = nlohmann::json::object();  // shadow_ms, camera_ms, readback_ms, compare_ms
+};
+
+class SweepRunner {
+ public:
+  virtual ~SweepRunner() = default;
+  // Runs one configuration. `imagesDir` non-empty: also write raster.exr and errors.png there.
+  virtual SweepRunOutput run(const Scene& scene, const Method& method, const std::string& light,
+                             const std::string& imagesDir) = 0;
+  // Renders one configuration again and writes reference | raster | errors to `pngPath`.
+  // Returns false when this runner cannot make pictures.
+  virtual bool writeTriptych(const Scene& scene, const Method& method, const std::string& light,
+                             const std::string& pngPath) = 0;
+  // Device and cache facts for results.json ("device", "reference_cache", ...).
+  virtual nlohmann::json info() const { return nlohmann::json::object(); }
+};
+
+// Production runner: references from a ReferenceCache in `cacheDir` (traced once per scene and
+// camera, kept in memory for the sweep), one Rasterizer (created on first use, on the Vulkan device
+// whose name contains `device`; empty = lavapipe), compareFrames.
+std::unique_ptr<SweepRunner> makePipelineRunner(const std::string& cacheDir, int spp, const std::string& device = "");
+
+// The cache folder a sweep into `outDir` uses when none is given: $SHADOWLAB_CACHE, else
+// <parent of outDir>/.shadowlab-cache, so sweeps side by side share their references.
+std::string defaultSweepCacheDir(const std::string& outDir);
+
+struct SweepOptions {
+  std::string outDir;
+  // Progress: a bar with rate and ETA when `progressBar`, plain lines otherwise; null: silent.
+  std::FILE* progress = stderr;
+  bool progressBar = false;
+  // Set (e.g. by a SIGINT handler) to stop after the configuration in progress.
+  const std::atomic<bool>* stop = nullptr;
+  bool writeReport = true;   // charts + report.html (results.csv/json are always written)
+  bool triptychs = true;     // render the best and worst configuration of each scene again
+  std::string reportScript;  // chart script; empty: no charts (a note in the report). See defaultReportScript.
+  std::string python;        // empty: $SHADOWLAB_PYTHON, else /usr/bin/python3
+};
+
+struct SweepSummary {
+  size_t configurations = 0;  // rows planned
+  size_t resumed = 0;         // rows found in rows.jsonl and not run again
+  size_t ran = 0;             // rows run by this call
+  bool interrupted = false;   // stopped by options.stop; outputs not regenerated
+  double totalSeconds = 0;
+  std::string resultsJson, resultsCsv, reportHtml;  // empty when not written
+  std::vector<std::string> notes;                   // e.g. charts skipped or failed
+};
+
+// Runs the plan into options.outDir (created), appending each finished row durably to
+// outDir/rows.jsonl (fsync'd); rows already there for the same scene content and method are not
+// run again; a torn last line is dropped. At the end writes results.json, results.csv, figures/
+// and report.html. Log of starts/finishes: outDir/sweep.log.
+SweepSummary runSweep(const SweepPlan& plan, SweepRunner& runner, const SweepOptions& options);
+
+// The report of a finished sweep whose results.json is written: runs the chart script into
+// outDir/figures (PNG, PDF, SVG and figures/charts.json), renders the best and worst configuration
+// of each scene again for triptychs (figures/triptych_*.png) and writes outDir/report.html.
+// Returns notes (charts skipped, script failures) that the report also shows.
+std::vector<std::string> writeSweepReport(const SweepPlan& plan, const std::vector<ResultRow>& rows,
+                                          const nlohmann::json& results, SweepRunner& runner,
+                                          const SweepOptions& options);
+
+// Pieces of the report, usable on their own.
+void writeResultsCsv(const std::string& path, const std::vector<ResultRow>& rows);
+// Per scene: configurations on the Pareto front of (raster time = shadow_ms + camera_ms,
+// error_rate), by increasing time: each is the lowest error reachable within its time budget.
+std::vector<size_t> paretoFront(const std::vector<ResultRow>& rows, const std::string& scene);
+// The chart script: $SHADOWLAB_REPORT_SCRIPT when set, else <sourceDir>/compare/report/charts.py
+// (the executables know their source folder through the SHADOWLAB_SOURCE_DIR definition).
+std::string defaultReportScript(const std::string& sourceDir);
+
+}  // namespace shadowlab

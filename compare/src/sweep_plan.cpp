@@ -1,0 +1,414 @@
+// Sweep specification -> validated plan. Everything that can be wrong with the user's input is
+// found here, before runSweep creates a single file (the CLI promises "nothing written" on exit 2).
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <map>
+#include <set>
+
+#include "shadowlab/compare/sweep.h"
+#include "shadowlab/compare/gate.h"
+#include "shadowlab/scenes/error.h"
+#include "shadowlab/scenes/io.h"
+
+namespace shadowlab {
+namespace {
+
+using ojson = nlohmann::ordered_json;
+
+// A grid larger than this is almost certainly a typo (e.g. a pasted list); refuse it rather than
+// start a run of days.
+constexpr size_t kMaxConfigurations = 100000;
+
+std::string trim(const std::string& s) {
+  size_t b = s.find_first_not_of(" \t\r\n");
+  if (b == std::string::npos) return "";
+  size_t e = s.find_last_not_of(" \t\r\n");
+  return s.substr(b, e - b + 1);
+}
+
+// RFC 6901 escaping of one reference token ("scene:/a/b" holds slashes).
+std::string pointerToken(const std::string& token) {
+  std::string out;
+  for (char c : token) {
+    if (c == '~') out += "~0";
+    else if (c == '/') out += "~1";
+    else out += c;
+  }
+  return out;
+}
+
+std::string joinKeys(const std::vector<std::string>& keys) {
+  std::string out;
+  for (size_t i = 0; i < keys.size(); ++i) out += (i ? ", " : "") + keys[i];
+  return out;
+}
+
+bool isMethodKey(const std::string& key) {
+  const auto& keys = methodKeys();
+  return std::find(keys.begin(), keys.end(), key) != keys.end();
+}
+
+bool isSceneKey(const std::string& key) { return key.rfind(kSceneKeyPrefix, 0) == 0; }
+
+std::string scenePointerOf(const std::string& key) { return key.substr(std::string(kSceneKeyPrefix).size()); }
+
+void checkKey(const std::string& key, const std::string& origin) {
+  if (isMethodKey(key)) return;
+  if (isSceneKey(key)) {
+    std::string pointer = scenePointerOf(key);
+    try {
+      if (pointer.empty() || pointer[0] != '/') throw std::invalid_argument("must start with '/'");
+      nlohmann::json::json_pointer p(pointer);
+      (void)p;
+      return;
+    } catch (const std::exception&) {
+      throw InputError(formatError(origin, "", "scene key \"" + key +
+                                                   "\" has no valid JSON pointer; expected scene:/path/to/value, "
+                                                   "e.g. scene:/lights/0/elevation_deg"));
+    }
+  }
+  throw InputError(formatError(origin, "", "unknown key \"" + key + "\"; expected one of " +
+                                               joinKeys(methodKeys()) + ", or scene:/json/pointer"));
+}
+
+// Text from the command line given to a scene value: a JSON literal when it parses as one
+// (30 -> number, true -> bool), else the text as a string.
+nlohmann::json sceneValueFromText(const nlohmann::json& v) {
+  if (!v.is_string()) return v;
+  const std::string text = v.get<std::string>();
+  try {
+    auto parsed = nlohmann::json::parse(text);
+    if (parsed.is_primitive()) return parsed;
+  } catch (const std::exception&) {
+  }
+  return v;
+}
+
+void applyValue(Method& m, const std::string& key, const nlohmann::json& value, const std::string& origin) {
+  // Command-line values arrive as text, sweep-file values typed: each goes through the parser
+  // meant for it so that "256" and 256 are checked by the same rules.
+  if (value.is_string()) applyMethodSetting(m, key, value.get<std::string>(), origin);
+  else applyMethodJson(m, key, value, origin);
+}
+
+std::string methodValueText(const Method& m, const std::string& key) {
+  nlohmann::json j = methodToJson(m);
+  if (!j.contains(key)) throw DriverError("methodToJson has no key \"" + key + "\"");
+  return canonicalValueText(j.at(key));
+}
+
+std::string dirOf(const std::string& path) {
+  size_t slash = path.find_last_of('/');
+  return slash == std::string::npos ? "" : path.substr(0, slash + 1);
+}
+
+std::string typeName(const ojson& j) { return j.type_name(); }
+
+}  // namespace
+
+std::string canonicalValueText(const nlohmann::json& value) {
+  if (value.is_string()) return value.get<std::string>();
+  if (value.is_boolean()) return value.get<bool>() ? "true" : "false";
+  if (value.is_number_integer()) return std::to_string(value.get<int64_t>());
+  if (value.is_number_unsigned()) return std::to_string(value.get<uint64_t>());
+  if (value.is_number_float()) {
+    double d = value.get<double>();
+    if (d == 0.0) return "0";  // also folds -0
+    char buf[64];
+    std::snprintf(buf, sizeof buf, "%.6g", d);
+    return buf;
+  }
+  return value.dump();
+}
+
+std::string SweepJob::key() const {
+  ResultRow row;
+  row.scene = sceneName;
+  row.config = config;
+  row.light = light;
+  return row.key();
+}
+
+SweepAxis parseGridArgument(const std::string& text) {
+  const std::string origin = "--grid " + text;
+  size_t eq = text.find('=');
+  if (eq == std::string::npos)
+    throw InputError(formatError(origin, "", "no '=' found; expected key=v1,v2,... (e.g. map.size=512,1024)"));
+  SweepAxis axis;
+  axis.key = trim(text.substr(0, eq));
+  axis.origin = origin;
+  if (axis.key.empty()) throw InputError(formatError(origin, "", "empty key; expected key=v1,v2,..."));
+  std::string list = text.substr(eq + 1);
+  if (trim(list).empty())
+    throw InputError(formatError(origin, "", "empty list of values for \"" + axis.key + "\"; expected key=v1,v2,..."));
+  size_t start = 0;
+  int index = 0;
+  while (true) {
+    size_t comma = list.find(',', start);
+    std::string item = trim(list.substr(start, comma == std::string::npos ? std::string::npos : comma - start));
+    ++index;
+    if (item.empty())
+      throw InputError(formatError(origin, "", "value " + std::to_string(index) + " of \"" + axis.key +
+                                                   "\" is empty; expected a comma-separated list without gaps"));
+    axis.values.push_back(item);
+    axis.valueOrigins.push_back(origin);
+    if (comma == std::string::npos) break;
+    start = comma + 1;
+  }
+  return axis;
+}
+
+SweepSetting parseSetArgument(const std::string& text) {
+  const std::string origin = "--set " + text;
+  size_t eq = text.find('=');
+  if (eq == std::string::npos) throw InputError(formatError(origin, "", "no '=' found; expected key=value"));
+  SweepSetting s;
+  s.key = trim(text.substr(0, eq));
+  s.value = trim(text.substr(eq + 1));
+  s.origin = origin;
+  if (s.key.empty()) throw InputError(formatError(origin, "", "empty key; expected key=value"));
+  if (s.value.get<std::string>().empty())
+    throw InputError(formatError(origin, "", "empty value for \"" + s.key + "\"; expected key=value"));
+  return s;
+}
+
+void loadSweepFile(const std::string& path, SweepSpec& spec) {
+  const std::string text = readFile(path);
+  // The gate's parser words syntax errors the house way ("file:line:col: error: ..."); the
+  // document is then read again keeping the user's key order (the grid's axis order).
+  (void)parseJsonDocument(text, path);
+  ojson doc = ojson::parse(text, nullptr, true, /*ignore_comments=*/true);
+  auto fail = [&](const std::string& pointer, const std::string& what) {
+    throw InputError(formatError(path, pointer, what));
+  };
+  if (!doc.is_object()) fail("", "got " + typeName(doc) + "; expected an object { \"scenes\", \"grid\", \"set\", ... }");
+  const std::string baseDir = dirOf(path);
+  for (auto it = doc.begin(); it != doc.end(); ++it) {
+    const std::string& k = it.key();
+    const ojson& v = it.value();
+    const std::string ptr = "/" + pointerToken(k);
+    if (k == "scenes") {
+      if (v.is_string()) {
+        spec.scenes.push_back(v.get<std::string>());
+        continue;
+      }
+      if (!v.is_array()) fail(ptr, "got " + typeName(v) + "; expected an array of scene names or paths");
+      if (v.empty()) fail(ptr, "empty list; expected at least one scene (leave \"scenes\" out for all bundled scenes)");
+      for (size_t i = 0; i < v.size(); ++i) {
+        if (!v[i].is_string() || v[i].get<std::string>().empty())
+          fail(ptr + "/" + std::to_string(i), "got " + typeName(v[i]) + "; expected a scene name or path");
+        std::string s = v[i].get<std::string>();
+        // Paths are relative to the sweep file; bare names are bundled scenes.
+        bool isPath = s.find('/') != std::string::npos || (s.size() > 5 && s.substr(s.size() - 5) == ".json");
+        if (isPath && s[0] != '/') s = baseDir + s;
+        spec.scenes.push_back(s);
+      }
+    } else if (k == "grid") {
+      if (!v.is_object()) fail(ptr, "got " + typeName(v) + "; expected an object {\"key\": [v1, v2, ...]}");
+      for (auto g = v.begin(); g != v.end(); ++g) {
+        const std::string gptr = ptr + "/" + pointerToken(g.key());
+        SweepAxis axis;
+        axis.key = g.key();
+        axis.origin = path + ": " + gptr;
+        checkKey(axis.key, axis.origin);
+        const ojson& list = g.value();
+        if (!list.is_array()) fail(gptr, "got " + typeName(list) + "; expected an array of values");
+        if (list.empty()) fail(gptr, "empty list of values; expected at least one");
+        for (size_t i = 0; i < list.size(); ++i) {
+          const ojson& item = list[i];
+          const std::string iptr = gptr + "/" + std::to_string(i);
+          if (!item.is_primitive() || item.is_null()) {
+            if (!isSceneKey(axis.key) || item.is_null())
+              fail(iptr, "got " + typeName(item) + "; expected a number, string or boolean");
+          }
+          axis.values.push_back(nlohmann::json::parse(item.dump()));
+          axis.valueOrigins.push_back(path + ": " + iptr);
+        }
+        // A key given twice in a file is caught by the plan's duplicate check.
+        spec.grid.push_back(std::move(axis));
+      }
+    } else if (k == "set") {
+      if (!v.is_object()) fail(ptr, "got " + typeName(v) + "; expected an object {\"key\": value}");
+      for (auto s = v.begin(); s != v.end(); ++s) {
+        const std::string sptr = ptr + "/" + pointerToken(s.key());
+        if (!s.value().is_primitive() || s.value().is_null())
+          fail(sptr, "got " + typeName(s.value()) + "; expected a number, string or boolean");
+        spec.fixed.push_back({s.key(), nlohmann::json::parse(s.value().dump()), path + ": " + sptr});
+      }
+    } else if (k == "method") {
+      if (!v.is_string() || v.get<std::string>().empty()) fail(ptr, "got " + typeName(v) + "; expected a method file path");
+      std::string m = v.get<std::string>();
+      spec.methodFile = m[0] == '/' ? m : baseDir + m;
+    } else if (k == "light") {
+      if (!v.is_string()) fail(ptr, "got " + typeName(v) + "; expected a light name");
+      spec.light = v.get<std::string>();
+    } else if (k == "spp") {
+      if (!v.is_number_integer() || v.get<int64_t>() < 1 || v.get<int64_t>() > 4096)
+        fail(ptr, "got " + v.dump() + "; expected an integer from 1 to 4096");
+      spec.spp = v.get<int>();
+    } else if (k == "keep_images") {
+      if (!v.is_boolean()) fail(ptr, "got " + typeName(v) + "; expected true or false");
+      spec.keepImages = v.get<bool>();
+    } else if (k == "description" || k == "$schema") {
+      if (!v.is_string()) fail(ptr, "got " + typeName(v) + "; expected a string");
+    } else {
+      fail(ptr, "unknown key \"" + k + "\"; expected one of scenes, grid, set, method, light, spp, keep_images, description");
+    }
+  }
+}
+
+SweepPlan planSweep(const SweepSpec& spec) {
+  SweepPlan plan;
+  plan.spec = spec;
+  if (spec.spp < 1) throw InputError(formatError("--spp", "", "got " + std::to_string(spec.spp) + "; expected 1 or more"));
+
+  // Base method: file, then fixed settings.
+  Method base;
+  if (!spec.methodFile.empty()) base = loadMethodFile(spec.methodFile);
+  std::set<std::string> fixedKeys;
+  std::vector<SceneOverride> fixedSceneOverrides;
+  for (const auto& s : spec.fixed) {
+    checkKey(s.key, s.origin);
+    if (!fixedKeys.insert(s.key).second)
+      throw InputError(formatError(s.origin, "", "\"" + s.key + "\" is set twice; expected each key once"));
+    if (isSceneKey(s.key)) fixedSceneOverrides.push_back({scenePointerOf(s.key), sceneValueFromText(s.value)});
+    else applyValue(base, s.key, s.value, s.origin);
+  }
+
+  // Axes: known keys, each once, not also fixed, every value valid on its own and distinct.
+  struct Point {
+    std::string text;
+    nlohmann::json value;
+    std::string origin;
+  };
+  std::vector<std::vector<Point>> axisPoints;
+  std::set<std::string> axisKeys;
+  for (const auto& axis : spec.grid) {
+    checkKey(axis.key, axis.origin);
+    if (axis.values.empty())
+      throw InputError(formatError(axis.origin, "", "empty list of values for \"" + axis.key + "\"; expected at least one"));
+    if (!axisKeys.insert(axis.key).second)
+      throw InputError(formatError(axis.origin, "", "\"" + axis.key + "\" is swept twice; expected each key in one --grid"));
+    if (fixedKeys.count(axis.key))
+      throw InputError(formatError(axis.origin, "", "\"" + axis.key + "\" is both swept and fixed by --set; expected one of them"));
+    std::vector<Point> points;
+    std::set<std::string> seen;
+    for (size_t i = 0; i < axis.values.size(); ++i) {
+      const std::string& origin = i < axis.valueOrigins.size() ? axis.valueOrigins[i] : axis.origin;
+      Point p;
+      p.origin = origin;
+      if (isSceneKey(axis.key)) {
+        p.value = sceneValueFromText(axis.values[i]);
+        p.text = canonicalValueText(p.value);
+      } else {
+        Method probe = base;
+        applyValue(probe, axis.key, axis.values[i], origin);
+        p.value = axis.values[i];
+        p.text = methodValueText(probe, axis.key);
+      }
+      if (!seen.insert(p.text).second)
+        throw InputError(formatError(origin, "", "value \"" + p.text + "\" of \"" + axis.key +
+                                                     "\" appears twice; expected distinct values"));
+      points.push_back(std::move(p));
+    }
+    axisPoints.push_back(std::move(points));
+  }
+
+  size_t total = 1;
+  for (const auto& pts : axisPoints) {
+    total *= pts.size();
+    if (total > kMaxConfigurations)
+      throw InputError(formatError("shadowlab sweep", "", "the grid has more than " + std::to_string(kMaxConfigurations) +
+                                                             " configurations; expected a smaller grid"));
+  }
+
+  // Expand: the last axis varies fastest (odometer order).
+  std::vector<size_t> idx(axisPoints.size(), 0);
+  for (size_t n = 0; n < total; ++n) {
+    SweepConfig c;
+    c.method = base;
+    c.sceneOverrides = fixedSceneOverrides;
+    for (size_t a = 0; a < axisPoints.size(); ++a) {
+      const Point& p = axisPoints[a][idx[a]];
+      const std::string& key = spec.grid[a].key;
+      if (isSceneKey(key)) c.sceneOverrides.push_back({scenePointerOf(key), p.value});
+      else applyValue(c.method, key, p.value, p.origin);
+      c.values.emplace_back(key, p.text);
+    }
+    std::sort(c.values.begin(), c.values.end());
+    for (const auto& [k, v] : c.values) c.config += (c.config.empty() ? "" : ",") + k + "=" + v;
+    if (c.config.empty()) c.config = "default";
+    validateMethod(c.method, "shadowlab sweep: configuration " + c.config);
+    plan.configs.push_back(std::move(c));
+    for (size_t a = axisPoints.size(); a-- > 0;) {
+      if (++idx[a] < axisPoints[a].size()) break;
+      idx[a] = 0;
+    }
+  }
+
+  // Scenes: resolve, load each under every distinct set of scene values, resolve the light.
+  std::vector<std::string> requested = spec.scenes;
+  if (requested.empty()) requested = bundledSceneNames();
+  if (requested.empty())
+    throw InputError(formatError("shadowlab sweep", "", "no scenes given and no bundled scenes found in " + bundledScenesDir()));
+  std::set<std::string> seenPaths;
+  for (const auto& s : requested) {
+    std::string p = resolveScenePath(s);
+    if (!seenPaths.insert(p).second)
+      throw InputError(formatError("shadowlab sweep", "", "scene \"" + s + "\" is given twice; expected each scene once"));
+    plan.scenePaths.push_back(p);
+  }
+  std::map<std::string, size_t> variantOf;  // scene index + overrides -> variant
+  for (size_t si = 0; si < plan.scenePaths.size(); ++si) {
+    std::string sceneName;
+    std::string light;
+    for (size_t ci = 0; ci < plan.configs.size(); ++ci) {
+      const SweepConfig& c = plan.configs[ci];
+      std::string vkey = std::to_string(si);
+      for (const auto& o : c.sceneOverrides) vkey += "\n" + o.pointer + "=" + o.value.dump();
+      auto found = variantOf.find(vkey);
+      size_t vi;
+      if (found == variantOf.end()) {
+        vi = plan.variants.size();
+        plan.variants.push_back(loadScene(plan.scenePaths[si], c.sceneOverrides));
+        variantOf.emplace(vkey, vi);
+      } else {
+        vi = found->second;
+      }
+      const Scene& scene = plan.variants[vi];
+      if (scene.lights.empty())
+        throw InputError(formatError(plan.scenePaths[si], "/lights", "the scene has no light; expected at least one to compare"));
+      if (sceneName.empty()) {
+        sceneName = scene.name;
+        for (const auto& other : plan.sceneNames)
+          if (other == sceneName)
+            throw InputError(formatError(plan.scenePaths[si], "", "two scenes are named \"" + sceneName +
+                                                                     "\"; expected distinct file names (rows are matched by name)"));
+      }
+      if (!spec.light.empty()) {
+        if (!scene.findLight(spec.light)) {
+          std::vector<std::string> names;
+          for (const auto& l : scene.lights) names.push_back(l.name);
+          throw InputError(formatError(plan.scenePaths[si], "", "no light named \"" + spec.light + "\"; expected one of " +
+                                                                   (names.empty() ? std::string("(none)") : joinKeys(names))));
+        }
+        light = spec.light;
+      } else {
+        light = scene.lights.empty() ? "" : scene.lights.front().name;
+      }
+      SweepJob job;
+      job.sceneIndex = si;
+      job.configIndex = ci;
+      job.variantIndex = vi;
+      job.light = light;
+      job.sceneName = sceneName;
+      job.config = c.config;
+      plan.jobs.push_back(std::move(job));
+    }
+    plan.sceneNames.push_back(sceneName);
+  }
+  return plan;
+}
+
+}  // namespace shadowlab

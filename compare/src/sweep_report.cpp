@@ -1,0 +1,524 @@
+// The sweep's readable outputs: results.csv, the charts (a matplotlib script, run as a child
+// process so that the C++ side needs no Python), the triptychs and report.html.
+//
+// report.html must open from disk with no network: no external scripts, fonts or styles; every
+// picture is a relative file under figures/ (the folder travels together). A small inline script
+// marks document.body.dataset.imagesOk after checking every <img>, so a headless browser can tell
+// a broken report from a good one (tests/report_chromium_test.cpp).
+#include <fcntl.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <cctype>
+#include <optional>
+#include <cmath>
+#include <cstring>
+#include <ctime>
+#include <filesystem>
+#include <map>
+#include <set>
+#include <sstream>
+
+#include "shadowlab/compare/sweep.h"
+#include "shadowlab/scenes/error.h"
+#include "shadowlab/scenes/io.h"
+
+namespace shadowlab {
+namespace {
+
+namespace fs = std::filesystem;
+
+std::string joinPath(const std::string& dir, const std::string& name) {
+  if (dir.empty()) return name;
+  return dir.back() == '/' ? dir + name : dir + "/" + name;
+}
+
+std::string csvField(const std::string& s) {
+  if (s.find_first_of(",\"\n\r") == std::string::npos) return s;
+  std::string out = "\"";
+  for (char c : s) {
+    if (c == '"') out += "\"\"";
+    else out += c;
+  }
+  return out + "\"";
+}
+
+std::string valueText(const nlohmann::json& v) {
+  if (v.is_null()) return "";
+  if (v.is_string()) return v.get<std::string>();
+  if (v.is_boolean()) return v.get<bool>() ? "true" : "false";
+  if (v.is_number_float()) {
+    double d = v.get<double>();
+    if (!std::isfinite(d)) return "";
+    char buf[40];
+    std::snprintf(buf, sizeof buf, "%.17g", d);
+    return buf;
+  }
+  return v.dump();
+}
+
+// Flattens nested objects into dotted names (a later metric may hold per-cascade objects).
+void flatten(const nlohmann::json& j, const std::string& prefix, std::vector<std::pair<std::string, nlohmann::json>>& out) {
+  for (auto it = j.begin(); it != j.end(); ++it) {
+    std::string name = prefix.empty() ? it.key() : prefix + "." + it.key();
+    if (it.value().is_object()) flatten(it.value(), name, out);
+    else out.emplace_back(name, it.value());
+  }
+}
+
+std::string html(const std::string& s) {
+  std::string out;
+  out.reserve(s.size());
+  for (char c : s) {
+    switch (c) {
+      case '&': out += "&amp;"; break;
+      case '<': out += "&lt;"; break;
+      case '>': out += "&gt;"; break;
+      case '"': out += "&quot;"; break;
+      case '\'': out += "&#39;"; break;
+      default: out += c;
+    }
+  }
+  return out;
+}
+
+double num(const nlohmann::json& obj, const char* key, double fallback = NAN) {
+  auto it = obj.find(key);
+  if (it == obj.end() || !it->is_number()) return fallback;
+  return it->get<double>();
+}
+
+std::string fmt(double v, const char* f = "%.4g") {
+  if (!std::isfinite(v)) return "&ndash;";
+  char buf[64];
+  std::snprintf(buf, sizeof buf, f, v);
+  return buf;
+}
+
+std::string pct(double rate) {
+  if (!std::isfinite(rate)) return "&ndash;";
+  char buf[64];
+  std::snprintf(buf, sizeof buf, "%.3f%%", rate * 100.0);
+  return buf;
+}
+
+double rasterMs(const ResultRow& r) { return num(r.timings, "shadow_ms", 0.0) + num(r.timings, "camera_ms", 0.0); }
+
+// Runs `argv` with stdout and stderr into `logPath`; returns the exit status (or -1 when it could
+// not start, 128 + signal when killed).
+int runLogged(const std::vector<std::string>& argv, const std::string& logPath) {
+  int logFd = ::open(logPath.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
+  pid_t pid = ::fork();
+  if (pid < 0) {
+    if (logFd >= 0) ::close(logFd);
+    return -1;
+  }
+  if (pid == 0) {
+    if (logFd >= 0) {
+      ::dup2(logFd, 1);
+      ::dup2(logFd, 2);
+    }
+    // The chart script must not read the terminal (a SIGINT meant for the sweep reaches it too,
+    // which is what a user expects).
+    int devnull = ::open("/dev/null", O_RDONLY);
+    if (devnull >= 0) ::dup2(devnull, 0);
+    std::vector<char*> args;
+    for (const auto& a : argv) args.push_back(const_cast<char*>(a.c_str()));
+    args.push_back(nullptr);
+    ::execv(args[0], args.data());
+    std::fprintf(stderr, "cannot run %s: %s\n", args[0], std::strerror(errno));
+    ::_exit(127);
+  }
+  if (logFd >= 0) ::close(logFd);
+  int status = 0;
+  while (::waitpid(pid, &status, 0) < 0) {
+    if (errno != EINTR) return -1;
+  }
+  if (WIFEXITED(status)) return WEXITSTATUS(status);
+  if (WIFSIGNALED(status)) return 128 + WTERMSIG(status);
+  return -1;
+}
+
+std::string tailOf(const std::string& path, size_t lines) {
+  std::string text;
+  try {
+    text = readFile(path);
+  } catch (const std::exception&) {
+    return "";
+  }
+  size_t pos = text.size();
+  while (pos > 0 && (text[pos - 1] == '\n')) --pos;
+  size_t end = pos;
+  for (size_t n = 0; n < lines && pos > 0; ++n) {
+    pos = text.rfind('\n', pos - 1);
+    if (pos == std::string::npos) {
+      pos = 0;
+      break;
+    }
+  }
+  return text.substr(pos == 0 ? 0 : pos + 1, end - (pos == 0 ? 0 : pos + 1));
+}
+
+std::string fileSafe(const std::string& s) {
+  std::string out;
+  for (char c : s) out += (std::isalnum(static_cast<unsigned char>(c)) || c == '-' || c == '_') ? c : '_';
+  return out;
+}
+
+const char* kStyle = R"CSS(
+body { font-family: -apple-system, "Segoe UI", Roboto, "DejaVu Sans", Arial, sans-serif; margin: 2em auto;
+       max-width: 1200px; padding: 0 1em; color: #1d1d1f; line-height: 1.45; }
+h1 { font-size: 1.6em; margin-bottom: 0.2em; } h2 { margin-top: 1.8em; border-bottom: 1px solid #ddd; }
+h3 { margin-bottom: 0.3em; }
+table { border-collapse: collapse; margin: 0.6em 0 1.2em; font-size: 0.88em; }
+th, td { border: 1px solid #d0d0d0; padding: 0.25em 0.55em; text-align: right; vertical-align: top; }
+th { background: #f3f3f3; } td.t, th.t { text-align: left; font-family: "DejaVu Sans Mono", monospace; }
+figure { margin: 1em 0 2em; } figure img { max-width: 100%; height: auto; border: 1px solid #e3e3e3; }
+figcaption { font-size: 0.9em; color: #444; margin-top: 0.3em; }
+.note { background: #fff8e1; border-left: 4px solid #f0b400; padding: 0.4em 0.8em; margin: 0.5em 0; }
+.muted { color: #666; font-size: 0.9em; } code { font-family: "DejaVu Sans Mono", monospace; }
+details summary { cursor: pointer; margin: 0.5em 0; }
+)CSS";
+
+// Marks the page for headless checks: imagesOk is "true" only when every picture decoded.
+const char* kImageCheck = R"JS(
+window.addEventListener('load', function () {
+  var images = document.images, bad = [];
+  for (var i = 0; i < images.length; i++) {
+    if (!(images[i].complete && images[i].naturalWidth > 0)) bad.push(images[i].getAttribute('src'));
+  }
+  document.body.dataset.imagesOk = bad.length === 0 ? 'true' : 'false';
+  document.body.dataset.imagesCount = String(images.length);
+  if (bad.length) console.error('shadowlab report: pictures that did not load: ' + bad.join(', '));
+});
+)JS";
+
+}  // namespace
+
+std::string defaultReportScript(const std::string& sourceDir) {
+  const char* env = std::getenv("SHADOWLAB_REPORT_SCRIPT");
+  if (env && *env) return env;
+  return joinPath(sourceDir, "compare/report/charts.py");
+}
+
+void writeResultsCsv(const std::string& path, const std::vector<ResultRow>& rows) {
+  // Columns: scene, config, light, then the union of method keys, metrics and timings, each in
+  // first-seen order. Names are bare (error_rate, map.size): one name everywhere.
+  std::vector<std::string> methodCols, metricCols, timingCols;
+  auto addCols = [](const nlohmann::json& j, std::vector<std::string>& cols) {
+    std::vector<std::pair<std::string, nlohmann::json>> flat;
+    flatten(j, "", flat);
+    for (const auto& [k, v] : flat)
+      if (std::find(cols.begin(), cols.end(), k) == cols.end()) cols.push_back(k);
+  };
+  for (const auto& r : rows) {
+    addCols(r.method, methodCols);
+    addCols(r.metrics, metricCols);
+    addCols(r.timings, timingCols);
+  }
+  std::ostringstream out;
+  out << "scene,config,light";
+  for (const auto* cols : {&methodCols, &metricCols, &timingCols})
+    for (const auto& c : *cols) out << "," << csvField(c);
+  out << "\n";
+  for (const auto& r : rows) {
+    out << csvField(r.scene) << "," << csvField(r.config) << "," << csvField(r.light);
+    const nlohmann::json* sources[3] = {&r.method, &r.metrics, &r.timings};
+    const std::vector<std::string>* colSets[3] = {&methodCols, &metricCols, &timingCols};
+    for (int s = 0; s < 3; ++s) {
+      std::vector<std::pair<std::string, nlohmann::json>> flat;
+      flatten(*sources[s], "", flat);
+      std::map<std::string, nlohmann::json> byName(flat.begin(), flat.end());
+      for (const auto& c : *colSets[s]) {
+        auto it = byName.find(c);
+        out << "," << (it == byName.end() ? "" : csvField(valueText(it->second)));
+      }
+    }
+    out << "\n";
+  }
+  writeFileAtomic(path, out.str());
+}
+
+std::vector<size_t> paretoFront(const std::vector<ResultRow>& rows, const std::string& scene) {
+  std::vector<size_t> idx;
+  for (size_t i = 0; i < rows.size(); ++i)
+    if (rows[i].scene == scene && std::isfinite(num(rows[i].metrics, "error_rate"))) idx.push_back(i);
+  std::stable_sort(idx.begin(), idx.end(), [&](size_t a, size_t b) {
+    double ta = rasterMs(rows[a]), tb = rasterMs(rows[b]);
+    if (ta != tb) return ta < tb;
+    return num(rows[a].metrics, "error_rate") < num(rows[b].metrics, "error_rate");
+  });
+  std::vector<size_t> front;
+  double best = INFINITY;
+  for (size_t i : idx) {
+    double e = num(rows[i].metrics, "error_rate");
+    if (e < best) {
+      front.push_back(i);
+      best = e;
+    }
+  }
+  return front;
+}
+
+std::vector<std::string> writeSweepReport(const SweepPlan& plan, const std::vector<ResultRow>& rows,
+                                          const nlohmann::json& results, SweepRunner& runner,
+                                          const SweepOptions& options) {
+  std::vector<std::string> notes;
+  const std::string figuresDir = joinPath(options.outDir, "figures");
+  makeDirs(figuresDir);
+  const std::string resultsPath = joinPath(options.outDir, "results.json");
+  const std::string manifestPath = joinPath(figuresDir, "charts.json");
+
+  // Charts. A stale manifest from an earlier run must not pass for this run's charts.
+  std::error_code ec;
+  fs::remove(manifestPath, ec);
+  nlohmann::json manifest;
+  if (options.reportScript.empty()) {
+    notes.push_back("charts skipped: no chart script configured (set SHADOWLAB_REPORT_SCRIPT)");
+  } else if (!fs::is_regular_file(options.reportScript, ec)) {
+    notes.push_back("charts skipped: chart script " + options.reportScript + " not found");
+  } else {
+    std::string python = options.python;
+    if (python.empty()) {
+      const char* env = std::getenv("SHADOWLAB_PYTHON");
+      python = env && *env ? env : "/usr/bin/python3";
+    }
+    const std::string logPath = joinPath(figuresDir, "charts.log");
+    int rc = runLogged({python, options.reportScript, resultsPath, figuresDir}, logPath);
+    if (rc != 0) {
+      notes.push_back("charts failed: " + python + " " + options.reportScript + " exited with " + std::to_string(rc) +
+                      "; see figures/charts.log: " + tailOf(logPath, 3));
+    }
+  }
+  if (fs::is_regular_file(manifestPath, ec)) {
+    try {
+      manifest = nlohmann::json::parse(readFile(manifestPath));
+    } catch (const std::exception& e) {
+      notes.push_back(std::string("charts unusable: figures/charts.json: ") + e.what());
+      manifest = nlohmann::json();
+    }
+  }
+
+  // Triptychs of the best and the worst configuration of each scene, rendered again now: the
+  // sweep keeps no images.
+  struct Pick {
+    std::string label;
+    size_t row;
+    std::string file;  // relative to outDir, empty when not rendered
+  };
+  std::map<std::string, std::vector<Pick>> picks;
+  if (options.triptychs) {
+    for (size_t s = 0; s < plan.sceneNames.size(); ++s) {
+      const std::string& name = plan.sceneNames[s];
+      std::optional<size_t> best, worst;
+      for (size_t i = 0; i < rows.size(); ++i) {
+        if (rows[i].scene != name) continue;
+        double e = num(rows[i].metrics, "error_rate");
+        if (!std::isfinite(e)) continue;
+        if (!best || e < num(rows[*best].metrics, "error_rate")) best = i;
+        if (!worst || e > num(rows[*worst].metrics, "error_rate")) worst = i;
+      }
+      if (!best) continue;
+      std::vector<Pick> list{{"best", *best, ""}};
+      if (*worst != *best) list.push_back({"worst", *worst, ""});
+      for (auto& p : list) {
+        const SweepJob& job = plan.jobs[p.row];
+        std::string rel = "figures/triptych_" + fileSafe(name) + "_" + p.label + ".png";
+        std::string abs = joinPath(options.outDir, rel);
+        fs::remove(abs, ec);
+        try {
+          if (runner.writeTriptych(plan.variants[job.variantIndex], plan.configs[job.configIndex].method, job.light, abs) &&
+              fs::is_regular_file(abs, ec))
+            p.file = rel;
+        } catch (const std::exception& e) {
+          notes.push_back("triptych for " + name + " (" + rows[p.row].config + ") failed: " + e.what());
+        }
+      }
+      picks[name] = list;
+    }
+  }
+
+  // The page.
+  std::ostringstream h;
+  const std::time_t now = std::time(nullptr);
+  char stamp[64];
+  std::strftime(stamp, sizeof stamp, "%Y-%m-%d %H:%M:%S UTC", std::gmtime(&now));
+  h << "<!DOCTYPE html>\n<html lang=\"en\">\n<head>\n<meta charset=\"utf-8\">\n"
+    << "<meta name=\"viewport\" content=\"width=device-width, initial-scale=1\">\n"
+    << "<title>shadowlab sweep: " << html(std::to_string(plan.sceneNames.size())) << " scene(s) x "
+    << plan.configs.size() << " configuration(s)</title>\n<style>" << kStyle << "</style>\n</head>\n<body>\n";
+  h << "<h1>shadowlab sweep report</h1>\n<p class=\"muted\">" << rows.size() << " rows: "
+    << plan.sceneNames.size() << " scene(s) &times; " << plan.configs.size() << " configuration(s). Generated "
+    << stamp << ".</p>\n";
+
+  // Run facts.
+  const nlohmann::json machine = results.value("machine", nlohmann::json::object());
+  const nlohmann::json runInfo = results.value("runner", nlohmann::json::object());
+  h << "<table>\n";
+  auto fact = [&](const std::string& k, const std::string& v) {
+    h << "<tr><th class=\"t\">" << html(k) << "</th><td class=\"t\">" << v << "</td></tr>\n";
+  };
+  fact("machine", html(machine.value("cpu", std::string("?")) + ", " +
+                       std::to_string(machine.value("hardware_threads", 0)) + " threads, " +
+                       machine.value("os", std::string("?"))));
+  if (runInfo.contains("device") && runInfo["device"].is_string()) fact("raster device", html(runInfo["device"].get<std::string>()));
+  if (runInfo.contains("reference_cache") && runInfo["reference_cache"].is_string())
+    fact("reference cache", html(runInfo["reference_cache"].get<std::string>()) + " (" +
+                                std::to_string(runInfo.value("references_traced", 0)) + " traced, " +
+                                std::to_string(runInfo.value("references_loaded", 0)) + " loaded)");
+  fact("rows run / resumed", std::to_string(results.value("rows_run", 0)) + " / " +
+                                 std::to_string(results.value("rows_resumed", 0)));
+  const double sweepSeconds = results.value("sweep_seconds", 0.0);
+  const size_t ran = results.value("rows_run", size_t(0));
+  fact("configuration loop", fmt(sweepSeconds, "%.2f") + " s" +
+                                 (ran ? " (" + fmt(sweepSeconds / double(ran) * 1000.0, "%.1f") + " ms per row)" : ""));
+  fact("outputs", "<a href=\"results.json\">results.json</a>, <a href=\"results.csv\">results.csv</a>, "
+                  "<a href=\"rows.jsonl\">rows.jsonl</a>");
+  h << "</table>\n";
+
+  // Scenes.
+  h << "<h2>Scenes</h2>\n<table>\n<tr><th class=\"t\">scene</th><th class=\"t\">file</th><th>triangles</th>"
+       "<th>camera</th><th class=\"t\">light</th><th class=\"t\">scene hash</th></tr>\n";
+  for (size_t s = 0; s < plan.sceneNames.size(); ++s) {
+    const Scene* scene = nullptr;
+    std::string light;
+    for (const auto& job : plan.jobs)
+      if (job.sceneIndex == s) {
+        scene = &plan.variants[job.variantIndex];
+        light = job.light;
+        break;
+      }
+    if (!scene) continue;
+    h << "<tr><td class=\"t\">" << html(plan.sceneNames[s]) << "</td><td class=\"t\">" << html(plan.scenePaths[s])
+      << "</td><td>" << scene->triangleCount() << "</td><td>" << scene->camera.width << "&times;" << scene->camera.height
+      << "</td><td class=\"t\">" << html(light) << "</td><td class=\"t\">" << html(scene->hash) << "</td></tr>\n";
+  }
+  h << "</table>\n";
+
+  // Grid.
+  h << "<h2>Grid</h2>\n";
+  if (plan.spec.grid.empty()) {
+    h << "<p>Nothing swept: one configuration (<code>default</code>) per scene.</p>\n";
+  } else {
+    h << "<table>\n<tr><th class=\"t\">key</th><th class=\"t\">values</th></tr>\n";
+    const nlohmann::json grid = results.value("sweep", nlohmann::json::object()).value("grid", nlohmann::json::array());
+    for (const auto& axis : grid) {
+      std::string values;
+      for (const auto& v : axis.value("values", nlohmann::json::array())) values += (values.empty() ? "" : ", ") + valueText(v);
+      h << "<tr><td class=\"t\">" << html(axis.value("key", std::string())) << "</td><td class=\"t\">" << html(values)
+        << "</td></tr>\n";
+    }
+    h << "</table>\n";
+  }
+  if (!plan.spec.fixed.empty() || !plan.spec.methodFile.empty()) {
+    h << "<p>Fixed for every configuration:";
+    if (!plan.spec.methodFile.empty()) h << " method file <code>" << html(plan.spec.methodFile) << "</code>";
+    for (const auto& s : plan.spec.fixed) h << " <code>" << html(s.key + "=" + canonicalValueText(s.value)) << "</code>";
+    h << "</p>\n";
+  }
+  h << "<p class=\"muted\">Every other method key keeps its default (raster/METHODS.md). Each row's full method is in "
+       "results.json.</p>\n";
+
+  // Summary: the Pareto front per scene.
+  h << "<h2>Best configurations per scene</h2>\n<p>For each scene, the configurations on the Pareto front of raster "
+       "time (shadow pass + camera pass, GPU timestamps) against <code>error_rate</code>: each row is the lowest error "
+       "reachable within its time budget; every configuration not listed is slower, less accurate, or both.</p>\n";
+  for (const auto& name : plan.sceneNames) {
+    auto front = paretoFront(rows, name);
+    h << "<h3>" << html(name) << "</h3>\n";
+    if (front.empty()) {
+      h << "<p class=\"note\">No row with an error rate.</p>\n";
+      continue;
+    }
+    h << "<table>\n<tr><th>time budget (ms)</th><th class=\"t\">configuration</th><th>error_rate</th><th>acne_rate</th>"
+         "<th>leak_rate</th><th>aliasing_rate</th><th>coverage_rate</th><th>m_p95 (px)</th><th>compare_ms</th></tr>\n";
+    for (size_t i : front) {
+      const ResultRow& r = rows[i];
+      h << "<tr><td>&le; " << fmt(rasterMs(r), "%.2f") << "</td><td class=\"t\">" << html(r.config) << "</td><td>"
+        << pct(num(r.metrics, "error_rate")) << "</td><td>" << pct(num(r.metrics, "acne_rate")) << "</td><td>"
+        << pct(num(r.metrics, "leak_rate")) << "</td><td>" << pct(num(r.metrics, "aliasing_rate")) << "</td><td>"
+        << pct(num(r.metrics, "coverage_rate")) << "</td><td>" << fmt(num(r.metrics, "m_p95")) << "</td><td>"
+        << fmt(num(r.timings, "compare_ms"), "%.1f") << "</td></tr>\n";
+    }
+    h << "</table>\n";
+  }
+
+  // Charts.
+  h << "<h2>Charts</h2>\n";
+  for (const auto& n : notes)
+    if (n.rfind("charts", 0) == 0) h << "<p class=\"note\">" << html(n) << "</p>\n";
+  if (manifest.is_object()) {
+    for (const auto& c : manifest.value("charts", nlohmann::json::array())) {
+      const std::string png = c.value("png", std::string());
+      h << "<figure id=\"" << html(c.value("id", std::string())) << "\">\n<h3>" << html(c.value("title", std::string()))
+        << "</h3>\n<img src=\"" << html(png) << "\" alt=\"" << html(c.value("title", std::string())) << "\">\n<figcaption>"
+        << html(c.value("caption", std::string()));
+      std::string links;
+      for (const char* kind : {"pdf", "svg"}) {
+        std::string f = c.value(kind, std::string());
+        if (!f.empty()) links += std::string(links.empty() ? "" : ", ") + "<a href=\"" + html(f) + "\">" + kind + "</a>";
+      }
+      if (!links.empty()) h << " For papers: " << links << ".";
+      h << "</figcaption>\n</figure>\n";
+    }
+    for (const auto& s : manifest.value("skipped", nlohmann::json::array())) {
+      std::string text = "Chart \"" + s.value("title", std::string()) + "\" skipped: " + s.value("reason", std::string());
+      notes.push_back(text);
+      h << "<p class=\"note\">" << html(text) << "</p>\n";
+    }
+  }
+
+  // Triptychs.
+  h << "<h2>Best and worst configuration of each scene</h2>\n<p>Reference (Embree) | raster | errors, rendered again "
+       "for this report. Error colours are explained by the legend drawn into the errors panel.</p>\n";
+  if (!options.triptychs) h << "<p class=\"note\">Triptychs were not rendered for this report.</p>\n";
+  for (const auto& name : plan.sceneNames) {
+    auto it = picks.find(name);
+    if (it == picks.end()) continue;
+    for (const auto& p : it->second) {
+      const ResultRow& r = rows[p.row];
+      h << "<figure>\n<h3>" << html(name) << ": " << p.label << " (" << html(r.config) << ")</h3>\n";
+      if (p.file.empty()) {
+        h << "<p class=\"note\">No triptych: this sweep's runner makes no pictures, or rendering it failed (see the "
+             "notes).</p>\n";
+      } else {
+        h << "<img src=\"" << html(p.file) << "\" alt=\"" << html(name + " " + p.label + " triptych") << "\">\n";
+      }
+      h << "<figcaption>error_rate " << pct(num(r.metrics, "error_rate")) << " (acne " << pct(num(r.metrics, "acne_rate"))
+        << ", leak " << pct(num(r.metrics, "leak_rate")) << ", aliasing " << pct(num(r.metrics, "aliasing_rate"))
+        << ", coverage " << pct(num(r.metrics, "coverage_rate")) << "); raster " << fmt(rasterMs(r), "%.2f")
+        << " ms.</figcaption>\n</figure>\n";
+    }
+  }
+
+  // Every row.
+  h << "<h2>All rows</h2>\n<details>\n<summary>" << rows.size() << " rows (also in results.csv)</summary>\n<table>\n"
+    << "<tr><th class=\"t\">scene</th><th class=\"t\">configuration</th><th class=\"t\">light</th><th>error_rate</th>"
+       "<th>acne_rate</th><th>leak_rate</th><th>aliasing_rate</th><th>coverage_rate</th><th>m_median</th><th>m_p95</th>"
+       "<th>m_max</th><th>shadow_ms</th><th>camera_ms</th><th>compare_ms</th><th>total_ms</th></tr>\n";
+  for (const auto& r : rows) {
+    h << "<tr><td class=\"t\">" << html(r.scene) << "</td><td class=\"t\">" << html(r.config) << "</td><td class=\"t\">"
+      << html(r.light) << "</td>";
+    for (const char* k : {"error_rate", "acne_rate", "leak_rate", "aliasing_rate", "coverage_rate"})
+      h << "<td>" << pct(num(r.metrics, k)) << "</td>";
+    for (const char* k : {"m_median", "m_p95", "m_max"}) h << "<td>" << fmt(num(r.metrics, k)) << "</td>";
+    for (const char* k : {"shadow_ms", "camera_ms", "compare_ms", "total_ms"})
+      h << "<td>" << fmt(num(r.timings, k), "%.2f") << "</td>";
+    h << "</tr>\n";
+  }
+  h << "</table>\n</details>\n";
+
+  std::vector<std::string> otherNotes;
+  for (const auto& n : notes)
+    if (n.rfind("charts", 0) != 0 && n.rfind("Chart ", 0) != 0) otherNotes.push_back(n);
+  if (!otherNotes.empty()) {
+    h << "<h2>Notes</h2>\n";
+    for (const auto& n : otherNotes) h << "<p class=\"note\">" << html(n) << "</p>\n";
+  }
+  h << "<script>" << kImageCheck << "</script>\n</body>\n</html>\n";
+  writeFileAtomic(joinPath(options.outDir, "report.html"), h.str());
+  return notes;
+}
+
+}  // namespace shadowlab

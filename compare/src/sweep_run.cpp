@@ -1,0 +1,413 @@
+// The sweep loop: runs what rows.jsonl does not hold yet, one durable line per finished row, then
+// regenerates results.json / results.csv / the report from the whole set.
+//
+// Why rows.jsonl and not results.json as the journal: appending one line and fsync-ing it costs
+// microseconds and cannot corrupt earlier rows, whereas rewriting a growing JSON file per row
+// would cost O(rows^2) bytes. A kill during the append leaves at most one torn last line, which
+// the next run drops (and truncates away, so the next append starts on a clean line).
+#include <fcntl.h>
+#include <sys/file.h>
+#include <sys/ioctl.h>
+#include <sys/utsname.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <thread>
+
+#include "shadowlab/compare/sweep.h"
+#include "shadowlab/scenes/error.h"
+#include "shadowlab/scenes/io.h"
+
+namespace shadowlab {
+namespace {
+
+namespace fs = std::filesystem;
+using Clock = std::chrono::steady_clock;
+
+double secondsSince(Clock::time_point t0) {
+  return std::chrono::duration<double>(Clock::now() - t0).count();
+}
+
+std::string joinPath(const std::string& dir, const std::string& name) {
+  if (dir.empty()) return name;
+  return dir.back() == '/' ? dir + name : dir + "/" + name;
+}
+
+// Folder name for one configuration's images: the config text with anything a file system or a
+// shell might trip on replaced.
+std::string slug(const std::string& text) {
+  std::string out;
+  for (char c : text) {
+    bool ok = (c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z') || (c >= '0' && c <= '9') || c == '.' ||
+              c == '-' || c == '_' || c == '=' || c == ',';
+    out += ok ? c : '_';
+  }
+  return out.empty() ? "default" : out;
+}
+
+struct StoredRow {
+  ResultRow row;
+  std::string sceneHash;
+  double seconds = 0;
+};
+
+// Reads rows.jsonl; drops (and truncates away) a torn last line. A damaged line before the last
+// is not a torn write: refuse it rather than silently run its configuration again.
+std::map<std::string, StoredRow> readJournal(const std::string& path) {
+  std::map<std::string, StoredRow> rows;
+  std::error_code ec;
+  if (!fs::exists(path, ec)) return rows;
+  const std::string text = readFile(path);
+  size_t pos = 0, goodEnd = 0;
+  int lineNo = 0;
+  while (pos < text.size()) {
+    ++lineNo;
+    size_t nl = text.find('\n', pos);
+    bool complete = nl != std::string::npos;
+    std::string line = text.substr(pos, complete ? nl - pos : std::string::npos);
+    size_t next = complete ? nl + 1 : text.size();
+    bool last = next >= text.size();
+    if (line.empty()) {
+      if (complete) goodEnd = next;
+      pos = next;
+      continue;
+    }
+    try {
+      if (!complete) throw std::runtime_error("no newline");
+      auto j = nlohmann::json::parse(line);
+      StoredRow s;
+      s.row = ResultRow::fromJson(j.at("row"), path + ":" + std::to_string(lineNo));
+      s.sceneHash = j.value("scene_hash", std::string());
+      s.seconds = j.value("seconds", 0.0);
+      rows[s.row.key()] = std::move(s);  // a later line for the same key wins (a stale row re-run)
+      goodEnd = next;
+    } catch (const std::exception& e) {
+      if (!last)
+        throw InputError(formatError(path + ":" + std::to_string(lineNo), "",
+                                     std::string("damaged row (") + e.what() +
+                                         "); expected one JSON row per line. Delete the line or the file to run it again"));
+      // Torn last line: the process died while appending it.
+    }
+    pos = next;
+  }
+  if (goodEnd < text.size()) {
+    if (::truncate(path.c_str(), static_cast<off_t>(goodEnd)) != 0)
+      throw InputError(formatError(path, "", std::string("cannot drop the torn last line: ") + std::strerror(errno)));
+  }
+  return rows;
+}
+
+// Appends with one write() on an O_APPEND descriptor and fsyncs, so a finished row survives a
+// kill or a power cut right after.
+class Journal {
+ public:
+  explicit Journal(const std::string& path) : path_(path) {
+    fd_ = ::open(path.c_str(), O_WRONLY | O_CREAT | O_APPEND | O_CLOEXEC, 0644);
+    if (fd_ < 0) throw InputError(formatError(path, "", std::string("cannot open for appending: ") + std::strerror(errno)));
+  }
+  ~Journal() {
+    if (fd_ >= 0) ::close(fd_);
+  }
+  Journal(const Journal&) = delete;
+  Journal& operator=(const Journal&) = delete;
+  void append(const std::string& line, bool sync) {
+    std::string bytes = line + "\n";
+    const char* p = bytes.data();
+    size_t left = bytes.size();
+    while (left > 0) {
+      ssize_t n = ::write(fd_, p, left);
+      if (n < 0) {
+        if (errno == EINTR) continue;
+        throw InputError(formatError(path_, "", std::string("cannot append: ") + std::strerror(errno)));
+      }
+      p += n;
+      left -= size_t(n);
+    }
+    if (sync && ::fsync(fd_) != 0)
+      throw InputError(formatError(path_, "", std::string("cannot sync: ") + std::strerror(errno)));
+  }
+
+ private:
+  std::string path_;
+  int fd_ = -1;
+};
+
+// One sweep per folder at a time: two writers would run the same rows twice.
+class FolderLock {
+ public:
+  explicit FolderLock(const std::string& dir) {
+    std::string path = joinPath(dir, ".sweep.lock");
+    fd_ = ::open(path.c_str(), O_RDWR | O_CREAT | O_CLOEXEC, 0644);
+    if (fd_ < 0) throw InputError(formatError(path, "", std::string("cannot open: ") + std::strerror(errno)));
+    if (::flock(fd_, LOCK_EX | LOCK_NB) != 0) {
+      ::close(fd_);
+      fd_ = -1;
+      throw InputError(formatError(dir, "", "another sweep is writing into this folder; expected one sweep per output folder"));
+    }
+  }
+  ~FolderLock() {
+    if (fd_ >= 0) ::close(fd_);
+  }
+
+ private:
+  int fd_ = -1;
+};
+
+std::string fmtDuration(double s) {
+  if (!std::isfinite(s) || s < 0) return "--:--";
+  long t = long(s + 0.5);
+  char buf[32];
+  if (t >= 3600) std::snprintf(buf, sizeof buf, "%ld:%02ld:%02ld", t / 3600, (t / 60) % 60, t % 60);
+  else std::snprintf(buf, sizeof buf, "%ld:%02ld", t / 60, t % 60);
+  return buf;
+}
+
+class Progress {
+ public:
+  Progress(std::FILE* out, bool bar, size_t total, size_t already)
+      : out_(out), bar_(bar), total_(total), done_(already), t0_(Clock::now()) {}
+
+  void start(const std::string& what) {
+    if (!out_ || !bar_) return;
+    draw(what);
+  }
+  void finish(const std::string& what, double errorRate, double seconds) {
+    ++done_;
+    ++ran_;
+    if (!out_) return;
+    if (bar_) {
+      draw(what);
+      return;
+    }
+    double elapsed = secondsSince(t0_);
+    double rate = elapsed > 0 ? ran_ / elapsed : 0;
+    double eta = rate > 0 ? (total_ - done_) / rate : NAN;
+    std::fprintf(out_, "sweep: %zu/%zu %s: error_rate %.6g in %.0f ms (%.2f cfg/s, ETA %s)\n", done_, total_,
+                 what.c_str(), errorRate, seconds * 1000.0, rate, fmtDuration(eta).c_str());
+    std::fflush(out_);
+  }
+  void end() {
+    if (out_ && bar_ && drawn_) {
+      std::fputc('\n', out_);
+      std::fflush(out_);
+    }
+  }
+
+ private:
+  void draw(const std::string& what) {
+    int columns = 100;
+    winsize ws{};
+    if (::ioctl(::fileno(out_), TIOCGWINSZ, &ws) == 0 && ws.ws_col > 20) columns = ws.ws_col;
+    double elapsed = secondsSince(t0_);
+    double rate = elapsed > 0 && ran_ > 0 ? ran_ / elapsed : 0;
+    double eta = rate > 0 ? (total_ - done_) / rate : NAN;
+    const int width = 24;
+    int filled = total_ ? int(double(done_) / double(total_) * width) : width;
+    std::string bar(size_t(filled), '#');
+    bar += std::string(size_t(width - filled), '-');
+    char head[160];
+    std::snprintf(head, sizeof head, "[%s] %zu/%zu %.2f cfg/s ETA %s ", bar.c_str(), done_, total_, rate,
+                  fmtDuration(eta).c_str());
+    std::string line = std::string(head) + what;
+    if (int(line.size()) > columns - 1) line.resize(size_t(columns - 1));
+    std::fprintf(out_, "\r\033[K%s", line.c_str());
+    std::fflush(out_);
+    drawn_ = true;
+  }
+
+  std::FILE* out_;
+  bool bar_;
+  size_t total_, done_, ran_ = 0;
+  Clock::time_point t0_;
+  bool drawn_ = false;
+};
+
+nlohmann::json machineInfo() {
+  nlohmann::json m = nlohmann::json::object();
+  char host[256] = {0};
+  if (::gethostname(host, sizeof host - 1) == 0) m["hostname"] = host;
+  utsname u{};
+  if (::uname(&u) == 0) m["os"] = std::string(u.sysname) + " " + u.release + " " + u.machine;
+  m["hardware_threads"] = std::thread::hardware_concurrency();
+  std::ifstream cpu("/proc/cpuinfo");
+  std::string line;
+  while (std::getline(cpu, line)) {
+    if (line.rfind("model name", 0) == 0) {
+      size_t colon = line.find(':');
+      if (colon != std::string::npos) m["cpu"] = line.substr(colon + 2);
+      break;
+    }
+  }
+  return m;
+}
+
+nlohmann::json sweepDescription(const SweepPlan& plan) {
+  nlohmann::json d = nlohmann::json::object();
+  d["scenes"] = plan.sceneNames;
+  d["scene_paths"] = plan.scenePaths;
+  nlohmann::json grid = nlohmann::json::array();
+  for (const auto& axis : plan.spec.grid) {
+    nlohmann::json values = nlohmann::json::array();
+    // The canonical texts, in the order given, as they appear in `config`.
+    std::vector<std::string> seen;
+    for (const auto& c : plan.configs)
+      for (const auto& [k, v] : c.values)
+        if (k == axis.key && std::find(seen.begin(), seen.end(), v) == seen.end()) seen.push_back(v);
+    grid.push_back({{"key", axis.key}, {"values", seen}});
+  }
+  d["grid"] = grid;
+  nlohmann::json fixed = nlohmann::json::object();
+  for (const auto& s : plan.spec.fixed) fixed[s.key] = s.value;
+  d["set"] = fixed;
+  if (!plan.spec.methodFile.empty()) d["method_file"] = plan.spec.methodFile;
+  d["light"] = plan.spec.light;
+  d["spp"] = plan.spec.spp;
+  d["keep_images"] = plan.spec.keepImages;
+  return d;
+}
+
+}  // namespace
+
+std::string defaultSweepCacheDir(const std::string& outDir) {
+  const char* env = std::getenv("SHADOWLAB_CACHE");
+  if (env && *env) return env;
+  fs::path out = fs::absolute(fs::path(outDir)).lexically_normal();
+  if (!out.has_filename()) out = out.parent_path();  // trailing slash
+  return (out.parent_path() / ".shadowlab-cache").string();
+}
+
+SweepSummary runSweep(const SweepPlan& plan, SweepRunner& runner, const SweepOptions& options) {
+  const auto t0 = Clock::now();
+  SweepSummary summary;
+  summary.configurations = plan.jobs.size();
+  if (options.outDir.empty()) throw InputError("shadowlab sweep: error: no output folder; expected -o DIR");
+  makeDirs(options.outDir);
+  FolderLock lock(options.outDir);
+  const std::string journalPath = joinPath(options.outDir, "rows.jsonl");
+  auto stored = readJournal(journalPath);
+  Journal journal(journalPath);
+  std::ofstream log(joinPath(options.outDir, "sweep.log"), std::ios::app);
+  const long pid = long(::getpid());
+
+  // A stored row counts only for the same scene content and the same resolved method: editing a
+  // scene file or a --set between runs must not mix old rows into new results.
+  std::vector<nlohmann::json> methodJson(plan.configs.size());
+  for (size_t i = 0; i < plan.configs.size(); ++i) methodJson[i] = methodToJson(plan.configs[i].method);
+  std::vector<const StoredRow*> have(plan.jobs.size(), nullptr);
+  for (size_t i = 0; i < plan.jobs.size(); ++i) {
+    const SweepJob& job = plan.jobs[i];
+    auto it = stored.find(job.key());
+    if (it == stored.end()) continue;
+    if (it->second.sceneHash != plan.variants[job.variantIndex].hash) continue;
+    if (it->second.row.method != methodJson[job.configIndex]) continue;
+    have[i] = &it->second;
+    ++summary.resumed;
+  }
+  if (log) log << "pid " << pid << " begin: " << plan.jobs.size() << " rows planned, " << summary.resumed << " already done\n";
+  if (options.progress && summary.resumed > 0)
+    std::fprintf(options.progress, "sweep: resuming: %zu of %zu rows are already in %s\n", summary.resumed,
+                 plan.jobs.size(), journalPath.c_str());
+
+  Progress progress(options.progress, options.progressBar, plan.jobs.size(), summary.resumed);
+  std::vector<StoredRow> fresh(plan.jobs.size());
+  const auto loop0 = Clock::now();
+  for (size_t i = 0; i < plan.jobs.size(); ++i) {
+    if (have[i]) continue;
+    if (options.stop && options.stop->load()) {
+      summary.interrupted = true;
+      break;
+    }
+    const SweepJob& job = plan.jobs[i];
+    const SweepConfig& config = plan.configs[job.configIndex];
+    const Scene& scene = plan.variants[job.variantIndex];
+    const std::string what = job.sceneName + " " + job.config;
+    if (log) log << "pid " << pid << " start " << job.key() << "\n" << std::flush;
+    progress.start(what);
+    std::string imagesDir;
+    if (plan.spec.keepImages) {
+      imagesDir = joinPath(joinPath(joinPath(options.outDir, "images"), slug(job.sceneName)), slug(job.config));
+      makeDirs(imagesDir);
+    }
+    const auto c0 = Clock::now();
+    SweepRunOutput out = runner.run(scene, config.method, job.light, imagesDir);
+    const double seconds = secondsSince(c0);
+    StoredRow s;
+    s.row.scene = job.sceneName;
+    s.row.config = job.config;
+    s.row.light = job.light;
+    s.row.method = methodJson[job.configIndex];
+    s.row.metrics = out.metrics;
+    s.row.timings = out.timings;
+    s.row.timings["total_ms"] = seconds * 1000.0;  // wall time of this configuration in the sweep
+    s.sceneHash = scene.hash;
+    s.seconds = seconds;
+    nlohmann::json line = {{"scene_hash", s.sceneHash}, {"seconds", seconds}, {"pid", pid}, {"row", s.row.toJson()}};
+    journal.append(line.dump(), /*sync=*/true);
+    if (log) log << "pid " << pid << " done " << job.key() << " " << seconds << " s\n" << std::flush;
+    double errorRate = out.metrics.value("error_rate", 0.0);
+    fresh[i] = std::move(s);
+    have[i] = &fresh[i];
+    ++summary.ran;
+    progress.finish(what, errorRate, seconds);
+  }
+  progress.end();
+  const double loopSeconds = secondsSince(loop0);
+  if (summary.interrupted) {
+    if (log) log << "pid " << pid << " interrupted after " << summary.ran << " rows\n";
+    summary.totalSeconds = secondsSince(t0);
+    return summary;
+  }
+
+  std::vector<ResultRow> rows;
+  nlohmann::json configSeconds = nlohmann::json::array();
+  double secondsSum = 0;
+  for (size_t i = 0; i < plan.jobs.size(); ++i) {
+    rows.push_back(have[i]->row);
+    configSeconds.push_back({{"scene", have[i]->row.scene},
+                             {"config", have[i]->row.config},
+                             {"light", have[i]->row.light},
+                             {"seconds", have[i]->seconds}});
+    secondsSum += have[i]->seconds;
+  }
+  nlohmann::json results = nlohmann::json::object();
+  results["schema"] = "shadowlab.results/1";
+  results["rows"] = nlohmann::json::array();
+  for (const auto& r : rows) results["rows"].push_back(r.toJson());
+  results["configurations"] = rows.size();
+  results["rows_run"] = summary.ran;
+  results["rows_resumed"] = summary.resumed;
+  results["sweep_seconds"] = loopSeconds;  // the configuration loop of this invocation
+  results["config_seconds"] = configSeconds;
+  results["config_seconds_sum"] = secondsSum;  // includes rows finished by earlier invocations
+  results["sweep"] = sweepDescription(plan);
+  results["machine"] = machineInfo();
+  results["runner"] = runner.info();
+  results["report_seconds"] = nullptr;
+  results["total_seconds"] = secondsSince(t0);
+
+  summary.resultsJson = joinPath(options.outDir, "results.json");
+  summary.resultsCsv = joinPath(options.outDir, "results.csv");
+  writeJsonAtomic(summary.resultsJson, results);
+  writeResultsCsv(summary.resultsCsv, rows);
+
+  if (options.writeReport) {
+    const auto r0 = Clock::now();
+    summary.notes = writeSweepReport(plan, rows, results, runner, options);
+    summary.reportHtml = joinPath(options.outDir, "report.html");
+    // Written again so total_seconds covers the report too (charts and triptychs included).
+    results["report_seconds"] = secondsSince(r0);
+    results["total_seconds"] = secondsSince(t0);
+    writeJsonAtomic(summary.resultsJson, results);
+  }
+  summary.totalSeconds = secondsSince(t0);
+  if (log) log << "pid " << pid << " end: " << summary.ran << " rows run, " << summary.totalSeconds << " s\n";
+  return summary;
+}
+
+}  // namespace shadowlab

@@ -1,0 +1,127 @@
+// The production sweep runner: what runPipeline does per configuration, with the reference kept
+// in memory between configurations of the same scene. runPipeline asks the ReferenceCache for
+// every call, which reads a 1080p multi-channel EXR from disk each time (hundreds of ms); a sweep
+// of a hundred configurations cannot afford that. The metrics are the same: the same cached
+// reference frame, the same Rasterizer::render, the same compareFrames with the same light
+// (tests/sweep_pipeline_test.cpp checks the numbers against `shadowlab run`).
+#include <chrono>
+#include <memory>
+
+#include "shadowlab/compare/compare.h"
+#include "shadowlab/compare/pipeline.h"
+#include "shadowlab/compare/sweep.h"
+#include "shadowlab/raster/raster.h"
+#include "shadowlab/reference/reference.h"
+#include "shadowlab/scenes/error.h"
+
+namespace shadowlab {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+double msSince(Clock::time_point t0) {
+  return std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
+}
+
+class PipelineRunner final : public SweepRunner {
+ public:
+  PipelineRunner(const std::string& cacheDir, int spp, const std::string& device) : cache_(cacheDir) {
+    referenceOptions_.spp = spp;
+    deviceOptions_.device = device;
+  }
+
+  SweepRunOutput run(const Scene& scene, const Method& method, const std::string& light,
+                     const std::string& imagesDir) override {
+    const Frame& reference = referenceFor(scene);
+    RasterTimings t;
+    Frame raster = rasterizer().render(scene, method, light, &t);
+    CompareOptions options;
+    options.light = resolvedLight(scene, light);
+    Classification classification;
+    const bool keep = !imagesDir.empty();
+    const auto c0 = Clock::now();
+    Metrics m = compareFrames(reference, raster, options, keep ? &classification : nullptr);
+    const double compareMs = msSince(c0);
+    if (keep) {
+      writeFrameExr(raster, imagesDir + "/raster.exr");
+      writeErrorsPng(imagesDir + "/errors.png", classification);
+    }
+    SweepRunOutput out;
+    out.metrics = m.toJson();
+    out.timings = {{"shadow_ms", t.shadowMs},
+                   {"camera_ms", t.cameraMs},
+                   {"readback_ms", t.readbackMs},
+                   {"raster_ms", t.totalMs},
+                   {"compare_ms", compareMs}};
+    return out;
+  }
+
+  bool writeTriptych(const Scene& scene, const Method& method, const std::string& light,
+                     const std::string& pngPath) override {
+    const Frame& reference = referenceFor(scene);
+    Frame raster = rasterizer().render(scene, method, light, nullptr);
+    CompareOptions options;
+    options.light = resolvedLight(scene, light);
+    Classification classification;
+    compareFrames(reference, raster, options, &classification);
+    writeTriptychPng(pngPath, reference, raster, classification);
+    return true;
+  }
+
+  nlohmann::json info() const override {
+    nlohmann::json j = nlohmann::json::object();
+    j["device"] = rasterizer_ ? rasterizer_->deviceName() : std::string("(not started: every row was resumed)");
+    j["reference_cache"] = cache_.dir();
+    j["references_traced"] = traced_;
+    j["references_loaded"] = loaded_;
+    j["reference_seconds"] = referenceSeconds_;
+    j["reference_spp"] = referenceOptions_.spp;
+    return j;
+  }
+
+ private:
+  static std::string resolvedLight(const Scene& scene, const std::string& light) {
+    // The same choice runPipeline makes, so the compared light is the rendered one.
+    if (!light.empty()) return light;
+    return scene.lights.empty() ? "" : scene.lights.front().name;
+  }
+
+  Rasterizer& rasterizer() {
+    if (!rasterizer_) rasterizer_ = std::make_unique<Rasterizer>(deviceOptions_);
+    return *rasterizer_;
+  }
+
+  // Only the current scene's reference is held: a 1080p reference frame with all its channels is
+  // well over 100 MB, and the plan visits scenes one after another.
+  const Frame& referenceFor(const Scene& scene) {
+    const std::string hash = referenceHash(scene, referenceOptions_);
+    if (hash != currentHash_) {
+      current_ = Frame();
+      currentHash_.clear();
+      const auto t0 = Clock::now();
+      bool traced = false;
+      current_ = cache_.get(scene, referenceOptions_, &traced);
+      referenceSeconds_ += msSince(t0) / 1000.0;
+      (traced ? traced_ : loaded_) += 1;
+      currentHash_ = hash;
+    }
+    return current_;
+  }
+
+  ReferenceCache cache_;
+  ReferenceOptions referenceOptions_;
+  RasterDeviceOptions deviceOptions_;
+  std::unique_ptr<Rasterizer> rasterizer_;
+  std::string currentHash_;
+  Frame current_;
+  int traced_ = 0, loaded_ = 0;
+  double referenceSeconds_ = 0;
+};
+
+}  // namespace
+
+std::unique_ptr<SweepRunner> makePipelineRunner(const std::string& cacheDir, int spp, const std::string& device) {
+  return std::make_unique<PipelineRunner>(cacheDir, spp, device);
+}
+
+}  // namespace shadowlab
