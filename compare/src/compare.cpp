@@ -139,8 +139,9 @@ struct BlockSums {
   uint64_t counts[8] = {};
   uint64_t refShadow = 0, rasShadow = 0, bothShadow = 0;
   double sumAbs = 0, sumSq = 0;
-  float mMax = 0;
+  float mMax = 0, mMin = std::numeric_limits<float>::max();
   uint64_t candidates = 0;
+  float candidateLimitPx = 0;  // largest m (pixels per texel) over the candidates
   uint64_t projRef = 0, projRas = 0, projBoth = 0, reverse = 0;
   double projColorAbs = 0;
 };
@@ -248,9 +249,13 @@ Metrics compareFrames(const Frame& reference, const Frame& raster, const Compare
   Classification& cls = classification ? *classification : local;
   cls.width = width;
   cls.height = height;
-  cls.classes.assign(n, PixelClass::NotCompared);
-  cls.referenceLit.assign(n, 0);
-  std::vector<uint8_t> decision(n, kDecisionNone);
+  cls.classes.resize(n);
+  cls.referenceLit.resize(n);
+  // Scratch reused across calls on the same thread (a sweep compares hundreds of frames): saves
+  // the page faults of fresh multi-megabyte allocations.
+  thread_local std::vector<uint8_t> decisionScratch;
+  decisionScratch.resize(n);
+  uint8_t* decision = decisionScratch.data();
   uint8_t* klass = reinterpret_cast<uint8_t*>(cls.classes.data());
   uint8_t* refLit = cls.referenceLit.data();
   const float leakFactor = options.leakBiasFactor;
@@ -267,7 +272,12 @@ Metrics compareFrames(const Frame& reference, const Frame& raster, const Compare
     const size_t end = std::min(n, size_t(b + 1) * kBlockRows * width);
     for (size_t i = begin; i < end; ++i) {
       const bool hr = refHit[i] >= 0.5f, hs = rasHit[i] >= 0.5f;
-      if (!hr && !hs) continue;  // NotCompared, already set
+      refLit[i] = 0;
+      decision[i] = kDecisionNone;
+      if (!hr && !hs) {
+        klass[i] = uint8_t(PixelClass::NotCompared);
+        continue;
+      }
       if (!(hr && hs) || refObj[i] != rasObj[i]) {
         klass[i] = uint8_t(PixelClass::GeometryMismatch);
         ++s.mismatch;
@@ -288,6 +298,7 @@ Metrics compareFrames(const Frame& reference, const Frame& raster, const Compare
       if (mPlane) {
         m = sanitizeM(mPlane[i]);
         s.mMax = std::max(s.mMax, m);
+        s.mMin = std::min(s.mMin, m);
         ++hist[floatBits(m) >> 16];
       }
       if (hasProjector) {
@@ -319,8 +330,10 @@ Metrics compareFrames(const Frame& reference, const Frame& raster, const Compare
       } else {
         klass[i] = kCandidate;
         ++s.candidates;
+        s.candidateLimitPx = std::max(s.candidateLimitPx, mPlane ? m : 1.0f);
         continue;
       }
+      ++s.counts[size_t(c)];
       klass[i] = uint8_t(c);
     }
     sums[size_t(b)] = s;
@@ -330,6 +343,7 @@ Metrics compareFrames(const Frame& reference, const Frame& raster, const Compare
   for (const auto& s : sums) {
     t.compared += s.compared;
     t.mismatch += s.mismatch;
+    for (int k = 0; k < 8; ++k) t.counts[k] += s.counts[k];
     t.refShadow += s.refShadow;
     t.rasShadow += s.rasShadow;
     t.bothShadow += s.bothShadow;
@@ -337,6 +351,7 @@ Metrics compareFrames(const Frame& reference, const Frame& raster, const Compare
     t.sumSq += s.sumSq;
     t.mMax = std::max(t.mMax, s.mMax);
     t.candidates += s.candidates;
+    t.candidateLimitPx = std::max(t.candidateLimitPx, s.candidateLimitPx);
     t.projRef += s.projRef;
     t.projRas += s.projRas;
     t.projBoth += s.projBoth;
@@ -346,99 +361,130 @@ Metrics compareFrames(const Frame& reference, const Frame& raster, const Compare
 
   // ---- pass 2: aliasing = remaining disagreements near a reference shadow boundary -----------
   // Boundary pixels: compared pixels with a 4-neighbour compared pixel of the other reference
-  // decision. Their exact Euclidean distance transform (Meijster et al. 2000: a column scan, then
-  // the lower envelope of parabolas per row, Felzenszwalb & Huttenlocher 2012), in pixels, is
-  // computed only for the rows that hold candidates.
+  // decision. Their exact Euclidean distance transform (Meijster et al. 2000: column scans, then
+  // per row the lower envelope of parabolas of Felzenszwalb & Huttenlocher 2012), in pixels.
+  // Only distances up to the largest candidate limit (boundaryTexels * m) matter, which bounds the
+  // rows and columns the transform has to visit; larger distances may come out overestimated, but
+  // only beyond every limit, so no class changes.
   if (t.candidates > 0) {
-    const int32_t far = width + height + 1;  // more than any in-image distance
-    std::vector<int32_t> g(n);
-    auto isBoundary = [&](int x, int y) {
-      const size_t i = size_t(y) * width + x;
-      const uint8_t d = decision[i];
-      if (d == kDecisionNone) return false;
-      auto differs = [&](size_t j) { return decision[j] != kDecisionNone && decision[j] != d; };
-      return (x > 0 && differs(i - 1)) || (x + 1 < width && differs(i + 1)) ||
-             (y > 0 && differs(i - width)) || (y + 1 < height && differs(i + width));
-    };
-    // Column scans, processed row by row over a strip of columns (cache-friendly).
-    constexpr int kStrip = 256;
+    const double maxLimitPx = double(options.boundaryTexels) * double(t.candidateLimitPx);
+    const int reach = int(std::min(double(width + height), std::ceil(maxLimitPx))) + 1;
+    // Rows to scan: those within `reach` of a row holding a candidate.
+    std::vector<uint8_t> rowHasCandidate(size_t(height), 0);
+    tbb::parallel_for(0, height, [&](int y) {
+      const uint8_t* krow = klass + size_t(y) * width;
+      uint8_t any = 0;
+      for (int x = 0; x < width; ++x) any |= krow[x] == kCandidate;
+      rowHasCandidate[size_t(y)] = any;
+    });
+    std::vector<std::pair<int, int>> bands;  // [y0, y1) row intervals
+    for (int y = 0; y < height; ++y) {
+      if (!rowHasCandidate[size_t(y)]) continue;
+      const int y0 = std::max(0, y - reach), y1 = std::min(height, y + reach + 1);
+      if (!bands.empty() && y0 <= bands.back().second) bands.back().second = std::max(bands.back().second, y1);
+      else bands.emplace_back(y0, y1);
+    }
+    // g = vertical distance to the nearest boundary pixel within the band, capped at `far`.
+    const uint16_t far = uint16_t(std::min(reach + 1, 65535));
+    thread_local std::vector<uint16_t> gScratch;
+    gScratch.resize(n);
+    uint16_t* g = gScratch.data();
+    constexpr int kStrip = 512;
     const int strips = (width + kStrip - 1) / kStrip;
-    tbb::parallel_for(0, strips, [&](int sIdx) {
-      const int x0 = sIdx * kStrip, x1 = std::min(width, x0 + kStrip);
-      for (int y = 0; y < height; ++y) {
-        int32_t* row = g.data() + size_t(y) * width;
-        const int32_t* above = y > 0 ? row - width : nullptr;
+    tbb::parallel_for(0, int(bands.size()) * strips, [&](int job) {
+      const auto [y0, y1] = bands[size_t(job / strips)];
+      const int x0 = (job % strips) * kStrip, x1 = std::min(width, x0 + kStrip);
+      for (int y = y0; y < y1; ++y) {
+        const uint8_t* d = decision + size_t(y) * width;
+        const uint8_t* du = y > 0 ? d - width : d;  // out of the image: itself, never "different"
+        const uint8_t* dd = y + 1 < height ? d + width : d;
+        uint16_t* row = g + size_t(y) * width;
+        const uint16_t* above = y > y0 ? row - width : nullptr;
         for (int x = x0; x < x1; ++x) {
-          row[x] = isBoundary(x, y) ? 0 : (above ? std::min(far, above[x] + 1) : far);
+          // Decisions are 1 (lit) and 2 (shadowed), 0 for not compared: two pixels hold
+          // different decisions, both compared, exactly when their xor is 3.
+          const uint8_t c = d[x];
+          const bool boundary = (c ^ du[x]) == 3 || (c ^ dd[x]) == 3 || (x > 0 && (c ^ d[x - 1]) == 3) ||
+                                (x + 1 < width && (c ^ d[x + 1]) == 3);
+          const uint16_t up = above ? uint16_t(std::min<int>(far, above[x] + 1)) : far;
+          row[x] = boundary ? uint16_t(0) : up;
         }
       }
-      for (int y = height - 2; y >= 0; --y) {
-        int32_t* row = g.data() + size_t(y) * width;
-        const int32_t* below = row + width;
-        for (int x = x0; x < x1; ++x) row[x] = std::min(row[x], below[x] + 1);
+      for (int y = y1 - 2; y >= y0; --y) {
+        uint16_t* row = g + size_t(y) * width;
+        const uint16_t* below = row + width;
+        for (int x = x0; x < x1; ++x) row[x] = std::min<uint16_t>(row[x], uint16_t(below[x] + 1));
       }
     });
     const float boundaryTexels = options.boundaryTexels;
+    std::vector<std::array<uint64_t, 2>> rowCounts(size_t(height), {0, 0});  // aliasing, other
+    struct RowScratch {
+      std::vector<int> v;
+      std::vector<double> z;
+    };
+    tbb::enumerable_thread_specific<RowScratch> scratch;
     tbb::parallel_for(0, height, [&](int y) {
+      if (!rowHasCandidate[size_t(y)]) return;
       uint8_t* krow = klass + size_t(y) * width;
-      bool any = false;
-      for (int x = 0; x < width && !any; ++x) any = krow[x] == kCandidate;
-      if (!any) return;
-      const int32_t* grow = g.data() + size_t(y) * width;
-      // Lower envelope of parabolas f(q) = (x - q)^2 + g(q)^2 over the columns q of this row.
-      std::vector<int> v(static_cast<size_t>(width));
-      std::vector<double> z(size_t(width) + 1);
+      int xFirst = width, xLast = -1;
+      for (int x = 0; x < width; ++x) {
+        if (krow[x] == kCandidate) {
+          xFirst = std::min(xFirst, x);
+          xLast = x;
+        }
+      }
+      // Columns farther than `reach` from every candidate cannot bring a distance under a limit.
+      const int q0 = std::max(0, xFirst - reach), q1 = std::min(width, xLast + reach + 1);
+      const uint16_t* grow = g + size_t(y) * width;
+      RowScratch& rs = scratch.local();
+      rs.v.resize(size_t(q1 - q0));
+      rs.z.resize(size_t(q1 - q0) + 1);
+      int* v = rs.v.data();
+      double* z = rs.z.data();
       auto f = [&](int q) { return double(grow[q]) * double(grow[q]); };
+      auto intersect = [&](int q, int p) { return ((f(q) + double(q) * q) - (f(p) + double(p) * p)) / (2.0 * (q - p)); };
       int k = 0;
-      v[0] = 0;
+      v[0] = q0;
       z[0] = -std::numeric_limits<double>::infinity();
       z[1] = std::numeric_limits<double>::infinity();
-      auto intersect = [&](int q, int p) { return ((f(q) + double(q) * q) - (f(p) + double(p) * p)) / (2.0 * (q - p)); };
-      for (int q = 1; q < width; ++q) {
-        double sq = intersect(q, v[size_t(k)]);
-        while (sq <= z[size_t(k)]) {  // z[0] = -inf stops this at k = 0
+      for (int q = q0 + 1; q < q1; ++q) {
+        double sq = intersect(q, v[k]);
+        while (sq <= z[k]) {  // z[0] = -inf stops this at k = 0
           --k;
-          sq = intersect(q, v[size_t(k)]);
+          sq = intersect(q, v[k]);
         }
         ++k;
-        v[size_t(k)] = q;
-        z[size_t(k)] = sq;
-        z[size_t(k) + 1] = std::numeric_limits<double>::infinity();
+        v[k] = q;
+        z[k] = sq;
+        z[k + 1] = std::numeric_limits<double>::infinity();
       }
       k = 0;
-      for (int x = 0; x < width; ++x) {
-        while (z[size_t(k) + 1] < x) ++k;
+      std::array<uint64_t, 2> counts{0, 0};
+      for (int x = xFirst; x <= xLast; ++x) {
+        while (z[k + 1] < x) ++k;
         if (krow[x] != kCandidate) continue;
-        const int p = v[size_t(k)];
+        const int p = v[k];
         const double dist2 = double(x - p) * double(x - p) + f(p);
         const size_t i = size_t(y) * width + x;
-        const double m = mPlane ? double(sanitizeM(mPlane[i])) : 1.0;
-        const double limitPx = double(boundaryTexels) * m;
-        krow[x] = uint8_t(dist2 <= limitPx * limitPx ? PixelClass::Aliasing : PixelClass::Other);
+        const double limitPx = double(boundaryTexels) * (mPlane ? double(sanitizeM(mPlane[i])) : 1.0);
+        const bool aliasing = dist2 <= limitPx * limitPx;
+        krow[x] = uint8_t(aliasing ? PixelClass::Aliasing : PixelClass::Other);
+        ++counts[aliasing ? 0 : 1];
       }
+      rowCounts[size_t(y)] = counts;
     });
+    for (const auto& rc : rowCounts) {
+      t.counts[size_t(PixelClass::Aliasing)] += rc[0];
+      t.counts[size_t(PixelClass::Other)] += rc[1];
+    }
   }
 
-  // ---- counts (integers: order-independent) -------------------------------------------------
   Metrics out;
-  {
-    std::vector<std::array<uint64_t, 8>> blockCounts(size_t(std::max(blocks, 0)));
-    tbb::parallel_for(0, blocks, [&](int b) {
-      std::array<uint64_t, 8> c{};
-      const size_t begin = size_t(b) * kBlockRows * width;
-      const size_t end = std::min(n, size_t(b + 1) * kBlockRows * width);
-      for (size_t i = begin; i < end; ++i) ++c[klass[i] & 7];
-      blockCounts[size_t(b)] = c;
-    });
-    std::array<uint64_t, 8> c{};
-    for (const auto& bc : blockCounts)
-      for (int k = 0; k < 8; ++k) c[size_t(k)] += bc[size_t(k)];
-    out.acne = c[size_t(PixelClass::Acne)];
-    out.leak = c[size_t(PixelClass::Leak)];
-    out.aliasing = c[size_t(PixelClass::Aliasing)];
-    out.coverage = c[size_t(PixelClass::Coverage)];
-    out.other = c[size_t(PixelClass::Other)];
-  }
+  out.acne = t.counts[size_t(PixelClass::Acne)];
+  out.leak = t.counts[size_t(PixelClass::Leak)];
+  out.aliasing = t.counts[size_t(PixelClass::Aliasing)];
+  out.coverage = t.counts[size_t(PixelClass::Coverage)];
+  out.other = t.counts[size_t(PixelClass::Other)];
   out.pixelsCompared = t.compared;
   out.geometryMismatch = t.mismatch;
   out.errors = out.acne + out.leak + out.aliasing + out.coverage + out.other;
@@ -456,12 +502,13 @@ Metrics compareFrames(const Frame& reference, const Frame& raster, const Compare
   out.rmse = t.compared ? std::sqrt(t.sumSq / denom) : 0.0;
 
   // m quantiles, exact, in linear time: a two-level radix select over the float bits (non-negative
-  // floats order like their bit patterns): 16 high bits in pass 1, then the 16 low bits.
+  // floats order like their bit patterns): 16 high bits in pass 1, then the 16 low bits of the
+  // values in the two bins that hold the ranks. Nearest rank: the value at sorted index
+  // ceil(p * N) - 1.
   if (mPlane && t.compared > 0) {
     std::vector<uint64_t> high(65536, 0);
     for (const auto& h : mHistLocal)
       for (size_t k = 0; k < h.size(); ++k) high[k] += h[k];
-    // Nearest rank: the value at sorted index ceil(p * N) - 1.
     const double ps[2] = {0.5, 0.95};
     uint64_t rank[2];
     uint32_t bin[2];
@@ -475,9 +522,11 @@ Metrics compareFrames(const Frame& reference, const Frame& raster, const Compare
       }
       bin[q] = b;  // rank[q] is now the rank within that bin
     }
-    // Second level: histograms of the low 16 bits of the values in those bins.
     tbb::enumerable_thread_specific<std::vector<uint64_t>> lowLocal([] { return std::vector<uint64_t>(2 * 65536, 0); });
     tbb::parallel_for(0, blocks, [&](int b) {
+      // m is smooth over the image: most blocks hold no value of either bin.
+      const uint32_t lo = floatBits(sums[size_t(b)].mMin) >> 16, hi = floatBits(sums[size_t(b)].mMax) >> 16;
+      if (sums[size_t(b)].compared == 0 || ((bin[0] < lo || bin[0] > hi) && (bin[1] < lo || bin[1] > hi))) return;
       uint64_t* h = lowLocal.local().data();
       const size_t begin = size_t(b) * kBlockRows * width;
       const size_t end = std::min(n, size_t(b + 1) * kBlockRows * width);
