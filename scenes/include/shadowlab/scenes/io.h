@@ -20,8 +20,9 @@ std::string readFile(const std::string& path);
 // Creates `dir` and its parents; throws InputError naming it when that fails.
 void makeDirs(const std::string& dir);
 
-// 64-bit FNV-1a, printed as 16 lowercase hex digits. Used for scene and camera hashes.
-uint64_t fnv1a64(const void* data, size_t size, uint64_t seed = 1469598103934665603ull);
+// 64-bit FNV-1a (offset basis 0xcbf29ce484222325), printed as 16 lowercase hex digits. Used for
+// scene and camera hashes; pass a previous hash as `seed` to continue hashing more bytes.
+uint64_t fnv1a64(const void* data, size_t size, uint64_t seed = 14695981039346656037ull);
 std::string hashHex(uint64_t h);
 
 }  // namespace shadowlab
