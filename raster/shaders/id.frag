@@ -1,0 +1,42 @@
+#version 460
+// Writes (object index + 1, primitive id) beside the depth. Alpha-tested materials discard
+// below their cutoff, sampling the alpha texture exactly like scenes' sampleAlphaNearest
+// (nearest texel, repeat addressing, texel (0,0) top-left) so both renderers agree on holes.
+// One-sided materials discard back faces (as seen from the camera or the light).
+layout(location = 0) in vec2 uv;
+layout(location = 0) out uvec2 outId;
+
+layout(push_constant) uniform Draw {
+  mat4 clipFromWorld;
+  uint objectIndex;
+  uint triangleBase;
+  uint pad0;
+  uint pad1;
+} draw;
+
+struct MaterialGpu {
+  uint alphaOffset;  // first texel in alphaTexels
+  uint width;
+  uint height;
+  uint flags;        // bit 0: two-sided, bit 1: alpha-tested
+  float cutoff;
+  float pad0;
+  float pad1;
+  float pad2;
+};
+
+layout(std430, set = 0, binding = 0) readonly buffer TriangleMaterials { uint triangleMaterial[]; };
+layout(std430, set = 0, binding = 1) readonly buffer Materials { MaterialGpu materials[]; };
+layout(std430, set = 0, binding = 2) readonly buffer AlphaTexels { float alphaTexels[]; };
+
+void main() {
+  MaterialGpu m = materials[triangleMaterial[draw.triangleBase + uint(gl_PrimitiveID)]];
+  if ((m.flags & 1u) == 0u && !gl_FrontFacing) discard;
+  if ((m.flags & 2u) != 0u) {
+    int w = int(m.width), h = int(m.height);
+    int x = clamp(int(floor(fract(uv.x) * float(w))), 0, w - 1);
+    int y = clamp(int(floor(fract(uv.y) * float(h))), 0, h - 1);
+    if (alphaTexels[m.alphaOffset + uint(y * w + x)] < m.cutoff) discard;
+  }
+  outId = uvec2(draw.objectIndex + 1u, uint(gl_PrimitiveID));
+}

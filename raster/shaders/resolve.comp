@@ -1,0 +1,261 @@
+#version 460
+// Camera pass, part 2: per pixel, from the visibility buffer (object, primitive) of part 1.
+// The visible point is the intersection of the pixel-center camera ray with the visible
+// triangle's plane (the reference's hit point up to float rounding), and every derivative
+// (texel footprint m, receiver plane) is taken analytically on that plane instead of from
+// 2x2-quad differences, so triangle edges do not smear neighbouring planes into each other.
+// Writes one float plane per output channel (see channel indices below) into `outPlanes`.
+layout(local_size_x = 8, local_size_y = 8) in;
+
+// Specialized per filter so lavapipe compiles straight-line code for the cheap filters.
+layout(constant_id = 0) const uint kFilter = 0u;  // 0 none, 1 hw2x2, 2 bilinear4, 3 pcf, 4 poisson
+
+const int kMaxLayers = 14;  // 6 light layers (a cube) + 8 projectors
+const int kMaxProjectors = 8;
+const int kMaxTaps = 64;
+
+layout(std140, set = 0, binding = 3) uniform Params {
+  mat4 texFromWorld[kMaxLayers];  // world -> (u*w, v*w, depth*w, w), u,v in [0,1], v = 0 top
+  vec4 layerInfo[kMaxLayers];     // x: world size of one texel per unit of w
+  vec4 lightPosType;              // xyz position, w: 0 directional, 1 spot, 2 point
+  vec4 lightDirCos;               // xyz direction of travel, w: cos(cone / 2)
+  vec4 cameraOrigin;              // xyz
+  vec4 rayX;                      // unnormalized ray direction through image point (x, y):
+  vec4 rayY;                      //   rayX * x + rayY * y + rayC (x, y in pixels)
+  vec4 rayC;
+  vec4 bias;        // x compare (depth), y normal (texels), z receiver plane (0/1), w poisson radius (texels)
+  vec4 depthBias;   // x constant factor, y slope factor, z clamp, w r of the format (0: float format)
+  ivec4 sizes;      // x map size, y light layers, z projector count, w pcf size
+  ivec4 sizes2;     // x width, y height, z poisson taps, w reverse guard (0/1)
+  ivec4 projector[kMaxProjectors];  // x first texel in projectorTexels, y width, z height
+  vec4 poisson[kMaxTaps];           // xy: unit-disc offsets
+} P;
+
+layout(set = 0, binding = 4) uniform sampler2DArray mapDepth;         // NEAREST, raw depth
+layout(set = 0, binding = 5) uniform sampler2DArrayShadow mapShadow;  // LINEAR, compare LESS_OR_EQUAL
+layout(set = 0, binding = 6) uniform usampler2DArray mapIds;
+layout(set = 0, binding = 7) uniform usampler2D cameraIds;
+
+struct ObjectGpu {
+  uint id;
+  uint vertexBase;
+  uint triangleBase;
+  uint pad;
+};
+layout(std430, set = 0, binding = 8) readonly buffer Positions { float positions[]; };
+layout(std430, set = 0, binding = 9) readonly buffer Indices { uint indices[]; };
+layout(std430, set = 0, binding = 10) readonly buffer Objects { ObjectGpu objects[]; };
+layout(std430, set = 0, binding = 11) readonly buffer ProjectorTexels { float projectorTexels[]; };
+layout(std430, set = 0, binding = 12) writeonly buffer OutPlanes { float outPlanes[]; };
+
+const uint kHit = 0u, kObjectId = 1u, kPrimId = 2u, kVis = 3u, kReceiverDepth = 4u, kMapDepth = 5u,
+           kOccluderId = 6u, kOccluderPrim = 7u, kInMap = 8u, kM = 9u, kBiasDepth = 10u,
+           kBiasWorld = 11u, kLightChannels = 12u, kProjectorChannels = 5u;
+
+uint gPixel;
+uint gPlane;
+void put(uint channel, float value) { outPlanes[channel * gPlane + gPixel] = value; }
+
+vec3 vertexAt(uint v) { return vec3(positions[3u * v], positions[3u * v + 1u], positions[3u * v + 2u]); }
+vec3 rayThrough(vec2 pixel) { return P.rayX.xyz * pixel.x + P.rayY.xyz * pixel.y + P.rayC.xyz; }
+
+int gLayer;
+float gSize;
+vec4 project(vec3 pWorld) { return P.texFromWorld[gLayer] * vec4(pWorld, 1.0); }
+vec3 mapCoords(vec3 pWorld) {  // (u, v in texels, depth)
+  vec4 t = project(pWorld);
+  return vec3(t.xy / t.w * gSize, t.z / t.w);
+}
+
+// Lit (1) when the stored depth is not in front of the reference depth.
+float tap(ivec2 texel, float depthRef) {
+  ivec2 c = clamp(texel, ivec2(0), ivec2(int(gSize) - 1));
+  return texelFetch(mapDepth, ivec3(c, gLayer), 0).r >= depthRef ? 1.0 : 0.0;
+}
+
+vec2 gSlope;   // receiver plane: d(depth)/d(texel u, v), zero when bias.receiver_plane is off
+vec2 gSt;      // lookup position in texels
+float gRef;    // reference depth at gSt (receiver depth - compare bias)
+float refAt(ivec2 texel) { return gRef + dot(gSlope, vec2(texel) + 0.5 - gSt); }
+
+float filterVisibility() {
+  ivec2 center = ivec2(floor(gSt));
+  if (kFilter == 1u) {
+    // The hardware blends four comparisons; the receiver plane cannot be applied per tap.
+    return textureGrad(mapShadow, vec4(gSt / gSize, float(gLayer), gRef), vec2(0.0), vec2(0.0));
+  } else if (kFilter == 2u) {
+    vec2 s = gSt - 0.5;
+    ivec2 i0 = ivec2(floor(s));
+    vec2 f = s - floor(s);
+    float v00 = tap(i0, refAt(i0));
+    float v10 = tap(i0 + ivec2(1, 0), refAt(i0 + ivec2(1, 0)));
+    float v01 = tap(i0 + ivec2(0, 1), refAt(i0 + ivec2(0, 1)));
+    float v11 = tap(i0 + ivec2(1, 1), refAt(i0 + ivec2(1, 1)));
+    return mix(mix(v00, v10, f.x), mix(v01, v11, f.x), f.y);
+  } else if (kFilter == 3u) {
+    int h = P.sizes.w / 2;
+    float sum = 0.0;
+    for (int dy = -h; dy <= h; ++dy)
+      for (int dx = -h; dx <= h; ++dx) {
+        ivec2 t = center + ivec2(dx, dy);
+        sum += tap(t, refAt(t));
+      }
+    float n = float(2 * h + 1);
+    return sum / (n * n);
+  } else if (kFilter == 4u) {
+    int taps = P.sizes2.z;
+    float sum = 0.0;
+    for (int i = 0; i < taps; ++i) {
+      ivec2 t = ivec2(floor(gSt + P.poisson[i].xy * P.bias.w));
+      sum += tap(t, refAt(t));
+    }
+    return sum / float(taps);
+  }
+  return tap(center, refAt(center));
+}
+
+int cubeFace(vec3 v) {
+  vec3 a = abs(v);
+  if (a.x >= a.y && a.x >= a.z) return v.x > 0.0 ? 0 : 1;
+  if (a.y >= a.z) return v.y > 0.0 ? 2 : 3;
+  return v.z > 0.0 ? 4 : 5;
+}
+
+void main() {
+  int width = P.sizes2.x, height = P.sizes2.y;
+  ivec2 px = ivec2(gl_GlobalInvocationID.xy);
+  if (px.x >= width || px.y >= height) return;
+  gPixel = uint(px.y * width + px.x);
+  gPlane = uint(width * height);
+  uint channelCount = kLightChannels + kProjectorChannels * uint(P.sizes.z);
+
+  uvec2 ids = texelFetch(cameraIds, px, 0).xy;
+  if (ids.x == 0u) {
+    for (uint c = 0u; c < channelCount; ++c) put(c, 0.0);
+    return;
+  }
+  ObjectGpu obj = objects[ids.x - 1u];
+  uint tri = obj.triangleBase + ids.y;
+  vec3 v0 = vertexAt(obj.vertexBase + indices[3u * tri]);
+  vec3 v1 = vertexAt(obj.vertexBase + indices[3u * tri + 1u]);
+  vec3 v2 = vertexAt(obj.vertexBase + indices[3u * tri + 2u]);
+  vec3 nTri = cross(v1 - v0, v2 - v0);
+  vec3 origin = P.cameraOrigin.xyz;
+  vec2 pixelCenter = vec2(px) + 0.5;
+  vec3 dir = rayThrough(pixelCenter);
+  vec3 p = origin + dir * (dot(v0 - origin, nTri) / dot(dir, nTri));
+  vec3 normal = normalize(nTri);
+  if (dot(normal, dir) > 0.0) normal = -normal;  // face the camera, like the reference's N
+
+  put(kHit, 1.0);
+  put(kObjectId, float(obj.id));
+  put(kPrimId, float(ids.y));
+
+  // ---- the light ----
+  int lightType = int(P.lightPosType.w);
+  vec3 lightPos = P.lightPosType.xyz;
+  gSize = float(P.sizes.x);
+  gLayer = lightType == 2 ? cubeFace(p - lightPos) : 0;
+  vec4 tP = project(p);
+  float texelWorld = P.layerInfo[gLayer].x * abs(tP.w);
+  vec3 q = p + normal * (P.bias.y * texelWorld);  // normal-offset lookup point
+  vec4 tQ = project(q);
+  bool inFront = tQ.w > 0.0;
+  vec3 uvz = tQ.xyz / tQ.w;
+  gSt = uvz.xy * gSize;
+  bool inMap = inFront && all(greaterThanEqual(uvz.xy, vec2(0.0))) && all(lessThanEqual(uvz.xy, vec2(1.0)));
+  float depthP = tP.z / tP.w;
+
+  // The receiver's plane in map space, from two tangent points one texel away: the same
+  // (dz/du, dz/dv) the dFdx/dFdy solve yields, without its singularity at grazing views.
+  vec3 e1 = normalize(v1 - v0);
+  vec3 e2 = cross(normal, e1);
+  vec3 m0 = mapCoords(q), m1 = mapCoords(q + e1 * texelWorld), m2 = mapCoords(q + e2 * texelWorld);
+  vec2 a1 = m1.xy - m0.xy, a2 = m2.xy - m0.xy;
+  float det = a1.x * a2.y - a1.y * a2.x;
+  vec2 slope = abs(det) > 1e-12 ? vec2((m1.z - m0.z) * a2.y - (m2.z - m0.z) * a1.y,
+                                       (m2.z - m0.z) * a1.x - (m1.z - m0.z) * a2.x) / det
+                                : vec2(0.0);
+  gSlope = P.bias.z > 0.5 ? slope : vec2(0.0);
+  gRef = uvz.z - P.bias.x;
+
+  float vis = 1.0;  // policy: points outside the map are lit
+  float mapDepthCenter = 0.0, occluderId = 0.0, occluderPrim = 0.0;
+  if (inMap) {
+    vis = filterVisibility();
+    ivec2 c = clamp(ivec2(floor(gSt)), ivec2(0), ivec2(int(gSize) - 1));
+    mapDepthCenter = texelFetch(mapDepth, ivec3(c, gLayer), 0).r;
+    uvec2 occ = texelFetch(mapIds, ivec3(c, gLayer), 0).xy;
+    if (occ.x != 0u) {
+      occluderId = float(objects[occ.x - 1u].id);
+      occluderPrim = float(occ.y);
+    }
+  }
+  if (lightType == 1 && dot(normalize(p - lightPos), P.lightDirCos.xyz) < P.lightDirCos.w) vis = 0.0;
+
+  // Rasterizer depth bias the map texel carries when the receiver is its own caster:
+  // constant * r + slope * maxDepthSlope, clamped (Vulkan's formula; maxDepthSlope per texel).
+  float r = P.depthBias.w > 0.0 ? P.depthBias.w : exp2(floor(log2(max(depthP, 1e-30))) - 23.0);
+  float rasterBias = P.depthBias.x * r + P.depthBias.y * max(abs(slope.x), abs(slope.y));
+  if (P.depthBias.z > 0.0) rasterBias = min(rasterBias, P.depthBias.z);
+  if (P.depthBias.z < 0.0) rasterBias = max(rasterBias, P.depthBias.z);
+  float biasDepth = P.bias.x + rasterBias + (depthP - uvz.z);
+  vec3 toLight = lightType == 0 ? -P.lightDirCos.xyz : normalize(lightPos - p);
+  vec4 tL = project(p + toLight * texelWorld);
+  float depthStep = abs(depthP - tL.z / tL.w);
+  float worldPerDepth = depthStep > 0.0 ? texelWorld / depthStep : 0.0;
+
+  // Lloyd's m: the Jacobian d(texel)/d(pixel) by central differences of exact plane points.
+  vec2 tx0, tx1, ty0, ty1;
+  {
+    vec3 d;
+    d = rayThrough(pixelCenter + vec2(0.5, 0.0)); tx1 = mapCoords(origin + d * (dot(v0 - origin, nTri) / dot(d, nTri))).xy;
+    d = rayThrough(pixelCenter - vec2(0.5, 0.0)); tx0 = mapCoords(origin + d * (dot(v0 - origin, nTri) / dot(d, nTri))).xy;
+    d = rayThrough(pixelCenter + vec2(0.0, 0.5)); ty1 = mapCoords(origin + d * (dot(v0 - origin, nTri) / dot(d, nTri))).xy;
+    d = rayThrough(pixelCenter - vec2(0.0, 0.5)); ty0 = mapCoords(origin + d * (dot(v0 - origin, nTri) / dot(d, nTri))).xy;
+  }
+  vec2 jx = tx1 - tx0, jy = ty1 - ty0;
+  float sumSq = dot(jx, jx) + dot(jy, jy);
+  float detJ = jx.x * jy.y - jy.x * jx.y;
+  float sMax = sqrt(0.5 * (sumSq + sqrt(max(sumSq * sumSq - 4.0 * detJ * detJ, 0.0))));
+  float sMin = sMax > 0.0 ? abs(detJ) / sMax : 0.0;
+  float m = sMin > 1e-6 ? min(1.0 / sMin, 1e6) : 1e6;
+
+  put(kVis, vis);
+  put(kReceiverDepth, uvz.z);
+  put(kMapDepth, mapDepthCenter);
+  put(kOccluderId, occluderId);
+  put(kOccluderPrim, occluderPrim);
+  put(kInMap, inMap ? 1.0 : 0.0);
+  put(kM, m);
+  put(kBiasDepth, biasDepth);
+  put(kBiasWorld, biasDepth * worldPerDepth);
+
+  // ---- projectors ----
+  for (int j = 0; j < P.sizes.z; ++j) {
+    uint base = kLightChannels + kProjectorChannels * uint(j);
+    gLayer = P.sizes.y + j;
+    vec4 t = project(p);
+    vec3 puv = t.xyz / t.w;
+    bool insideUv = all(greaterThanEqual(puv.xy, vec2(0.0))) && all(lessThanEqual(puv.xy, vec2(1.0)));
+    bool reverse = t.w < 0.0 && insideUv;
+    bool frontInFrustum = t.w > 0.0 && insideUv && puv.z >= 0.0 && puv.z <= 1.0;
+    // Without the guard, points behind the projector are projected too; its depth map says
+    // nothing about them (their depth lies outside [0, 1]), so nothing occludes them.
+    bool covered = frontInFrustum || (P.sizes2.w == 0 && reverse);
+    if (covered && frontInFrustum) covered = tap(ivec2(floor(puv.xy * gSize)), puv.z - P.bias.x) > 0.5;
+    vec3 color = vec3(0.0);
+    if (covered) {
+      ivec4 info = P.projector[j];
+      int x = clamp(int(floor(puv.x * float(info.y))), 0, info.y - 1);
+      int y = clamp(int(floor(puv.y * float(info.z))), 0, info.z - 1);
+      uint o = uint(info.x) + 3u * uint(y * info.y + x);
+      color = vec3(projectorTexels[o], projectorTexels[o + 1u], projectorTexels[o + 2u]);
+    }
+    put(base, covered ? 1.0 : 0.0);
+    put(base + 1u, color.r);
+    put(base + 2u, color.g);
+    put(base + 3u, color.b);
+    put(base + 4u, reverse ? 1.0 : 0.0);
+  }
+}

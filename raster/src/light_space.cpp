@@ -1,0 +1,136 @@
+#include "light_space.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+#include <glm/gtc/matrix_transform.hpp>
+
+namespace shadowlab::raster {
+
+namespace {
+
+glm::vec3 upFor(glm::vec3 dir) {
+  return std::abs(dir.y) > 0.99f ? glm::vec3(0, 0, 1) : glm::vec3(0, 1, 0);
+}
+
+// View space (right-handed, looking down -z) -> tex, orthographic box.
+glm::mat4 texFromViewOrtho(float left, float right, float bottom, float top, float nearZ, float farZ) {
+  glm::mat4 m(0.0f);  // glm: m[column][row]
+  m[0][0] = 1.0f / (right - left);
+  m[3][0] = -left / (right - left);
+  m[1][1] = -1.0f / (top - bottom);  // v = 0 at the top
+  m[3][1] = top / (top - bottom);
+  m[2][2] = -1.0f / (farZ - nearZ);  // depth = (-z - near) / (far - near)
+  m[3][2] = -nearZ / (farZ - nearZ);
+  m[3][3] = 1.0f;
+  return m;
+}
+
+// View space -> tex, perspective with square aspect. w = -z.
+glm::mat4 texFromViewPerspective(float fovRad, float nearZ, float farZ) {
+  float k = 1.0f / std::tan(0.5f * fovRad);
+  glm::mat4 m(0.0f);
+  m[0][0] = 0.5f * k;   // u*w = 0.5 k x + 0.5 w
+  m[2][0] = -0.5f;
+  m[1][1] = -0.5f * k;  // v*w = -0.5 k y + 0.5 w
+  m[2][1] = -0.5f;
+  m[2][2] = -farZ / (farZ - nearZ);  // depth*w = f/(f-n) (w - n)
+  m[3][2] = -farZ * nearZ / (farZ - nearZ);
+  m[2][3] = -1.0f;
+  return m;
+}
+
+float farthestCorner(const Scene& scene, glm::vec3 from) {
+  glm::vec3 lo = scene.boundsMin(), hi = scene.boundsMax();
+  float best = 0;
+  for (int i = 0; i < 8; ++i) {
+    glm::vec3 c((i & 1) ? hi.x : lo.x, (i & 2) ? hi.y : lo.y, (i & 4) ? hi.z : lo.z);
+    best = std::max(best, glm::length(c - from));
+  }
+  return best;
+}
+
+}  // namespace
+
+glm::mat4 clipFromTex() {
+  glm::mat4 m(1.0f);
+  m[0][0] = 2.0f;
+  m[3][0] = -1.0f;
+  m[1][1] = 2.0f;
+  m[3][1] = -1.0f;
+  return m;
+}
+
+int cubeFace(glm::vec3 v) {
+  glm::vec3 a = glm::abs(v);
+  if (a.x >= a.y && a.x >= a.z) return v.x > 0 ? 0 : 1;
+  if (a.y >= a.z) return v.y > 0 ? 2 : 3;
+  return v.z > 0 ? 4 : 5;
+}
+
+LightSpace fitLight(const Scene& scene, const Light& light, Fit fit, int mapSize) {
+  LightSpace out;
+  glm::vec3 lo = scene.boundsMin(), hi = scene.boundsMax();
+  glm::vec3 center = 0.5f * (lo + hi);
+  float radius = std::max(0.5f * glm::length(hi - lo), 1e-4f) * 1.001f;
+  if (light.type == LightType::Directional) {
+    out.depthClamp = true;
+    glm::vec3 dir = glm::normalize(light.direction);
+    glm::mat4 viewFromWorld = glm::lookAt(center, center + dir, upFor(dir));
+    MapLayer layer;
+    if (fit == Fit::Sphere) {
+      layer.texFromWorld = texFromViewOrtho(-radius, radius, -radius, radius, -radius, radius) * viewFromWorld;
+      layer.texelWorldPerW = 2.0f * radius / float(mapSize);
+    } else {
+      float inf = std::numeric_limits<float>::infinity();
+      glm::vec3 vmin(inf), vmax(-inf);
+      for (const Object& o : scene.objects)
+        for (const glm::vec3& p : o.positions) {
+          glm::vec3 v = glm::vec3(viewFromWorld * glm::vec4(p, 1.0f));
+          vmin = glm::min(vmin, v);
+          vmax = glm::max(vmax, v);
+        }
+      if (!(vmin.x <= vmax.x)) vmin = vmax = glm::vec3(0);
+      // A hair of margin so the extreme vertices rasterize inside the map, not on its border.
+      glm::vec3 pad = glm::max((vmax - vmin) * 1e-4f, glm::vec3(1e-5f));
+      vmin -= pad;
+      vmax += pad;
+      layer.texFromWorld = texFromViewOrtho(vmin.x, vmax.x, vmin.y, vmax.y, -vmax.z, -vmin.z) * viewFromWorld;
+      layer.texelWorldPerW = std::max(vmax.x - vmin.x, vmax.y - vmin.y) / float(mapSize);
+    }
+    out.layers.push_back(layer);
+    return out;
+  }
+  float nearZ = std::max(light.nearPlane, 1e-5f);
+  float farZ = std::max(farthestCorner(scene, light.position) * 1.01f, nearZ * 2.0f);
+  if (light.type == LightType::Spot) {
+    glm::vec3 dir = glm::normalize(light.direction);
+    float fov = glm::radians(std::clamp(light.coneDeg, 1e-3f, 179.0f));
+    MapLayer layer;
+    layer.texFromWorld = texFromViewPerspective(fov, nearZ, farZ) *
+                         glm::lookAt(light.position, light.position + dir, upFor(dir));
+    layer.texelWorldPerW = 2.0f * std::tan(0.5f * fov) / float(mapSize);
+    out.layers.push_back(layer);
+    return out;
+  }
+  const glm::vec3 axes[6] = {{1, 0, 0}, {-1, 0, 0}, {0, 1, 0}, {0, -1, 0}, {0, 0, 1}, {0, 0, -1}};
+  for (const glm::vec3& axis : axes) {
+    MapLayer layer;
+    layer.texFromWorld = texFromViewPerspective(glm::radians(90.0f), nearZ, farZ) *
+                         glm::lookAt(light.position, light.position + axis, upFor(axis));
+    layer.texelWorldPerW = 2.0f / float(mapSize);
+    out.layers.push_back(layer);
+  }
+  return out;
+}
+
+MapLayer projectorLayer(const Projector& projector, int mapSize) {
+  MapLayer layer;
+  layer.texFromWorld = projector.texFromWorld();
+  float fov = glm::radians(projector.fovDeg);
+  layer.texelWorldPerW = 2.0f * std::tan(0.5f * fov) / float(mapSize);
+  return layer;
+}
+
+}  // namespace shadowlab::raster

@@ -1,0 +1,39 @@
+#pragma once
+// Where each map layer looks from: the light's (or projector's) projective texture matrix.
+// One convention for every layer, the same as Projector::texFromWorld:
+//   texFromWorld * (p, 1) = (u*w, v*w, depth*w, w), u, v in [0,1] across the map (v = 0 on
+//   the map's top row), depth in [0,1] from near to far (Vulkan), w > 0 in front.
+// The shadow pass renders layer i with clipFromTex() * texFromWorld, so texel (x, y) of the map
+// covers u in [x, x+1) / size, v in [y, y+1) / size exactly.
+#include <vector>
+
+#include <glm/glm.hpp>
+
+#include "shadowlab/scenes/method.h"
+#include "shadowlab/scenes/scene.h"
+
+namespace shadowlab::raster {
+
+struct MapLayer {
+  glm::mat4 texFromWorld{1.0f};
+  float texelWorldPerW = 0;  // world size of one texel at w = 1 (orthographic: everywhere)
+};
+
+struct LightSpace {
+  std::vector<MapLayer> layers;  // directional and spot: 1; point: 6 cube faces (+X -X +Y -Y +Z -Z)
+  bool depthClamp = false;       // directional: casters outside [near, far] still write the map
+};
+
+// Directional: orthographic, fit to the bounding sphere of the scene's box (Fit::Sphere) or to
+// the light-space box of all vertices (Fit::Tight). Spot: perspective with fov = cone angle,
+// near = light.nearPlane, far = the farthest corner of the scene's box. Point: six 90-degree faces.
+LightSpace fitLight(const Scene& scene, const Light& light, Fit fit, int mapSize);
+MapLayer projectorLayer(const Projector& projector, int mapSize);
+
+// (u, v, depth, w) -> Vulkan clip space (x = 2u - 1, y = 2v - 1: v = 0 is the framebuffer's top).
+glm::mat4 clipFromTex();
+
+// Which cube face (index into LightSpace::layers) a direction from a point light falls in.
+int cubeFace(glm::vec3 fromLight);
+
+}  // namespace shadowlab::raster

@@ -1,0 +1,645 @@
+// The rasterizer, pass by pass:
+//   Pass 1 (shadow): depth + (object, primitive) ids from the light into one layer per map
+//                    (cube faces for point lights), then one layer per projector.
+//   Pass 2 (camera): the camera's visibility buffer: depth + (object, primitive) per pixel.
+//   Pass 3 (resolve, compute): per pixel, the visible point, the map lookup with the method's
+//                    bias and filter, the evidence channels, the projectors; one float plane
+//                    per output channel, read back into the Frame with one copy per channel.
+#include "shadowlab/raster/raster.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstring>
+#include <map>
+#include <set>
+#include <tuple>
+
+#include <glm/gtc/matrix_inverse.hpp>
+
+#include "light_space.h"
+#include "scene_gpu.h"
+#include "shadowlab/scenes/error.h"
+#include "shadowlab/scenes/io.h"
+#include "vk/buffer.h"
+#include "vk/check.h"
+#include "vk/commands.h"
+#include "vk/context.h"
+#include "vk/image.h"
+#include "vk/pipeline.h"
+
+#include "id_frag.h"
+#include "id_vert.h"
+#include "resolve_comp.h"
+
+namespace shadowlab {
+
+namespace {
+
+constexpr int kMaxLayers = 14;
+constexpr int kMaxLightLayers = 6;
+constexpr int kMaxProjectors = 8;
+constexpr int kMaxTaps = 64;
+constexpr int kLightChannels = 12;
+constexpr int kProjectorChannels = 5;
+constexpr VkFormat kIdFormat = VK_FORMAT_R32G32_UINT;
+constexpr VkFormat kCameraDepthFormat = VK_FORMAT_D32_SFLOAT;
+
+// Mirrors `Params` in resolve.comp (std140: every member is 16-byte aligned already).
+struct Params {
+  glm::mat4 texFromWorld[kMaxLayers];
+  glm::vec4 layerInfo[kMaxLayers];
+  glm::vec4 lightPosType, lightDirCos, cameraOrigin, rayX, rayY, rayC, bias, depthBias;
+  glm::ivec4 sizes, sizes2;
+  glm::ivec4 projector[kMaxProjectors];
+  glm::vec4 poisson[kMaxTaps];
+};
+
+struct DrawPush {
+  glm::mat4 clipFromWorld;
+  uint32_t objectIndex, triangleBase, pad0, pad1;
+};
+
+VkFormat vkDepthFormat(DepthFormat f) {
+  switch (f) {
+    case DepthFormat::D16: return VK_FORMAT_D16_UNORM;
+    case DepthFormat::D24: return VK_FORMAT_X8_D24_UNORM_PACK32;
+    case DepthFormat::D32F: return VK_FORMAT_D32_SFLOAT;
+  }
+  return VK_FORMAT_D32_SFLOAT;
+}
+
+// Smallest resolvable depth difference r of a UNORM format (Vulkan: 2^-n); 0 marks the float
+// format, whose r depends on the depth's exponent and is computed per pixel in the shader.
+float depthResolution(DepthFormat f) {
+  switch (f) {
+    case DepthFormat::D16: return std::ldexp(1.0f, -16);
+    case DepthFormat::D24: return std::ldexp(1.0f, -24);
+    case DepthFormat::D32F: return 0.0f;
+  }
+  return 0.0f;
+}
+
+VkCullModeFlags vkCull(CullMode c) {
+  switch (c) {
+    case CullMode::Back: return VK_CULL_MODE_BACK_BIT;
+    case CullMode::Front: return VK_CULL_MODE_FRONT_BIT;
+    case CullMode::None: return VK_CULL_MODE_NONE;
+  }
+  return VK_CULL_MODE_NONE;
+}
+
+// A fixed Poisson disc, progressive (Mitchell's best candidate, fixed seed): any prefix of
+// `taps` points is itself well spread, so filter.taps can be swept without a new table.
+std::vector<glm::vec2> poissonDisc() {
+  std::vector<glm::vec2> points;
+  uint32_t state = 12345u;
+  auto next = [&state] {
+    state = state * 1664525u + 1013904223u;
+    return float(state >> 8) / float(1u << 24);
+  };
+  while (points.size() < size_t(kMaxTaps)) {
+    glm::vec2 best(0);
+    float bestDistance = -1;
+    int candidates = int(points.size()) * 4 + 1;
+    for (int c = 0; c < candidates; ++c) {
+      glm::vec2 p;
+      do p = glm::vec2(next(), next()) * 2.0f - 1.0f;
+      while (glm::dot(p, p) > 1.0f);
+      float d = 1e9f;
+      for (auto& q : points) d = std::min(d, glm::dot(p - q, p - q));
+      if (d > bestDistance) bestDistance = d, best = p;
+    }
+    points.push_back(best);
+  }
+  return points;
+}
+
+double msSince(std::chrono::steady_clock::time_point t0) {
+  return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+}
+
+// The frame metadata's "camera_hash", defined exactly as the reference defines it
+// (reference/src/detail.h): FNV-1a over position, lookAt, up, vfovDeg (10 float32) and
+// width, height (2 int32), so compare can match the two frames.
+std::string cameraHashOf(const Camera& camera) {
+  float floats[10] = {camera.position.x, camera.position.y, camera.position.z, camera.lookAt.x,
+                      camera.lookAt.y,   camera.lookAt.z,   camera.up.x,       camera.up.y,
+                      camera.up.z,       camera.vfovDeg};
+  int32_t ints[2] = {camera.width, camera.height};
+  unsigned char bytes[sizeof(floats) + sizeof(ints)];
+  std::memcpy(bytes, floats, sizeof(floats));
+  std::memcpy(bytes + sizeof(floats), ints, sizeof(ints));
+  return hashHex(fnv1a64(bytes, sizeof(bytes)));
+}
+
+}  // namespace
+
+struct Rasterizer::Impl {
+  std::unique_ptr<vk::Context> context;
+  std::unique_ptr<vk::Commands> commands;
+  vk::DescriptorSetLayout setLayout;
+  vk::PipelineLayout pipelineLayout;
+  vk::DescriptorPool descriptorPool;
+  VkDescriptorSet descriptorSet = VK_NULL_HANDLE;
+  vk::Sampler nearestSampler, compareSampler;
+  vk::ShaderModule idVert, idFrag, resolveComp;
+  vk::QueryPool queries;
+  std::map<std::pair<VkFormat, bool>, vk::PipelineHandle> shadowPipelines;
+  vk::PipelineHandle cameraPipeline;
+  std::map<Filter, vk::PipelineHandle> resolvePipelines;
+  std::set<std::string> warmed;
+  std::vector<glm::vec2> poisson = poissonDisc();
+
+  std::unique_ptr<raster::SceneGpu> scene;
+  vk::Image mapDepth, mapIds, cameraDepth, cameraIds;
+  vk::Buffer params, output;
+
+  explicit Impl(const RasterDeviceOptions& options);
+  void createLayouts();
+  VkPipeline shadowPipeline(VkFormat format, bool depthClamp);
+  VkPipeline resolvePipeline(Filter filter);
+  void ensureImages(int mapSize, VkFormat mapFormat, int layers, int width, int height);
+  void writeDescriptors();
+  void record(VkCommandBuffer cmd, const std::vector<glm::mat4>& layerClip, int lightLayers,
+              VkPipeline shadow, VkPipeline resolve, const Method& method, const glm::mat4& cameraClip,
+              int width, int height);
+};
+
+Rasterizer::Impl::Impl(const RasterDeviceOptions& options) {
+  vk::ContextOptions co;
+  co.device = options.device;
+  co.validation = options.validation;
+  context = std::make_unique<vk::Context>(co);
+  commands = std::make_unique<vk::Commands>(*context);
+  createLayouts();
+  idVert = vk::createShaderModule(*context, kSpv_id_vert, sizeof(kSpv_id_vert));
+  idFrag = vk::createShaderModule(*context, kSpv_id_frag, sizeof(kSpv_id_frag));
+  resolveComp = vk::createShaderModule(*context, kSpv_resolve_comp, sizeof(kSpv_resolve_comp));
+
+  VkDevice device = context->device();
+  auto makeSampler = [&](bool compare) {
+    VkSamplerCreateInfo s{VK_STRUCTURE_TYPE_SAMPLER_CREATE_INFO};
+    // Depths are point-sampled; only the comparison sampler filters (its 0/1 results).
+    s.magFilter = s.minFilter = compare ? VK_FILTER_LINEAR : VK_FILTER_NEAREST;
+    s.mipmapMode = VK_SAMPLER_MIPMAP_MODE_NEAREST;
+    s.addressModeU = s.addressModeV = s.addressModeW = VK_SAMPLER_ADDRESS_MODE_CLAMP_TO_EDGE;
+    s.compareEnable = compare;
+    s.compareOp = VK_COMPARE_OP_LESS_OR_EQUAL;  // lit when reference <= stored depth
+    s.maxLod = 0.0f;
+    VkSampler sampler;
+    VK_CHECK(vkCreateSampler(device, &s, nullptr, &sampler));
+    return vk::Sampler(device, sampler);
+  };
+  nearestSampler = makeSampler(false);
+  compareSampler = makeSampler(true);
+
+  VkQueryPoolCreateInfo q{VK_STRUCTURE_TYPE_QUERY_POOL_CREATE_INFO};
+  q.queryType = VK_QUERY_TYPE_TIMESTAMP;
+  q.queryCount = 3;
+  VkQueryPool pool;
+  VK_CHECK(vkCreateQueryPool(device, &q, nullptr, &pool));
+  queries = vk::QueryPool(device, pool);
+  params = vk::Buffer(*context, sizeof(Params), VK_BUFFER_USAGE_UNIFORM_BUFFER_BIT);
+}
+
+void Rasterizer::Impl::createLayouts() {
+  VkDevice device = context->device();
+  std::vector<VkDescriptorSetLayoutBinding> bindings;
+  auto add = [&](uint32_t binding, VkDescriptorType type, VkShaderStageFlags stages) {
+    bindings.push_back({binding, type, 1, stages, nullptr});
+  };
+  const VkShaderStageFlags fragCompute = VK_SHADER_STAGE_FRAGMENT_BIT | VK_SHADER_STAGE_COMPUTE_BIT;
+  add(0, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, fragCompute);
+  add(1, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, fragCompute);
+  add(2, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, fragCompute);
+  add(3, VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER, VK_SHADER_STAGE_COMPUTE_BIT);
+  for (uint32_t b = 4; b <= 7; ++b) add(b, VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER, VK_SHADER_STAGE_COMPUTE_BIT);
+  for (uint32_t b = 8; b <= 12; ++b) add(b, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, VK_SHADER_STAGE_COMPUTE_BIT);
+  VkDescriptorSetLayoutCreateInfo info{VK_STRUCTURE_TYPE_DESCRIPTOR_SET_LAYOUT_CREATE_INFO};
+  info.bindingCount = uint32_t(bindings.size());
+  info.pBindings = bindings.data();
+  VkDescriptorSetLayout layout;
+  VK_CHECK(vkCreateDescriptorSetLayout(device, &info, nullptr, &layout));
+  setLayout = vk::DescriptorSetLayout(device, layout);
+
+  VkPushConstantRange push{VK_SHADER_STAGE_VERTEX_BIT | VK_SHADER_STAGE_FRAGMENT_BIT, 0, sizeof(DrawPush)};
+  VkPipelineLayoutCreateInfo pl{VK_STRUCTURE_TYPE_PIPELINE_LAYOUT_CREATE_INFO};
+  pl.setLayoutCount = 1;
+  pl.pSetLayouts = &layout;
+  pl.pushConstantRangeCount = 1;
+  pl.pPushConstantRanges = &push;
+  VkPipelineLayout pipeLayout;
+  VK_CHECK(vkCreatePipelineLayout(device, &pl, nullptr, &pipeLayout));
+  pipelineLayout = vk::PipelineLayout(device, pipeLayout);
+
+  VkDescriptorPoolSize sizes[] = {{VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, 8},
+                                  {VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER, 1},
+                                  {VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER, 4}};
+  VkDescriptorPoolCreateInfo dp{VK_STRUCTURE_TYPE_DESCRIPTOR_POOL_CREATE_INFO};
+  dp.maxSets = 1;
+  dp.poolSizeCount = 3;
+  dp.pPoolSizes = sizes;
+  VkDescriptorPool pool;
+  VK_CHECK(vkCreateDescriptorPool(device, &dp, nullptr, &pool));
+  descriptorPool = vk::DescriptorPool(device, pool);
+  VkDescriptorSetAllocateInfo alloc{VK_STRUCTURE_TYPE_DESCRIPTOR_SET_ALLOCATE_INFO};
+  alloc.descriptorPool = pool;
+  alloc.descriptorSetCount = 1;
+  alloc.pSetLayouts = &layout;
+  VK_CHECK(vkAllocateDescriptorSets(device, &alloc, &descriptorSet));
+}
+
+VkPipeline Rasterizer::Impl::shadowPipeline(VkFormat format, bool depthClamp) {
+  auto key = std::make_pair(format, depthClamp);
+  auto it = shadowPipelines.find(key);
+  if (it != shadowPipelines.end()) return it->second.get();
+  vk::GraphicsPipelineDesc d;
+  d.vertex = idVert.get();
+  d.fragment = idFrag.get();
+  d.layout = pipelineLayout.get();
+  d.bindings = {{0, 5 * sizeof(float), VK_VERTEX_INPUT_RATE_VERTEX}};
+  d.attributes = {{0, 0, VK_FORMAT_R32G32B32_SFLOAT, 0}, {1, 0, VK_FORMAT_R32G32_SFLOAT, 3 * sizeof(float)}};
+  d.colorFormats = {kIdFormat};
+  d.depthFormat = format;
+  d.depthClamp = depthClamp;
+  d.depthBias = true;
+  return shadowPipelines.emplace(key, vk::createGraphicsPipeline(*context, d)).first->second.get();
+}
+
+VkPipeline Rasterizer::Impl::resolvePipeline(Filter filter) {
+  auto it = resolvePipelines.find(filter);
+  if (it != resolvePipelines.end()) return it->second.get();
+  uint32_t kind = uint32_t(filter);
+  return resolvePipelines
+      .emplace(filter, vk::createComputePipeline(*context, resolveComp.get(), pipelineLayout.get(), {kind}))
+      .first->second.get();
+}
+
+void Rasterizer::Impl::ensureImages(int mapSize, VkFormat mapFormat, int layers, int width, int height) {
+  const vk::Context& c = *context;
+  if (mapDepth.width() != mapSize || mapDepth.format() != mapFormat || mapDepth.layers() != layers) {
+    mapDepth = vk::Image(c, mapSize, mapSize, layers, mapFormat,
+                         VK_IMAGE_USAGE_DEPTH_STENCIL_ATTACHMENT_BIT | VK_IMAGE_USAGE_SAMPLED_BIT,
+                         VK_IMAGE_ASPECT_DEPTH_BIT);
+    mapIds = vk::Image(c, mapSize, mapSize, layers, kIdFormat,
+                       VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT | VK_IMAGE_USAGE_SAMPLED_BIT,
+                       VK_IMAGE_ASPECT_COLOR_BIT);
+  }
+  if (cameraIds.width() != width || cameraIds.height() != height) {
+    cameraDepth = vk::Image(c, width, height, 1, kCameraDepthFormat,
+                            VK_IMAGE_USAGE_DEPTH_STENCIL_ATTACHMENT_BIT, VK_IMAGE_ASPECT_DEPTH_BIT);
+    cameraIds = vk::Image(c, width, height, 1, kIdFormat,
+                          VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT | VK_IMAGE_USAGE_SAMPLED_BIT,
+                          VK_IMAGE_ASPECT_COLOR_BIT);
+  }
+}
+
+void Rasterizer::Impl::writeDescriptors() {
+  const raster::SceneGpu& s = *scene;
+  const vk::Buffer* buffers[13] = {&s.triangleMaterials, &s.materials, &s.alphaTexels, &params,
+                                   nullptr, nullptr, nullptr, nullptr,
+                                   &s.positions, &s.indices, &s.objects, &s.projectorTexels, &output};
+  VkDescriptorBufferInfo bufferInfos[13]{};
+  VkDescriptorImageInfo imageInfos[4] = {
+      {nearestSampler.get(), mapDepth.arrayView(), VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL},
+      {compareSampler.get(), mapDepth.arrayView(), VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL},
+      {nearestSampler.get(), mapIds.arrayView(), VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL},
+      {nearestSampler.get(), cameraIds.layerView(0), VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL}};
+  std::vector<VkWriteDescriptorSet> writes;
+  for (uint32_t b = 0; b < 13; ++b) {
+    VkWriteDescriptorSet w{VK_STRUCTURE_TYPE_WRITE_DESCRIPTOR_SET};
+    w.dstSet = descriptorSet;
+    w.dstBinding = b;
+    w.descriptorCount = 1;
+    if (b >= 4 && b <= 7) {
+      w.descriptorType = VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER;
+      w.pImageInfo = &imageInfos[b - 4];
+    } else {
+      bufferInfos[b] = {buffers[b]->get(), 0, VK_WHOLE_SIZE};
+      w.descriptorType = b == 3 ? VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER : VK_DESCRIPTOR_TYPE_STORAGE_BUFFER;
+      w.pBufferInfo = &bufferInfos[b];
+    }
+    writes.push_back(w);
+  }
+  vkUpdateDescriptorSets(context->device(), uint32_t(writes.size()), writes.data(), 0, nullptr);
+}
+
+void Rasterizer::Impl::record(VkCommandBuffer cmd, const std::vector<glm::mat4>& layerClip, int lightLayers,
+                              VkPipeline shadow, VkPipeline resolve, const Method& method,
+                              const glm::mat4& cameraClip, int width, int height) {
+  const raster::SceneGpu& s = *scene;
+  VkQueryPool pool = queries.get();
+  vkCmdResetQueryPool(cmd, pool, 0, 3);
+  vkCmdWriteTimestamp2(cmd, VK_PIPELINE_STAGE_2_TOP_OF_PIPE_BIT, pool, 0);
+  VkDescriptorSet set = descriptorSet;
+  vkCmdBindDescriptorSets(cmd, VK_PIPELINE_BIND_POINT_GRAPHICS, pipelineLayout.get(), 0, 1, &set, 0, nullptr);
+  VkBuffer vb = s.vertices.get();
+  VkDeviceSize zero = 0;
+  vkCmdBindVertexBuffers(cmd, 0, 1, &vb, &zero);
+  vkCmdBindIndexBuffer(cmd, s.indices.get(), 0, VK_INDEX_TYPE_UINT32);
+
+  auto drawAll = [&](const glm::mat4& clip, bool castersOnly) {
+    for (const raster::Draw& d : s.draws) {
+      if (castersOnly && !d.castsShadow) continue;
+      DrawPush push{clip, d.objectIndex, d.triangleBase, 0, 0};
+      vkCmdPushConstants(cmd, pipelineLayout.get(), VK_SHADER_STAGE_VERTEX_BIT | VK_SHADER_STAGE_FRAGMENT_BIT,
+                         0, sizeof(push), &push);
+      vkCmdDrawIndexed(cmd, d.indexCount, 1, d.firstIndex, d.vertexOffset, 0);
+    }
+  };
+  auto beginRendering = [&](VkImageView depthView, VkImageView idView, int w, int h) {
+    VkRenderingAttachmentInfo color{VK_STRUCTURE_TYPE_RENDERING_ATTACHMENT_INFO};
+    color.imageView = idView;
+    color.imageLayout = VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL;
+    color.loadOp = VK_ATTACHMENT_LOAD_OP_CLEAR;
+    color.storeOp = VK_ATTACHMENT_STORE_OP_STORE;
+    color.clearValue.color.uint32[0] = 0;  // id 0: nothing drawn here
+    VkRenderingAttachmentInfo depth{VK_STRUCTURE_TYPE_RENDERING_ATTACHMENT_INFO};
+    depth.imageView = depthView;
+    depth.imageLayout = VK_IMAGE_LAYOUT_DEPTH_ATTACHMENT_OPTIMAL;
+    depth.loadOp = VK_ATTACHMENT_LOAD_OP_CLEAR;
+    depth.storeOp = VK_ATTACHMENT_STORE_OP_STORE;
+    depth.clearValue.depthStencil = {1.0f, 0};  // an empty texel lies at the far plane: lights all
+    VkRenderingInfo info{VK_STRUCTURE_TYPE_RENDERING_INFO};
+    info.renderArea = {{0, 0}, {uint32_t(w), uint32_t(h)}};
+    info.layerCount = 1;
+    info.colorAttachmentCount = 1;
+    info.pColorAttachments = &color;
+    info.pDepthAttachment = &depth;
+    vkCmdBeginRendering(cmd, &info);
+    VkViewport viewport{0, 0, float(w), float(h), 0.0f, 1.0f};
+    VkRect2D scissor{{0, 0}, {uint32_t(w), uint32_t(h)}};
+    vkCmdSetViewport(cmd, 0, 1, &viewport);
+    vkCmdSetScissor(cmd, 0, 1, &scissor);
+  };
+
+  // ---- Pass 1: depth (+ ids) from the light and from each projector ----
+  vk::transition(cmd, mapDepth, VK_IMAGE_LAYOUT_UNDEFINED, VK_IMAGE_LAYOUT_DEPTH_ATTACHMENT_OPTIMAL,
+                 VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT, 0,
+                 VK_PIPELINE_STAGE_2_EARLY_FRAGMENT_TESTS_BIT | VK_PIPELINE_STAGE_2_LATE_FRAGMENT_TESTS_BIT,
+                 VK_ACCESS_2_DEPTH_STENCIL_ATTACHMENT_READ_BIT | VK_ACCESS_2_DEPTH_STENCIL_ATTACHMENT_WRITE_BIT);
+  vk::transition(cmd, mapIds, VK_IMAGE_LAYOUT_UNDEFINED, VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL,
+                 VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT, 0, VK_PIPELINE_STAGE_2_COLOR_ATTACHMENT_OUTPUT_BIT,
+                 VK_ACCESS_2_COLOR_ATTACHMENT_WRITE_BIT);
+  vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_GRAPHICS, shadow);
+  for (size_t layer = 0; layer < layerClip.size(); ++layer) {
+    beginRendering(mapDepth.layerView(int(layer)), mapIds.layerView(int(layer)), method.mapSize, method.mapSize);
+    vkCmdSetCullMode(cmd, vkCull(method.cull));
+    vkCmdSetDepthBias(cmd, method.biasConstant, method.biasClamp, method.biasSlope);
+    drawAll(layerClip[layer], true);
+    vkCmdEndRendering(cmd);
+  }
+  (void)lightLayers;
+  vkCmdWriteTimestamp2(cmd, VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT, pool, 1);
+  vk::transition(cmd, mapDepth, VK_IMAGE_LAYOUT_DEPTH_ATTACHMENT_OPTIMAL, VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL,
+                 VK_PIPELINE_STAGE_2_LATE_FRAGMENT_TESTS_BIT, VK_ACCESS_2_DEPTH_STENCIL_ATTACHMENT_WRITE_BIT,
+                 VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT, VK_ACCESS_2_SHADER_SAMPLED_READ_BIT);
+  vk::transition(cmd, mapIds, VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL, VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL,
+                 VK_PIPELINE_STAGE_2_COLOR_ATTACHMENT_OUTPUT_BIT, VK_ACCESS_2_COLOR_ATTACHMENT_WRITE_BIT,
+                 VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT, VK_ACCESS_2_SHADER_SAMPLED_READ_BIT);
+
+  // ---- Pass 2: the camera's visibility buffer ----
+  vk::transition(cmd, cameraDepth, VK_IMAGE_LAYOUT_UNDEFINED, VK_IMAGE_LAYOUT_DEPTH_ATTACHMENT_OPTIMAL,
+                 VK_PIPELINE_STAGE_2_NONE, 0,
+                 VK_PIPELINE_STAGE_2_EARLY_FRAGMENT_TESTS_BIT | VK_PIPELINE_STAGE_2_LATE_FRAGMENT_TESTS_BIT,
+                 VK_ACCESS_2_DEPTH_STENCIL_ATTACHMENT_READ_BIT | VK_ACCESS_2_DEPTH_STENCIL_ATTACHMENT_WRITE_BIT);
+  vk::transition(cmd, cameraIds, VK_IMAGE_LAYOUT_UNDEFINED, VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL,
+                 VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT, 0, VK_PIPELINE_STAGE_2_COLOR_ATTACHMENT_OUTPUT_BIT,
+                 VK_ACCESS_2_COLOR_ATTACHMENT_WRITE_BIT);
+  vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_GRAPHICS, cameraPipeline.get());
+  beginRendering(cameraDepth.layerView(0), cameraIds.layerView(0), width, height);
+  vkCmdSetCullMode(cmd, VK_CULL_MODE_NONE);  // one-sided materials cull in the fragment shader
+  drawAll(cameraClip, false);
+  vkCmdEndRendering(cmd);
+  vk::transition(cmd, cameraIds, VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL, VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL,
+                 VK_PIPELINE_STAGE_2_COLOR_ATTACHMENT_OUTPUT_BIT, VK_ACCESS_2_COLOR_ATTACHMENT_WRITE_BIT,
+                 VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT, VK_ACCESS_2_SHADER_SAMPLED_READ_BIT);
+
+  // ---- Pass 3: resolve ----
+  vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, resolve);
+  vkCmdBindDescriptorSets(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, pipelineLayout.get(), 0, 1, &set, 0, nullptr);
+  vkCmdDispatch(cmd, uint32_t((width + 7) / 8), uint32_t((height + 7) / 8), 1);
+  vkCmdWriteTimestamp2(cmd, VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT, pool, 2);
+  VkMemoryBarrier2 toHost{VK_STRUCTURE_TYPE_MEMORY_BARRIER_2};
+  toHost.srcStageMask = VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT;
+  toHost.srcAccessMask = VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT;
+  toHost.dstStageMask = VK_PIPELINE_STAGE_2_HOST_BIT;
+  toHost.dstAccessMask = VK_ACCESS_2_HOST_READ_BIT;
+  VkDependencyInfo dep{VK_STRUCTURE_TYPE_DEPENDENCY_INFO};
+  dep.memoryBarrierCount = 1;
+  dep.pMemoryBarriers = &toHost;
+  vkCmdPipelineBarrier2(cmd, &dep);
+}
+
+Rasterizer::Rasterizer(const RasterDeviceOptions& options) : impl_(std::make_unique<Impl>(options)) {}
+Rasterizer::~Rasterizer() = default;
+Rasterizer::Rasterizer(Rasterizer&&) noexcept = default;
+Rasterizer& Rasterizer::operator=(Rasterizer&&) noexcept = default;
+
+std::string Rasterizer::deviceName() const { return impl_->context->deviceName(); }
+
+int Rasterizer::maxMapSize() const {
+  const VkPhysicalDeviceLimits& l = impl_->context->properties().limits;
+  return int(std::min({l.maxImageDimension2D, l.maxFramebufferWidth, l.maxFramebufferHeight}));
+}
+
+int Rasterizer::validationMessages() const { return impl_->context->validationMessages(); }
+
+Frame Rasterizer::render(const Scene& scene, const Method& method, const std::string& lightName,
+                         RasterTimings* timings) {
+  auto t0 = std::chrono::steady_clock::now();
+  Impl& im = *impl_;
+  const std::string where = scene.path.empty() ? scene.name : scene.path;
+
+  // ---- everything that can be wrong with the request, before any GPU work ----
+  const Light* light = nullptr;
+  if (!lightName.empty()) {
+    light = scene.findLight(lightName);
+    if (!light) {
+      std::string names;
+      for (auto& l : scene.lights) names += (names.empty() ? "" : ", ") + l.name;
+      throw InputError(formatError(where, "", "no light named \"" + lightName + "\"; expected one of: " +
+                                                  (names.empty() ? "(the scene has no lights)" : names)));
+    }
+  } else if (!scene.lights.empty()) {
+    light = &scene.lights.front();
+  }
+  if (method.mapSize < 16 || method.mapSize > maxMapSize())
+    throw InputError(formatError("method", "map.size", "got " + std::to_string(method.mapSize) +
+                                                           "; expected 16.." + std::to_string(maxMapSize()) +
+                                                           " (the device's largest image)"));
+  if (method.filter == Filter::Pcf && (method.filterSize < 1 || method.filterSize % 2 == 0 || method.filterSize > 15))
+    throw InputError(formatError("method", "filter.size", "got " + std::to_string(method.filterSize) +
+                                                              "; expected an odd number 3..15"));
+  if (method.filter == Filter::Poisson && (method.filterTaps < 1 || method.filterTaps > kMaxTaps))
+    throw InputError(formatError("method", "filter.taps", "got " + std::to_string(method.filterTaps) +
+                                                              "; expected 1..64"));
+  if (method.filter == Filter::Poisson && !(method.filterRadius > 0.0f && method.filterRadius <= 32.0f))
+    throw InputError(formatError("method", "filter.radius", "got " + std::to_string(method.filterRadius) +
+                                                                "; expected > 0 and <= 32 texels"));
+  if (scene.projectors.size() > size_t(kMaxProjectors))
+    throw InputError(formatError(where, "/projectors", "got " + std::to_string(scene.projectors.size()) +
+                                                           " projectors; the rasterizer renders at most 8"));
+  const Camera& camera = scene.camera;
+  if (camera.width < 1 || camera.height < 1 || camera.width > maxMapSize() || camera.height > maxMapSize())
+    throw InputError(formatError(where, "/camera", "image size " + std::to_string(camera.width) + "x" +
+                                                       std::to_string(camera.height) + " is not renderable"));
+  VkFormat mapFormat = vkDepthFormat(method.mapFormat);
+  {
+    VkFormatProperties fp;
+    vkGetPhysicalDeviceFormatProperties(im.context->physical(), mapFormat, &fp);
+    VkFormatFeatureFlags need = VK_FORMAT_FEATURE_DEPTH_STENCIL_ATTACHMENT_BIT | VK_FORMAT_FEATURE_SAMPLED_IMAGE_BIT;
+    if ((fp.optimalTilingFeatures & need) != need)
+      throw InputError(formatError("method", "map.format", "got " + toString(method.mapFormat) + ", which device " +
+                                                               deviceName() + " cannot render and sample; expected another format"));
+  }
+
+  // ---- scene upload (cached by content hash) ----
+  std::string key = raster::sceneKey(scene);
+  if (!im.scene || im.scene->hash != key) {
+    im.scene.reset();
+    im.scene = std::make_unique<raster::SceneGpu>(raster::uploadScene(*im.context, scene, key));
+  }
+
+  // ---- map layers: the light's, then one per projector ----
+  raster::LightSpace lightSpace;
+  if (light) lightSpace = raster::fitLight(scene, *light, method.fit, method.mapSize);
+  std::vector<raster::MapLayer> layers = lightSpace.layers;
+  int lightLayers = int(layers.size());
+  for (const Projector& p : scene.projectors) layers.push_back(raster::projectorLayer(p, method.mapSize));
+  std::vector<glm::mat4> layerClip;
+  for (auto& l : layers) layerClip.push_back(raster::clipFromTex() * l.texFromWorld);
+  int width = camera.width, height = camera.height;
+  int projectorCount = int(scene.projectors.size());
+  int channelCount = kLightChannels + kProjectorChannels * projectorCount;
+
+  im.ensureImages(method.mapSize, mapFormat, std::max(1, int(layers.size())), width, height);
+  size_t outputBytes = size_t(channelCount) * size_t(width) * size_t(height) * sizeof(float);
+  if (im.output.size() != outputBytes)
+    im.output = vk::Buffer(*im.context, outputBytes, VK_BUFFER_USAGE_STORAGE_BUFFER_BIT);
+  im.writeDescriptors();
+
+  // ---- parameters ----
+  Params prm{};
+  for (size_t i = 0; i < layers.size(); ++i) {
+    prm.texFromWorld[i] = layers[i].texFromWorld;
+    prm.layerInfo[i] = glm::vec4(layers[i].texelWorldPerW, 0, 0, 0);
+  }
+  if (light) {
+    float type = light->type == LightType::Directional ? 0.0f : light->type == LightType::Spot ? 1.0f : 2.0f;
+    prm.lightPosType = glm::vec4(light->position, type);
+    prm.lightDirCos = glm::vec4(glm::normalize(light->direction), std::cos(glm::radians(0.5f * light->coneDeg)));
+  } else {
+    prm.lightPosType = glm::vec4(0, 0, 0, -1.0f);
+  }
+  glm::mat4 cameraClip = camera.clipFromView() * camera.viewFromWorld();
+  {
+    // Rays through image points, from the inverse of the very matrix that rasterized the
+    // visibility buffer: dir(x, y) = rayX x + rayY y + rayC (affine: w of an unprojected
+    // far-plane point does not depend on x, y).
+    glm::dmat4 inv = glm::inverse(glm::dmat4(cameraClip));
+    glm::dvec3 origin(camera.position);
+    auto dirAt = [&](double x, double y) {
+      glm::dvec4 f = inv * glm::dvec4(2.0 * x / width - 1.0, 2.0 * y / height - 1.0, 1.0, 1.0);
+      return glm::dvec3(f) / f.w - origin;
+    };
+    glm::dvec3 c = dirAt(0, 0);
+    prm.cameraOrigin = glm::vec4(camera.position, 1);
+    prm.rayC = glm::vec4(glm::vec3(c), 0);
+    prm.rayX = glm::vec4(glm::vec3(dirAt(1, 0) - c), 0);
+    prm.rayY = glm::vec4(glm::vec3(dirAt(0, 1) - c), 0);
+  }
+  prm.bias = glm::vec4(method.biasCompare, method.biasNormal, method.biasReceiverPlane ? 1.0f : 0.0f,
+                       method.filterRadius);
+  prm.depthBias = glm::vec4(method.biasConstant, method.biasSlope, method.biasClamp, depthResolution(method.mapFormat));
+  prm.sizes = glm::ivec4(method.mapSize, lightLayers, projectorCount, method.filterSize);
+  prm.sizes2 = glm::ivec4(width, height, method.filterTaps, method.projectorReverseGuard ? 1 : 0);
+  for (int j = 0; j < projectorCount; ++j) {
+    const raster::ProjectorImage& pi = im.scene->projectors[size_t(j)];
+    prm.projector[j] = glm::ivec4(pi.firstTexel, pi.width, pi.height, lightLayers + j);
+  }
+  for (int i = 0; i < kMaxTaps; ++i) prm.poisson[i] = glm::vec4(im.poisson[size_t(i)], 0, 0);
+  im.params.upload(&prm, sizeof(prm));
+
+  // ---- pipelines (cached by what needs one), warm-up, the timed frame ----
+  bool depthClamp = lightSpace.depthClamp;
+  VkPipeline shadow = im.shadowPipeline(mapFormat, depthClamp);
+  if (!im.cameraPipeline) {
+    vk::GraphicsPipelineDesc d;
+    d.vertex = im.idVert.get();
+    d.fragment = im.idFrag.get();
+    d.layout = im.pipelineLayout.get();
+    d.bindings = {{0, 5 * sizeof(float), VK_VERTEX_INPUT_RATE_VERTEX}};
+    d.attributes = {{0, 0, VK_FORMAT_R32G32B32_SFLOAT, 0}, {1, 0, VK_FORMAT_R32G32_SFLOAT, 3 * sizeof(float)}};
+    d.colorFormats = {kIdFormat};
+    d.depthFormat = kCameraDepthFormat;
+    im.cameraPipeline = vk::createGraphicsPipeline(*im.context, d);
+  }
+  VkPipeline resolve = im.resolvePipeline(method.filter);
+  std::string warmKey = std::to_string(int(mapFormat)) + "/" + std::to_string(depthClamp) + "/" +
+                        toString(method.filter);
+  int runs = im.warmed.insert(warmKey).second ? 2 : 1;  // lavapipe compiles shaders at first use
+  for (int run = 0; run < runs; ++run) {
+    VkCommandBuffer cmd = im.commands->begin();
+    im.record(cmd, layerClip, lightLayers, shadow, resolve, method, cameraClip, width, height);
+    im.commands->submitAndWait();
+  }
+  uint64_t stamps[3] = {0, 0, 0};
+  VK_CHECK(vkGetQueryPoolResults(im.context->device(), im.queries.get(), 0, 3, sizeof(stamps), stamps,
+                                 sizeof(uint64_t), VK_QUERY_RESULT_64_BIT | VK_QUERY_RESULT_WAIT_BIT));
+  double nsPerTick = im.context->properties().limits.timestampPeriod;
+
+  // ---- readback: one copy per channel plane ----
+  auto tRead = std::chrono::steady_clock::now();
+  im.output.invalidate(*im.context);
+  Frame frame;
+  frame.width = width;
+  frame.height = height;
+  const float* planes = static_cast<const float*>(im.output.mapped());
+  size_t n = size_t(width) * size_t(height);
+  auto take = [&](const std::string& name, int channel) {
+    const float* src = planes + size_t(channel) * n;
+    frame.names.push_back(name);
+    frame.data.emplace_back(src, src + n);
+  };
+  take("hit", 0);
+  take("object_id", 1);
+  take("prim_id", 2);
+  if (light) {
+    const std::string p = "light." + light->name + ".";
+    const char* names[] = {"vis", "receiver_depth", "map_depth", "occluder_id", "occluder_prim",
+                           "in_map", "m", "bias_depth", "bias_world"};
+    for (int i = 0; i < 9; ++i) take(p + names[i], 3 + i);
+  }
+  for (int j = 0; j < projectorCount; ++j) {
+    const std::string p = "proj." + scene.projectors[size_t(j)].name + ".";
+    const char* names[] = {"coverage", "R", "G", "B", "reverse"};
+    for (int i = 0; i < kProjectorChannels; ++i) take(p + names[i], kLightChannels + kProjectorChannels * j + i);
+  }
+  double readbackMs = msSince(tRead);
+
+  nlohmann::json lights = nlohmann::json::array(), projectors = nlohmann::json::array();
+  for (auto& l : scene.lights) lights.push_back(l.name);
+  for (auto& p : scene.projectors) projectors.push_back(p.name);
+  frame.meta = {{"kind", "raster"},
+                {"scene", scene.name},
+                {"scene_hash", scene.hash},
+                {"camera_hash", cameraHashOf(camera)},
+                {"width", width},
+                {"height", height},
+                {"light", light ? light->name : ""},
+                {"lights", lights},
+                {"projectors", projectors},
+                {"method", methodToJson(method)},
+                {"device", deviceName()}};
+  if (timings) {
+    timings->shadowMs = double(stamps[1] - stamps[0]) * nsPerTick * 1e-6;
+    timings->cameraMs = double(stamps[2] - stamps[1]) * nsPerTick * 1e-6;
+    timings->readbackMs = readbackMs;
+    timings->totalMs = msSince(t0);
+  }
+  return frame;
+}
+
+}  // namespace shadowlab

@@ -1,0 +1,50 @@
+#pragma once
+// The scene as the GPU sees it: one interleaved vertex buffer (position, uv), one index buffer
+// with per-object local indices, and the tables the shaders read (triangle materials, material
+// alpha textures, positions and objects for the resolve pass, projector images).
+// Uploaded once per scene hash and reused across a sweep.
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "shadowlab/scenes/scene.h"
+#include "vk/buffer.h"
+
+namespace shadowlab::raster {
+
+struct Draw {
+  uint32_t objectIndex = 0;
+  uint32_t firstIndex = 0;
+  uint32_t indexCount = 0;
+  int32_t vertexOffset = 0;
+  uint32_t triangleBase = 0;
+  bool castsShadow = true;
+};
+
+struct ProjectorImage {
+  int32_t firstTexel = 0;  // index of its first float in the projector texel table
+  int32_t width = 0;
+  int32_t height = 0;
+};
+
+struct SceneGpu {
+  std::string hash;
+  std::vector<Draw> draws;
+  std::vector<ProjectorImage> projectors;
+  vk::Buffer vertices;           // vec3 position + vec2 uv per vertex
+  vk::Buffer indices;            // uint32 local indices (also the resolve pass's index table)
+  vk::Buffer positions;          // float[3] per vertex (resolve pass)
+  vk::Buffer objects;            // ObjectGpu per object
+  vk::Buffer triangleMaterials;  // uint per triangle
+  vk::Buffer materials;          // MaterialGpu per material
+  vk::Buffer alphaTexels;        // all alpha textures, float
+  vk::Buffer projectorTexels;    // all projector images, RGB float
+};
+
+SceneGpu uploadScene(const vk::Context& context, const Scene& scene, const std::string& hash);
+
+// The scene's content hash (Scene::hash, or one computed over the geometry when the scene was
+// built in code and has none).
+std::string sceneKey(const Scene& scene);
+
+}  // namespace shadowlab::raster

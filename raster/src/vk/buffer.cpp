@@ -1,0 +1,49 @@
+#include "vk/buffer.h"
+
+#include <cstring>
+
+#include "vk/check.h"
+
+namespace shadowlab::vk {
+
+Buffer::Buffer(const Context& context, VkDeviceSize size, VkBufferUsageFlags usage) : size_(size) {
+  VkDevice device = context.device();
+  VkBufferCreateInfo info{VK_STRUCTURE_TYPE_BUFFER_CREATE_INFO};
+  info.size = size > 0 ? size : 4;  // a zero-sized buffer is illegal; empty tables still bind
+  info.usage = usage;
+  info.sharingMode = VK_SHARING_MODE_EXCLUSIVE;
+  VkBuffer buffer;
+  VK_CHECK(vkCreateBuffer(device, &info, nullptr, &buffer));
+  buffer_ = BufferHandle(device, buffer);
+
+  VkMemoryRequirements req;
+  vkGetBufferMemoryRequirements(device, buffer, &req);
+  VkMemoryAllocateInfo alloc{VK_STRUCTURE_TYPE_MEMORY_ALLOCATE_INFO};
+  alloc.allocationSize = req.size;
+  // Cached memory makes the CPU readback of the output planes a plain memcpy speed read.
+  alloc.memoryTypeIndex = context.memoryType(req.memoryTypeBits, VK_MEMORY_PROPERTY_HOST_VISIBLE_BIT,
+                                             VK_MEMORY_PROPERTY_HOST_COHERENT_BIT |
+                                                 VK_MEMORY_PROPERTY_HOST_CACHED_BIT);
+  VkDeviceMemory memory;
+  VK_CHECK(vkAllocateMemory(device, &alloc, nullptr, &memory));
+  memory_ = Memory(device, memory);
+  VK_CHECK(vkBindBufferMemory(device, buffer, memory, 0));
+  VK_CHECK(vkMapMemory(device, memory, 0, VK_WHOLE_SIZE, 0, &mapped_));
+  VkPhysicalDeviceMemoryProperties props;
+  vkGetPhysicalDeviceMemoryProperties(context.physical(), &props);
+  coherent_ = props.memoryTypes[alloc.memoryTypeIndex].propertyFlags & VK_MEMORY_PROPERTY_HOST_COHERENT_BIT;
+}
+
+void Buffer::upload(const void* data, size_t bytes, size_t offset) {
+  if (bytes) std::memcpy(static_cast<char*>(mapped_) + offset, data, bytes);
+}
+
+void Buffer::invalidate(const Context& context) const {
+  if (coherent_) return;
+  VkMappedMemoryRange range{VK_STRUCTURE_TYPE_MAPPED_MEMORY_RANGE};
+  range.memory = memory_.get();
+  range.size = VK_WHOLE_SIZE;
+  VK_CHECK(vkInvalidateMappedMemoryRanges(context.device(), 1, &range));
+}
+
+}  // namespace shadowlab::vk

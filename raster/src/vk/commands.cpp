@@ -1,0 +1,44 @@
+#include "vk/commands.h"
+
+#include <cstdint>
+
+#include "vk/check.h"
+
+namespace shadowlab::vk {
+
+Commands::Commands(const Context& context) : context_(context) {
+  VkCommandBufferAllocateInfo info{VK_STRUCTURE_TYPE_COMMAND_BUFFER_ALLOCATE_INFO};
+  info.commandPool = context.commandPool();
+  info.level = VK_COMMAND_BUFFER_LEVEL_PRIMARY;
+  info.commandBufferCount = 1;
+  VK_CHECK(vkAllocateCommandBuffers(context.device(), &info, &cmd_));
+  VkFenceCreateInfo fenceInfo{VK_STRUCTURE_TYPE_FENCE_CREATE_INFO};
+  VkFence fence;
+  VK_CHECK(vkCreateFence(context.device(), &fenceInfo, nullptr, &fence));
+  fence_ = Fence(context.device(), fence);
+}
+
+Commands::~Commands() {
+  if (cmd_) vkFreeCommandBuffers(context_.device(), context_.commandPool(), 1, &cmd_);
+}
+
+VkCommandBuffer Commands::begin() {
+  VK_CHECK(vkResetCommandBuffer(cmd_, 0));
+  VkCommandBufferBeginInfo info{VK_STRUCTURE_TYPE_COMMAND_BUFFER_BEGIN_INFO};
+  info.flags = VK_COMMAND_BUFFER_USAGE_ONE_TIME_SUBMIT_BIT;
+  VK_CHECK(vkBeginCommandBuffer(cmd_, &info));
+  return cmd_;
+}
+
+void Commands::submitAndWait() {
+  VK_CHECK(vkEndCommandBuffer(cmd_));
+  VkFence fence = fence_.get();
+  VK_CHECK(vkResetFences(context_.device(), 1, &fence));
+  VkSubmitInfo submit{VK_STRUCTURE_TYPE_SUBMIT_INFO};
+  submit.commandBufferCount = 1;
+  submit.pCommandBuffers = &cmd_;
+  VK_CHECK(vkQueueSubmit(context_.queue(), 1, &submit, fence));
+  VK_CHECK(vkWaitForFences(context_.device(), 1, &fence, VK_TRUE, UINT64_MAX));
+}
+
+}  // namespace shadowlab::vk

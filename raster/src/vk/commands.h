@@ -1,0 +1,24 @@
+#pragma once
+// A primary command buffer recorded once and submitted with a fence; the caller waits on it.
+#include "vk/context.h"
+#include "vk/handle.h"
+
+namespace shadowlab::vk {
+
+class Commands {
+ public:
+  explicit Commands(const Context& context);
+  ~Commands();
+  Commands(const Commands&) = delete;
+  Commands& operator=(const Commands&) = delete;
+
+  VkCommandBuffer begin();     // resets and begins recording
+  void submitAndWait();        // ends, submits, waits for completion
+
+ private:
+  const Context& context_;
+  VkCommandBuffer cmd_ = VK_NULL_HANDLE;
+  Fence fence_;
+};
+
+}  // namespace shadowlab::vk

@@ -1,0 +1,59 @@
+#pragma once
+// The instance, the chosen physical device and one logical device with one queue that does
+// graphics and compute. Move-only; owns everything it creates.
+#include <atomic>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include <vulkan/vulkan.h>
+
+#include "vk/handle.h"
+
+namespace shadowlab::vk {
+
+struct ContextOptions {
+  std::string device;       // substring of the device name; empty: llvmpipe if present, else first
+  bool validation = false;  // VK_LAYER_KHRONOS_validation + a counting debug messenger
+};
+
+class Context {
+ public:
+  explicit Context(const ContextOptions& options);
+  ~Context();
+  Context(const Context&) = delete;
+  Context& operator=(const Context&) = delete;
+  Context(Context&&) = delete;  // held by unique_ptr: the messenger keeps a pointer to the counter
+  Context& operator=(Context&&) = delete;
+
+  VkDevice device() const { return device_; }
+  VkPhysicalDevice physical() const { return physical_; }
+  VkQueue queue() const { return queue_; }
+  uint32_t queueFamily() const { return queueFamily_; }
+  VkCommandPool commandPool() const { return commandPool_.get(); }
+  const VkPhysicalDeviceProperties& properties() const { return properties_; }
+  std::string deviceName() const;  // "llvmpipe (LLVM 15.0.6, 256 bits) / llvmpipe"-style: device / driver
+  int validationMessages() const { return validationMessages_->load(); }
+  bool validationEnabled() const { return messenger_ != VK_NULL_HANDLE; }
+
+  // First memory type allowed by `typeBits` having all of `required` (and preferring `preferred`).
+  uint32_t memoryType(uint32_t typeBits, VkMemoryPropertyFlags required,
+                      VkMemoryPropertyFlags preferred = 0) const;
+
+ private:
+  void release();  // also used when the constructor fails half way
+
+  VkInstance instance_ = VK_NULL_HANDLE;
+  VkDebugUtilsMessengerEXT messenger_ = VK_NULL_HANDLE;
+  VkPhysicalDevice physical_ = VK_NULL_HANDLE;
+  VkDevice device_ = VK_NULL_HANDLE;
+  VkQueue queue_ = VK_NULL_HANDLE;
+  uint32_t queueFamily_ = 0;
+  CommandPool commandPool_;
+  VkPhysicalDeviceProperties properties_{};
+  VkPhysicalDeviceMemoryProperties memory_{};
+  std::string driverName_;
+  std::unique_ptr<std::atomic<int>> validationMessages_ = std::make_unique<std::atomic<int>>(0);
+};
+
+}  // namespace shadowlab::vk

@@ -1,0 +1,70 @@
+#include "vk/image.h"
+
+#include "vk/check.h"
+
+namespace shadowlab::vk {
+
+Image::Image(const Context& context, int width, int height, int layers, VkFormat format,
+             VkImageUsageFlags usage, VkImageAspectFlags aspect)
+    : width_(width), height_(height), layers_(layers), format_(format), aspect_(aspect) {
+  VkDevice device = context.device();
+  VkImageCreateInfo info{VK_STRUCTURE_TYPE_IMAGE_CREATE_INFO};
+  info.imageType = VK_IMAGE_TYPE_2D;
+  info.format = format;
+  info.extent = {uint32_t(width), uint32_t(height), 1};
+  info.mipLevels = 1;
+  info.arrayLayers = uint32_t(layers);
+  info.samples = VK_SAMPLE_COUNT_1_BIT;
+  info.tiling = VK_IMAGE_TILING_OPTIMAL;
+  info.usage = usage;
+  info.sharingMode = VK_SHARING_MODE_EXCLUSIVE;
+  info.initialLayout = VK_IMAGE_LAYOUT_UNDEFINED;
+  VkImage image;
+  VK_CHECK(vkCreateImage(device, &info, nullptr, &image));
+  image_ = ImageHandle(device, image);
+
+  VkMemoryRequirements req;
+  vkGetImageMemoryRequirements(device, image, &req);
+  VkMemoryAllocateInfo alloc{VK_STRUCTURE_TYPE_MEMORY_ALLOCATE_INFO};
+  alloc.allocationSize = req.size;
+  alloc.memoryTypeIndex = context.memoryType(req.memoryTypeBits, 0, VK_MEMORY_PROPERTY_DEVICE_LOCAL_BIT);
+  VkDeviceMemory memory;
+  VK_CHECK(vkAllocateMemory(device, &alloc, nullptr, &memory));
+  memory_ = Memory(device, memory);
+  VK_CHECK(vkBindImageMemory(device, image, memory, 0));
+
+  auto makeView = [&](VkImageViewType type, int first, int count) {
+    VkImageViewCreateInfo v{VK_STRUCTURE_TYPE_IMAGE_VIEW_CREATE_INFO};
+    v.image = image;
+    v.viewType = type;
+    v.format = format;
+    v.subresourceRange = {aspect, 0, 1, uint32_t(first), uint32_t(count)};
+    VkImageView view;
+    VK_CHECK(vkCreateImageView(device, &v, nullptr, &view));
+    return ImageView(device, view);
+  };
+  arrayView_ = makeView(VK_IMAGE_VIEW_TYPE_2D_ARRAY, 0, layers);
+  for (int i = 0; i < layers; ++i) layerViews_.push_back(makeView(VK_IMAGE_VIEW_TYPE_2D, i, 1));
+}
+
+void transition(VkCommandBuffer cmd, const Image& image, VkImageLayout from, VkImageLayout to,
+                VkPipelineStageFlags2 srcStage, VkAccessFlags2 srcAccess,
+                VkPipelineStageFlags2 dstStage, VkAccessFlags2 dstAccess) {
+  VkImageMemoryBarrier2 b{VK_STRUCTURE_TYPE_IMAGE_MEMORY_BARRIER_2};
+  b.srcStageMask = srcStage;
+  b.srcAccessMask = srcAccess;
+  b.dstStageMask = dstStage;
+  b.dstAccessMask = dstAccess;
+  b.oldLayout = from;
+  b.newLayout = to;
+  b.srcQueueFamilyIndex = VK_QUEUE_FAMILY_IGNORED;
+  b.dstQueueFamilyIndex = VK_QUEUE_FAMILY_IGNORED;
+  b.image = image.get();
+  b.subresourceRange = image.range();
+  VkDependencyInfo dep{VK_STRUCTURE_TYPE_DEPENDENCY_INFO};
+  dep.imageMemoryBarrierCount = 1;
+  dep.pImageMemoryBarriers = &b;
+  vkCmdPipelineBarrier2(cmd, &dep);
+}
+
+}  // namespace shadowlab::vk

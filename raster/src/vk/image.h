@@ -1,0 +1,44 @@
+#pragma once
+// A 2D (array) image in device memory with one view over all layers (for sampling) and one
+// 2D view per layer (for rendering into that layer).
+#include <vector>
+
+#include "vk/context.h"
+#include "vk/handle.h"
+
+namespace shadowlab::vk {
+
+class Image {
+ public:
+  Image() = default;
+  Image(const Context& context, int width, int height, int layers, VkFormat format,
+        VkImageUsageFlags usage, VkImageAspectFlags aspect);
+  Image(Image&&) noexcept = default;
+  Image& operator=(Image&&) noexcept = default;
+
+  VkImage get() const { return image_.get(); }
+  VkImageView arrayView() const { return arrayView_.get(); }
+  VkImageView layerView(int layer) const { return layerViews_[size_t(layer)].get(); }
+  int width() const { return width_; }
+  int height() const { return height_; }
+  int layers() const { return layers_; }
+  VkFormat format() const { return format_; }
+  VkImageAspectFlags aspect() const { return aspect_; }
+  VkImageSubresourceRange range() const { return {aspect_, 0, 1, 0, uint32_t(layers_)}; }
+
+ private:
+  ImageHandle image_;
+  Memory memory_;
+  ImageView arrayView_;
+  std::vector<ImageView> layerViews_;
+  int width_ = 0, height_ = 0, layers_ = 0;
+  VkFormat format_ = VK_FORMAT_UNDEFINED;
+  VkImageAspectFlags aspect_ = 0;
+};
+
+// One image layout transition (synchronization2), whole image.
+void transition(VkCommandBuffer cmd, const Image& image, VkImageLayout from, VkImageLayout to,
+                VkPipelineStageFlags2 srcStage, VkAccessFlags2 srcAccess,
+                VkPipelineStageFlags2 dstStage, VkAccessFlags2 dstAccess);
+
+}  // namespace shadowlab::vk

@@ -1,0 +1,35 @@
+#pragma once
+// Pipeline construction for dynamic rendering (no render passes). Everything a sweep varies at
+// draw time (depth bias, cull mode, viewport) is dynamic state; what needs a new pipeline is
+// named in the descriptions below and is the rasterizer's pipeline-cache key.
+#include <cstdint>
+#include <vector>
+
+#include "vk/context.h"
+#include "vk/handle.h"
+
+namespace shadowlab::vk {
+
+ShaderModule createShaderModule(const Context& context, const uint32_t* code, size_t bytes);
+
+struct GraphicsPipelineDesc {
+  VkShaderModule vertex = VK_NULL_HANDLE;
+  VkShaderModule fragment = VK_NULL_HANDLE;
+  VkPipelineLayout layout = VK_NULL_HANDLE;
+  std::vector<VkVertexInputBindingDescription> bindings;
+  std::vector<VkVertexInputAttributeDescription> attributes;
+  std::vector<VkFormat> colorFormats;
+  VkFormat depthFormat = VK_FORMAT_UNDEFINED;
+  VkFrontFace frontFace = VK_FRONT_FACE_COUNTER_CLOCKWISE;
+  bool depthClamp = false;  // keeps casters outside [near, far] in the map (directional lights)
+  bool depthBias = false;   // depth bias values come from vkCmdSetDepthBias
+};
+
+PipelineHandle createGraphicsPipeline(const Context& context, const GraphicsPipelineDesc& desc);
+
+// A compute pipeline with 32-bit specialization constants 0..n-1.
+PipelineHandle createComputePipeline(const Context& context, VkShaderModule module,
+                                     VkPipelineLayout layout,
+                                     const std::vector<uint32_t>& specialization);
+
+}  // namespace shadowlab::vk
