@@ -20,24 +20,55 @@ void lineColumn(const std::string& text, size_t byte, size_t& line, size_t& colu
   column = end - lineStart + 1;
 }
 
-nlohmann::json parseJsonText(const std::string& text, const std::string& file) {
-  try {
-    return nlohmann::json::parse(text, nullptr, /*allow_exceptions=*/true, /*ignore_comments=*/true);
-  } catch (const nlohmann::json::parse_error& e) {
-    size_t line = 0, column = 0;
-    lineColumn(text, e.byte, line, column);
-    // nlohmann's text is "[json.exception.parse_error.101] parse error at line L, column C: WHAT";
-    // keep WHAT and put the place where GCC puts it.
-    std::string what = e.what();
-    size_t at = what.find("column ");
-    if (at != std::string::npos) at = what.find(": ", at);
-    if (at != std::string::npos) {
-      what = what.substr(at + 2);
-    } else if (what.rfind("[json.exception", 0) == 0 && what.find("] ") != std::string::npos) {
-      what = what.substr(what.find("] ") + 2);
-    }
-    throw InputError(file + ":" + std::to_string(line) + ":" + std::to_string(column) + ": error: " + what);
+namespace {
+
+// nlohmann's DOM builder, but recording where parsing stopped instead of throwing: a number
+// overflow (1e999) is reported through the same hook as syntax errors, with its position,
+// which the thrown out_of_range exception would lose.
+struct PositionedDomParser : nlohmann::detail::json_sax_dom_parser<nlohmann::json> {
+  explicit PositionedDomParser(nlohmann::json& result)
+      : nlohmann::detail::json_sax_dom_parser<nlohmann::json>(result, /*allow_exceptions=*/false) {}
+  template <class Exception>
+  bool parse_error(std::size_t position, const std::string& lastToken, const Exception& ex) {
+    errorByte = position;
+    errorToken = lastToken;
+    errorId = ex.id;
+    errorText = ex.what();
+    return false;
   }
+  std::size_t errorByte = 0;
+  std::string errorToken;
+  int errorId = 0;
+  std::string errorText;
+};
+
+}  // namespace
+
+nlohmann::json parseJsonText(const std::string& text, const std::string& file) {
+  nlohmann::json result;
+  PositionedDomParser sax(result);
+  bool ok = nlohmann::json::sax_parse(text, &sax, nlohmann::json::input_format_t::json, /*strict=*/true,
+                                      /*ignore_comments=*/true);
+  if (ok) return result;
+  std::string what = sax.errorText;
+  size_t byte = sax.errorByte;
+  // nlohmann's text is "[json.exception.parse_error.101] parse error at line L, column C: WHAT";
+  // keep WHAT and put the place where GCC puts it.
+  size_t at = what.find("column ");
+  if (at != std::string::npos) at = what.find(": ", at);
+  if (at != std::string::npos) {
+    what = what.substr(at + 2);
+  } else if (what.rfind("[json.exception", 0) == 0 && what.find("] ") != std::string::npos) {
+    what = what.substr(what.find("] ") + 2);
+  }
+  if (sax.errorId == 406) {
+    // The position is just past the number: point at its first character instead.
+    if (byte > sax.errorToken.size()) byte -= sax.errorToken.size() - 1;
+    what += "; expected a finite number (NaN and infinity are not allowed)";
+  }
+  size_t line = 0, column = 0;
+  lineColumn(text, byte, line, column);
+  throw InputError(file + ":" + std::to_string(line) + ":" + std::to_string(column) + ": error: " + what);
 }
 
 nlohmann::json parseJsonFile(const std::string& path) { return parseJsonText(readFile(path), path); }
@@ -73,6 +104,34 @@ std::string childPointer(const std::string& pointer, const std::string& key) {
 
 std::string childPointer(const std::string& pointer, size_t index) {
   return pointer + "/" + std::to_string(index);
+}
+
+std::string didYouMean(const std::string& got, const std::vector<std::string>& choices) {
+  // Levenshtein distance; a typo is at most 2 edits and less than half the word.
+  auto distance = [](const std::string& a, const std::string& b) {
+    std::vector<size_t> row(b.size() + 1);
+    for (size_t j = 0; j <= b.size(); ++j) row[j] = j;
+    for (size_t i = 1; i <= a.size(); ++i) {
+      size_t diag = row[0];
+      row[0] = i;
+      for (size_t j = 1; j <= b.size(); ++j) {
+        size_t up = row[j];
+        row[j] = std::min({row[j] + 1, row[j - 1] + 1, diag + (a[i - 1] == b[j - 1] ? 0 : 1)});
+        diag = up;
+      }
+    }
+    return row[b.size()];
+  };
+  std::string best;
+  size_t bestDistance = 3;
+  for (const auto& c : choices) {
+    size_t d = distance(got, c);
+    if (d < bestDistance && 2 * d < std::max(got.size(), c.size())) {
+      bestDistance = d;
+      best = c;
+    }
+  }
+  return best.empty() ? "" : " (did you mean \"" + best + "\"?)";
 }
 
 }  // namespace shadowlab::detail

@@ -2,6 +2,7 @@
 // Internal helpers for the scene and method parsers: JSON with comments, GCC-style errors with
 // line:col for syntax errors and JSON pointers for everything else, and "got ..." descriptions.
 #include <string>
+#include <vector>
 
 #include <nlohmann/json.hpp>
 
@@ -22,5 +23,8 @@ std::string describe(const nlohmann::json& j);
 // "/a/b" + key with RFC 6901 escaping; "" + 0 -> "/0".
 std::string childPointer(const std::string& pointer, const std::string& key);
 std::string childPointer(const std::string& pointer, size_t index);
+
+// ' (did you mean "x"?)' for the closest choice within a small edit distance, else "".
+std::string didYouMean(const std::string& got, const std::vector<std::string>& choices);
 
 }  // namespace shadowlab::detail

@@ -65,7 +65,8 @@ class Reader {
       if (std::find(allowed.begin(), allowed.end(), item.key()) != allowed.end()) continue;
       std::string list;
       for (const auto& a : allowed) list += (list.empty() ? "" : ", ") + a;
-      fail(detail::childPointer(n.ptr, item.key()), "unknown key \"" + item.key() + "\"; expected one of " + list);
+      fail(detail::childPointer(n.ptr, item.key()),
+           "unknown key \"" + item.key() + "\"" + detail::didYouMean(item.key(), allowed) + "; expected one of " + list);
     }
   }
 

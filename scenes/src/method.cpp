@@ -216,7 +216,29 @@ void apply(Method& m, const std::string& key, const Value& v, const Where& w) {
       set(m, v, w);
       return;
     }
-  throw InputError(formatError(w.file, w.place, "unknown method key \"" + key + "\"; expected one of " + keyList()));
+  std::vector<std::string> all = methodKeys();
+  all.push_back("name");
+  throw InputError(formatError(w.file, w.place, "unknown method key \"" + key + "\"" + detail::didYouMean(key, all) +
+                                                    "; expected one of " + keyList()));
+}
+
+// Cross-field and range rules on a whole Method (a hand-built Method skips the setters).
+// `prefix` is "/" in files, so places read as JSON pointers there and as keys elsewhere.
+void crossCheck(const Method& m, const std::string& file, const std::string& prefix) {
+  auto bad = [&](const std::string& key, const std::string& got, const std::string& expected) {
+    throw InputError(formatError(file, prefix + key, "got " + got + "; expected " + expected));
+  };
+  // A PCF grid is centered on the lookup texel: an even size has no center.
+  if (m.filterSize % 2 == 0 || m.filterSize < 3 || m.filterSize > 15)
+    bad("filter.size", std::to_string(m.filterSize), "an odd integer 3..15");
+  if (m.mapSize < 16 || m.mapSize > 16384) bad("map.size", std::to_string(m.mapSize), "an integer 16..16384");
+  if (m.filterTaps < 1 || m.filterTaps > 64) bad("filter.taps", std::to_string(m.filterTaps), "an integer 1..64");
+  if (!(m.filterRadius > 0.0f && m.filterRadius <= 32.0f))
+    bad("filter.radius", nlohmann::json(m.filterRadius).dump(), "a number > 0 and <= 32 (map texels)");
+  for (auto [key, v] : {std::pair<const char*, float>{"bias.constant", m.biasConstant}, {"bias.slope", m.biasSlope},
+                        {"bias.clamp", m.biasClamp}, {"bias.compare", m.biasCompare}, {"bias.normal", m.biasNormal}})
+    if (!std::isfinite(v)) bad(key, nlohmann::json(double(v)).dump(), "a finite number");
+  if (m.name.empty()) bad("name", "\"\"", "a non-empty string");
 }
 
 }  // namespace
@@ -245,7 +267,7 @@ Method loadMethodFile(const std::string& path) {
     if (stem.size() > 5 && stem.compare(stem.size() - 5, 5, ".json") == 0) stem.resize(stem.size() - 5);
     m.name = stem;
   }
-  validateMethod(m, path);
+  crossCheck(m, path, "/");
   return m;
 }
 
@@ -280,21 +302,7 @@ nlohmann::json methodToJson(const Method& m) {
   return j;
 }
 
-void validateMethod(const Method& m, const std::string& origin) {
-  // A PCF grid is centered on the lookup texel: an even size has no center.
-  if (m.filterSize % 2 == 0)
-    throw InputError(formatError(origin, "filter.size",
-                                 "got " + std::to_string(m.filterSize) + "; expected an odd integer 3..15"));
-  if (m.filterSize < 3 || m.filterSize > 15)
-    throw InputError(formatError(origin, "filter.size",
-                                 "got " + std::to_string(m.filterSize) + "; expected an odd integer 3..15"));
-  if (m.mapSize < 16 || m.mapSize > 16384)
-    throw InputError(formatError(origin, "map.size", "got " + std::to_string(m.mapSize) + "; expected an integer 16..16384"));
-  if (m.filterTaps < 1 || m.filterTaps > 64)
-    throw InputError(formatError(origin, "filter.taps", "got " + std::to_string(m.filterTaps) + "; expected an integer 1..64"));
-  if (!(m.filterRadius > 0.0f && m.filterRadius <= 32.0f))
-    throw InputError(formatError(origin, "filter.radius", "got " + std::to_string(m.filterRadius) + "; expected a number > 0 and <= 32"));
-}
+void validateMethod(const Method& m, const std::string& origin) { crossCheck(m, origin, ""); }
 
 std::string toString(DepthFormat f) {
   for (const auto& c : kFormats)

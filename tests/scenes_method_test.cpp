@@ -1,0 +1,192 @@
+// Method keys: files, --set text and JSON values share one table; every rejection names the
+// origin and the key (or the JSON pointer in files) with what was found and what was expected.
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <fstream>
+#include <regex>
+
+#include "shadowlab/scenes/error.h"
+#include "shadowlab/scenes/io.h"
+#include "shadowlab/scenes/method.h"
+
+namespace fs = std::filesystem;
+using namespace shadowlab;
+
+namespace {
+
+std::string badInputDir() { return std::string(SHADOWLAB_SOURCE_DIR) + "/tests/bad_input"; }
+
+std::string errorOf(const std::function<void()>& fn) {
+  try {
+    fn();
+  } catch (const InputError& e) {
+    return e.what();
+  }
+  return "(no InputError thrown)";
+}
+
+std::string setError(const std::string& key, const std::string& value) {
+  Method m;
+  return errorOf([&] { applyMethodSetting(m, key, value, "--set"); });
+}
+
+fs::path tempFile(const std::string& name, const std::string& text) {
+  fs::path dir = fs::temp_directory_path() / ("shadowlab_scenes_method_test_" + std::to_string(::getpid()));
+  fs::create_directories(dir);
+  writeFileAtomic((dir / name).string(), text);
+  return dir / name;
+}
+
+}  // namespace
+
+TEST(Method, KeysInDocumentationOrder) {
+  EXPECT_EQ(methodKeys(), (std::vector<std::string>{"map.size", "map.format", "cull", "fit", "bias.constant", "bias.slope",
+                                                    "bias.clamp", "bias.compare", "bias.normal", "bias.receiver_plane",
+                                                    "filter", "filter.size", "filter.taps", "filter.radius",
+                                                    "projector.reverse_guard"}));
+}
+
+TEST(Method, SetEveryKeyFromText) {
+  Method m;
+  applyMethodSetting(m, "map.size", "4096", "--set");
+  applyMethodSetting(m, "map.format", "d32f", "--set");
+  applyMethodSetting(m, "cull", "front", "--set");
+  applyMethodSetting(m, "fit", "tight", "--set");
+  applyMethodSetting(m, "bias.constant", "-2.5", "--set");
+  applyMethodSetting(m, "bias.slope", "3e-1", "--set");
+  applyMethodSetting(m, "bias.clamp", "0.01", "--set");
+  applyMethodSetting(m, "bias.compare", "0.001", "--set");
+  applyMethodSetting(m, "bias.normal", "1.5", "--set");
+  applyMethodSetting(m, "bias.receiver_plane", "1", "--set");
+  applyMethodSetting(m, "filter", "poisson", "--set");
+  applyMethodSetting(m, "filter.size", "7", "--set");
+  applyMethodSetting(m, "filter.taps", "32", "--set");
+  applyMethodSetting(m, "filter.radius", "2.25", "--set");
+  applyMethodSetting(m, "projector.reverse_guard", "false", "--set");
+  applyMethodSetting(m, "name", "mine", "--set");
+  EXPECT_EQ(m.mapSize, 4096);
+  EXPECT_EQ(m.mapFormat, DepthFormat::D32F);
+  EXPECT_EQ(m.cull, CullMode::Front);
+  EXPECT_EQ(m.fit, Fit::Tight);
+  EXPECT_FLOAT_EQ(m.biasConstant, -2.5f);
+  EXPECT_FLOAT_EQ(m.biasSlope, 0.3f);
+  EXPECT_FLOAT_EQ(m.biasClamp, 0.01f);
+  EXPECT_FLOAT_EQ(m.biasCompare, 0.001f);
+  EXPECT_FLOAT_EQ(m.biasNormal, 1.5f);
+  EXPECT_TRUE(m.biasReceiverPlane);
+  EXPECT_EQ(m.filter, Filter::Poisson);
+  EXPECT_EQ(m.filterSize, 7);
+  EXPECT_EQ(m.filterTaps, 32);
+  EXPECT_FLOAT_EQ(m.filterRadius, 2.25f);
+  EXPECT_FALSE(m.projectorReverseGuard);
+  EXPECT_EQ(m.name, "mine");
+  validateMethod(m, "--set");
+
+  // Bools: true/false/1/0 in both forms.
+  applyMethodSetting(m, "bias.receiver_plane", "0", "--set");
+  EXPECT_FALSE(m.biasReceiverPlane);
+  applyMethodJson(m, "bias.receiver_plane", 1, "grid");
+  EXPECT_TRUE(m.biasReceiverPlane);
+  applyMethodJson(m, "bias.receiver_plane", false, "grid");
+  EXPECT_FALSE(m.biasReceiverPlane);
+}
+
+TEST(Method, JsonRoundTrip) {
+  Method m;
+  m.name = "rt";
+  m.mapSize = 512;
+  m.mapFormat = DepthFormat::D16;
+  m.cull = CullMode::None;
+  m.filter = Filter::Bilinear4;
+  m.biasSlope = 0.125f;
+  m.biasNormal = 2.0f;
+  m.projectorReverseGuard = false;
+  nlohmann::json j = methodToJson(m);
+  EXPECT_EQ(j.size(), methodKeys().size() + 1);
+  Method back;
+  for (const auto& [k, v] : j.items()) applyMethodJson(back, k, v, "rt");
+  EXPECT_EQ(methodToJson(back), j);
+  EXPECT_EQ(j["map.format"], "d16");
+  EXPECT_EQ(j["filter"], "bilinear4");
+}
+
+TEST(Method, TextErrorsAreExact) {
+  EXPECT_EQ(setError("map.size", "abc"), "--set: map.size: error: got \"abc\"; expected an integer 16..16384");
+  EXPECT_EQ(setError("map.size", "8"), "--set: map.size: error: got \"8\"; expected an integer 16..16384");
+  EXPECT_EQ(setError("map.size", "1024.5"), "--set: map.size: error: got \"1024.5\"; expected an integer 16..16384");
+  EXPECT_EQ(setError("filter", "pcff"),
+            "--set: filter: error: got \"pcff\"; expected one of none, hw2x2, bilinear4, pcf, poisson");
+  EXPECT_EQ(setError("map.format", "d8"), "--set: map.format: error: got \"d8\"; expected one of d16, d24, d32f");
+  EXPECT_EQ(setError("bias.receiver_plane", "yes"),
+            "--set: bias.receiver_plane: error: got \"yes\"; expected true, false, 1 or 0");
+  EXPECT_EQ(setError("filter.size", "-3"), "--set: filter.size: error: got \"-3\"; expected an integer 3..15");
+  EXPECT_EQ(setError("filter.taps", "-1"), "--set: filter.taps: error: got \"-1\"; expected an integer 1..64");
+  EXPECT_EQ(setError("filter.radius", "0"),
+            "--set: filter.radius: error: got \"0\"; expected a number > 0 and <= 32 (map texels)");
+  EXPECT_EQ(setError("bias.normal", "-1"), "--set: bias.normal: error: got \"-1\"; expected a number 0..64 (map texels)");
+  EXPECT_NE(setError("nope", "1").find("--set: nope: error: unknown method key \"nope\"; expected one of name, map.size,"),
+            std::string::npos);
+  // NaN and infinity in every spelling strtod accepts.
+  for (const char* v : {"nan", "NaN", "inf", "-inf", "infinity", "1e999", "0x1p3", ""})
+    EXPECT_NE(setError("bias.slope", v).find("--set: bias.slope: error: got \""), std::string::npos) << v;
+}
+
+TEST(Method, JsonErrors) {
+  Method m;
+  EXPECT_EQ(errorOf([&] { applyMethodJson(m, "map.size", "2048", "grid.json: /grid/map.size/1"); }),
+            "grid.json: /grid/map.size/1: map.size: error: got \"2048\"; expected an integer 16..16384");
+  EXPECT_EQ(errorOf([&] { applyMethodJson(m, "bias.slope", std::numeric_limits<double>::infinity(), "g"); }),
+            "g: bias.slope: error: got inf (a number too large for a double); expected a finite number -1e6..1e6");
+  EXPECT_EQ(errorOf([&] { applyMethodJson(m, "cull", 3, "g"); }), "g: cull: error: got 3; expected one of back, front, none");
+  EXPECT_EQ(errorOf([&] { applyMethodJson(m, "bias.receiver_plane", 2, "g"); }),
+            "g: bias.receiver_plane: error: got 2; expected true, false, 1 or 0");
+  // An integral float is an integer; a fractional one is not.
+  applyMethodJson(m, "map.size", 1024.0, "g");
+  EXPECT_EQ(m.mapSize, 1024);
+  EXPECT_NE(errorOf([&] { applyMethodJson(m, "map.size", 1024.5, "g"); }).find("got 1024.5"), std::string::npos);
+}
+
+TEST(Method, ValidateCrossField) {
+  Method m;
+  m.filterSize = 4;
+  EXPECT_EQ(errorOf([&] { validateMethod(m, "x.json"); }), "x.json: filter.size: error: got 4; expected an odd integer 3..15");
+  m.filterSize = 5;
+  validateMethod(m, "x.json");
+}
+
+TEST(MethodFile, LoadsWithCommentsAndDefaultsTheName) {
+  fs::path p = tempFile("pcf5.json", R"(// a comment
+  { "map.size": 1024, /* inline */ "filter": "pcf", "filter.size": 5, "bias.slope": 2 })");
+  Method m = loadMethodFile(p.string());
+  EXPECT_EQ(m.name, "pcf5");  // unnamed file: the file stem
+  EXPECT_EQ(m.mapSize, 1024);
+  EXPECT_EQ(m.filter, Filter::Pcf);
+  EXPECT_EQ(m.filterSize, 5);
+  EXPECT_FLOAT_EQ(m.biasSlope, 2.0f);
+  EXPECT_EQ(m.mapFormat, DepthFormat::D24);  // untouched keys keep their defaults
+  fs::path named = tempFile("n.json", R"({"name": "soft", "filter": "hw2x2"})");
+  EXPECT_EQ(loadMethodFile(named.string()).name, "soft");
+}
+
+// Each tests/bad_input/method_*.json states its expected message in a "// expect: " line.
+TEST(MethodFile, BadInputsAreRejectedWithTheirMessage) {
+  int count = 0;
+  for (const auto& e : fs::directory_iterator(badInputDir())) {
+    std::string name = e.path().filename().string();
+    if (name.rfind("method_", 0) != 0) continue;
+    ++count;
+    std::string text = readFile(e.path().string());
+    std::smatch match;
+    ASSERT_TRUE(std::regex_search(text, match, std::regex("// expect: ([^\n]*)"))) << name << " has no // expect: line";
+    std::string msg = errorOf([&] { loadMethodFile(e.path().string()); });
+    EXPECT_EQ(msg.rfind(e.path().string(), 0), 0u) << "the message must start with the file path: " << msg;
+    EXPECT_NE(msg.find(match[1].str()), std::string::npos) << name << "\n  got:      " << msg << "\n  expected: " << match[1];
+  }
+  EXPECT_GE(count, 8);
+}
+
+TEST(MethodFile, MissingFile) {
+  std::string msg = errorOf([] { loadMethodFile("/nonexistent/m.json"); });
+  EXPECT_EQ(msg.rfind("/nonexistent/m.json: error: cannot open file", 0), 0u) << msg;
+}
