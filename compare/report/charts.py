@@ -1,0 +1,319 @@
+#!/usr/bin/python3
+"""Charts of a shadowlab sweep: reads results.json, writes PNG (for report.html), PDF and SVG (for
+papers) into a figures folder, plus figures/charts.json listing the charts made and the ones skipped.
+
+Usage: /usr/bin/python3 charts.py RESULTS_JSON FIGURES_DIR
+
+Run by `shadowlab sweep` after results.json is written (compare/SWEEPS.md). Needs Debian's
+python3-matplotlib; the `python3` of a pyenv usually lacks it, hence /usr/bin/python3.
+
+Every chart draws one panel per scene. When more keys are swept than a chart has axes for, each
+point shows the configuration with the lowest error among those sharing the chart's coordinates
+(said in the caption), so a chart never averages configurations that were never run together.
+A chart whose swept key is absent from the grid is skipped with a reason (not an error).
+"""
+import json
+import math
+import os
+import sys
+
+import matplotlib
+
+matplotlib.use("Agg")  # no display; also keeps the script from touching any GUI toolkit
+import matplotlib.pyplot as plt  # noqa: E402
+
+CLASSES = [("error_rate", "all errors"), ("acne_rate", "acne"), ("leak_rate", "leak"),
+           ("aliasing_rate", "aliasing"), ("coverage_rate", "coverage")]
+BIAS_KEYS = [("bias.slope", "bias.slope (x max depth slope)"),
+             ("bias.constant", "bias.constant (units of r)"),
+             ("bias.compare", "bias.compare (normalized depth)"),
+             ("bias.normal", "bias.normal (map texels)")]
+PNG_DPI = 100
+# Reproducible files: no timestamps in PDF/SVG, fixed SVG ids.
+matplotlib.rcParams["svg.hashsalt"] = "shadowlab"
+matplotlib.rcParams["font.size"] = 9
+
+
+def num(d, key):
+    v = d.get(key)
+    if isinstance(v, bool) or not isinstance(v, (int, float)):
+        return None
+    return float(v) if math.isfinite(v) else None
+
+
+def raster_ms(row):
+    t = row.get("timings", {})
+    return (num(t, "shadow_ms") or 0.0) + (num(t, "camera_ms") or 0.0)
+
+
+def method_value(row, key):
+    return row.get("method", {}).get(key)
+
+
+def swept_values(row, keys):
+    """The row's values of the swept keys (from its config text), as a tuple in `keys` order."""
+    parts = dict(p.split("=", 1) for p in row["config"].split(",") if "=" in p)
+    return tuple(parts.get(k, "") for k in keys)
+
+
+def best_by(rows, group_key, score):
+    """For each group, the row with the lowest score (ties: first in sweep order)."""
+    best = {}
+    for r in rows:
+        g = group_key(r)
+        s = score(r)
+        if s is None:
+            continue
+        if g not in best or s < best[g][0]:
+            best[g] = (s, r)
+    return {g: r for g, (s, r) in best.items()}
+
+
+def panel_grid(n, width_per=4.6, height_per=3.4, max_cols=3):
+    cols = min(max_cols, max(1, n))
+    rows = int(math.ceil(n / cols))
+    fig, axes = plt.subplots(rows, cols, figsize=(width_per * cols, height_per * rows), squeeze=False)
+    flat = [a for row in axes for a in row]
+    for a in flat[n:]:
+        a.set_visible(False)
+    return fig, flat[:n]
+
+
+def save(fig, out_dir, chart_id):
+    fig.tight_layout()
+    files = {}
+    for ext, kwargs in (("png", {"dpi": PNG_DPI}), ("pdf", {"metadata": {"CreationDate": None}}),
+                        ("svg", {"metadata": {"Date": None}})):
+        name = f"{chart_id}.{ext}"
+        tmp = os.path.join(out_dir, f".{name}.tmp")
+        fig.savefig(tmp, format=ext, **kwargs)
+        os.replace(tmp, os.path.join(out_dir, name))  # never a half-written figure
+        files[ext] = "figures/" + name
+    plt.close(fig)
+    return files
+
+
+def positive_floor(values):
+    """A floor for zeros on a log axis: half the smallest positive value (or 1e-6)."""
+    pos = [v for v in values if v is not None and v > 0]
+    return (min(pos) / 2.0) if pos else 1e-6
+
+
+def chart_error_by_size(scenes, rows_by_scene, swept, out_dir):
+    if "map.size" not in swept:
+        return None, "map.size is not in the grid (sweep it, e.g. --grid map.size=256,512,1024,2048)"
+    others = [k for k in swept if k not in ("map.size", "filter")]
+    fig, axes = panel_grid(len(scenes) * len(CLASSES), width_per=3.3, height_per=2.8, max_cols=len(CLASSES))
+    drew_zero = False
+    for si, scene in enumerate(scenes):
+        rows = rows_by_scene[scene]
+        filters = []
+        for r in rows:
+            f = str(method_value(r, "filter"))
+            if f not in filters:
+                filters.append(f)
+        for ci, (metric, label) in enumerate(CLASSES):
+            ax = axes[si * len(CLASSES) + ci]
+            best = best_by(rows, lambda r: (str(method_value(r, "filter")), method_value(r, "map.size")),
+                           lambda r: num(r["metrics"], "error_rate"))
+            floor = positive_floor([num(r["metrics"], metric) for r in best.values()])
+            for f in filters:
+                pts = sorted((int(k[1]), num(r["metrics"], metric)) for k, r in best.items()
+                             if k[0] == f and num(r["metrics"], metric) is not None)
+                xs = [p[0] for p in pts]
+                ys = [p[1] if p[1] > 0 else floor for p in pts]
+                line, = ax.plot(xs, ys, marker="o", label=f"filter={f}")
+                zx = [p[0] for p in pts if p[1] <= 0]
+                if zx:
+                    drew_zero = True
+                    ax.plot(zx, [floor] * len(zx), linestyle="none", marker="v", markersize=7,
+                            markerfacecolor="white", color=line.get_color())
+            ax.set_xscale("log", base=2)
+            ax.set_yscale("log")
+            ax.set_title(f"{scene}: {label}")
+            ax.set_xlabel("shadow map size (texels per side)")
+            ax.set_ylabel(f"{metric} (fraction of pixels)")
+            ax.grid(True, which="both", alpha=0.3)
+            if ci == 0:
+                ax.legend(fontsize=7)
+    caption = ("Error rate by class against shadow-map resolution (log-log), one line per filter, one row of panels "
+               "per scene.")
+    if others:
+        caption += (" At each size and filter the configuration with the lowest error_rate over "
+                    + ", ".join(others) + " is shown.")
+    if drew_zero:
+        caption += " Hollow triangles: a rate of exactly 0, drawn at the panel's floor (log axes cannot show 0)."
+    return save(fig, out_dir, "error_by_size"), caption
+
+
+def chart_bias_tradeoff(scenes, rows_by_scene, swept, out_dir, key, key_label):
+    others = [k for k in swept if k != key]
+    fig, axes = panel_grid(len(scenes))
+    notes = []
+    for ax, scene in zip(axes, scenes):
+        rows = rows_by_scene[scene]
+        best = best_by(rows, lambda r: float(method_value(r, key)),
+                       lambda r: (num(r["metrics"], "acne_rate") or 0) + (num(r["metrics"], "leak_rate") or 0))
+        xs = sorted(best)
+        acne = [num(best[x]["metrics"], "acne_rate") or 0 for x in xs]
+        leak = [num(best[x]["metrics"], "leak_rate") or 0 for x in xs]
+        total = [a + l for a, l in zip(acne, leak)]
+        ax.plot(xs, acne, marker="o", color="tab:red", label="acne_rate (too little bias)")
+        ax.plot(xs, leak, marker="s", color="tab:blue", label="leak_rate (too much bias)")
+        ax.plot(xs, total, linestyle="--", color="0.4", label="acne_rate + leak_rate")
+        if xs:
+            i = min(range(len(xs)), key=lambda k: (total[k], xs[k]))
+            ax.axvline(xs[i], color="tab:green", alpha=0.6)
+            ax.plot([xs[i]], [total[i]], marker="*", markersize=14, color="tab:green",
+                    label=f"best {key} = {xs[i]:g}")
+            notes.append(f"{scene}: best {key} = {xs[i]:g} (acne {acne[i]:.3%}, leak {leak[i]:.3%})")
+        if len(xs) > 2 and min(xs) >= 0 and max(xs) > 0:
+            pos = [x for x in xs if x > 0]
+            if pos and max(pos) / min(pos) >= 50:
+                ax.set_xscale("symlog", linthresh=min(pos))
+        ax.set_title(scene)
+        ax.set_xlabel(key_label)
+        ax.set_ylabel("rate (fraction of compared pixels)")
+        ax.grid(True, alpha=0.3)
+        ax.legend(fontsize=7)
+    caption = (f"The bias trade-off for {key}: acne falls and leaking (peter panning) rises as the bias grows; the star "
+               "marks the bias with the lowest acne_rate + leak_rate. " + "; ".join(notes) + ".")
+    if others:
+        caption += " At each bias the configuration with the lowest acne_rate + leak_rate over " + ", ".join(others) + \
+                   " is shown."
+    return save(fig, out_dir, "bias_tradeoff_" + key.replace(".", "_")), caption
+
+
+def pareto(points):
+    """points: (time, error, label); returns the front by increasing time, strictly decreasing error."""
+    front, best = [], math.inf
+    for p in sorted(points, key=lambda p: (p[0], p[1])):
+        if p[1] < best:
+            front.append(p)
+            best = p[1]
+    return front
+
+
+def chart_accuracy_vs_time(scenes, rows_by_scene, out_dir):
+    fig, axes = panel_grid(len(scenes), width_per=5.6, height_per=4.0, max_cols=2)
+    for ax, scene in zip(axes, scenes):
+        pts = [(raster_ms(r), num(r["metrics"], "error_rate"), r["config"]) for r in rows_by_scene[scene]
+               if num(r["metrics"], "error_rate") is not None]
+        floor = positive_floor([p[1] for p in pts])
+        ys = [p[1] if p[1] > 0 else floor for p in pts]
+        ax.scatter([p[0] for p in pts], ys, s=18, color="tab:gray", alpha=0.7, label="configuration")
+        front = pareto(pts)
+        fx = [p[0] for p in front]
+        fy = [p[1] if p[1] > 0 else floor for p in front]
+        ax.step(fx, fy, where="post", color="tab:orange", linewidth=1.6, label="Pareto front")
+        ax.scatter(fx, fy, s=36, color="tab:orange", zorder=3)
+        # Label the front (its configurations are the answer to "what should I use at this budget").
+        for k, p in enumerate(front[:10]):
+            ax.annotate(p[2], (fx[k], fy[k]), textcoords="offset points", xytext=(5, 4), fontsize=6.5,
+                        color="tab:orange")
+        if len(front) > 10:
+            ax.text(0.99, 0.01, f"{len(front) - 10} more front points: see the table", transform=ax.transAxes,
+                    ha="right", va="bottom", fontsize=7)
+        ax.set_yscale("log")
+        ax.set_title(f"{scene}: accuracy against time")
+        ax.set_xlabel("raster time: shadow pass + camera pass (ms, GPU timestamps)")
+        ax.set_ylabel("error_rate (fraction of compared pixels)")
+        ax.grid(True, which="both", alpha=0.3)
+        ax.legend(fontsize=7, loc="best")
+    caption = ("Accuracy against time: each dot is one configuration; the orange steps are the Pareto front (no other "
+               "configuration is both faster and more accurate), labelled with their configurations. Zero error rates "
+               "are drawn at the panel's floor.")
+    return save(fig, out_dir, "accuracy_vs_time"), caption
+
+
+def chart_m_footprint(scenes, rows_by_scene, out_dir):
+    have = any(num(r["metrics"], "m_p95") is not None for rs in rows_by_scene.values() for r in rs)
+    if not have:
+        return None, "the rows have no m_median/m_p95/m_max metrics"
+    n_configs = max(len(rs) for rs in rows_by_scene.values())
+    fig, axes = panel_grid(len(scenes), width_per=max(4.6, min(14.0, 0.22 * n_configs + 2.5)), height_per=3.8,
+                           max_cols=1 if n_configs > 12 else 2)
+    for ax, scene in zip(axes, scenes):
+        rows = rows_by_scene[scene]
+        xs = list(range(len(rows)))
+        med = [num(r["metrics"], "m_median") for r in rows]
+        p95 = [num(r["metrics"], "m_p95") for r in rows]
+        mx = [num(r["metrics"], "m_max") for r in rows]
+        floor = positive_floor(med + p95 + mx)
+        fix = lambda v: v if v is not None and v > 0 else floor  # noqa: E731
+        ax.vlines(xs, [fix(v) for v in med], [fix(v) for v in mx], color="0.6", linewidth=1.2, label="median..max")
+        ax.scatter(xs, [fix(v) for v in med], marker="o", s=16, color="tab:blue", label="m_median", zorder=3)
+        ax.scatter(xs, [fix(v) for v in p95], marker="^", s=22, color="tab:orange", label="m_p95", zorder=3)
+        ax.scatter(xs, [fix(v) for v in mx], marker="_", s=60, color="tab:red", label="m_max", zorder=3)
+        ax.axhline(1.0, color="tab:green", linestyle="--", linewidth=1, label="m = 1 (no aliasing)")
+        ax.axhline(10.0, color="tab:red", linestyle=":", linewidth=1, label="m = 10 (severe)")
+        ax.set_yscale("log")
+        ax.set_xticks(xs)
+        if len(rows) <= 40:
+            ax.set_xticklabels([r["config"] for r in rows], rotation=60, ha="right", fontsize=6)
+        else:
+            ax.set_xticklabels([str(x) if x % 5 == 0 else "" for x in xs], fontsize=6)
+            ax.set_xlabel("configuration (index in sweep order; see the rows table)")
+        ax.set_title(f"{scene}: texel footprint m per configuration")
+        ax.set_ylabel("m: screen extent of one map texel (pixels)")
+        ax.grid(True, axis="y", which="both", alpha=0.3)
+        ax.legend(fontsize=6.5, ncol=2)
+    caption = ("Distribution of Lloyd et al.'s texel footprint m (the largest screen extent of one shadow-map texel, in "
+               "pixels) over the compared pixels of each configuration: median, 95th percentile and maximum. m <= 1: no "
+               "perspective/projective aliasing; m > 10: severe.")
+    return save(fig, out_dir, "m_footprint"), caption
+
+
+def main(argv):
+    if len(argv) != 3:
+        sys.stderr.write("usage: charts.py RESULTS_JSON FIGURES_DIR\n")
+        return 2
+    results_path, out_dir = argv[1], argv[2]
+    with open(results_path, encoding="utf-8") as f:
+        results = json.load(f)
+    os.makedirs(out_dir, exist_ok=True)
+    rows = results.get("rows", [])
+    sweep = results.get("sweep", {})
+    swept = [axis["key"] for axis in sweep.get("grid", [])]
+    scenes = []
+    for r in rows:
+        if r["scene"] not in scenes:
+            scenes.append(r["scene"])
+    rows_by_scene = {s: [r for r in rows if r["scene"] == s] for s in scenes}
+
+    charts, skipped = [], []
+
+    def add(chart_id, title, result):
+        files, text = result
+        if files is None:
+            skipped.append({"id": chart_id, "title": title, "reason": text})
+        else:
+            charts.append({"id": chart_id, "title": title, "caption": text, **files})
+
+    if not rows:
+        skipped.append({"id": "all", "title": "all charts", "reason": "results.json has no rows"})
+    else:
+        add("error_by_size", "Error rate by class against map size",
+            chart_error_by_size(scenes, rows_by_scene, swept, out_dir))
+        bias_swept = [(k, label) for k, label in BIAS_KEYS if k in swept]
+        if not bias_swept:
+            skipped.append({"id": "bias_tradeoff", "title": "The bias trade-off",
+                            "reason": "no bias key (bias.slope, bias.constant, bias.compare, bias.normal) is in the grid"})
+        for key, label in bias_swept:
+            add("bias_tradeoff_" + key.replace(".", "_"), f"The bias trade-off: {key}",
+                chart_bias_tradeoff(scenes, rows_by_scene, swept, out_dir, key, label))
+        add("accuracy_vs_time", "Accuracy against time (Pareto front)",
+            chart_accuracy_vs_time(scenes, rows_by_scene, out_dir))
+        add("m_footprint", "Texel footprint m per configuration", chart_m_footprint(scenes, rows_by_scene, out_dir))
+
+    manifest = {"charts": charts, "skipped": skipped}
+    tmp = os.path.join(out_dir, ".charts.json.tmp")
+    with open(tmp, "w", encoding="utf-8") as f:
+        json.dump(manifest, f, indent=2)
+        f.write("\n")
+    os.replace(tmp, os.path.join(out_dir, "charts.json"))
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main(sys.argv))

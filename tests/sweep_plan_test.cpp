@@ -1,0 +1,235 @@
+// Sweep specification -> plan: grid parsing, validation before anything is written, expansion
+// order, canonical config text, sweep files with their error places. No renderer involved.
+#include <gtest/gtest.h>
+#include <unistd.h>
+
+#include <cmath>
+
+#include <filesystem>
+#include <fstream>
+
+#include "shadowlab/compare/sweep.h"
+#include "shadowlab/scenes/error.h"
+
+namespace fs = std::filesystem;
+using namespace shadowlab;
+
+namespace {
+
+std::string tempDir(const std::string& name) {
+  fs::path d = fs::temp_directory_path() / ("shadowlab_sweep_plan_" + name + "_" + std::to_string(::getpid()));
+  fs::remove_all(d);
+  fs::create_directories(d);
+  return d.string();
+}
+
+std::string writeText(const std::string& path, const std::string& text) {
+  std::ofstream(path) << text;
+  return path;
+}
+
+// The message of the InputError `f` throws ("" when it throws nothing: the test then fails).
+template <class F>
+std::string inputErrorOf(F&& f) {
+  try {
+    f();
+  } catch (const InputError& e) {
+    return e.what();
+  }
+  ADD_FAILURE() << "expected an InputError";
+  return "";
+}
+
+SweepSpec specWithGrid(std::vector<std::string> grid) {
+  SweepSpec spec;
+  spec.scenes = {"sphere_on_plane"};
+  for (const auto& g : grid) spec.grid.push_back(parseGridArgument(g));
+  return spec;
+}
+
+}  // namespace
+
+TEST(SweepPlan, GridArgumentSplitsKeyAndValues) {
+  SweepAxis a = parseGridArgument("map.size=256, 512 ,1024");
+  EXPECT_EQ(a.key, "map.size");
+  ASSERT_EQ(a.values.size(), 3u);
+  EXPECT_EQ(a.values[0], "256");
+  EXPECT_EQ(a.values[1], "512");
+  EXPECT_EQ(a.values[2], "1024");
+}
+
+TEST(SweepPlan, MalformedGridArgumentsNameTheArgument) {
+  EXPECT_EQ(inputErrorOf([] { parseGridArgument("map.size"); }),
+            "--grid map.size: error: no '=' found; expected key=v1,v2,... (e.g. map.size=512,1024)");
+  EXPECT_EQ(inputErrorOf([] { parseGridArgument("map.size="); }),
+            "--grid map.size=: error: empty list of values for \"map.size\"; expected key=v1,v2,...");
+  EXPECT_NE(inputErrorOf([] { parseGridArgument("map.size=256,,512"); }).find("value 2 of \"map.size\" is empty"),
+            std::string::npos);
+  EXPECT_NE(inputErrorOf([] { parseGridArgument("=1,2"); }).find("empty key"), std::string::npos);
+}
+
+TEST(SweepPlan, UnknownKeyAndBadValuesAreRejected) {
+  std::string unknown = inputErrorOf([] { planSweep(specWithGrid({"map.sise=256,512"})); });
+  EXPECT_NE(unknown.find("--grid map.sise=256,512: error: unknown key \"map.sise\""), std::string::npos) << unknown;
+  EXPECT_NE(unknown.find("map.size"), std::string::npos) << "the message lists the valid keys: " << unknown;
+
+  std::string nonNumeric = inputErrorOf([] { planSweep(specWithGrid({"map.size=256,big"})); });
+  EXPECT_NE(nonNumeric.find("--grid map.size=256,big"), std::string::npos) << nonNumeric;
+  EXPECT_NE(nonNumeric.find("\"big\""), std::string::npos) << nonNumeric;
+
+  std::string badEnum = inputErrorOf([] { planSweep(specWithGrid({"filter=pcf,blur"})); });
+  EXPECT_NE(badEnum.find("\"blur\""), std::string::npos) << badEnum;
+
+  std::string dup = inputErrorOf([] { planSweep(specWithGrid({"bias.slope=0.5,0.50"})); });
+  EXPECT_NE(dup.find("value \"0.5\" of \"bias.slope\" appears twice"), std::string::npos) << dup;
+
+  std::string twice = inputErrorOf([] { planSweep(specWithGrid({"map.size=256", "map.size=512"})); });
+  EXPECT_NE(twice.find("is swept twice"), std::string::npos) << twice;
+
+  SweepSpec both = specWithGrid({"map.size=256,512"});
+  both.fixed.push_back(parseSetArgument("map.size=1024"));
+  EXPECT_NE(inputErrorOf([&] { planSweep(both); }).find("both swept and fixed"), std::string::npos);
+
+  // A cross-field rule (pcf needs an odd kernel) is checked for every configuration.
+  SweepSpec even = specWithGrid({"filter.size=3,4"});
+  even.fixed.push_back(parseSetArgument("filter=pcf"));
+  EXPECT_NE(inputErrorOf([&] { planSweep(even); }).find("filter.size"), std::string::npos);
+
+  SweepSpec light = specWithGrid({"map.size=256"});
+  light.light = "moon";
+  EXPECT_NE(inputErrorOf([&] { planSweep(light); }).find("no light named \"moon\"; expected one of sun"),
+            std::string::npos);
+}
+
+TEST(SweepPlan, ExpandsTheGridLastAxisFastestWithSortedCanonicalConfigs) {
+  SweepPlan plan = planSweep(specWithGrid({"map.size=512,256", "bias.slope=0,1.50"}));
+  ASSERT_EQ(plan.configs.size(), 4u);
+  ASSERT_EQ(plan.jobs.size(), 4u);
+  // Keys sorted in the text; values canonical (1.50 -> 1.5); the order of the grid is kept.
+  EXPECT_EQ(plan.configs[0].config, "bias.slope=0,map.size=512");
+  EXPECT_EQ(plan.configs[1].config, "bias.slope=1.5,map.size=512");
+  EXPECT_EQ(plan.configs[2].config, "bias.slope=0,map.size=256");
+  EXPECT_EQ(plan.configs[3].config, "bias.slope=1.5,map.size=256");
+  EXPECT_EQ(plan.configs[1].method.mapSize, 512);
+  EXPECT_FLOAT_EQ(plan.configs[1].method.biasSlope, 1.5f);
+  EXPECT_EQ(plan.configs[3].method.mapSize, 256);
+  EXPECT_EQ(plan.jobs[0].sceneName, "sphere_on_plane");
+  EXPECT_EQ(plan.jobs[0].light, "sun");
+  // Method keys only: the scene is loaded once.
+  EXPECT_EQ(plan.variants.size(), 1u);
+}
+
+TEST(SweepPlan, FixedSettingsApplyToEveryConfigurationAndNothingSweptIsDefault) {
+  SweepSpec spec;
+  spec.scenes = {"sphere_on_plane"};
+  spec.fixed.push_back(parseSetArgument("filter=pcf"));
+  spec.fixed.push_back(parseSetArgument("filter.size=5"));
+  SweepPlan plan = planSweep(spec);
+  ASSERT_EQ(plan.configs.size(), 1u);
+  EXPECT_EQ(plan.configs[0].config, "default");
+  EXPECT_EQ(plan.configs[0].method.filter, Filter::Pcf);
+  EXPECT_EQ(plan.configs[0].method.filterSize, 5);
+}
+
+TEST(SweepPlan, SceneKeysLoadOneVariantPerValue) {
+  SweepPlan plan = planSweep(specWithGrid({"scene:/lights/0/elevation_deg=60,20", "map.size=256,512"}));
+  ASSERT_EQ(plan.configs.size(), 4u);
+  EXPECT_EQ(plan.configs[0].config, "map.size=256,scene:/lights/0/elevation_deg=60");
+  EXPECT_EQ(plan.variants.size(), 2u);
+  EXPECT_NE(plan.variants[0].hash, plan.variants[1].hash) << "the override must reach the loaded scene";
+  EXPECT_EQ(plan.jobs[0].variantIndex, plan.jobs[1].variantIndex);
+  EXPECT_NE(plan.jobs[0].variantIndex, plan.jobs[2].variantIndex);
+  // Light direction from elevation 60 vs 20 degrees: -y component sin(60) vs sin(20).
+  EXPECT_NEAR(-plan.variants[plan.jobs[0].variantIndex].lights[0].direction.y, std::sin(60.0 * M_PI / 180.0), 1e-5);
+  EXPECT_NEAR(-plan.variants[plan.jobs[2].variantIndex].lights[0].direction.y, std::sin(20.0 * M_PI / 180.0), 1e-5);
+
+  std::string bad = inputErrorOf([] { planSweep(specWithGrid({"scene:lights=1"})); });
+  EXPECT_NE(bad.find("no valid JSON pointer"), std::string::npos) << bad;
+}
+
+TEST(SweepPlan, SweepFileReadsScenesGridAndSettings) {
+  std::string dir = tempDir("file");
+  std::string path = writeText(dir + "/sweep.json", R"({
+    // comments are allowed
+    "description": "two sizes, two biases",
+    "scenes": ["sphere_on_plane"],
+    "grid": {"map.size": [256, 512], "bias.slope": [0, 2.0]},
+    "set": {"filter": "hw2x2"},
+    "spp": 1
+  })");
+  SweepSpec spec;
+  loadSweepFile(path, spec);
+  SweepPlan plan = planSweep(spec);
+  ASSERT_EQ(plan.configs.size(), 4u);
+  EXPECT_EQ(plan.configs[0].config, "bias.slope=0,map.size=256");
+  EXPECT_EQ(plan.configs[1].config, "bias.slope=2,map.size=256");
+  EXPECT_EQ(plan.configs[0].method.filter, Filter::Hw2x2);
+  fs::remove_all(dir);
+}
+
+TEST(SweepPlan, SweepFileErrorsNameFileAndPlace) {
+  std::string dir = tempDir("fileerr");
+  // Syntax error: line:col of the offending token (line 3, the missing comma before "grid").
+  std::string syntax = writeText(dir + "/syntax.json", "{\n  \"scenes\": [\"sphere_on_plane\"]\n  \"grid\": {}\n}\n");
+  std::string e1 = inputErrorOf([&] {
+    SweepSpec s;
+    loadSweepFile(syntax, s);
+  });
+  EXPECT_EQ(e1.rfind(syntax + ":3:", 0), 0u) << e1;
+
+  std::string emptyList = writeText(dir + "/empty.json", R"({"grid": {"map.size": []}})");
+  std::string e2 = inputErrorOf([&] {
+    SweepSpec s;
+    loadSweepFile(emptyList, s);
+  });
+  EXPECT_EQ(e2, emptyList + ": /grid/map.size: error: empty list of values; expected at least one");
+
+  std::string unknownKey = writeText(dir + "/unknown.json", R"({"grid": {"map.sizes": [256]}})");
+  std::string e3 = inputErrorOf([&] {
+    SweepSpec s;
+    loadSweepFile(unknownKey, s);
+  });
+  EXPECT_NE(e3.find(unknownKey + ": /grid/map.sizes: error: unknown key \"map.sizes\""), std::string::npos) << e3;
+
+  std::string badValue = writeText(dir + "/value.json", R"({"grid": {"map.size": [256, "huge"]}})");
+  std::string e4 = inputErrorOf([&] {
+    SweepSpec s;
+    loadSweepFile(badValue, s);
+    s.scenes = {"sphere_on_plane"};
+    planSweep(s);
+  });
+  EXPECT_NE(e4.find(badValue + ": /grid/map.size/1"), std::string::npos) << e4;
+  EXPECT_NE(e4.find("\"huge\""), std::string::npos) << e4;
+
+  std::string topKey = writeText(dir + "/top.json", R"({"scenes": ["sphere_on_plane"], "grids": {}})");
+  std::string e5 = inputErrorOf([&] {
+    SweepSpec s;
+    loadSweepFile(topKey, s);
+  });
+  EXPECT_NE(e5.find(topKey + ": /grids: error: unknown key \"grids\""), std::string::npos) << e5;
+
+  std::string e6 = inputErrorOf([&] {
+    SweepSpec s;
+    loadSweepFile(dir + "/missing.json", s);
+  });
+  EXPECT_NE(e6.find(dir + "/missing.json"), std::string::npos) << e6;
+  fs::remove_all(dir);
+}
+
+TEST(SweepPlan, CanonicalValueText) {
+  EXPECT_EQ(canonicalValueText(nlohmann::json(256)), "256");
+  EXPECT_EQ(canonicalValueText(nlohmann::json(0.5)), "0.5");
+  EXPECT_EQ(canonicalValueText(nlohmann::json(double(0.1f))), "0.1");
+  EXPECT_EQ(canonicalValueText(nlohmann::json(-0.0)), "0");
+  EXPECT_EQ(canonicalValueText(nlohmann::json("pcf")), "pcf");
+  EXPECT_EQ(canonicalValueText(nlohmann::json(true)), "true");
+}
+
+TEST(SweepPlan, DefaultCacheDirSitsBesideTheOutputFolder) {
+  ::unsetenv("SHADOWLAB_CACHE");
+  EXPECT_EQ(defaultSweepCacheDir("/tmp/x/sweep1"), "/tmp/x/.shadowlab-cache");
+  EXPECT_EQ(defaultSweepCacheDir("/tmp/x/sweep1/"), "/tmp/x/.shadowlab-cache");
+  ::setenv("SHADOWLAB_CACHE", "/tmp/elsewhere", 1);
+  EXPECT_EQ(defaultSweepCacheDir("/tmp/x/sweep1"), "/tmp/elsewhere");
+  ::unsetenv("SHADOWLAB_CACHE");
+}

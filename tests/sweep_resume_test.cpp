@@ -1,0 +1,260 @@
+// The sweep loop with an injected fake runner (no renderer): rows are appended durably, an
+// interrupted sweep resumes without running any finished configuration again, a torn last line
+// is dropped, a damaged earlier line is refused, stale rows (another method) are run again, and
+// results.json / results.csv hold exactly one row per scene x configuration.
+#include <gtest/gtest.h>
+#include <unistd.h>
+
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <set>
+#include <sstream>
+
+#include "shadowlab/compare/sweep.h"
+#include "shadowlab/scenes/error.h"
+#include "shadowlab/scenes/io.h"
+
+namespace fs = std::filesystem;
+using namespace shadowlab;
+
+namespace {
+
+// Metrics that are a known function of the method, so a row can be checked against its config.
+double fakeErrorRate(const Method& m) { return 1.0 / m.mapSize + 0.001 * m.biasSlope; }
+
+class FakeRunner : public SweepRunner {
+ public:
+  std::map<std::string, int> runs;  // config text (from the method) -> times run
+  std::atomic<bool>* stopAfter = nullptr;
+  int stopAfterRuns = -1;
+
+  SweepRunOutput run(const Scene& scene, const Method& m, const std::string& light, const std::string&) override {
+    std::string key = scene.name + "|" + std::to_string(m.mapSize) + "|" + std::to_string(m.biasSlope) + "|" + light;
+    ++runs[key];
+    ++total;
+    if (stopAfter && total == stopAfterRuns) stopAfter->store(true);  // as if Ctrl-C came during this run
+    SweepRunOutput out;
+    out.metrics = {{"error_rate", fakeErrorRate(m)}, {"acne_rate", 0.0}, {"leak_rate", 0.001 * m.biasSlope},
+                   {"aliasing_rate", 1.0 / m.mapSize}, {"coverage_rate", 0.0}, {"m_median", 1.0},
+                   {"m_p95", 2.0}, {"m_max", 3.0}};
+    out.timings = {{"shadow_ms", m.mapSize / 100.0}, {"camera_ms", 1.0}, {"readback_ms", 0.5}, {"compare_ms", 0.25}};
+    return out;
+  }
+  bool writeTriptych(const Scene&, const Method&, const std::string&, const std::string&) override { return false; }
+  int total = 0;
+};
+
+std::string tempDir(const std::string& name) {
+  fs::path d = fs::temp_directory_path() / ("shadowlab_sweep_resume_" + name + "_" + std::to_string(::getpid()));
+  fs::remove_all(d);
+  return d.string();
+}
+
+SweepPlan smallPlan(std::vector<std::string> grid, std::vector<std::string> sets = {}) {
+  SweepSpec spec;
+  spec.scenes = {"sphere_on_plane"};
+  for (const auto& g : grid) spec.grid.push_back(parseGridArgument(g));
+  for (const auto& s : sets) spec.fixed.push_back(parseSetArgument(s));
+  return planSweep(spec);
+}
+
+SweepOptions quietOptions(const std::string& dir) {
+  SweepOptions o;
+  o.outDir = dir;
+  o.progress = nullptr;
+  o.writeReport = false;
+  return o;
+}
+
+std::vector<std::string> lines(const std::string& path) {
+  std::ifstream in(path);
+  std::vector<std::string> out;
+  std::string line;
+  while (std::getline(in, line)) out.push_back(line);
+  return out;
+}
+
+}  // namespace
+
+TEST(SweepResume, WritesOneRowPerConfigurationWithItsNumbers) {
+  const std::string dir = tempDir("rows");
+  SweepPlan plan = smallPlan({"map.size=256,512", "bias.slope=0,2"});
+  FakeRunner runner;
+  SweepSummary s = runSweep(plan, runner, quietOptions(dir));
+  EXPECT_FALSE(s.interrupted);
+  EXPECT_EQ(s.ran, 4u);
+  EXPECT_EQ(s.resumed, 0u);
+  auto rows = loadResultRows(dir + "/results.json");
+  ASSERT_EQ(rows.size(), 4u);
+  const char* expected[] = {"bias.slope=0,map.size=256", "bias.slope=2,map.size=256", "bias.slope=0,map.size=512",
+                            "bias.slope=2,map.size=512"};
+  for (size_t i = 0; i < 4; ++i) {
+    EXPECT_EQ(rows[i].scene, "sphere_on_plane");
+    EXPECT_EQ(rows[i].config, expected[i]);
+    EXPECT_EQ(rows[i].light, "sun");
+    const Method& m = plan.configs[i].method;
+    EXPECT_DOUBLE_EQ(rows[i].metrics.at("error_rate").get<double>(), fakeErrorRate(m));
+    EXPECT_EQ(rows[i].method.at("map.size").get<int>(), m.mapSize);
+    for (const char* t : {"shadow_ms", "camera_ms", "readback_ms", "compare_ms", "total_ms"})
+      EXPECT_TRUE(rows[i].timings.contains(t)) << t;
+  }
+  // results.json records the total and the per-configuration times.
+  auto results = nlohmann::json::parse(readFile(dir + "/results.json"));
+  EXPECT_EQ(results.at("configurations").get<int>(), 4);
+  EXPECT_GE(results.at("total_seconds").get<double>(), 0.0);
+  ASSERT_EQ(results.at("config_seconds").size(), 4u);
+  EXPECT_EQ(results.at("config_seconds")[3].at("config"), "bias.slope=2,map.size=512");
+  EXPECT_EQ(results.at("sweep").at("grid")[0].at("key"), "map.size");
+  EXPECT_EQ(results.at("sweep").at("grid")[0].at("values"), nlohmann::json({"256", "512"}));
+
+  // CSV: header then one line per row; the config (it holds commas) is quoted.
+  auto csv = lines(dir + "/results.csv");
+  ASSERT_EQ(csv.size(), 5u);
+  EXPECT_EQ(csv[0].rfind("scene,config,light,", 0), 0u) << csv[0];
+  for (const char* col : {",map.size,", ",bias.slope,", ",error_rate,", ",total_ms"})
+    EXPECT_NE(csv[0].find(col), std::string::npos) << col;
+  EXPECT_EQ(csv[1].rfind("sphere_on_plane,\"bias.slope=0,map.size=256\",sun,", 0), 0u) << csv[1];
+  fs::remove_all(dir);
+}
+
+TEST(SweepResume, InterruptedSweepContinuesWithoutRunningAnyRowTwice) {
+  const std::string dir = tempDir("interrupt");
+  SweepPlan plan = smallPlan({"map.size=256,512,1024", "bias.slope=0,1,2"});  // 9 rows
+  std::atomic<bool> stop{false};
+  FakeRunner first;
+  first.stopAfter = &stop;
+  first.stopAfterRuns = 4;
+  SweepOptions o = quietOptions(dir);
+  o.stop = &stop;
+  SweepSummary s1 = runSweep(plan, first, o);
+  EXPECT_TRUE(s1.interrupted);
+  EXPECT_EQ(s1.ran, 4u) << "the configuration in progress when the stop came is finished and kept";
+  EXPECT_EQ(lines(dir + "/rows.jsonl").size(), 4u);
+  EXPECT_FALSE(fs::exists(dir + "/results.json")) << "an interrupted sweep does not write partial results";
+
+  stop = false;
+  FakeRunner second;
+  SweepSummary s2 = runSweep(plan, second, o);
+  EXPECT_FALSE(s2.interrupted);
+  EXPECT_EQ(s2.resumed, 4u);
+  EXPECT_EQ(s2.ran, 5u);
+  for (const auto& [key, n] : first.runs) EXPECT_EQ(second.runs.count(key), 0u) << key << " ran again";
+  for (const auto& [key, n] : second.runs) EXPECT_EQ(n, 1) << key;
+  auto rows = loadResultRows(dir + "/results.json");
+  ASSERT_EQ(rows.size(), 9u);
+  std::set<std::string> keys;
+  for (const auto& r : rows) EXPECT_TRUE(keys.insert(r.key()).second) << "duplicate " << r.key();
+
+  // A third run finds everything done and runs nothing.
+  FakeRunner third;
+  SweepSummary s3 = runSweep(plan, third, o);
+  EXPECT_EQ(s3.ran, 0u);
+  EXPECT_EQ(s3.resumed, 9u);
+  EXPECT_EQ(third.total, 0);
+  fs::remove_all(dir);
+}
+
+TEST(SweepResume, TornLastLineIsDroppedAndRunAgain) {
+  const std::string dir = tempDir("torn");
+  SweepPlan plan = smallPlan({"map.size=256,512,1024"});
+  FakeRunner first;
+  runSweep(plan, first, quietOptions(dir));
+  // Simulate a kill in the middle of appending the third row: cut its line short.
+  auto all = lines(dir + "/rows.jsonl");
+  ASSERT_EQ(all.size(), 3u);
+  {
+    std::ofstream out(dir + "/rows.jsonl", std::ios::trunc);
+    out << all[0] << "\n" << all[1] << "\n" << all[2].substr(0, all[2].size() / 2);
+  }
+  FakeRunner second;
+  SweepSummary s = runSweep(plan, second, quietOptions(dir));
+  EXPECT_EQ(s.resumed, 2u);
+  EXPECT_EQ(s.ran, 1u);
+  ASSERT_EQ(second.runs.size(), 1u);
+  EXPECT_NE(second.runs.begin()->first.find("|1024|"), std::string::npos);
+  auto now = lines(dir + "/rows.jsonl");
+  ASSERT_EQ(now.size(), 3u) << "the torn line is truncated away, not left before the new row";
+  for (const auto& l : now) EXPECT_NO_THROW((void)nlohmann::json::parse(l)) << l;
+  fs::remove_all(dir);
+}
+
+TEST(SweepResume, DamagedEarlierLineIsRefused) {
+  const std::string dir = tempDir("damaged");
+  SweepPlan plan = smallPlan({"map.size=256,512"});
+  FakeRunner first;
+  runSweep(plan, first, quietOptions(dir));
+  auto all = lines(dir + "/rows.jsonl");
+  {
+    std::ofstream out(dir + "/rows.jsonl", std::ios::trunc);
+    out << "{not json\n" << all[1] << "\n";
+  }
+  FakeRunner second;
+  try {
+    runSweep(plan, second, quietOptions(dir));
+    FAIL() << "a damaged row before the last line must be refused";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find(dir + "/rows.jsonl:1"), std::string::npos) << e.what();
+  }
+  EXPECT_EQ(second.total, 0);
+  fs::remove_all(dir);
+}
+
+TEST(SweepResume, RowsOfAnotherMethodAreRunAgain) {
+  const std::string dir = tempDir("stale");
+  FakeRunner first;
+  runSweep(smallPlan({"map.size=256,512"}, {"bias.slope=1"}), first, quietOptions(dir));
+  // Same configs (config text has only map.size) but another fixed bias: a different experiment.
+  FakeRunner second;
+  SweepSummary s = runSweep(smallPlan({"map.size=256,512"}, {"bias.slope=3"}), second, quietOptions(dir));
+  EXPECT_EQ(s.resumed, 0u);
+  EXPECT_EQ(s.ran, 2u);
+  auto rows = loadResultRows(dir + "/results.json");
+  ASSERT_EQ(rows.size(), 2u);
+  EXPECT_DOUBLE_EQ(rows[0].method.at("bias.slope").get<double>(), 3.0);
+  fs::remove_all(dir);
+}
+
+TEST(SweepResume, ParetoFrontKeepsOnlyRowsThatBeatEveryFasterRow) {
+  std::vector<ResultRow> rows(5);
+  const double ms[] = {10, 20, 30, 40, 15};
+  const double err[] = {0.5, 0.2, 0.3, 0.1, 0.6};
+  for (int i = 0; i < 5; ++i) {
+    rows[i].scene = "s";
+    rows[i].config = "c" + std::to_string(i);
+    rows[i].timings = {{"shadow_ms", ms[i] / 2}, {"camera_ms", ms[i] / 2}};
+    rows[i].metrics = {{"error_rate", err[i]}};
+  }
+  // By time: c0 (10, 0.5) front; c4 (15, 0.6) dominated; c1 (20, 0.2) front; c2 (30, 0.3) dominated;
+  // c3 (40, 0.1) front.
+  EXPECT_EQ(paretoFront(rows, "s"), (std::vector<size_t>{0, 1, 3}));
+  EXPECT_TRUE(paretoFront(rows, "other").empty());
+}
+
+TEST(SweepResume, ASecondSweepIntoTheSameFolderIsRefusedWhileOneRuns) {
+  const std::string dir = tempDir("lock");
+  SweepPlan plan = smallPlan({"map.size=256,512"});
+  // The fake runner starts a nested sweep into the same folder while the outer one holds it.
+  struct Nested : FakeRunner {
+    const SweepPlan* plan = nullptr;
+    std::string dir, error;
+    SweepRunOutput run(const Scene& s, const Method& m, const std::string& l, const std::string& i) override {
+      if (error.empty()) {
+        FakeRunner inner;
+        try {
+          runSweep(*plan, inner, quietOptions(dir));
+          error = "(none)";
+        } catch (const InputError& e) {
+          error = e.what();
+        }
+      }
+      return FakeRunner::run(s, m, l, i);
+    }
+  } runner;
+  runner.plan = &plan;
+  runner.dir = dir;
+  runSweep(plan, runner, quietOptions(dir));
+  EXPECT_NE(runner.error.find("another sweep is writing into this folder"), std::string::npos) << runner.error;
+  EXPECT_EQ(lines(dir + "/rows.jsonl").size(), 2u);
+  fs::remove_all(dir);
+}
