@@ -13,7 +13,7 @@
 namespace {
 
 struct Options {
-  std::string current;
+  std::vector<std::string> currents;
   std::string baseline;
   std::string tolerances;
   std::string jsonOut;
@@ -34,9 +34,9 @@ int updateBaseline(const Options& o, const shadowlab::ResultFile& current) {
   GateResult self = runGate(current, current, defaultTolerances());
   (void)self;
   std::vector<std::string> changes = describeBaselineUpdate(current, baseline);
-  writeJsonAtomic(o.baseline, current.document);
+  writeJsonAtomic(o.baseline, baselineDocument(current));
   std::printf("shadowlab gate: %s baseline %s from %s (%zu rows)\n", existed ? "updated" : "created",
-              o.baseline.c_str(), o.current.c_str(), current.rows.size());
+              o.baseline.c_str(), current.path.c_str(), current.rows.size());
   for (const std::string& line : changes) std::printf("  %s\n", line.c_str());
   if (changes.empty()) std::printf("  no metric changed (timings may have)\n");
   return 0;
@@ -47,7 +47,9 @@ int run(const Options& o) {
   // Everything is read and checked before anything is written: a bad input never leaves a
   // half-updated baseline or a report of a gate that did not run.
   Tolerances tolerances = o.tolerances.empty() ? defaultTolerances() : loadTolerances(o.tolerances);
-  ResultFile current = loadResultFile(o.current);
+  std::vector<ResultFile> files;
+  for (const std::string& path : o.currents) files.push_back(loadResultFile(path));
+  ResultFile current = mergeResultFiles(files);
   if (o.updateBaseline) return updateBaseline(o, current);
   if (!std::filesystem::exists(o.baseline))
     throw InputError(formatError(o.baseline, "",
@@ -61,7 +63,7 @@ int run(const Options& o) {
 
   std::fputs(formatGateTable(result, o.brief).c_str(), stdout);
   std::printf("shadowlab gate: %s (baseline %s, current %s, tolerances %s)\n", result.summary().c_str(),
-              o.baseline.c_str(), o.current.c_str(), tolerances.origin.c_str());
+              o.baseline.c_str(), current.path.c_str(), tolerances.origin.c_str());
   std::fflush(stdout);
   for (const GateCheck& c : result.checks)
     if (c.verdict == Verdict::Regressed) std::fprintf(stderr, "shadowlab gate: error: %s\n", c.message.c_str());
@@ -72,7 +74,9 @@ shadowlab::app::Registrar reg{"gate", [](CLI::App& app) {
   auto* sub = app.add_subcommand("gate",
                                  "Compare results against a baseline under tolerances; exit 1 on a regression");
   auto o = std::make_shared<Options>();
-  sub->add_option("current", o->current, "Current metrics.json or results.json")->required();
+  sub->add_option("current", o->currents,
+                  "Current metrics.json or results.json files (several are gated as one set of rows)")
+      ->required();
   sub->add_option("--baseline", o->baseline, "Baseline metrics.json or results.json")->required();
   sub->add_option("--tolerances", o->tolerances,
                   "Tolerance file (JSON, see compare/GATE.md); default: exact metrics, timings reported");

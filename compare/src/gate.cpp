@@ -152,8 +152,8 @@ int verdictRank(Verdict v) {
     case Verdict::Missing: return 1;
     case Verdict::Improved: return 2;
     case Verdict::New: return 3;
-    case Verdict::Reported: return 4;
-    case Verdict::Pass: return 5;
+    case Verdict::Pass: return 4;
+    case Verdict::Reported: return 5;
   }
   return 6;
 }
@@ -192,10 +192,17 @@ void checkDuplicates(const ResultFile& f) {
   std::map<std::string, size_t> seen;
   for (size_t i = 0; i < f.rows.size(); ++i) {
     auto [it, fresh] = seen.emplace(f.rows[i].key(), i);
-    if (!fresh)
-      throw InputError(formatError(f.path, f.pointers[i],
-                                   "row \"" + f.rows[i].key() + "\" appears again (first at " +
-                                       f.pointers[it->second] + "); expected each (scene, config, light) once"));
+    if (!fresh) {
+      // Name the first occurrence by pointer within the same file, by file (and pointer) across
+      // merged files: the same metrics.json given twice has no pointer to tell them apart.
+      size_t j = it->second;
+      std::string first = f.pathOf(j) == f.pathOf(i) && !f.pointers[j].empty() ? f.pointers[j]
+                          : f.pointers[j].empty()                              ? f.pathOf(j)
+                                                                               : f.pathOf(j) + ": " + f.pointers[j];
+      throw InputError(formatError(f.pathOf(i), f.pointers[i],
+                                   "row \"" + f.rows[i].key() + "\" appears again (first at " + first +
+                                       "); expected each (scene, config, light) once"));
+    }
   }
 }
 
@@ -390,6 +397,7 @@ GateResult runGate(const ResultFile& current, const ResultFile& baseline, const 
     matched.insert(base.key());
     const ResultRow& cur = current.rows[found->second];
     const std::string& curPointer = current.pointers[found->second];
+    const std::string& curPath = current.pathOf(found->second);
     ++result.rowsCompared;
 
     std::map<std::string, nlohmann::json> baseMetrics, curMetrics;
@@ -398,7 +406,7 @@ GateResult runGate(const ResultFile& current, const ResultFile& baseline, const 
     for (auto& [name, bv] : baseMetrics) {
       auto ci = curMetrics.find(name);
       if (ci == curMetrics.end()) {
-        problems.push_back(formatError(current.path, curPointer + "/metrics",
+        problems.push_back(formatError(curPath, curPointer + "/metrics",
                                        "row \"" + base.key() + "\" has no metric \"" + name +
                                            "\"; expected it, as in the baseline " + baseline.path));
         continue;
@@ -409,7 +417,7 @@ GateResult runGate(const ResultFile& current, const ResultFile& baseline, const 
         problems.push_back(formatError(baseline.path, metricPointer(baseline.pointers[b], "metrics", name),
                                        "metric \"" + name + "\" is null (NaN); expected a number"));
       if (cv.is_null())
-        problems.push_back(formatError(current.path, metricPointer(curPointer, "metrics", name),
+        problems.push_back(formatError(curPath, metricPointer(curPointer, "metrics", name),
                                        "metric \"" + name + "\" is null (NaN); expected a number"));
       if (bv.is_null() || cv.is_null()) continue;
 
@@ -425,10 +433,14 @@ GateResult runGate(const ResultFile& current, const ResultFile& baseline, const 
         double bd = bv.get<double>(), cd = cv.get<double>();
         double allowed = tol.allowed(bd);
         std::string allowedText = formatNumber(allowed);
+        // The table shows a rounding-only tolerance (the built-in 1e-9 relative) as 0, not as
+        // "+4.76802e-14"; messages keep the exact number.
+        const std::string shown =
+            tol.absTolerance == 0 && tol.relTolerance <= 1e-6 ? std::string("0") : allowedText;
         auto [cs, bs] = formatPair(cd, bd);
         switch (tol.direction) {
           case Direction::LowerIsBetter:
-            c.tolerance = "+" + allowedText;
+            c.tolerance = "+" + shown;
             if (cd > bd + allowed) {
               c.verdict = Verdict::Regressed;
               c.message = prefix + cs + ", above the baseline " + bs + " + tolerance " + allowedText;
@@ -437,7 +449,7 @@ GateResult runGate(const ResultFile& current, const ResultFile& baseline, const 
             }
             break;
           case Direction::HigherIsBetter:
-            c.tolerance = "-" + allowedText;
+            c.tolerance = "-" + shown;
             if (cd < bd - allowed) {
               c.verdict = Verdict::Regressed;
               c.message = prefix + cs + ", below the baseline " + bs + " - tolerance " + allowedText;
@@ -446,7 +458,7 @@ GateResult runGate(const ResultFile& current, const ResultFile& baseline, const 
             }
             break;
           default:
-            c.tolerance = "+/-" + allowedText;
+            c.tolerance = "+/-" + shown;
             if (std::fabs(cd - bd) > allowed) {
               c.verdict = Verdict::Regressed;
               c.message = prefix + cs + ", not the baseline " + bs + " +/- tolerance " + allowedText;
@@ -650,6 +662,33 @@ std::string gateToJunitXml(const GateResult& result) {
   }
   x << "</testsuites>\n";
   return x.str();
+}
+
+ResultFile mergeResultFiles(const std::vector<ResultFile>& files) {
+  if (files.size() == 1) return files.front();
+  ResultFile merged;
+  merged.schema = "shadowlab.results/1";
+  for (const ResultFile& f : files) {
+    merged.path += (merged.path.empty() ? "" : " + ") + f.path;
+    for (size_t i = 0; i < f.rows.size(); ++i) {
+      merged.rows.push_back(f.rows[i]);
+      merged.pointers.push_back(f.pointers[i]);
+      merged.rowPaths.push_back(f.pathOf(i));
+    }
+  }
+  merged.document = baselineDocument(merged);
+  return merged;
+}
+
+nlohmann::json baselineDocument(const ResultFile& f) {
+  if (f.schema == "shadowlab.metrics/1" && f.rows.size() == 1) {
+    nlohmann::json j = f.rows[0].toJson();
+    j["schema"] = f.schema;
+    return j;
+  }
+  nlohmann::json rows = nlohmann::json::array();
+  for (const ResultRow& r : f.rows) rows.push_back(r.toJson());
+  return {{"schema", "shadowlab.results/1"}, {"rows", std::move(rows)}};
 }
 
 std::vector<std::string> describeBaselineUpdate(const ResultFile& current, const ResultFile& baseline) {

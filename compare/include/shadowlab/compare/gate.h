@@ -27,9 +27,17 @@ struct ResultFile {
   std::string schema;                 // "shadowlab.metrics/1" or "shadowlab.results/1"
   std::vector<ResultRow> rows;
   std::vector<std::string> pointers;  // JSON pointer of each row in the file ("" or "/rows/3")
+  std::vector<std::string> rowPaths;  // the file of each row when merged from several; else empty
   nlohmann::json document;            // the whole file as read
+  const std::string& pathOf(size_t row) const { return rowPaths.empty() ? path : rowPaths[row]; }
 };
 ResultFile loadResultFile(const std::string& path);  // InputError naming file and pointer
+// Several current files gated as one (e.g. one sweep per method): rows concatenated, each still
+// named by its own file in messages. One file is returned unchanged.
+ResultFile mergeResultFiles(const std::vector<ResultFile>& files);
+// What --update-baseline writes: the rows only (no sweep bookkeeping such as machine or seconds),
+// as a metrics.json when `f` is one metrics.json, else as a results.json.
+nlohmann::json baselineDocument(const ResultFile& f);
 
 enum class Direction {
   LowerIsBetter,   // error metrics: a rise beyond tolerance fails, a fall is an improvement
