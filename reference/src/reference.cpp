@@ -217,8 +217,10 @@ class Tracer {
     rtcIntersect8(valid, embree_.handle(), &context.rtc, &rayHit);
     for (int lane = 0; lane < kLanes; ++lane) {
       if (!occluded[lane]) continue;
-      // Both passes apply the same filter to the same segment, so the closest hit exists.
-      distance[lane] = rayHit.hit.geomID[lane] != RTC_INVALID_GEOMETRY_ID ? rayHit.ray.tfar[lane] : 0.0f;
+      // Both passes apply the same filter to the same segment, so the closest hit exists. The
+      // distance is measured from the surface point itself, not from the offset origin.
+      const float t = rayHit.hit.geomID[lane] != RTC_INVALID_GEOMETRY_ID ? rayHit.ray.tfar[lane] : 0.0f;
+      distance[lane] = glm::length(hits[lane].normal * hits[lane].offset + dir[lane] * t);
     }
   }
 

@@ -1,0 +1,122 @@
+// `shadowlab reference SCENE -o DIR [--spp N] [--threads N]`: traces the Embree ground truth and
+// writes DIR/reference.exr (channels: scenes/frame.h), DIR/reference.png (a readable picture) and
+// DIR/reference.json (ray counts, timings, hashes).
+#include <chrono>
+#include <cstdio>
+#include <exception>
+#include <memory>
+#include <thread>
+
+#include "command.h"
+#include "shadowlab/reference/reference.h"
+#include "shadowlab/scenes/error.h"
+#include "shadowlab/scenes/io.h"
+#include "shadowlab/scenes/loader.h"
+
+namespace {
+
+struct Options {
+  std::string scene;
+  std::string outDir;
+  int spp = 1;
+  int threads = 0;
+};
+
+int run(const Options& options) {
+  using Clock = std::chrono::steady_clock;
+  const auto start = Clock::now();
+  // Every argument is checked before anything is traced or written.
+  if (options.spp < 1 || options.spp > 1024) {
+    throw shadowlab::InputError("shadowlab reference: error: --spp " + std::to_string(options.spp) +
+                                "; expected an integer 1..1024");
+  }
+  if (options.threads < 0) {
+    throw shadowlab::InputError("shadowlab reference: error: --threads " + std::to_string(options.threads) +
+                                "; expected 0 (all hardware threads) or more");
+  }
+  if (options.outDir.empty()) {
+    throw shadowlab::InputError("shadowlab reference: error: -o is empty; expected an output folder");
+  }
+  const shadowlab::Scene scene = shadowlab::loadScene(shadowlab::resolveScenePath(options.scene));
+  const auto loaded = Clock::now();
+
+  shadowlab::ReferenceOptions referenceOptions;
+  referenceOptions.spp = options.spp;
+  referenceOptions.threads = options.threads;
+  shadowlab::ReferenceStats stats;
+  const shadowlab::Frame frame = shadowlab::renderReference(scene, referenceOptions, &stats);
+  const auto traced = Clock::now();
+
+  shadowlab::makeDirs(options.outDir);
+  const std::string exrPath = options.outDir + "/reference.exr";
+  const std::string pngPath = options.outDir + "/reference.png";
+  const std::string jsonPath = options.outDir + "/reference.json";
+  // The EXR (zip) and the PNG are independent and each mostly one core's work: write them side
+  // by side. Both writers are atomic (temporary file + rename).
+  std::exception_ptr pngError;
+  std::thread pngWriter([&] {
+    try {
+      shadowlab::writeRgbPng(pngPath, frame.width, frame.height, shadowlab::referencePicture(scene, frame));
+    } catch (...) {
+      pngError = std::current_exception();
+    }
+  });
+  try {
+    shadowlab::writeFrameExr(frame, exrPath);
+  } catch (...) {
+    pngWriter.join();
+    throw;
+  }
+  pngWriter.join();
+  if (pngError) std::rethrow_exception(pngError);
+  const auto written = Clock::now();
+
+  auto seconds = [](Clock::time_point a, Clock::time_point b) { return std::chrono::duration<double>(b - a).count(); };
+  nlohmann::json report = {
+      {"scene", scene.name},
+      {"scene_path", scene.path},
+      {"scene_hash", scene.hash},
+      {"camera_hash", frame.meta.value("camera_hash", "")},
+      {"reference_hash", shadowlab::referenceHash(scene, referenceOptions)},
+      {"width", frame.width},
+      {"height", frame.height},
+      {"spp", options.spp},
+      {"threads", options.threads},
+      {"lights", frame.meta["lights"]},
+      {"projectors", frame.meta["projectors"]},
+      {"triangles", scene.triangleCount()},
+      {"rays", stats.primaryRays + stats.shadowRays},
+      {"primary_rays", stats.primaryRays},
+      {"shadow_rays", stats.shadowRays},
+      {"seconds", stats.seconds},
+      {"mrays_per_s", stats.mraysPerS()},
+      {"build_seconds", stats.buildSeconds},
+      {"load_seconds", seconds(start, loaded)},
+      {"render_seconds", seconds(loaded, traced)},
+      {"write_seconds", seconds(traced, written)},
+      {"total_seconds", seconds(start, written)},
+      {"outputs", {"reference.exr", "reference.png", "reference.json"}},
+  };
+  shadowlab::writeJsonAtomic(jsonPath, report);
+  std::printf("reference: %s %dx%d spp %d: %.3f Mrays in %.3f s (%.1f Mrays/s), build %.3f s, total %.3f s -> %s\n",
+              scene.name.c_str(), frame.width, frame.height, options.spp,
+              double(stats.primaryRays + stats.shadowRays) * 1e-6, stats.seconds, stats.mraysPerS(),
+              stats.buildSeconds, seconds(start, Clock::now()), options.outDir.c_str());
+  return 0;
+}
+
+shadowlab::app::Registrar reg{"reference", [](CLI::App& app) {
+  auto* sub = app.add_subcommand("reference", "Trace the Embree ground truth of a scene");
+  auto options = std::make_shared<Options>();
+  sub->add_option("scene", options->scene, "bundled scene name (see `shadowlab scenes`) or path to a scene .json")
+      ->required();
+  sub->add_option("-o,--out", options->outDir, "output folder: reference.exr, reference.png, reference.json")
+      ->required();
+  sub->add_option("--spp", options->spp, "stratified samples per pixel, 1..1024 (fractional visibility)")
+      ->capture_default_str();
+  sub->add_option("--threads", options->threads, "worker threads, 0 = all; results are identical for any value")
+      ->capture_default_str();
+  return std::function<int()>([options] { return run(*options); });
+}};
+
+}  // namespace
