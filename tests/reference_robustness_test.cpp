@@ -1,0 +1,267 @@
+// The reference's own errors: self-shadowing (acne in the ground truth), leaks from the origin
+// offset at contact lines and through thin walls, and results that depend on the thread count.
+//
+// Convex casters (the bundled scenes' boxes, rotated or not) are described exactly by the face
+// planes of their triangles. A ground point P under a directional light (toLight = -direction) is
+//   shadowed  iff the ray P + s toLight, s > 0, enters the box (clipping the ray against every
+//             face half-space leaves a non-empty interval),
+// and that is the expected answer, except for points whose ray passes within `margin` world units
+// of the box surface (it hits the box grown by margin but misses it shrunk by margin): those are
+// left out. margin = 1e-3 is far below a pixel's footprint (~1e-2 here) and far above the shadow
+// origin's offset (2^-17 of the coordinates, ~1e-4), so an offset that leaked light at contact
+// lines or through thin walls, or a self-intersection that darkened the ground, would fail.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstring>
+
+#include <glm/glm.hpp>
+
+#include "shadowlab/reference/reference.h"
+#include "shadowlab/scenes/error.h"
+#include "shadowlab/scenes/loader.h"
+
+namespace {
+
+using namespace shadowlab;
+
+struct ConvexCaster {
+  std::vector<glm::dvec3> normals;  // outward, unit
+  std::vector<double> offsets;      // n . x <= offset inside
+
+  // Face planes of a closed convex mesh, oriented away from its vertex centroid.
+  explicit ConvexCaster(const Object& object) {
+    glm::dvec3 centroid(0.0);
+    for (const glm::vec3& p : object.positions) centroid += glm::dvec3(p);
+    centroid /= double(object.positions.size());
+    for (const glm::uvec3& tri : object.triangles) {
+      const glm::dvec3 p0(object.positions[tri.x]), p1(object.positions[tri.y]), p2(object.positions[tri.z]);
+      glm::dvec3 n = glm::normalize(glm::cross(p1 - p0, p2 - p0));
+      if (glm::dot(n, p0 - centroid) < 0.0) n = -n;
+      normals.push_back(n);
+      offsets.push_back(glm::dot(n, p0));
+    }
+  }
+  // Does the ray o + s d (s > 0) enter the body grown by `margin` (shrunk where negative)?
+  bool hit(const glm::dvec3& o, const glm::dvec3& d, double margin) const {
+    double enter = 0.0, leave = INFINITY;
+    for (size_t k = 0; k < normals.size(); ++k) {
+      const double distance = glm::dot(normals[k], o) - (offsets[k] + margin);
+      const double along = glm::dot(normals[k], d);
+      if (along == 0.0) {
+        if (distance > 0.0) return false;
+        continue;
+      }
+      const double s = -distance / along;
+      if (along < 0.0) enter = std::max(enter, s);
+      else leave = std::min(leave, s);
+      if (enter > leave) return false;
+    }
+    return true;
+  }
+};
+
+struct GroundCheck {
+  size_t lit = 0, shadowed = 0, skipped = 0, wrongLit = 0, wrongShadowed = 0;
+  std::string first;
+};
+
+// Every ground pixel whose expected answer is clear must match exactly.
+GroundCheck checkGround(const Scene& scene, const Frame& frame, double margin = 1e-3) {
+  const Object* ground = nullptr;
+  std::vector<ConvexCaster> casters;
+  for (const Object& object : scene.objects) {
+    if (object.name == "ground") ground = &object;
+    else casters.emplace_back(object);
+  }
+  EXPECT_NE(ground, nullptr);
+  const Light& light = scene.lights.at(0);
+  EXPECT_EQ(light.type, LightType::Directional);
+  const glm::dvec3 toLight = -glm::normalize(glm::dvec3(light.direction));
+  const std::string visName = "light." + light.name + ".vis";
+  const auto& id = frame.get("object_id");
+  const auto& vis = frame.get(visName);
+  const auto& px = frame.get("P.x");
+  const auto& py = frame.get("P.y");
+  const auto& pz = frame.get("P.z");
+  GroundCheck result;
+  for (size_t i = 0; i < frame.pixelCount(); ++i) {
+    if (!ground || id[i] != float(ground->id)) continue;
+    const glm::dvec3 p(px[i], py[i], pz[i]);
+    bool surely = false, maybe = false;
+    for (const ConvexCaster& caster : casters) {
+      surely = surely || caster.hit(p, toLight, -margin);
+      maybe = maybe || caster.hit(p, toLight, margin);
+    }
+    if (maybe && !surely) {
+      ++result.skipped;
+      continue;
+    }
+    const bool expectedLit = !maybe;
+    if (expectedLit) ++result.lit;
+    else ++result.shadowed;
+    if ((vis[i] == 1.0f) != expectedLit || (vis[i] != 0.0f && vis[i] != 1.0f)) {
+      (expectedLit ? result.wrongShadowed : result.wrongLit)++;
+      if (result.wrongLit + result.wrongShadowed <= 10)
+        result.first += "  pixel " + std::to_string(i % frame.width) + ", " + std::to_string(i / frame.width) +
+                        " at (" + std::to_string(p.x) + ", " + std::to_string(p.y) + ", " + std::to_string(p.z) +
+                        "): vis " + std::to_string(vis[i]) + "; expected " + (expectedLit ? "1" : "0") + "\n";
+    }
+  }
+  return result;
+}
+
+// The grazing scene at its own 5 degrees and lower: the ground facing the light at 5, 1 and
+// 0.25 degrees must be lit everywhere the block's shadow is not. Self-intersection would darken
+// the ground (the classic acne, here in the reference itself): wrongShadowed counts it.
+TEST(ReferenceRobustness, GrazingLightShowsZeroSelfShadowing) {
+  for (double elevationDeg : {5.0, 1.0, 0.25}) {
+    SCOPED_TRACE("elevation " + std::to_string(elevationDeg));
+    const Scene scene = loadScene(resolveScenePath("grazing"), {{"/lights/0/elevation_deg", elevationDeg}});
+    const Frame frame = renderReference(scene, {});
+    const GroundCheck result = checkGround(scene, frame);
+    EXPECT_EQ(result.wrongShadowed, 0u) << "self-shadowed ground pixels:\n" << result.first;
+    EXPECT_EQ(result.wrongLit, 0u) << result.first;
+    EXPECT_GT(result.lit, 100000u);
+    EXPECT_GT(result.shadowed, 1000u);
+  }
+}
+
+// Contact: the crate rests exactly on the ground (and at 0.002 and 0.01 above it). Points next
+// to its base on the shadow side must stay dark: an origin offset large enough to slip under
+// the crate would light them (wrongLit).
+TEST(ReferenceRobustness, ContactLineDoesNotLeak) {
+  for (double centerY : {1.0, 1.002, 1.01}) {
+    SCOPED_TRACE("crate center y " + std::to_string(centerY));
+    const Scene scene = loadScene(resolveScenePath("contact"), {{"/objects/1/transform/translate/1", centerY}});
+    const Frame frame = renderReference(scene, {});
+    const GroundCheck result = checkGround(scene, frame);
+    EXPECT_EQ(result.wrongLit, 0u) << "leaking pixels:\n" << result.first;
+    EXPECT_EQ(result.wrongShadowed, 0u) << result.first;
+    EXPECT_GT(result.shadowed, 10000u);
+    EXPECT_GT(result.lit, 100000u);
+  }
+}
+
+// Thin walls down to 0.005 thick must block the light completely.
+TEST(ReferenceRobustness, ThinWallDoesNotLeak) {
+  for (double thickness : {0.02, 0.005}) {
+    SCOPED_TRACE("thickness " + std::to_string(thickness));
+    const Scene scene = loadScene(resolveScenePath("thin_wall"), {{"/objects/1/size/0", thickness}});
+    const Frame frame = renderReference(scene, {});
+    const GroundCheck result = checkGround(scene, frame);
+    EXPECT_EQ(result.wrongLit, 0u) << "leaking pixels:\n" << result.first;
+    EXPECT_EQ(result.wrongShadowed, 0u) << result.first;
+    EXPECT_GT(result.shadowed, 20000u);
+  }
+}
+
+// Bit-identical channels and metadata for 1, 2 and 4 threads (and a repeat), on scenes that
+// exercise every path: a scanned mesh, alpha testing, a projector, and spp > 1.
+TEST(ReferenceRobustness, BitIdenticalForAnyThreadCount) {
+  struct Case {
+    const char* scene;
+    int spp;
+  };
+  for (const Case& c : {Case{"bunny", 1}, Case{"alpha_fence", 1}, Case{"projector", 1}, Case{"contact", 4}}) {
+    SCOPED_TRACE(std::string(c.scene) + " spp " + std::to_string(c.spp));
+    const Scene scene =
+        loadScene(resolveScenePath(c.scene), {{"/camera/width", 480}, {"/camera/height", 270}});
+    std::vector<Frame> frames;
+    for (int threads : {1, 2, 4, 4}) {
+      ReferenceOptions options;
+      options.threads = threads;
+      options.spp = c.spp;
+      frames.push_back(renderReference(scene, options));
+    }
+    const Frame& first = frames.front();
+    // The frame is not trivially constant: something is lit and something is shadowed.
+    const auto& vis = first.get("light." + scene.lights.at(0).name + ".vis");
+    const auto& hit = first.get("hit");
+    size_t lit = 0, dark = 0;
+    for (size_t i = 0; i < vis.size(); ++i) {
+      if (hit[i] == 0.0f) continue;
+      (vis[i] > 0.5f ? lit : dark)++;
+    }
+    EXPECT_GT(lit, 1000u);
+    EXPECT_GT(dark, 500u);
+    for (size_t f = 1; f < frames.size(); ++f) {
+      ASSERT_EQ(frames[f].names, first.names);
+      EXPECT_EQ(frames[f].meta, first.meta);
+      for (size_t c2 = 0; c2 < first.names.size(); ++c2) {
+        const auto& a = first.data[c2];
+        const auto& b = frames[f].data[c2];
+        ASSERT_EQ(a.size(), b.size());
+        EXPECT_EQ(std::memcmp(a.data(), b.data(), a.size() * sizeof(float)), 0)
+            << "channel " << first.names[c2] << " differs between 1 thread and run " << f;
+      }
+    }
+  }
+}
+
+// The metadata and channel names exactly as scenes/frame.h documents them, and the hashes:
+// referenceHash changes with spp and camera but not with the thread count.
+TEST(ReferenceRobustness, ChannelsMetadataAndHashes) {
+  const Scene scene = loadScene(resolveScenePath("projector"), {{"/camera/width", 64}, {"/camera/height", 36}});
+  ReferenceStats stats;
+  const Frame frame = renderReference(scene, {}, &stats);
+  const std::vector<std::string> expected = {
+      "hit", "object_id", "prim_id", "P.x", "P.y", "P.z", "N.x", "N.y", "N.z",
+      "light.sun.vis", "light.sun.occluder_dist",
+      "proj.slide.coverage", "proj.slide.u", "proj.slide.v", "proj.slide.R", "proj.slide.G", "proj.slide.B"};
+  EXPECT_EQ(frame.names, expected);
+  EXPECT_EQ(frame.meta["kind"], "reference");
+  EXPECT_EQ(frame.meta["scene"], "projector");
+  EXPECT_EQ(frame.meta["scene_hash"], scene.hash);
+  EXPECT_EQ(frame.meta["width"], 64);
+  EXPECT_EQ(frame.meta["height"], 36);
+  EXPECT_EQ(frame.meta["lights"], nlohmann::json::array({"sun"}));
+  EXPECT_EQ(frame.meta["projectors"], nlohmann::json::array({"slide"}));
+  EXPECT_EQ(frame.meta["camera_hash"].get<std::string>().size(), 16u);
+  EXPECT_EQ(stats.primaryRays, 64u * 36u);
+  EXPECT_GT(stats.shadowRays, 0u);
+
+  ReferenceOptions options;
+  const std::string base = referenceHash(scene, options);
+  options.threads = 3;
+  EXPECT_EQ(referenceHash(scene, options), base);
+  options.spp = 4;
+  EXPECT_NE(referenceHash(scene, options), base);
+  Scene moved = scene;
+  moved.camera.position.x += 0.001f;
+  EXPECT_NE(referenceHash(moved, {}), base);
+
+  // N faces the camera and is unit length wherever there is a hit; misses are all zero.
+  const auto& hit = frame.get("hit");
+  for (size_t i = 0; i < frame.pixelCount(); ++i) {
+    const glm::vec3 n(frame.get("N.x")[i], frame.get("N.y")[i], frame.get("N.z")[i]);
+    const glm::vec3 p(frame.get("P.x")[i], frame.get("P.y")[i], frame.get("P.z")[i]);
+    if (hit[i] == 1.0f) {
+      EXPECT_NEAR(glm::length(n), 1.0f, 1e-5f);
+      EXPECT_LT(glm::dot(n, p - scene.camera.position), 0.0f);
+    } else {
+      EXPECT_EQ(frame.get("object_id")[i], 0.0f);
+      EXPECT_EQ(glm::length(n), 0.0f);
+      EXPECT_EQ(frame.get("light.sun.vis")[i], 0.0f);
+    }
+  }
+  // The readable picture has one RGB triple per pixel and is not blank.
+  const std::vector<uint8_t> picture = referencePicture(scene, frame);
+  ASSERT_EQ(picture.size(), frame.pixelCount() * 3);
+  EXPECT_NE(*std::max_element(picture.begin(), picture.end()), *std::min_element(picture.begin(), picture.end()));
+}
+
+TEST(ReferenceRobustness, RejectsBadOptions) {
+  const Scene scene = loadScene(resolveScenePath("contact"), {{"/camera/width", 32}, {"/camera/height", 18}});
+  for (int spp : {0, -1, 1025}) {
+    ReferenceOptions options;
+    options.spp = spp;
+    EXPECT_THROW(renderReference(scene, options), InputError) << spp;
+  }
+  ReferenceOptions options;
+  options.threads = -2;
+  EXPECT_THROW(renderReference(scene, options), InputError);
+}
+
+}  // namespace
