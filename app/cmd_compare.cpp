@@ -97,7 +97,7 @@ int run(const Options& o) {
   // Everything is validated and computed: only now does the output folder appear.
   makeDirs(o.outDir);
   writeMetricsJson((fs::path(o.outDir) / "metrics.json").string(), row);
-  writeErrorsPng((fs::path(o.outDir) / "errors.png").string(), classification);
+  writeErrorsPng((fs::path(o.outDir) / "errors.png").string(), classification, &reference);
   writeTriptychPng((fs::path(o.outDir) / "triptych.png").string(), reference, raster, classification);
   std::printf("compared %llu pixels (%llu geometry mismatch): error_rate %.4f (acne %llu, leak %llu, aliasing %llu, "
               "coverage %llu, other %llu) in %.1f ms\n",

@@ -102,7 +102,7 @@ int run(const Options& o) {
     writeFrameExr(r.reference, (out / "reference.exr").string());
     writeFrameExr(r.raster, (out / "raster.exr").string());
   }
-  writeErrorsPng((out / "errors.png").string(), r.classification);
+  writeErrorsPng((out / "errors.png").string(), r.classification, &r.reference);
   writeTriptychPng((out / "triptych.png").string(), r.reference, r.raster, r.classification);
   // metrics.json last: its presence means the run finished.
   writeMetricsJson((out / "metrics.json").string(), row);

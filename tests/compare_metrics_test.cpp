@@ -228,6 +228,29 @@ TEST(CompareMetrics, BoundaryTexelsWidensAliasing) {
   EXPECT_EQ(m0.other, 8u);
 }
 
+TEST(CompareMetrics, LeakEvidenceNearTheBoundaryIsAliasing) {
+  // Within boundaryTexels texels of the true edge the map's resolution limits every texel-scaled
+  // bias, so leak evidence there counts as aliasing; farther out it is a leak. Acne keeps its
+  // own signature even at the edge.
+  Pair p = makeAgreeingPair();
+  for (int x : {33, 34, 40}) {  // 1, 2 and 8 px from the boundary column 32, m = 1
+    p.ras("light.sun.vis", x, 5) = 1.0f;
+    p.ras("light.sun.map_depth", x, 5) = 0.4995f;  // caster in front, within the bias
+  }
+  p.ras("light.sun.vis", 30, 6) = 0.0f;  // 1 px from the boundary, own texel: acne
+  p.ras("light.sun.occluder_id", 30, 6) = kPlane;
+  Classification c;
+  const Metrics m = compareFrames(p.reference, p.raster, {}, &c);
+  EXPECT_EQ(c.classes[p.idx(33, 5)], PixelClass::Aliasing);
+  EXPECT_EQ(c.classes[p.idx(34, 5)], PixelClass::Aliasing);
+  EXPECT_EQ(c.classes[p.idx(40, 5)], PixelClass::Leak);
+  EXPECT_EQ(c.classes[p.idx(30, 6)], PixelClass::Acne);
+  EXPECT_EQ(m.aliasing, 2u);
+  EXPECT_EQ(m.leak, 1u);
+  EXPECT_EQ(m.acne, 1u);
+  EXPECT_EQ(m.other, 0u);
+}
+
 TEST(CompareMetrics, FrameComparedWithItselfHasZeroError) {
   Pair p = makeAgreeingPair();
   plant(p);

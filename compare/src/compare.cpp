@@ -66,9 +66,10 @@ nlohmann::json Metrics::toJson() const {
 
 namespace {
 
-// Internal per-pixel code for "disagreement not explained by coverage, acne or leak": resolved to
-// Aliasing or Other once the boundary distances are known. Never leaves this file.
-constexpr uint8_t kCandidate = 255;
+// Internal per-pixel codes for "disagreement not explained by coverage or acne": resolved to
+// Aliasing, or beyond the boundary band to Leak (kCandidateLeak: the leak evidence holds) or
+// Other, once the boundary distances are known. Never leave this file.
+constexpr uint8_t kCandidate = 255, kCandidateLeak = 254;
 // Reference decision per pixel, for the boundary distance transform.
 constexpr uint8_t kDecisionNone = 0, kDecisionLit = 1, kDecisionShadowed = 2;
 constexpr int kBlockRows = 16;
@@ -321,14 +322,14 @@ Metrics compareFrames(const Frame& reference, const Frame& raster, const Compare
         c = PixelClass::Coverage;
       } else if (rLit && occId && occId[i] == rasObj[i]) {
         c = PixelClass::Acne;
-      } else if (!rLit && depthEvidence && occId[i] != 0.0f && occId[i] != rasObj[i] &&
-                 recvDepth[i] > mapDepth[i] && recvDepth[i] <= mapDepth[i] + biasDepth[i]) {
-        c = PixelClass::Leak;  // another object was in front in the map; only the bias let it pass
-      } else if (!rLit && refOccDist && biasWorld && refOccDist[i] >= 0.0f &&
-                 refOccDist[i] <= leakFactor * biasWorld[i]) {
-        c = PixelClass::Leak;  // the true occluder lies within the bias distance
       } else {
-        klass[i] = kCandidate;
+        // Aliasing or, beyond the boundary band, leak (with its evidence) or other: pass 2.
+        const bool leakEvidence =
+            !rLit && ((depthEvidence && occId[i] != 0.0f && occId[i] != rasObj[i] && recvDepth[i] > mapDepth[i] &&
+                       recvDepth[i] <= mapDepth[i] + biasDepth[i]) ||  // (a) an occluder in the map, let through by the bias
+                      (refOccDist && biasWorld && refOccDist[i] >= 0.0f &&
+                       refOccDist[i] <= leakFactor * biasWorld[i]));  // (b) the true occluder within the bias distance
+        klass[i] = leakEvidence ? kCandidateLeak : kCandidate;
         ++s.candidates;
         s.candidateLimitPx = std::max(s.candidateLimitPx, mPlane ? m : 1.0f);
         continue;
@@ -374,7 +375,7 @@ Metrics compareFrames(const Frame& reference, const Frame& raster, const Compare
     tbb::parallel_for(0, height, [&](int y) {
       const uint8_t* krow = klass + size_t(y) * width;
       uint8_t any = 0;
-      for (int x = 0; x < width; ++x) any |= krow[x] == kCandidate;
+      for (int x = 0; x < width; ++x) any |= krow[x] >= kCandidateLeak;
       rowHasCandidate[size_t(y)] = any;
     });
     std::vector<std::pair<int, int>> bands;  // [y0, y1) row intervals
@@ -417,7 +418,7 @@ Metrics compareFrames(const Frame& reference, const Frame& raster, const Compare
       }
     });
     const float boundaryTexels = options.boundaryTexels;
-    std::vector<std::array<uint64_t, 2>> rowCounts(size_t(height), {0, 0});  // aliasing, other
+    std::vector<std::array<uint64_t, 3>> rowCounts(size_t(height), {0, 0, 0});
     struct RowScratch {
       std::vector<int> v;
       std::vector<double> z;
@@ -428,7 +429,7 @@ Metrics compareFrames(const Frame& reference, const Frame& raster, const Compare
       uint8_t* krow = klass + size_t(y) * width;
       int xFirst = width, xLast = -1;
       for (int x = 0; x < width; ++x) {
-        if (krow[x] == kCandidate) {
+        if (krow[x] >= kCandidateLeak) {
           xFirst = std::min(xFirst, x);
           xLast = x;
         }
@@ -459,23 +460,26 @@ Metrics compareFrames(const Frame& reference, const Frame& raster, const Compare
         z[k + 1] = std::numeric_limits<double>::infinity();
       }
       k = 0;
-      std::array<uint64_t, 2> counts{0, 0};
+      std::array<uint64_t, 3> counts{0, 0, 0};  // aliasing, leak, other
       for (int x = xFirst; x <= xLast; ++x) {
         while (z[k + 1] < x) ++k;
-        if (krow[x] != kCandidate) continue;
+        if (krow[x] < kCandidateLeak) continue;
         const int p = v[k];
         const double dist2 = double(x - p) * double(x - p) + f(p);
         const size_t i = size_t(y) * width + x;
         const double limitPx = double(boundaryTexels) * (mPlane ? double(sanitizeM(mPlane[i])) : 1.0);
-        const bool aliasing = dist2 <= limitPx * limitPx;
-        krow[x] = uint8_t(aliasing ? PixelClass::Aliasing : PixelClass::Other);
-        ++counts[aliasing ? 0 : 1];
+        const PixelClass c = dist2 <= limitPx * limitPx ? PixelClass::Aliasing
+                             : krow[x] == kCandidateLeak ? PixelClass::Leak
+                                                          : PixelClass::Other;
+        krow[x] = uint8_t(c);
+        ++counts[c == PixelClass::Aliasing ? 0 : c == PixelClass::Leak ? 1 : 2];
       }
       rowCounts[size_t(y)] = counts;
     });
     for (const auto& rc : rowCounts) {
       t.counts[size_t(PixelClass::Aliasing)] += rc[0];
-      t.counts[size_t(PixelClass::Other)] += rc[1];
+      t.counts[size_t(PixelClass::Leak)] += rc[1];
+      t.counts[size_t(PixelClass::Other)] += rc[2];
     }
   }
 

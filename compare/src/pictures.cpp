@@ -125,7 +125,34 @@ void classColor(PixelClass c, bool referenceLit, uint8_t rgb[3]) {
   }
 }
 
-std::vector<uint8_t> errorsPicture(const Classification& c, int* outWidth, int* outHeight) {
+namespace {
+
+// 1 where `hit` or `object_id` differs from the right or lower neighbour: silhouettes and the
+// seams between objects. Empty when the frame lacks the channels or has another size.
+std::vector<uint8_t> silhouettes(const Frame* f, int w, int h) {
+  if (!f || f->width != w || f->height != h || !f->has("hit") || !f->has("object_id")) return {};
+  const auto& hit = f->get("hit");
+  const auto& id = f->get("object_id");
+  std::vector<uint8_t> edge(size_t(w) * h, 0);
+  auto key = [&](size_t i) { return hit[i] >= 0.5f ? id[i] : -1.0f; };
+  for (int y = 0; y < h; ++y) {
+    for (int x = 0; x < w; ++x) {
+      const size_t i = size_t(y) * w + x;
+      const float k = key(i);
+      if (x + 1 < w && key(i + 1) != k) edge[i] = edge[i + 1] = 1;
+      if (y + 1 < h && key(i + w) != k) edge[i] = edge[i + w] = 1;
+    }
+  }
+  return edge;
+}
+
+void darken(uint8_t* p) {
+  for (int k = 0; k < 3; ++k) p[k] = uint8_t(p[k] * 3 / 5);
+}
+
+}  // namespace
+
+std::vector<uint8_t> errorsPicture(const Classification& c, int* outWidth, int* outHeight, const Frame* outlines) {
   const int w = c.width, h = c.height;
   if (w <= 0 || h <= 0 || c.classes.size() != size_t(w) * h) {
     throw InputError("errors picture: error: classification is " + std::to_string(w) + "x" + std::to_string(h) +
@@ -171,6 +198,13 @@ std::vector<uint8_t> errorsPicture(const Classification& c, int* outWidth, int* 
       classColor(c.classes[i], lit, &canvas.rgb[i * 3]);
     }
   }
+  // Outlines only over correct and background pixels: an error pixel keeps its class color.
+  const std::vector<uint8_t> edge = silhouettes(outlines, w, h);
+  for (size_t i = 0; i < edge.size(); ++i) {
+    if (edge[i] && (c.classes[i] == PixelClass::Correct || c.classes[i] == PixelClass::NotCompared)) {
+      darken(&canvas.rgb[i * 3]);
+    }
+  }
   for (size_t k = 0; k < entries.size(); ++k) {
     uint8_t col[3];
     classColor(entries[k].cls, entries[k].lit, col);
@@ -183,17 +217,20 @@ std::vector<uint8_t> errorsPicture(const Classification& c, int* outWidth, int* 
   return std::move(canvas.rgb);
 }
 
-void writeErrorsPng(const std::string& path, const Classification& c) {
+void writeErrorsPng(const std::string& path, const Classification& c, const Frame* outlines) {
   int w = 0, h = 0;
-  std::vector<uint8_t> rgb = errorsPicture(c, &w, &h);
+  std::vector<uint8_t> rgb = errorsPicture(c, &w, &h, outlines);
   writeRgbPng(path, w, h, rgb);
 }
 
 namespace {
 
 // Grey shading from visibility only (compare sees frames, not the scene): lit surfaces light grey,
-// shadowed ones dark grey, background dark blue.
+// shadowed ones dark grey, background dark blue; each object slightly tinted and outlined so
+// that a lit object in front of a lit ground stays visible.
 std::vector<uint8_t> visibilityPicture(const Frame& f, const std::string& light) {
+  const std::vector<uint8_t> edge = silhouettes(&f, f.width, f.height);
+  const float* id = f.has("object_id") ? f.get("object_id").data() : nullptr;
   std::vector<uint8_t> rgb(f.pixelCount() * 3);
   const std::string visName = "light." + light + ".vis";
   const float* hit = f.has("hit") ? f.get("hit").data() : nullptr;
@@ -206,8 +243,10 @@ std::vector<uint8_t> visibilityPicture(const Frame& f, const std::string& light)
     }
     float v = vis ? vis[i] : 1.0f;
     v = v >= 0.0f ? std::min(v, 1.0f) : 0.0f;
-    const uint8_t g = uint8_t(60.0f + 170.0f * v + 0.5f);
-    p[0] = p[1] = p[2] = g;
+    const float g = 60.0f + 170.0f * v;
+    const uint32_t tint = id ? uint32_t(id[i]) * 2654435761u : 0u;  // a fixed hash per object id
+    for (int k = 0; k < 3; ++k) p[k] = uint8_t(g * (0.82f + 0.18f * float((tint >> (8 * k + 5)) & 7) / 7.0f) + 0.5f);
+    if (!edge.empty() && edge[i]) darken(p);
   }
   return rgb;
 }
@@ -231,7 +270,7 @@ void writeTriptychPng(const std::string& path, const Frame& reference, const Fra
     light.clear();  // no light: both panels show geometry only
   }
   int ew = 0, eh = 0;
-  const std::vector<uint8_t> errors = errorsPicture(c, &ew, &eh);
+  const std::vector<uint8_t> errors = errorsPicture(c, &ew, &eh, &reference);
   const int s = fontScale(w);
   const int gap = 4 * s, header = kGlyphH * s + 4 * s;
   Canvas canvas(3 * w + 2 * gap, header + std::max(h, eh), kLegendBackground);

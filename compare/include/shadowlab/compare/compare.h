@@ -73,8 +73,11 @@ Metrics compareFrames(const Frame& reference, const Frame& raster, const Compare
 
 // Pictures (8-bit RGB, width*height*3): each class in its own color with a legend drawn in;
 // the triptych is reference | raster | errors side by side.
-std::vector<uint8_t> errorsPicture(const Classification& c, int* outWidth, int* outHeight);
-void writeErrorsPng(const std::string& path, const Classification& c);
+// `outlines` (optional, e.g. the reference frame): object silhouettes (where `hit` or `object_id`
+// changes between neighbours) are drawn darker over correct pixels so the geometry is readable.
+std::vector<uint8_t> errorsPicture(const Classification& c, int* outWidth, int* outHeight,
+                                   const Frame* outlines = nullptr);
+void writeErrorsPng(const std::string& path, const Classification& c, const Frame* outlines = nullptr);
 void writeTriptychPng(const std::string& path, const Frame& reference, const Frame& raster,
                       const Classification& c);
 
