@@ -61,11 +61,14 @@ nlohmann::json parseJsonText(const std::string& text, const std::string& file) {
   } else if (what.rfind("[json.exception", 0) == 0 && what.find("] ") != std::string::npos) {
     what = what.substr(what.find("] ") + 2);
   }
-  if (sax.errorId == 406) {
-    // The position is just past the number: point at its first character instead.
-    if (byte > sax.errorToken.size()) byte -= sax.errorToken.size() - 1;
-    what += "; expected a finite number (NaN and infinity are not allowed)";
+  // nlohmann's position is the last character it read (one past a number); GCC points at the
+  // start of the offending token, so find the token just before that position.
+  if (!sax.errorToken.empty() && byte > 0) {
+    size_t limit = std::min(byte, text.size());
+    size_t start = text.rfind(sax.errorToken, limit > 0 ? limit - 1 : 0);
+    if (start != std::string::npos && start + sax.errorToken.size() + 2 >= limit) byte = start + 1;
   }
+  if (sax.errorId == 406) what += "; expected a finite number (NaN and infinity are not allowed)";
   size_t line = 0, column = 0;
   lineColumn(text, byte, line, column);
   throw InputError(file + ":" + std::to_string(line) + ":" + std::to_string(column) + ": error: " + what);

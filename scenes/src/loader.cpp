@@ -77,7 +77,7 @@ class Reader {
   }
   Node require(const Node& n, const std::string& key, const std::string& what) const {
     Node c = child(n, key);
-    if (!c) fail(n.ptr.empty() ? "/" : n.ptr, "missing key \"" + key + "\"; expected " + what);
+    if (!c) fail(n.ptr, "missing key \"" + key + "\"; expected " + what);
     return c;
   }
   Node at(const Node& n, size_t i) const { return Node{&(*n.j)[i], detail::childPointer(n.ptr, i)}; }
@@ -158,6 +158,12 @@ class Reader {
  private:
   std::string file_;
 };
+
+std::string numText(double v) {
+  std::ostringstream s;
+  s << v;
+  return s.str();
+}
 
 std::string vecText(glm::vec3 v) {
   std::ostringstream s;
@@ -530,7 +536,7 @@ void readCamera(const Reader& r, const Node& root, Camera& cam) {
     r.fail(r.child(c, "up").ptr, "got " + vecText(cam.up) + ", parallel to the view direction " +
                                      vecText(glm::normalize(view)) + "; expected an up vector not parallel to it");
   if (!(cam.nearPlane < cam.farPlane))
-    r.fail(r.child(c, "near").ptr, "got near " + std::to_string(cam.nearPlane) + " >= far " + std::to_string(cam.farPlane) +
+    r.fail(r.child(c, "near").ptr, "got near " + numText(cam.nearPlane) + " >= far " + numText(cam.farPlane) +
                                        "; expected near < far");
 }
 
@@ -774,7 +780,7 @@ void readProjectors(const Reader& r, const Node& root, const fs::path& dir, Scen
     if (Node n = r.child(p, "near")) proj.nearPlane = float(r.positive(n));
     if (Node n = r.child(p, "far")) proj.farPlane = float(r.positive(n));
     if (!(proj.nearPlane < proj.farPlane))
-      r.fail(r.child(p, "near").ptr, "got near " + std::to_string(proj.nearPlane) + " >= far " + std::to_string(proj.farPlane) +
+      r.fail(r.child(p, "near").ptr, "got near " + numText(proj.nearPlane) + " >= far " + numText(proj.farPlane) +
                                          "; expected near < far");
     Node img = r.require(p, "image", "a path to an image");
     proj.image = rgbOf(readImage(r, img.ptr, resolvePath(r.string(img, "a path to an image"), dir), "projector image"));
@@ -860,7 +866,10 @@ Scene loadScene(const std::string& path, const std::vector<SceneOverride>& overr
   std::error_code ec;
   if (!fs::exists(path, ec)) {
     std::string hint;
-    if (path.find('/') == std::string::npos && path.find(".json") == std::string::npos) hint = " (bundled scenes: run `shadowlab scenes`)";
+    if (fs::path(path).parent_path() == fs::path(bundledScenesDir())) {
+      hint = "; expected a file or a bundled scene name:";
+      for (const auto& n : bundledSceneNames()) hint += " " + n;
+    }
     throw InputError(formatError(path, "", "cannot open scene file: no such file" + hint));
   }
   json doc = detail::parseJsonFile(path);
