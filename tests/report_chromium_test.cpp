@@ -1,0 +1,225 @@
+// report.html in a real browser: a small real sweep (through the binary) writes its report, headless
+// Chromium opens it from disk with the network machinery off, and the page must load every
+// picture (the page's own check sets body[data-images-ok]) without a console message. The same
+// check must catch a report with a missing figure. Skips loudly when Chromium is not installed.
+#include <gtest/gtest.h>
+#include <signal.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <chrono>
+#include <filesystem>
+#include <fstream>
+#include <regex>
+#include <sstream>
+#include <thread>
+
+#include "shadowlab/compare/sweep.h"
+#include "shadowlab/scenes/io.h"
+
+namespace fs = std::filesystem;
+using namespace shadowlab;
+
+namespace {
+
+const char* kChromium = "/usr/bin/chromium";
+
+std::string slurp(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  std::stringstream ss;
+  ss << in.rdbuf();
+  return ss.str();
+}
+
+// Runs argv with stdout/stderr to files; exit status, or -1 after killing it on timeout.
+int runCommand(const std::vector<std::string>& args, const std::string& outPath, const std::string& errPath,
+               double timeoutS = 120) {
+  pid_t pid = ::fork();
+  if (pid == 0) {
+    if (!std::freopen(outPath.c_str(), "w", stdout) || !std::freopen(errPath.c_str(), "w", stderr)) ::_exit(126);
+    ::setpgid(0, 0);  // chromium forks helpers: a timeout kills the whole group
+    std::vector<char*> argv;
+    for (const auto& a : args) argv.push_back(const_cast<char*>(a.c_str()));
+    argv.push_back(nullptr);
+    ::execv(argv[0], argv.data());
+    ::_exit(127);
+  }
+  auto t0 = std::chrono::steady_clock::now();
+  int status = 0;
+  while (::waitpid(pid, &status, WNOHANG) != pid) {
+    if (std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count() > timeoutS) {
+      ::kill(-pid, SIGKILL);
+      ::waitpid(pid, &status, 0);
+      return -1;
+    }
+    std::this_thread::sleep_for(std::chrono::milliseconds(10));
+  }
+  return WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
+}
+
+struct PageCheck {
+  int rc = 0;
+  std::string imagesOk;     // body data-images-ok
+  int imagesCount = -1;     // body data-images-count
+  std::vector<std::string> consoleLines;
+  std::string dom, log;
+};
+
+std::vector<std::string> chromiumArgs(const std::string& profile) {
+  return {kChromium, "--headless", "--no-sandbox", "--disable-gpu", "--disable-background-networking",
+          "--disable-component-update", "--disable-sync", "--no-first-run", "--disable-default-apps",
+          "--user-data-dir=" + profile, "--enable-logging=stderr", "--v=0", "--virtual-time-budget=10000"};
+}
+
+PageCheck openInChromium(const std::string& html, const std::string& work) {
+  PageCheck c;
+  fs::create_directories(work);
+  auto args = chromiumArgs(work + "/profile");
+  args.push_back("--dump-dom");
+  args.push_back("file://" + fs::absolute(html).string());
+  c.rc = runCommand(args, work + "/dom.html", work + "/chromium.log");
+  c.dom = slurp(work + "/dom.html");
+  c.log = slurp(work + "/chromium.log");
+  std::smatch m;
+  static const std::regex ok(R"re(<body[^>]*data-images-ok="([a-z]+)")re");
+  static const std::regex count(R"re(<body[^>]*data-images-count="([0-9]+)")re");
+  if (std::regex_search(c.dom, m, ok)) c.imagesOk = m[1];
+  if (std::regex_search(c.dom, m, count)) c.imagesCount = std::stoi(m[1]);
+  // Console messages (console.error, uncaught exceptions, failed loads reported by the page)
+  // appear as "...:INFO:CONSOLE..." lines; the report itself logs nothing when all is well.
+  std::istringstream lines(c.log);
+  std::string line;
+  while (std::getline(lines, line))
+    if (line.find(":CONSOLE") != std::string::npos) c.consoleLines.push_back(line);
+  return c;
+}
+
+std::string tempDir(const std::string& name) {
+  fs::path d = fs::temp_directory_path() / ("shadowlab_report_" + name + "_" + std::to_string(::getpid()));
+  fs::remove_all(d);
+  fs::create_directories(d);
+  return d.string();
+}
+
+}  // namespace
+
+TEST(ReportChromium, RealSweepReportLoadsEveryPictureWithoutConsoleErrors) {
+  if (!fs::exists(kChromium)) GTEST_SKIP() << "SKIPPED LOUDLY: " << kChromium << " is not installed (apt-get install chromium)";
+  const std::string dir = tempDir("real");
+  const std::string out = dir + "/sweep";
+  // Two sizes x two biases at a quarter of the scene's pixels: every chart has its key.
+  int rc = runCommand({SHADOWLAB_BINARY, "sweep", "sphere_on_plane", "--grid", "map.size=256,1024", "--grid",
+                       "bias.slope=0,2", "--set", "scene:/camera/width=480", "--set", "scene:/camera/height=270", "-o",
+                       out, "--cache", dir + "/cache"},
+                      dir + "/sweep.out", dir + "/sweep.err");
+  if (rc == 3) GTEST_SKIP() << "no Vulkan device (shadowlab exit 3): " << slurp(dir + "/sweep.err");
+  ASSERT_EQ(rc, 0) << slurp(dir + "/sweep.err");
+  EXPECT_NE(slurp(dir + "/sweep.out").find("report: " + fs::absolute(out + "/report.html").string()), std::string::npos)
+      << "the sweep prints where the report is: " << slurp(dir + "/sweep.out");
+
+  // The charts the brief asks for, in the three formats, and both triptychs.
+  for (const char* chart : {"error_by_size", "bias_tradeoff_bias_slope", "accuracy_vs_time", "m_footprint"})
+    for (const char* ext : {"png", "pdf", "svg"}) {
+      std::string f = out + "/figures/" + chart + "." + ext;
+      EXPECT_TRUE(fs::is_regular_file(f)) << f << "\n" << slurp(out + "/figures/charts.log");
+    }
+  EXPECT_TRUE(fs::is_regular_file(out + "/figures/triptych_sphere_on_plane_best.png"));
+  EXPECT_TRUE(fs::is_regular_file(out + "/figures/triptych_sphere_on_plane_worst.png"));
+
+  // Self-contained: nothing fetched from a network.
+  const std::string html = slurp(out + "/report.html");
+  EXPECT_EQ(html.find("src=\"http"), std::string::npos);
+  EXPECT_EQ(html.find("href=\"http"), std::string::npos);
+  EXPECT_EQ(html.find("<link"), std::string::npos);
+  EXPECT_EQ(html.find("@import"), std::string::npos);
+  EXPECT_EQ(html.find("url("), std::string::npos);
+  // The summary, the grid and the charts are there.
+  EXPECT_NE(html.find("Best configurations per scene"), std::string::npos);
+  EXPECT_NE(html.find("bias.slope=2,map.size=1024"), std::string::npos);
+  EXPECT_NE(html.find("Pareto front"), std::string::npos);
+
+  PageCheck page = openInChromium(out + "/report.html", dir + "/chromium");
+  ASSERT_EQ(page.rc, 0) << page.log;
+  EXPECT_EQ(page.imagesOk, "true") << "a picture did not load; chromium log:\n" << page.log;
+  EXPECT_EQ(page.imagesCount, 6) << "4 charts + 2 triptychs";
+  EXPECT_TRUE(page.consoleLines.empty()) << "console messages:\n" << page.consoleLines.front();
+
+  // A screenshot renders (proof the page lays out, and an artifact to look at when it fails).
+  auto shot = chromiumArgs(dir + "/chromium/profile2");
+  shot.push_back("--window-size=1280,3000");
+  shot.push_back("--screenshot=" + dir + "/report.png");
+  shot.push_back("file://" + fs::absolute(out + "/report.html").string());
+  ASSERT_EQ(runCommand(shot, dir + "/shot.out", dir + "/shot.err"), 0) << slurp(dir + "/shot.err");
+  const std::string png = slurp(dir + "/report.png");
+  ASSERT_GT(png.size(), 10000u);
+  EXPECT_EQ(png.substr(1, 3), "PNG");
+
+  // The deliberate failure: the same report with one chart removed must be caught.
+  fs::remove(out + "/figures/accuracy_vs_time.png");
+  PageCheck broken = openInChromium(out + "/report.html", dir + "/chromium_broken");
+  EXPECT_EQ(broken.imagesOk, "false") << "a missing figure must be detected";
+  ASSERT_FALSE(broken.consoleLines.empty()) << "the page reports the missing picture on the console";
+  EXPECT_NE(broken.consoleLines.front().find("accuracy_vs_time.png"), std::string::npos) << broken.consoleLines.front();
+  fs::remove_all(dir);
+}
+
+// A fake runner (no renderer): the report machinery alone, on a grid without map.size or bias.
+class FakeRunner : public SweepRunner {
+ public:
+  SweepRunOutput run(const Scene&, const Method& m, const std::string&, const std::string&) override {
+    SweepRunOutput out;
+    double e = m.filter == Filter::None ? 0.02 : 0.01;
+    out.metrics = {{"error_rate", e}, {"acne_rate", e / 2}, {"leak_rate", e / 4}, {"aliasing_rate", e / 4},
+                   {"coverage_rate", 0.0}, {"m_median", 2.0}, {"m_p95", 5.0}, {"m_max", 40.0}};
+    out.timings = {{"shadow_ms", m.filter == Filter::None ? 5.0 : 6.0}, {"camera_ms", 10.0}, {"compare_ms", 1.0}};
+    return out;
+  }
+  bool writeTriptych(const Scene&, const Method&, const std::string&, const std::string&) override { return false; }
+};
+
+TEST(ReportChromium, ChartsWhoseKeyIsNotSweptAreSkippedWithANote) {
+  const std::string dir = tempDir("skip");
+  SweepSpec spec;
+  spec.scenes = {"sphere_on_plane"};
+  spec.grid.push_back(parseGridArgument("filter=none,hw2x2"));
+  SweepPlan plan = planSweep(spec);
+  FakeRunner runner;
+  SweepOptions o;
+  o.outDir = dir + "/sweep";
+  o.progress = nullptr;
+  o.reportScript = defaultReportScript(SHADOWLAB_SOURCE_DIR);
+  SweepSummary s = runSweep(plan, runner, o);
+  ASSERT_EQ(s.reportHtml, o.outDir + "/report.html");
+  const std::string html = slurp(s.reportHtml);
+  EXPECT_NE(html.find("skipped: map.size is not in the grid"), std::string::npos) << slurp(o.outDir + "/figures/charts.log");
+  EXPECT_NE(html.find("skipped: no bias key"), std::string::npos);
+  // The charts that need no particular key are made.
+  EXPECT_TRUE(fs::is_regular_file(o.outDir + "/figures/accuracy_vs_time.png")) << slurp(o.outDir + "/figures/charts.log");
+  EXPECT_TRUE(fs::is_regular_file(o.outDir + "/figures/m_footprint.svg"));
+  EXPECT_FALSE(fs::exists(o.outDir + "/figures/error_by_size.png"));
+  // Pareto table: hw2x2 (16 ms, 1%) beats none (15 ms, 2%) only at the larger budget: both listed.
+  EXPECT_NE(html.find("&le; 15.00</td><td class=\"t\">filter=none"), std::string::npos);
+  EXPECT_NE(html.find("&le; 16.00</td><td class=\"t\">filter=hw2x2"), std::string::npos);
+  fs::remove_all(dir);
+}
+
+TEST(ReportChromium, FailingChartScriptIsANoteNotACrash) {
+  const std::string dir = tempDir("fail");
+  const std::string script = dir + "/broken_charts.py";
+  std::ofstream(script) << "import sys\nsys.stderr.write('deliberate failure\\n')\nsys.exit(4)\n";
+  SweepSpec spec;
+  spec.scenes = {"sphere_on_plane"};
+  SweepPlan plan = planSweep(spec);
+  FakeRunner runner;
+  SweepOptions o;
+  o.outDir = dir + "/sweep";
+  o.progress = nullptr;
+  o.reportScript = script;
+  SweepSummary s = runSweep(plan, runner, o);
+  ASSERT_FALSE(s.notes.empty());
+  EXPECT_NE(s.notes[0].find("exited with 4"), std::string::npos) << s.notes[0];
+  EXPECT_NE(s.notes[0].find("deliberate failure"), std::string::npos) << s.notes[0];
+  EXPECT_NE(slurp(s.reportHtml).find("deliberate failure"), std::string::npos);
+  EXPECT_TRUE(fs::is_regular_file(s.resultsJson));
+  fs::remove_all(dir);
+}
