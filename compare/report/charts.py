@@ -147,39 +147,54 @@ def chart_error_by_size(scenes, rows_by_scene, swept, out_dir):
 
 
 def chart_bias_tradeoff(scenes, rows_by_scene, swept, out_dir, key, key_label):
-    others = [k for k in swept if k != key]
-    fig, axes = panel_grid(len(scenes))
+    # The best bias depends on the map resolution, so when map.size is swept (a handful of sizes)
+    # each size gets its own pair of lines; any other swept key is reduced to its best row.
+    per_size = "map.size" in swept and key != "map.size"
+    others = [k for k in swept if k != key and not (per_size and k == "map.size")]
+    fig, axes = panel_grid(len(scenes), width_per=5.2, height_per=3.8, max_cols=2)
     notes = []
     for ax, scene in zip(axes, scenes):
         rows = rows_by_scene[scene]
-        best = best_by(rows, lambda r: float(method_value(r, key)),
-                       lambda r: (num(r["metrics"], "acne_rate") or 0) + (num(r["metrics"], "leak_rate") or 0))
-        xs = sorted(best)
-        acne = [num(best[x]["metrics"], "acne_rate") or 0 for x in xs]
-        leak = [num(best[x]["metrics"], "leak_rate") or 0 for x in xs]
-        total = [a + l for a, l in zip(acne, leak)]
-        ax.plot(xs, acne, marker="o", color="tab:red", label="acne_rate (too little bias)")
-        ax.plot(xs, leak, marker="s", color="tab:blue", label="leak_rate (too much bias)")
-        ax.plot(xs, total, linestyle="--", color="0.4", label="acne_rate + leak_rate")
-        if xs:
+        sizes = sorted({int(method_value(r, "map.size")) for r in rows}) if per_size else [None]
+        if len(sizes) > 6:  # too many lines to read: keep the smallest, middle and largest
+            sizes = [sizes[0], sizes[len(sizes) // 2], sizes[-1]]
+        colors = plt.rcParams["axes.prop_cycle"].by_key()["color"]
+        for n, size in enumerate(sizes):
+            subset = [r for r in rows if size is None or int(method_value(r, "map.size")) == size]
+            best = best_by(subset, lambda r: float(method_value(r, key)),
+                           lambda r: (num(r["metrics"], "acne_rate") or 0) + (num(r["metrics"], "leak_rate") or 0))
+            xs = sorted(best)
+            if not xs:
+                continue
+            acne = [num(best[x]["metrics"], "acne_rate") or 0 for x in xs]
+            leak = [num(best[x]["metrics"], "leak_rate") or 0 for x in xs]
+            total = [a + l for a, l in zip(acne, leak)]
+            color = colors[n % len(colors)]
+            tag = "" if size is None else f" @ {size}"
+            ax.plot(xs, acne, marker="o", color=color, label=f"acne_rate{tag}")
+            ax.plot(xs, leak, marker="s", linestyle="--", color=color, label=f"leak_rate{tag}")
             i = min(range(len(xs)), key=lambda k: (total[k], xs[k]))
-            ax.axvline(xs[i], color="tab:green", alpha=0.6)
-            ax.plot([xs[i]], [total[i]], marker="*", markersize=14, color="tab:green",
-                    label=f"best {key} = {xs[i]:g}")
-            notes.append(f"{scene}: best {key} = {xs[i]:g} (acne {acne[i]:.3%}, leak {leak[i]:.3%})")
-        if len(xs) > 2 and min(xs) >= 0 and max(xs) > 0:
-            pos = [x for x in xs if x > 0]
-            if pos and max(pos) / min(pos) >= 50:
-                ax.set_xscale("symlog", linthresh=min(pos))
+            ax.plot([xs[i]], [total[i]], marker="*", markersize=14, color=color, markeredgecolor="black",
+                    linestyle="none", label=f"best {key} = {xs[i]:g}{tag}")
+            if size == sizes[-1]:
+                notes.append(f"{scene}: best {key} = {xs[i]:g}{tag} (acne {acne[i]:.3%}, leak {leak[i]:.3%})")
+        xs_all = sorted({float(method_value(r, key)) for r in rows})
+        pos = [x for x in xs_all if x > 0]
+        if len(xs_all) > 2 and min(xs_all) >= 0 and pos and max(pos) / min(pos) >= 50:
+            ax.set_xscale("symlog", linthresh=min(pos))
+        ax.set_yscale("symlog", linthresh=1e-4)
+        ax.set_ylim(bottom=0)
         ax.set_title(scene)
         ax.set_xlabel(key_label)
         ax.set_ylabel("rate (fraction of compared pixels)")
-        ax.grid(True, alpha=0.3)
-        ax.legend(fontsize=7)
-    caption = (f"The bias trade-off for {key}: acne falls and leaking (peter panning) rises as the bias grows; the star "
-               "marks the bias with the lowest acne_rate + leak_rate. " + "; ".join(notes) + ".")
+        ax.grid(True, which="both", alpha=0.3)
+        ax.legend(fontsize=6.5, ncol=2 if len(sizes) > 1 else 1)
+    caption = (f"The bias trade-off for {key}: acne (solid) falls and leaking or peter panning (dashed) rises as the "
+               "bias grows; a star marks the bias with the lowest acne_rate + leak_rate"
+               + (", one colour per map size" if per_size else "") + ". The y axis is linear below 1e-4 and "
+               "logarithmic above. " + "; ".join(notes) + ".")
     if others:
-        caption += " At each bias the configuration with the lowest acne_rate + leak_rate over " + ", ".join(others) + \
+        caption += " At each point the configuration with the lowest acne_rate + leak_rate over " + ", ".join(others) + \
                    " is shown."
     return save(fig, out_dir, "bias_tradeoff_" + key.replace(".", "_")), caption
 

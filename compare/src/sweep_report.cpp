@@ -49,11 +49,8 @@ std::string valueText(const nlohmann::json& v) {
   if (v.is_string()) return v.get<std::string>();
   if (v.is_boolean()) return v.get<bool>() ? "true" : "false";
   if (v.is_number_float()) {
-    double d = v.get<double>();
-    if (!std::isfinite(d)) return "";
-    char buf[40];
-    std::snprintf(buf, sizeof buf, "%.17g", d);
-    return buf;
+    if (!std::isfinite(v.get<double>())) return "";
+    return v.dump();  // shortest text that reads back to the same double
   }
   return v.dump();
 }
@@ -105,9 +102,8 @@ std::string pct(double rate) {
 
 double rasterMs(const ResultRow& r) { return num(r.timings, "shadow_ms", 0.0) + num(r.timings, "camera_ms", 0.0); }
 
-// Runs `argv` with stdout and stderr into `logPath`; returns the exit status (or -1 when it could
-// not start, 128 + signal when killed).
-int runLogged(const std::vector<std::string>& argv, const std::string& logPath) {
+// Starts `argv` with stdout and stderr into `logPath`; returns its pid (-1 when fork failed).
+pid_t spawnLogged(const std::vector<std::string>& argv, const std::string& logPath) {
   int logFd = ::open(logPath.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
   pid_t pid = ::fork();
   if (pid < 0) {
@@ -131,6 +127,12 @@ int runLogged(const std::vector<std::string>& argv, const std::string& logPath) 
     ::_exit(127);
   }
   if (logFd >= 0) ::close(logFd);
+  return pid;
+}
+
+// The exit status of a spawned child (-1 when it could not start, 128 + signal when killed).
+int waitExit(pid_t pid) {
+  if (pid < 0) return -1;
   int status = 0;
   while (::waitpid(pid, &status, 0) < 0) {
     if (errno != EINTR) return -1;
@@ -270,10 +272,15 @@ std::vector<std::string> writeSweepReport(const SweepPlan& plan, const std::vect
   const std::string resultsPath = joinPath(options.outDir, "results.json");
   const std::string manifestPath = joinPath(figuresDir, "charts.json");
 
-  // Charts. A stale manifest from an earlier run must not pass for this run's charts.
+  // Charts, in a child process that runs while the triptychs render (the two use different
+  // resources: one Python thread against lavapipe's threads). A stale manifest from an earlier
+  // run must not pass for this run's charts.
   std::error_code ec;
   fs::remove(manifestPath, ec);
   nlohmann::json manifest;
+  pid_t charts = -1;
+  std::string chartsCommand;
+  const std::string logPath = joinPath(figuresDir, "charts.log");
   if (options.reportScript.empty()) {
     notes.push_back("charts skipped: no chart script configured (set SHADOWLAB_REPORT_SCRIPT)");
   } else if (!fs::is_regular_file(options.reportScript, ec)) {
@@ -284,20 +291,9 @@ std::vector<std::string> writeSweepReport(const SweepPlan& plan, const std::vect
       const char* env = std::getenv("SHADOWLAB_PYTHON");
       python = env && *env ? env : "/usr/bin/python3";
     }
-    const std::string logPath = joinPath(figuresDir, "charts.log");
-    int rc = runLogged({python, options.reportScript, resultsPath, figuresDir}, logPath);
-    if (rc != 0) {
-      notes.push_back("charts failed: " + python + " " + options.reportScript + " exited with " + std::to_string(rc) +
-                      "; see figures/charts.log: " + tailOf(logPath, 3));
-    }
-  }
-  if (fs::is_regular_file(manifestPath, ec)) {
-    try {
-      manifest = nlohmann::json::parse(readFile(manifestPath));
-    } catch (const std::exception& e) {
-      notes.push_back(std::string("charts unusable: figures/charts.json: ") + e.what());
-      manifest = nlohmann::json();
-    }
+    charts = spawnLogged({python, options.reportScript, resultsPath, figuresDir}, logPath);
+    chartsCommand = python + " " + options.reportScript;
+    if (charts < 0) notes.push_back("charts failed: cannot start " + chartsCommand + ": " + std::strerror(errno));
   }
 
   // Triptychs of the best and the worst configuration of each scene, rendered again now: the
@@ -336,6 +332,21 @@ std::vector<std::string> writeSweepReport(const SweepPlan& plan, const std::vect
         }
       }
       picks[name] = list;
+    }
+  }
+
+  if (charts >= 0) {
+    int rc = waitExit(charts);
+    if (rc != 0)
+      notes.push_back("charts failed: " + chartsCommand + " exited with " + std::to_string(rc) +
+                      "; see figures/charts.log: " + tailOf(logPath, 3));
+  }
+  if (fs::is_regular_file(manifestPath, ec)) {
+    try {
+      manifest = nlohmann::json::parse(readFile(manifestPath));
+    } catch (const std::exception& e) {
+      notes.push_back(std::string("charts unusable: figures/charts.json: ") + e.what());
+      manifest = nlohmann::json();
     }
   }
 
