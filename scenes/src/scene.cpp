@@ -63,7 +63,10 @@ glm::mat4 Projector::texFromWorld() const {
   return bias * proj * view;
 }
 
-glm::mat4 Camera::viewFromWorld() const { return glm::lookAt(position, lookAt, up); }
+// Computed in double and rounded once, so the float matrix and the float ray agree to ~1e-5 px.
+glm::mat4 Camera::viewFromWorld() const {
+  return glm::mat4(glm::lookAt(glm::dvec3(position), glm::dvec3(lookAt), glm::dvec3(up)));
+}
 
 glm::mat4 Camera::clipFromView() const {
   return vulkanPerspective(vfovDeg, float(width) / float(height), nearPlane, farPlane);
@@ -71,17 +74,19 @@ glm::mat4 Camera::clipFromView() const {
 
 // The inverse of clipFromView for the point at image position (x, y) in pixels:
 //   ndc = (2x / W - 1, 2y / H - 1)
-//   d_view = (ndc.x * aspect * t, -ndc.y * t, -1), t = tan(vfov / 2)
+//   d_view = (ndc.x * aspect * t, -ndc.y * t, -1), t = tan(vfov / 2), aspect = W / H
 // expressed in world space with glm::lookAt's basis (right s, up u, forward f), then normalized.
+// Double inside: the reference traces these rays and the rasterizer uses the float matrices;
+// both must land on the same pixel center.
 glm::vec3 Camera::rayDirection(float x, float y) const {
-  glm::vec3 forward = glm::normalize(lookAt - position);
-  glm::vec3 right = glm::normalize(glm::cross(forward, up));
-  glm::vec3 trueUp = glm::cross(right, forward);
-  float t = std::tan(glm::radians(vfovDeg) * 0.5f);
-  float aspect = float(width) / float(height);
-  float ndcX = 2.0f * x / float(width) - 1.0f;
-  float ndcY = 2.0f * y / float(height) - 1.0f;
-  return glm::normalize(forward + (ndcX * aspect * t) * right - (ndcY * t) * trueUp);
+  glm::dvec3 forward = glm::normalize(glm::dvec3(lookAt) - glm::dvec3(position));
+  glm::dvec3 right = glm::normalize(glm::cross(forward, glm::dvec3(up)));
+  glm::dvec3 trueUp = glm::cross(right, forward);
+  double t = std::tan(double(glm::radians(vfovDeg)) * 0.5);
+  double aspect = double(float(width) / float(height));
+  double ndcX = 2.0 * x / width - 1.0;
+  double ndcY = 2.0 * y / height - 1.0;
+  return glm::vec3(glm::normalize(forward + (ndcX * aspect * t) * right - (ndcY * t) * trueUp));
 }
 
 glm::vec3 Scene::boundsMin() const {
