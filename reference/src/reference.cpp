@@ -54,6 +54,7 @@ struct LaneHit {
 
 struct PreparedLight {
   const Light* light = nullptr;
+  glm::vec3 toLight{0.0f};    // directional: unit, -direction
   double cosHalfCone = -1.0;  // spot: lit where cos(angle to the axis) >= this
 };
 
@@ -241,9 +242,9 @@ class Tracer {
       if (!h.hit) continue;
       glm::vec3 toLight;
       if (light.type == LightType::Directional) {
-        toLight = -light.direction;
+        toLight = prepared.toLight;
         tfar[lane] = kInf;
-        dir[lane] = glm::normalize(toLight);
+        dir[lane] = toLight;
       } else {
         toLight = light.position - h.position;
         if (light.type == LightType::Spot) {
@@ -381,6 +382,7 @@ Frame renderReference(const Scene& scene, const ReferenceOptions& options, Refer
     planes.occluderDist.push_back(frame.add("light." + light.name + ".occluder_dist", -1.0f).data());
     PreparedLight prepared;
     prepared.light = &light;
+    prepared.toLight = glm::normalize(-light.direction);
     if (light.type == LightType::Spot) prepared.cosHalfCone = std::cos(double(light.coneDeg) * 0.5 * M_PI / 180.0);
     lights.push_back(prepared);
   }
