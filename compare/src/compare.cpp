@@ -135,6 +135,46 @@ float bitsFloat(uint32_t b) {
   return v;
 }
 
+// A buffer reused across calls on the same thread (a sweep compares hundreds of frames): saves
+// the page faults of fresh multi-megabyte allocations. A thread waiting inside a TBB loop may run
+// another task that calls compareFrames again, so a buffer already lent out is never shared: that
+// nested call gets its own.
+template <typename T>
+class Scratch {
+ public:
+  explicit Scratch(size_t n) {
+    Slot& slot = slot_();
+    if (!slot.busy) {
+      slot.busy = true;
+      lent_ = &slot;
+      slot.buffer.resize(n);
+      data_ = slot.buffer.data();
+    } else {
+      own_.resize(n);
+      data_ = own_.data();
+    }
+  }
+  ~Scratch() {
+    if (lent_) lent_->busy = false;
+  }
+  Scratch(const Scratch&) = delete;
+  Scratch& operator=(const Scratch&) = delete;
+  T* data() { return data_; }
+
+ private:
+  struct Slot {
+    std::vector<T> buffer;
+    bool busy = false;
+  };
+  static Slot& slot_() {
+    thread_local Slot slot;
+    return slot;
+  }
+  Slot* lent_ = nullptr;
+  std::vector<T> own_;
+  T* data_ = nullptr;
+};
+
 struct BlockSums {
   uint64_t compared = 0, mismatch = 0;
   uint64_t counts[8] = {};
@@ -252,10 +292,7 @@ Metrics compareFrames(const Frame& reference, const Frame& raster, const Compare
   cls.height = height;
   cls.classes.resize(n);
   cls.referenceLit.resize(n);
-  // Scratch reused across calls on the same thread (a sweep compares hundreds of frames): saves
-  // the page faults of fresh multi-megabyte allocations.
-  thread_local std::vector<uint8_t> decisionScratch;
-  decisionScratch.resize(n);
+  Scratch<uint8_t> decisionScratch(n);
   uint8_t* decision = decisionScratch.data();
   uint8_t* klass = reinterpret_cast<uint8_t*>(cls.classes.data());
   uint8_t* refLit = cls.referenceLit.data();
@@ -269,6 +306,10 @@ Metrics compareFrames(const Frame& reference, const Frame& raster, const Compare
   tbb::parallel_for(0, blocks, [&](int b) {
     BlockSums s;
     uint64_t* hist = mPlane ? mHistLocal.local().data() : nullptr;
+    // m is smooth over the image, so neighbours share a histogram bin: count runs in a register
+    // instead of incrementing the same memory counter back to back (a store-to-load chain).
+    uint32_t runBin = 0;
+    uint64_t runLength = 0;
     const size_t begin = size_t(b) * kBlockRows * width;
     const size_t end = std::min(n, size_t(b + 1) * kBlockRows * width);
     for (size_t i = begin; i < end; ++i) {
@@ -300,7 +341,13 @@ Metrics compareFrames(const Frame& reference, const Frame& raster, const Compare
         m = sanitizeM(mPlane[i]);
         s.mMax = std::max(s.mMax, m);
         s.mMin = std::min(s.mMin, m);
-        ++hist[floatBits(m) >> 16];
+        const uint32_t bin = floatBits(m) >> 16;
+        if (bin != runBin) {
+          hist[runBin] += runLength;
+          runBin = bin;
+          runLength = 0;
+        }
+        ++runLength;
       }
       if (hasProjector) {
         const float rc = clamp01(refCov[i]), sc = clamp01(rasCov[i]);
@@ -337,6 +384,7 @@ Metrics compareFrames(const Frame& reference, const Frame& raster, const Compare
       ++s.counts[size_t(c)];
       klass[i] = uint8_t(c);
     }
+    if (hist) hist[runBin] += runLength;
     sums[size_t(b)] = s;
   });
 
@@ -387,8 +435,7 @@ Metrics compareFrames(const Frame& reference, const Frame& raster, const Compare
     }
     // g = vertical distance to the nearest boundary pixel within the band, capped at `far`.
     const uint16_t far = uint16_t(std::min(reach + 1, 65535));
-    thread_local std::vector<uint16_t> gScratch;
-    gScratch.resize(n);
+    Scratch<uint16_t> gScratch(n);
     uint16_t* g = gScratch.data();
     constexpr int kStrip = 512;
     const int strips = (width + kStrip - 1) / kStrip;
