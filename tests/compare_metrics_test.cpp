@@ -6,6 +6,7 @@
 
 #include <gtest/gtest.h>
 #include <tbb/global_control.h>
+#include <tbb/parallel_for.h>
 
 #include "shadowlab/compare/compare.h"
 #include "shadowlab/scenes/error.h"
@@ -466,6 +467,26 @@ TEST(CompareMetrics, AliasingMatchesBruteForceBoundaryDistance) {
   EXPECT_EQ(m.other, other);
   EXPECT_GT(aliasing, 50u);
   EXPECT_GT(other, 50u);
+}
+
+TEST(CompareMetrics, ConcurrentCallsAgreeWithSerialOnes) {
+  // A sweep may compare several pairs at once from TBB tasks (and a thread waiting inside one
+  // compare may pick up another): the results must not mix.
+  std::vector<Pair> pairs;
+  std::vector<std::string> serial;
+  for (int k = 0; k < 6; ++k) {
+    pairs.push_back(makeAgreeingPair(200 + 10 * k, 120));
+    Pair& p = pairs.back();
+    std::mt19937 rng(100 + k);
+    std::uniform_real_distribution<float> u(0.0f, 1.0f);
+    for (auto& v : p.raster.get("light.sun.vis")) v = u(rng) < 0.1f ? 1.0f - v : v;
+    serial.push_back(compareFrames(p.reference, p.raster).toJson().dump());
+  }
+  std::vector<std::string> parallel(pairs.size());
+  tbb::parallel_for(size_t(0), pairs.size(), [&](size_t k) {
+    parallel[k] = compareFrames(pairs[k].reference, pairs[k].raster).toJson().dump();
+  });
+  EXPECT_EQ(parallel, serial);
 }
 
 TEST(CompareMetrics, ErrorsPictureHasLegendAndClassColors) {
