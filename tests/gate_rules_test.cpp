@@ -95,12 +95,16 @@ TEST(GateRules, HigherIsBetterAndEqualAndIgnore) {
   EXPECT_TRUE(b.passed());
 }
 
-TEST(GateRules, FallbacksEntryThenDefaultThenBuiltin) {
-  Tolerances t = tolerances(R"({"default": {"abs": 0.5}, "metrics": {"acne_rate": {"rel": 0.2}}})");
+TEST(GateRules, ListedMetricsUseTheirEntryOnlyUnlistedUseTheDefault) {
+  Tolerances t = tolerances(R"({"default": {"abs": 0.5, "rel": 0.1}, "metrics": {"acne_rate": {"rel": 0.2}}})");
   MetricTolerance acne = t.forMetric("acne_rate");
   EXPECT_EQ(acne.direction, Direction::LowerIsBetter);  // built-in
   EXPECT_DOUBLE_EQ(acne.relTolerance, 0.2);
-  EXPECT_DOUBLE_EQ(acne.absTolerance, 0.5);  // from "default"
+  EXPECT_DOUBLE_EQ(acne.absTolerance, 0.0);  // left out of the entry: 0, not the default's 0.5
+  MetricTolerance leak = t.forMetric("leak_rate");  // not listed: the default
+  EXPECT_EQ(leak.direction, Direction::LowerIsBetter);
+  EXPECT_DOUBLE_EQ(leak.absTolerance, 0.5);
+  EXPECT_DOUBLE_EQ(leak.relTolerance, 0.1);
   EXPECT_EQ(t.forMetric("shadow_iou").direction, Direction::HigherIsBetter);
   EXPECT_EQ(t.forMetric("pixels_compared").direction, Direction::Equal);
   EXPECT_EQ(t.forMetric("some_new_thing").direction, Direction::Equal);
@@ -181,6 +185,13 @@ TEST(GateRules, MissingRowMissingMetricNanAndDuplicatesAreInputErrors) {
   EXPECT_NE(dup.find("cur.json: /rows/1: error: row \"grazing | a | sun\" appears again (first at /rows/0)"),
             std::string::npos)
       << dup;
+}
+
+TEST(GateRules, EmptyBaselineIsAnInputError) {
+  ResultFile empty = fileOf("base.json", {});
+  EXPECT_EQ(inputErrorOf([&] { runGate(fileOf("c", {row("a", {{"acne_rate", 0.01}})}), empty, defaultTolerances()); }),
+            "base.json: /rows: error: the baseline has no rows; expected at least one (create it with "
+            "--update-baseline)");
 }
 
 TEST(GateRules, NewRowsAndMetricsAreReportedNotFailed) {

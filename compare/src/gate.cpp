@@ -288,14 +288,20 @@ Direction builtinDirection(const std::string& metric, bool* known) {
 }
 
 MetricTolerance Tolerances::forMetric(const std::string& metric) const {
-  ToleranceSpec entry;
-  if (auto it = metrics.find(metric); it != metrics.end()) entry = it->second;
   MetricTolerance t;
-  t.direction = entry.direction ? *entry.direction
-                : fallback.direction ? *fallback.direction
-                                     : builtinDirection(metric);
-  t.absTolerance = entry.absTolerance ? *entry.absTolerance : fallback.absTolerance.value_or(0.0);
-  t.relTolerance = entry.relTolerance ? *entry.relTolerance : fallback.relTolerance.value_or(0.0);
+  auto it = metrics.find(metric);
+  if (it != metrics.end()) {
+    // A listed metric's entry is complete by itself: {"abs": 50} means 50 and no relative part,
+    // whatever "default" says (a default leaking into an entry surprises whoever reads the file).
+    const ToleranceSpec& entry = it->second;
+    t.direction = entry.direction.value_or(builtinDirection(metric));
+    t.absTolerance = entry.absTolerance.value_or(0.0);
+    t.relTolerance = entry.relTolerance.value_or(0.0);
+    return t;
+  }
+  t.direction = fallback.direction ? *fallback.direction : builtinDirection(metric);
+  t.absTolerance = fallback.absTolerance.value_or(0.0);
+  t.relTolerance = fallback.relTolerance.value_or(0.0);
   return t;
 }
 
@@ -357,6 +363,10 @@ std::string GateResult::summary() const {
 GateResult runGate(const ResultFile& current, const ResultFile& baseline, const Tolerances& tolerances) {
   checkDuplicates(current);
   checkDuplicates(baseline);
+  // An empty baseline would pass anything: every current row would merely be "new".
+  if (baseline.rows.empty())
+    throw InputError(formatError(baseline.path, "/rows",
+                                 "the baseline has no rows; expected at least one (create it with --update-baseline)"));
 
   // A tolerance for a metric no row has is a typo that would otherwise never apply.
   {

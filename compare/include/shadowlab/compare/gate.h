@@ -65,7 +65,7 @@ struct TimingTolerance {
   double minMs = 1.0;
 };
 
-// One entry of a tolerance file; what it leaves out falls back (see Tolerances::forMetric).
+// One entry of a tolerance file; what it leaves out is filled in by Tolerances::forMetric.
 struct ToleranceSpec {
   std::optional<Direction> direction;
   std::optional<double> absTolerance;
@@ -78,8 +78,8 @@ struct Tolerances {
   ToleranceSpec fallback;                        // "default"
   TimingTolerance timing;                        // "timing"
 
-  // direction: the entry's, else the default's, else builtinDirection(metric);
-  // abs / rel: the entry's, else the default's, else 0.
+  // A listed metric: its entry's fields, direction else builtinDirection(metric), abs/rel else 0.
+  // An unlisted metric: the default's fields, direction else builtinDirection(metric).
   MetricTolerance forMetric(const std::string& metric) const;
 };
 
