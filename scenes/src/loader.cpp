@@ -8,6 +8,7 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <limits>
 #include <map>
 #include <set>
 #include <sstream>
@@ -85,7 +86,9 @@ class Reader {
   double number(const Node& n) const {
     if (!n.j->is_number()) expected(n, "a number");
     double d = n.j->get<double>();
-    if (!std::isfinite(d)) expected(n, "a finite number");
+    // Values become floats: 1e39 is a finite double but an infinite float.
+    if (!std::isfinite(d) || std::fabs(d) > double(std::numeric_limits<float>::max()))
+      expected(n, "a finite number (magnitude below 3.4e38, the float range)");
     return d;
   }
   // lo < x < hi or lo <= x <= hi by the flags; `what` is the whole "expected" text.
@@ -855,6 +858,29 @@ void applyOverrides(const Reader& r, json& doc, const std::vector<SceneOverride>
   }
 }
 
+bool finiteMatrix(const glm::mat4& m) {
+  for (int c = 0; c < 4; ++c)
+    for (int r = 0; r < 4; ++r)
+      if (!std::isfinite(m[c][r])) return false;
+  return true;
+}
+
+// Inputs are finite one by one, yet their combination can overflow float (a camera 1e38 away
+// from its target): check what the renderers will compute before handing the scene over.
+void checkComputed(const Reader& r, const Scene& s) {
+  const Camera& c = s.camera;
+  bool ok = finiteMatrix(c.viewFromWorld()) && finiteMatrix(c.clipFromView());
+  for (glm::vec2 px : {glm::vec2(0), glm::vec2(float(c.width), float(c.height)), glm::vec2(0, float(c.height))})
+    ok = ok && finite(c.rayDirection(px.x, px.y));
+  if (!ok) r.fail("/camera", "the camera's matrices or rays are not finite; expected a camera with moderate coordinates");
+  for (size_t i = 0; i < s.lights.size(); ++i)
+    if (!finite(s.lights[i].direction) || !finite(s.lights[i].position))
+      r.fail("/lights/" + std::to_string(i), "the light's direction or position is not finite; expected finite values");
+  for (size_t i = 0; i < s.projectors.size(); ++i)
+    if (!finiteMatrix(s.projectors[i].texFromWorld()))
+      r.fail("/projectors/" + std::to_string(i), "the projective texture matrix is not finite; expected moderate coordinates");
+}
+
 std::string envOr(const char* name, const std::string& fallback) {
   const char* v = std::getenv(name);
   return v && *v ? std::string(v) : fallback;
@@ -892,6 +918,7 @@ Scene loadScene(const std::string& path, const std::vector<SceneOverride>& overr
   if (scene.lights.empty() && scene.projectors.empty())
     r.fail("/lights", "the scene has no light and no projector; expected at least one of them");
   readFailure(r, root, scene);
+  checkComputed(r, scene);
   scene.hash = sceneHash(doc, scene);
   return scene;
 }

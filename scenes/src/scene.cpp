@@ -53,7 +53,7 @@ float sampleAlphaNearest(const Image& alpha, glm::vec2 uv) {
 // so (u, v, depth) = xyz / w with v = 0 at the image's top row, and w = -z_view: the distance
 // in front of the projector along its axis (w <= 0: behind it).
 glm::mat4 Projector::texFromWorld() const {
-  glm::mat4 view = glm::lookAt(position, position + direction, up);
+  glm::mat4 view(glm::lookAt(glm::dvec3(position), glm::dvec3(position) + glm::dvec3(direction), glm::dvec3(up)));
   glm::mat4 proj = vulkanPerspective(fovDeg, aspect, nearPlane, farPlane);
   glm::mat4 bias(1.0f);
   bias[0][0] = 0.5f;
