@@ -461,7 +461,7 @@ Metrics compareFrames(const Frame& reference, const Frame& raster, const Compare
       for (int y = y1 - 2; y >= y0; --y) {
         uint16_t* row = g + size_t(y) * width;
         const uint16_t* below = row + width;
-        for (int x = x0; x < x1; ++x) row[x] = std::min<uint16_t>(row[x], uint16_t(below[x] + 1));
+        for (int x = x0; x < x1; ++x) row[x] = uint16_t(std::min<int>(row[x], below[x] + 1));  // <= far
       }
     });
     const float boundaryTexels = options.boundaryTexels;
