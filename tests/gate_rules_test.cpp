@@ -187,6 +187,50 @@ TEST(GateRules, MissingRowMissingMetricNanAndDuplicatesAreInputErrors) {
       << dup;
 }
 
+TEST(GateRules, RepeatedRunsGateTheMedianTiming) {
+  // Three runs of the same configuration (one per file): timings 30, 90, 33 ms -> median 33, so
+  // one noisy run does not fail a 1.5x timing gate against a 30 ms baseline.
+  auto run = [](const std::string& path, double totalMs) {
+    return fileOf(path, {row("a", {{"acne_rate", 0.01}}, {{"total_ms", totalMs}})});
+  };
+  ResultFile merged = mergeResultFiles({run("r1.json", 30.0), run("r2.json", 90.0), run("r3.json", 33.0)});
+  ASSERT_EQ(merged.rows.size(), 1u);
+  EXPECT_EQ(merged.repeatsOf(0), 3);
+  EXPECT_DOUBLE_EQ(merged.rows[0].timings["total_ms"].get<double>(), 33.0);
+  Tolerances fail = tolerances(R"({"timing": {"mode": "fail", "max_ratio": 1.5}})");
+  GateResult r = runGate(merged, run("base.json", 30.0), fail);
+  EXPECT_TRUE(r.passed());
+  EXPECT_EQ(find(r, "total_ms").samples, 3);
+  // Even count: the mean of the middle two.
+  ResultFile two = mergeResultFiles({run("r1.json", 30.0), run("r2.json", 90.0)});
+  EXPECT_DOUBLE_EQ(two.rows[0].timings["total_ms"].get<double>(), 60.0);
+  GateResult slow = runGate(two, run("base.json", 30.0), fail);
+  EXPECT_EQ(find(slow, "total_ms").verdict, Verdict::Regressed);
+  EXPECT_EQ(find(slow, "total_ms").message,
+            "grazing | a | sun: timing \"total_ms\" is 60 ms (median of 2 runs), 2.00x the baseline 30 ms, above "
+            "the limit 1.50x");
+}
+
+TEST(GateRules, RepeatedRunsMustAgreeOnMetrics) {
+  ResultFile a = fileOf("r1.json", {row("a", {{"acne_rate", 0.01}})});
+  ResultFile b = fileOf("r2.json", {row("a", {{"acne_rate", 0.02}})});
+  EXPECT_EQ(inputErrorOf([&] { mergeResultFiles({a, b}); }),
+            "r2.json: /rows/0/metrics/acne_rate: error: row \"grazing | a | sun\" repeats the run in r1.json but "
+            "metric \"acne_rate\" is 0.02 here and 0.01 there; expected repeated runs to agree (the pipeline is "
+            "deterministic)");
+  // Twice in one file is not a repeat but a malformed file.
+  ResultFile dup = fileOf("r3.json", {row("a", {{"acne_rate", 0.01}}), row("a", {{"acne_rate", 0.01}})});
+  EXPECT_NE(inputErrorOf([&] { mergeResultFiles({a, dup}); }).find("r3.json: /rows/1: error: row \"grazing | a | sun\" "
+                                                                  "appears again (first at /rows/0)"),
+            std::string::npos);
+  // Distinct rows from several files are simply concatenated, each naming its own file.
+  ResultFile c = fileOf("r4.json", {row("z", {{"acne_rate", 0.01}})});
+  ResultFile merged = mergeResultFiles({a, c});
+  ASSERT_EQ(merged.rows.size(), 2u);
+  EXPECT_EQ(merged.pathOf(1), "r4.json");
+  EXPECT_EQ(merged.repeatsOf(1), 1);
+}
+
 TEST(GateRules, EmptyBaselineIsAnInputError) {
   ResultFile empty = fileOf("base.json", {});
   EXPECT_EQ(inputErrorOf([&] { runGate(fileOf("c", {row("a", {{"acne_rate", 0.01}})}), empty, defaultTolerances()); }),

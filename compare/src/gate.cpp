@@ -509,6 +509,7 @@ GateResult runGate(const ResultFile& current, const ResultFile& baseline, const 
         continue;
       }
       c.current = *ct;
+      c.samples = current.repeatsOf(found->second);
       double bms = it.value().get<double>(), cms = ct->get<double>();
       double ratio = bms > 0 ? cms / bms : (cms > 0 ? INFINITY : 1.0);
       char ratioText[32];
@@ -527,7 +528,8 @@ GateResult runGate(const ResultFile& current, const ResultFile& baseline, const 
           c.verdict = Verdict::Regressed;
           char maxText[32];
           std::snprintf(maxText, sizeof maxText, "%.2fx", tolerances.timing.maxRatio);
-          c.message = base.key() + ": timing \"" + name + "\" is " + formatNumber(cms) + " ms, " + ratioText +
+          std::string median = c.samples > 1 ? " (median of " + std::to_string(c.samples) + " runs)" : "";
+          c.message = base.key() + ": timing \"" + name + "\" is " + formatNumber(cms) + " ms" + median + ", " + ratioText +
                       " the baseline " + formatNumber(bms) + " ms, above the limit " + maxText;
         }
       }
@@ -577,6 +579,7 @@ std::string formatGateTable(const GateResult& result, bool brief) {
         std::snprintf(ratio, sizeof ratio, " (%.2fx)", c.current.get<double>() / c.baseline.get<double>());
         cs += ratio;
       }
+      if (c.kind == "timing" && c.samples > 1) cs = "median of " + std::to_string(c.samples) + ": " + cs;
     }
     lines.push_back({toString(c.verdict), c.rowKey, metric, bs, cs, c.tolerance});
   }
@@ -624,6 +627,7 @@ nlohmann::json gateToJson(const GateResult& result, const ResultFile& current, c
     k["current"] = c.current;
     k["tolerance"] = c.tolerance;
     k["verdict"] = toString(c.verdict);
+    if (c.kind == "timing") k["samples"] = c.samples;
     if (!c.message.empty()) k["message"] = c.message;
     checks.push_back(std::move(k));
   }
@@ -678,12 +682,53 @@ ResultFile mergeResultFiles(const std::vector<ResultFile>& files) {
   if (files.size() == 1) return files.front();
   ResultFile merged;
   merged.schema = "shadowlab.results/1";
+  std::map<std::string, size_t> index;                          // row key -> merged row
+  std::vector<std::map<std::string, std::vector<double>>> samples;  // merged row -> timing -> runs
   for (const ResultFile& f : files) {
+    checkDuplicates(f);
     merged.path += (merged.path.empty() ? "" : " + ") + f.path;
     for (size_t i = 0; i < f.rows.size(); ++i) {
-      merged.rows.push_back(f.rows[i]);
-      merged.pointers.push_back(f.pointers[i]);
-      merged.rowPaths.push_back(f.pathOf(i));
+      const ResultRow& row = f.rows[i];
+      auto [it, fresh] = index.emplace(row.key(), merged.rows.size());
+      if (fresh) {
+        merged.rows.push_back(row);
+        merged.pointers.push_back(f.pointers[i]);
+        merged.rowPaths.push_back(f.pathOf(i));
+        merged.repeats.push_back(1);
+        samples.emplace_back();
+      } else {
+        // A repeated run: metrics must agree exactly; only timings may differ.
+        const size_t m = it->second;
+        std::map<std::string, nlohmann::json> a, b;
+        flatten(merged.rows[m].metrics, "", a);
+        flatten(row.metrics, "", b);
+        for (auto& [name, value] : b) {
+          auto other = a.find(name);
+          std::string was = other == a.end() ? std::string("absent") : formatValue(other->second);
+          if (other == a.end() || other->second != value)
+            throw InputError(formatError(f.pathOf(i), metricPointer(f.pointers[i], "metrics", name),
+                                         "row \"" + row.key() + "\" repeats the run in " + merged.rowPaths[m] +
+                                             " but metric \"" + name + "\" is " + formatValue(value) + " here and " + was +
+                                             " there; expected repeated runs to agree (the pipeline is "
+                                             "deterministic)"));
+        }
+        for (auto& [name, value] : a)
+          if (!b.count(name))
+            throw InputError(formatError(f.pathOf(i), f.pointers[i] + "/metrics",
+                                         "row \"" + row.key() + "\" repeats the run in " + merged.rowPaths[m] +
+                                             " but has no metric \"" + name + "\"; expected the same metrics"));
+        ++merged.repeats[it->second];
+      }
+      for (auto t = row.timings.begin(); t != row.timings.end(); ++t)
+        if (t.value().is_number()) samples[it->second][t.key()].push_back(t.value().get<double>());
+    }
+  }
+  for (size_t m = 0; m < merged.rows.size(); ++m) {
+    if (merged.repeats[m] == 1) continue;
+    for (auto& [name, values] : samples[m]) {
+      std::sort(values.begin(), values.end());
+      size_t n = values.size();
+      merged.rows[m].timings[name] = n % 2 ? values[n / 2] : 0.5 * (values[n / 2 - 1] + values[n / 2]);
     }
   }
   merged.document = baselineDocument(merged);

@@ -28,12 +28,18 @@ struct ResultFile {
   std::vector<ResultRow> rows;
   std::vector<std::string> pointers;  // JSON pointer of each row in the file ("" or "/rows/3")
   std::vector<std::string> rowPaths;  // the file of each row when merged from several; else empty
+  std::vector<int> repeats;           // how many runs each row's timings are the median of; else empty
   nlohmann::json document;            // the whole file as read
   const std::string& pathOf(size_t row) const { return rowPaths.empty() ? path : rowPaths[row]; }
+  int repeatsOf(size_t row) const { return repeats.empty() ? 1 : repeats[row]; }
 };
 ResultFile loadResultFile(const std::string& path);  // InputError naming file and pointer
 // Several current files gated as one (e.g. one sweep per method): rows concatenated, each still
-// named by its own file in messages. One file is returned unchanged.
+// named by its own file in messages. A row found in several files is a repeated run of one
+// configuration: its metrics must be identical in every file (the pipeline is deterministic;
+// InputError naming both files otherwise) and its timings become the median over the runs, the
+// noise-aware input the timing rule wants. A row twice in one file is an InputError. One file is
+// returned unchanged.
 ResultFile mergeResultFiles(const std::vector<ResultFile>& files);
 // What --update-baseline writes: the rows only (no sweep bookkeeping such as machine or seconds),
 // as a metrics.json when `f` is one metrics.json, else as a results.json.
@@ -103,7 +109,8 @@ struct GateCheck {
   std::string kind;          // "metric" | "timing" | "row"
   nlohmann::json baseline;   // the values as found (number, string, bool)
   nlohmann::json current;
-  std::string tolerance;     // printable: "+0.005", "±1%", "x1.50", "report"
+  std::string tolerance;     // printable: "+0.005", "-0.01", "+/-50", "<= 1.50x", "report"
+  int samples = 1;           // timings: how many current runs the value is the median of
   Verdict verdict = Verdict::Pass;
   std::string message;       // for regressions: the one-line error (without "shadowlab gate: error: ")
 };
