@@ -280,6 +280,21 @@ TEST_F(GateCli, MalformedResultFileExits2) {
   EXPECT_EQ(r.err, path("bad.json") + ": /rows/0/light: error: got a number; expected a string\n");
 }
 
+TEST_F(GateCli, RepeatedRunsAreGatedByTheirMedianTiming) {
+  // Three runs of the same sweep: total_ms of row 0 is 20, 80 and 22 ms. The median (22) passes a
+  // 1.5x timing gate that the one slow run alone would fail.
+  auto runWith = [&](const std::string& name, double totalMs) {
+    return current(name, [&](nlohmann::json& d) { d["rows"][0]["timings"]["total_ms"] = totalMs; });
+  };
+  std::string runs = runWith("r1.json", 20.0) + " " + runWith("r2.json", 80.0) + " " + runWith("r3.json", 22.0);
+  spit(dir_ / "strict.json", R"({"timing": {"mode": "fail", "max_ratio": 1.5}})");
+  CliRun slowAlone = gate(path("r2.json") + " --baseline " + path("base.json") + " --tolerances " + path("strict.json"));
+  EXPECT_EQ(slowAlone.code, 1) << slowAlone.out << slowAlone.err;
+  CliRun median = gate(runs + " --baseline " + path("base.json") + " --tolerances " + path("strict.json"));
+  EXPECT_EQ(median.code, 0) << median.out << median.err;
+  EXPECT_NE(median.out.find("median of 3: 22 (1.10x)"), std::string::npos) << median.out;
+}
+
 TEST_F(GateCli, UsageErrorExits2) {
   CliRun r = gate(path("base.json"));  // no --baseline
   EXPECT_EQ(r.code, 2);
