@@ -3,6 +3,10 @@
 // below their cutoff, sampling the alpha texture exactly like scenes' sampleAlphaNearest
 // (nearest texel, repeat addressing, texel (0,0) top-left) so both renderers agree on holes.
 // One-sided materials discard back faces (as seen from the camera or the light).
+// false: a plain id writer (no discard, so early depth testing stays on); the rasterizer picks
+// it for draws that need no alpha test and whose back faces the hardware cull already removes.
+layout(constant_id = 0) const bool kMaterialTests = true;
+
 layout(location = 0) in vec2 uv;
 layout(location = 0) out uvec2 outId;
 
@@ -30,6 +34,10 @@ layout(std430, set = 0, binding = 1) readonly buffer Materials { MaterialGpu mat
 layout(std430, set = 0, binding = 2) readonly buffer AlphaTexels { float alphaTexels[]; };
 
 void main() {
+  if (!kMaterialTests) {
+    outId = uvec2(draw.objectIndex + 1u, uint(gl_PrimitiveID));
+    return;
+  }
   MaterialGpu m = materials[triangleMaterial[draw.triangleBase + uint(gl_PrimitiveID)]];
   if ((m.flags & 1u) == 0u && !gl_FrontFacing) discard;
   if ((m.flags & 2u) != 0u) {

@@ -15,6 +15,8 @@
 #include <set>
 #include <tuple>
 
+#include <sys/resource.h>
+
 #include <glm/gtc/matrix_inverse.hpp>
 
 #include "light_space.h"
@@ -30,7 +32,8 @@
 
 #include "id_frag.h"
 #include "id_vert.h"
-#include "resolve_comp.h"
+#include "fullscreen_vert.h"
+#include "resolve_frag.h"
 
 namespace shadowlab {
 
@@ -53,6 +56,7 @@ struct Params {
   glm::ivec4 sizes, sizes2;
   glm::ivec4 projector[kMaxProjectors];
   glm::vec4 poisson[kMaxTaps];
+  glm::vec4 projectorPos[kMaxProjectors];
 };
 
 struct DrawPush {
@@ -135,6 +139,12 @@ std::string cameraHashOf(const Camera& camera) {
 
 }  // namespace
 
+// The id-writing pipelines of one frame: the plain writer and the one with material tests
+// (alpha cutoff, one-sided back faces), for the shadow pass and for the camera pass.
+struct IdPipelines {
+  VkPipeline shadowPlain, shadowTested, cameraPlain, cameraTested;
+};
+
 struct Rasterizer::Impl {
   std::unique_ptr<vk::Context> context;
   std::unique_ptr<vk::Commands> commands;
@@ -143,10 +153,10 @@ struct Rasterizer::Impl {
   vk::DescriptorPool descriptorPool;
   VkDescriptorSet descriptorSet = VK_NULL_HANDLE;
   vk::Sampler nearestSampler, compareSampler;
-  vk::ShaderModule idVert, idFrag, resolveComp;
+  vk::ShaderModule idVert, idFrag, fullscreenVert, resolveFrag;
   vk::QueryPool queries;
-  std::map<std::pair<VkFormat, bool>, vk::PipelineHandle> shadowPipelines;
-  vk::PipelineHandle cameraPipeline;
+  // Keyed by what needs a new pipeline: (depth format, depth clamp, material tests, depth bias).
+  std::map<std::tuple<VkFormat, bool, bool, bool>, vk::PipelineHandle> idPipelines;
   std::map<Filter, vk::PipelineHandle> resolvePipelines;
   std::set<std::string> warmed;
   std::vector<glm::vec2> poisson = poissonDisc();
@@ -157,13 +167,13 @@ struct Rasterizer::Impl {
 
   explicit Impl(const RasterDeviceOptions& options);
   void createLayouts();
-  VkPipeline shadowPipeline(VkFormat format, bool depthClamp);
+  VkPipeline idPipeline(VkFormat format, bool depthClamp, bool materialTests, bool depthBias);
   VkPipeline resolvePipeline(Filter filter);
   void ensureImages(int mapSize, VkFormat mapFormat, int layers, int width, int height);
   void writeDescriptors();
   void record(VkCommandBuffer cmd, const std::vector<glm::mat4>& layerClip, int lightLayers,
-              VkPipeline shadow, VkPipeline resolve, const Method& method, const glm::mat4& cameraClip,
-              int width, int height);
+              const IdPipelines& pipes, VkPipeline resolve, const Method& method,
+              const glm::mat4& cameraClip, int width, int height);
 };
 
 Rasterizer::Impl::Impl(const RasterDeviceOptions& options) {
@@ -175,7 +185,8 @@ Rasterizer::Impl::Impl(const RasterDeviceOptions& options) {
   createLayouts();
   idVert = vk::createShaderModule(*context, kSpv_id_vert, sizeof(kSpv_id_vert));
   idFrag = vk::createShaderModule(*context, kSpv_id_frag, sizeof(kSpv_id_frag));
-  resolveComp = vk::createShaderModule(*context, kSpv_resolve_comp, sizeof(kSpv_resolve_comp));
+  fullscreenVert = vk::createShaderModule(*context, kSpv_fullscreen_vert, sizeof(kSpv_fullscreen_vert));
+  resolveFrag = vk::createShaderModule(*context, kSpv_resolve_frag, sizeof(kSpv_resolve_frag));
 
   VkDevice device = context->device();
   auto makeSampler = [&](bool compare) {
@@ -196,7 +207,7 @@ Rasterizer::Impl::Impl(const RasterDeviceOptions& options) {
 
   VkQueryPoolCreateInfo q{VK_STRUCTURE_TYPE_QUERY_POOL_CREATE_INFO};
   q.queryType = VK_QUERY_TYPE_TIMESTAMP;
-  q.queryCount = 3;
+  q.queryCount = 4;
   VkQueryPool pool;
   VK_CHECK(vkCreateQueryPool(device, &q, nullptr, &pool));
   queries = vk::QueryPool(device, pool);
@@ -213,9 +224,9 @@ void Rasterizer::Impl::createLayouts() {
   add(0, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, fragCompute);
   add(1, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, fragCompute);
   add(2, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, fragCompute);
-  add(3, VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER, VK_SHADER_STAGE_COMPUTE_BIT);
-  for (uint32_t b = 4; b <= 7; ++b) add(b, VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER, VK_SHADER_STAGE_COMPUTE_BIT);
-  for (uint32_t b = 8; b <= 12; ++b) add(b, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, VK_SHADER_STAGE_COMPUTE_BIT);
+  add(3, VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER, fragCompute);
+  for (uint32_t b = 4; b <= 7; ++b) add(b, VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER, fragCompute);
+  for (uint32_t b = 8; b <= 12; ++b) add(b, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, fragCompute);
   VkDescriptorSetLayoutCreateInfo info{VK_STRUCTURE_TYPE_DESCRIPTOR_SET_LAYOUT_CREATE_INFO};
   info.bindingCount = uint32_t(bindings.size());
   info.pBindings = bindings.data();
@@ -250,10 +261,10 @@ void Rasterizer::Impl::createLayouts() {
   VK_CHECK(vkAllocateDescriptorSets(device, &alloc, &descriptorSet));
 }
 
-VkPipeline Rasterizer::Impl::shadowPipeline(VkFormat format, bool depthClamp) {
-  auto key = std::make_pair(format, depthClamp);
-  auto it = shadowPipelines.find(key);
-  if (it != shadowPipelines.end()) return it->second.get();
+VkPipeline Rasterizer::Impl::idPipeline(VkFormat format, bool depthClamp, bool materialTests, bool depthBias) {
+  auto key = std::make_tuple(format, depthClamp, materialTests, depthBias);
+  auto it = idPipelines.find(key);
+  if (it != idPipelines.end()) return it->second.get();
   vk::GraphicsPipelineDesc d;
   d.vertex = idVert.get();
   d.fragment = idFrag.get();
@@ -263,17 +274,21 @@ VkPipeline Rasterizer::Impl::shadowPipeline(VkFormat format, bool depthClamp) {
   d.colorFormats = {kIdFormat};
   d.depthFormat = format;
   d.depthClamp = depthClamp;
-  d.depthBias = true;
-  return shadowPipelines.emplace(key, vk::createGraphicsPipeline(*context, d)).first->second.get();
+  d.depthBias = depthBias;
+  d.fragmentSpecialization = {materialTests ? 1u : 0u};
+  return idPipelines.emplace(key, vk::createGraphicsPipeline(*context, d)).first->second.get();
 }
 
 VkPipeline Rasterizer::Impl::resolvePipeline(Filter filter) {
   auto it = resolvePipelines.find(filter);
   if (it != resolvePipelines.end()) return it->second.get();
-  uint32_t kind = uint32_t(filter);
-  return resolvePipelines
-      .emplace(filter, vk::createComputePipeline(*context, resolveComp.get(), pipelineLayout.get(), {kind}))
-      .first->second.get();
+  vk::GraphicsPipelineDesc d;
+  d.vertex = fullscreenVert.get();
+  d.fragment = resolveFrag.get();
+  d.layout = pipelineLayout.get();
+  d.depthTest = false;
+  d.fragmentSpecialization = {uint32_t(filter)};  // straight-line code per filter
+  return resolvePipelines.emplace(filter, vk::createGraphicsPipeline(*context, d)).first->second.get();
 }
 
 void Rasterizer::Impl::ensureImages(int mapSize, VkFormat mapFormat, int layers, int width, int height) {
@@ -326,11 +341,11 @@ void Rasterizer::Impl::writeDescriptors() {
 }
 
 void Rasterizer::Impl::record(VkCommandBuffer cmd, const std::vector<glm::mat4>& layerClip, int lightLayers,
-                              VkPipeline shadow, VkPipeline resolve, const Method& method,
+                              const IdPipelines& pipes, VkPipeline resolve, const Method& method,
                               const glm::mat4& cameraClip, int width, int height) {
   const raster::SceneGpu& s = *scene;
   VkQueryPool pool = queries.get();
-  vkCmdResetQueryPool(cmd, pool, 0, 3);
+  vkCmdResetQueryPool(cmd, pool, 0, 4);
   vkCmdWriteTimestamp2(cmd, VK_PIPELINE_STAGE_2_TOP_OF_PIPE_BIT, pool, 0);
   VkDescriptorSet set = descriptorSet;
   vkCmdBindDescriptorSets(cmd, VK_PIPELINE_BIND_POINT_GRAPHICS, pipelineLayout.get(), 0, 1, &set, 0, nullptr);
@@ -339,14 +354,29 @@ void Rasterizer::Impl::record(VkCommandBuffer cmd, const std::vector<glm::mat4>&
   vkCmdBindVertexBuffers(cmd, 0, 1, &vb, &zero);
   vkCmdBindIndexBuffer(cmd, s.indices.get(), 0, VK_INDEX_TYPE_UINT32);
 
-  auto drawAll = [&](const glm::mat4& clip, bool castersOnly) {
-    for (const raster::Draw& d : s.draws) {
-      if (castersOnly && !d.castsShadow) continue;
-      DrawPush push{clip, d.objectIndex, d.triangleBase, 0, 0};
-      vkCmdPushConstants(cmd, pipelineLayout.get(), VK_SHADER_STAGE_VERTEX_BIT | VK_SHADER_STAGE_FRAGMENT_BIT,
-                         0, sizeof(push), &push);
-      vkCmdDrawIndexed(cmd, d.indexCount, 1, d.firstIndex, d.vertexOffset, 0);
-    }
+  // Plain draws first, then those that need the material tests (discard turns early depth
+  // testing off, so only the draws that need it pay for it).
+  auto drawAll = [&](const glm::mat4& clip, bool shadowPass) {
+    VkPipeline bound = VK_NULL_HANDLE;
+    for (int tested = 0; tested < 2; ++tested)
+      for (const raster::Draw& d : s.draws) {
+        if (shadowPass && !d.castsShadow) continue;
+        VkCullModeFlags cull = shadowPass ? vkCull(method.cull) : VK_CULL_MODE_NONE;
+        // One-sided back faces: the hardware cull removes them when the pass culls back faces
+        // anyway (shadow pass with cull=back) or when every material of the object is one-sided.
+        bool backCulled = cull == VK_CULL_MODE_BACK_BIT;
+        if (!shadowPass && d.allOneSided) cull = VK_CULL_MODE_BACK_BIT, backCulled = true;
+        bool needsTests = d.hasAlpha || (d.anyOneSided && !backCulled);
+        if (needsTests != (tested == 1)) continue;
+        VkPipeline p = shadowPass ? (needsTests ? pipes.shadowTested : pipes.shadowPlain)
+                                  : (needsTests ? pipes.cameraTested : pipes.cameraPlain);
+        if (p != bound) vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_GRAPHICS, p), bound = p;
+        vkCmdSetCullMode(cmd, cull);
+        DrawPush push{clip, d.objectIndex, d.triangleBase, 0, 0};
+        vkCmdPushConstants(cmd, pipelineLayout.get(), VK_SHADER_STAGE_VERTEX_BIT | VK_SHADER_STAGE_FRAGMENT_BIT,
+                           0, sizeof(push), &push);
+        vkCmdDrawIndexed(cmd, d.indexCount, 1, d.firstIndex, d.vertexOffset, 0);
+      }
   };
   auto beginRendering = [&](VkImageView depthView, VkImageView idView, int w, int h) {
     VkRenderingAttachmentInfo color{VK_STRUCTURE_TYPE_RENDERING_ATTACHMENT_INFO};
@@ -376,16 +406,14 @@ void Rasterizer::Impl::record(VkCommandBuffer cmd, const std::vector<glm::mat4>&
 
   // ---- Pass 1: depth (+ ids) from the light and from each projector ----
   vk::transition(cmd, mapDepth, VK_IMAGE_LAYOUT_UNDEFINED, VK_IMAGE_LAYOUT_DEPTH_ATTACHMENT_OPTIMAL,
-                 VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT, 0,
+                 VK_PIPELINE_STAGE_2_FRAGMENT_SHADER_BIT, 0,
                  VK_PIPELINE_STAGE_2_EARLY_FRAGMENT_TESTS_BIT | VK_PIPELINE_STAGE_2_LATE_FRAGMENT_TESTS_BIT,
                  VK_ACCESS_2_DEPTH_STENCIL_ATTACHMENT_READ_BIT | VK_ACCESS_2_DEPTH_STENCIL_ATTACHMENT_WRITE_BIT);
   vk::transition(cmd, mapIds, VK_IMAGE_LAYOUT_UNDEFINED, VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL,
-                 VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT, 0, VK_PIPELINE_STAGE_2_COLOR_ATTACHMENT_OUTPUT_BIT,
+                 VK_PIPELINE_STAGE_2_FRAGMENT_SHADER_BIT, 0, VK_PIPELINE_STAGE_2_COLOR_ATTACHMENT_OUTPUT_BIT,
                  VK_ACCESS_2_COLOR_ATTACHMENT_WRITE_BIT);
-  vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_GRAPHICS, shadow);
   for (size_t layer = 0; layer < layerClip.size(); ++layer) {
     beginRendering(mapDepth.layerView(int(layer)), mapIds.layerView(int(layer)), method.mapSize, method.mapSize);
-    vkCmdSetCullMode(cmd, vkCull(method.cull));
     vkCmdSetDepthBias(cmd, method.biasConstant, method.biasClamp, method.biasSlope);
     drawAll(layerClip[layer], true);
     vkCmdEndRendering(cmd);
@@ -394,10 +422,10 @@ void Rasterizer::Impl::record(VkCommandBuffer cmd, const std::vector<glm::mat4>&
   vkCmdWriteTimestamp2(cmd, VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT, pool, 1);
   vk::transition(cmd, mapDepth, VK_IMAGE_LAYOUT_DEPTH_ATTACHMENT_OPTIMAL, VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL,
                  VK_PIPELINE_STAGE_2_LATE_FRAGMENT_TESTS_BIT, VK_ACCESS_2_DEPTH_STENCIL_ATTACHMENT_WRITE_BIT,
-                 VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT, VK_ACCESS_2_SHADER_SAMPLED_READ_BIT);
+                 VK_PIPELINE_STAGE_2_FRAGMENT_SHADER_BIT, VK_ACCESS_2_SHADER_SAMPLED_READ_BIT);
   vk::transition(cmd, mapIds, VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL, VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL,
                  VK_PIPELINE_STAGE_2_COLOR_ATTACHMENT_OUTPUT_BIT, VK_ACCESS_2_COLOR_ATTACHMENT_WRITE_BIT,
-                 VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT, VK_ACCESS_2_SHADER_SAMPLED_READ_BIT);
+                 VK_PIPELINE_STAGE_2_FRAGMENT_SHADER_BIT, VK_ACCESS_2_SHADER_SAMPLED_READ_BIT);
 
   // ---- Pass 2: the camera's visibility buffer ----
   vk::transition(cmd, cameraDepth, VK_IMAGE_LAYOUT_UNDEFINED, VK_IMAGE_LAYOUT_DEPTH_ATTACHMENT_OPTIMAL,
@@ -405,24 +433,34 @@ void Rasterizer::Impl::record(VkCommandBuffer cmd, const std::vector<glm::mat4>&
                  VK_PIPELINE_STAGE_2_EARLY_FRAGMENT_TESTS_BIT | VK_PIPELINE_STAGE_2_LATE_FRAGMENT_TESTS_BIT,
                  VK_ACCESS_2_DEPTH_STENCIL_ATTACHMENT_READ_BIT | VK_ACCESS_2_DEPTH_STENCIL_ATTACHMENT_WRITE_BIT);
   vk::transition(cmd, cameraIds, VK_IMAGE_LAYOUT_UNDEFINED, VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL,
-                 VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT, 0, VK_PIPELINE_STAGE_2_COLOR_ATTACHMENT_OUTPUT_BIT,
+                 VK_PIPELINE_STAGE_2_FRAGMENT_SHADER_BIT, 0, VK_PIPELINE_STAGE_2_COLOR_ATTACHMENT_OUTPUT_BIT,
                  VK_ACCESS_2_COLOR_ATTACHMENT_WRITE_BIT);
-  vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_GRAPHICS, cameraPipeline.get());
   beginRendering(cameraDepth.layerView(0), cameraIds.layerView(0), width, height);
-  vkCmdSetCullMode(cmd, VK_CULL_MODE_NONE);  // one-sided materials cull in the fragment shader
   drawAll(cameraClip, false);
   vkCmdEndRendering(cmd);
   vk::transition(cmd, cameraIds, VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL, VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL,
                  VK_PIPELINE_STAGE_2_COLOR_ATTACHMENT_OUTPUT_BIT, VK_ACCESS_2_COLOR_ATTACHMENT_WRITE_BIT,
-                 VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT, VK_ACCESS_2_SHADER_SAMPLED_READ_BIT);
+                 VK_PIPELINE_STAGE_2_FRAGMENT_SHADER_BIT, VK_ACCESS_2_SHADER_SAMPLED_READ_BIT);
 
-  // ---- Pass 3: resolve ----
-  vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, resolve);
-  vkCmdBindDescriptorSets(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, pipelineLayout.get(), 0, 1, &set, 0, nullptr);
-  vkCmdDispatch(cmd, uint32_t((width + 7) / 8), uint32_t((height + 7) / 8), 1);
+  // ---- Pass 3: resolve, one fragment per pixel, no attachments ----
+  vkCmdWriteTimestamp2(cmd, VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT, pool, 3);
+  {
+    VkRenderingInfo info{VK_STRUCTURE_TYPE_RENDERING_INFO};
+    info.renderArea = {{0, 0}, {uint32_t(width), uint32_t(height)}};
+    info.layerCount = 1;
+    vkCmdBeginRendering(cmd, &info);
+    VkViewport viewport{0, 0, float(width), float(height), 0.0f, 1.0f};
+    VkRect2D scissor{{0, 0}, {uint32_t(width), uint32_t(height)}};
+    vkCmdSetViewport(cmd, 0, 1, &viewport);
+    vkCmdSetScissor(cmd, 0, 1, &scissor);
+    vkCmdSetCullMode(cmd, VK_CULL_MODE_NONE);
+    vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_GRAPHICS, resolve);
+    vkCmdDraw(cmd, 3, 1, 0, 0);
+    vkCmdEndRendering(cmd);
+  }
   vkCmdWriteTimestamp2(cmd, VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT, pool, 2);
   VkMemoryBarrier2 toHost{VK_STRUCTURE_TYPE_MEMORY_BARRIER_2};
-  toHost.srcStageMask = VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT;
+  toHost.srcStageMask = VK_PIPELINE_STAGE_2_FRAGMENT_SHADER_BIT;
   toHost.srcAccessMask = VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT;
   toHost.dstStageMask = VK_PIPELINE_STAGE_2_HOST_BIT;
   toHost.dstAccessMask = VK_ACCESS_2_HOST_READ_BIT;
@@ -558,35 +596,32 @@ Frame Rasterizer::render(const Scene& scene, const Method& method, const std::st
   for (int j = 0; j < projectorCount; ++j) {
     const raster::ProjectorImage& pi = im.scene->projectors[size_t(j)];
     prm.projector[j] = glm::ivec4(pi.firstTexel, pi.width, pi.height, lightLayers + j);
+    prm.projectorPos[j] = glm::vec4(scene.projectors[size_t(j)].position, 1);
   }
   for (int i = 0; i < kMaxTaps; ++i) prm.poisson[i] = glm::vec4(im.poisson[size_t(i)], 0, 0);
   im.params.upload(&prm, sizeof(prm));
 
   // ---- pipelines (cached by what needs one), warm-up, the timed frame ----
   bool depthClamp = lightSpace.depthClamp;
-  VkPipeline shadow = im.shadowPipeline(mapFormat, depthClamp);
-  if (!im.cameraPipeline) {
-    vk::GraphicsPipelineDesc d;
-    d.vertex = im.idVert.get();
-    d.fragment = im.idFrag.get();
-    d.layout = im.pipelineLayout.get();
-    d.bindings = {{0, 5 * sizeof(float), VK_VERTEX_INPUT_RATE_VERTEX}};
-    d.attributes = {{0, 0, VK_FORMAT_R32G32B32_SFLOAT, 0}, {1, 0, VK_FORMAT_R32G32_SFLOAT, 3 * sizeof(float)}};
-    d.colorFormats = {kIdFormat};
-    d.depthFormat = kCameraDepthFormat;
-    im.cameraPipeline = vk::createGraphicsPipeline(*im.context, d);
-  }
+  IdPipelines pipes{im.idPipeline(mapFormat, depthClamp, false, true), im.idPipeline(mapFormat, depthClamp, true, true),
+                    im.idPipeline(kCameraDepthFormat, false, false, false),
+                    im.idPipeline(kCameraDepthFormat, false, true, false)};
   VkPipeline resolve = im.resolvePipeline(method.filter);
   std::string warmKey = std::to_string(int(mapFormat)) + "/" + std::to_string(depthClamp) + "/" +
                         toString(method.filter);
   int runs = im.warmed.insert(warmKey).second ? 2 : 1;  // lavapipe compiles shaders at first use
+  double cpuMs = 0;
   for (int run = 0; run < runs; ++run) {
+    struct rusage ru0, ru1;
+    getrusage(RUSAGE_SELF, &ru0);
     VkCommandBuffer cmd = im.commands->begin();
-    im.record(cmd, layerClip, lightLayers, shadow, resolve, method, cameraClip, width, height);
+    im.record(cmd, layerClip, lightLayers, pipes, resolve, method, cameraClip, width, height);
     im.commands->submitAndWait();
+    getrusage(RUSAGE_SELF, &ru1);
+    cpuMs = (ru1.ru_utime.tv_sec - ru0.ru_utime.tv_sec) * 1e3 + (ru1.ru_utime.tv_usec - ru0.ru_utime.tv_usec) * 1e-3;
   }
-  uint64_t stamps[3] = {0, 0, 0};
-  VK_CHECK(vkGetQueryPoolResults(im.context->device(), im.queries.get(), 0, 3, sizeof(stamps), stamps,
+  uint64_t stamps[4] = {0, 0, 0, 0};
+  VK_CHECK(vkGetQueryPoolResults(im.context->device(), im.queries.get(), 0, 4, sizeof(stamps), stamps,
                                  sizeof(uint64_t), VK_QUERY_RESULT_64_BIT | VK_QUERY_RESULT_WAIT_BIT));
   double nsPerTick = im.context->properties().limits.timestampPeriod;
 
@@ -633,6 +668,9 @@ Frame Rasterizer::render(const Scene& scene, const Method& method, const std::st
                 {"projectors", projectors},
                 {"method", methodToJson(method)},
                 {"device", deviceName()}};
+  if (getenv("SHADOWLAB_RASTER_DEBUG"))
+    fprintf(stderr, "cpu %.1f ms visbuffer %.2f ms resolve %.2f ms\n", cpuMs, double(stamps[3] - stamps[1]) * nsPerTick * 1e-6,
+            double(stamps[2] - stamps[3]) * nsPerTick * 1e-6);
   if (timings) {
     timings->shadowMs = double(stamps[1] - stamps[0]) * nsPerTick * 1e-6;
     timings->cameraMs = double(stamps[2] - stamps[1]) * nsPerTick * 1e-6;

@@ -67,9 +67,16 @@ SceneGpu uploadScene(const vk::Context& context, const Scene& scene, const std::
       vertices.insert(vertices.end(), {o.positions[v].x, o.positions[v].y, o.positions[v].z, uv.x, uv.y});
       positions.insert(positions.end(), {o.positions[v].x, o.positions[v].y, o.positions[v].z});
     }
+    d.allOneSided = !o.triangles.empty();
     for (size_t t = 0; t < o.triangles.size(); ++t) {
       indices.insert(indices.end(), {o.triangles[t].x, o.triangles[t].y, o.triangles[t].z});
-      triangleMaterials.push_back(t < o.triangleMaterial.size() ? o.triangleMaterial[t] : 0u);
+      uint32_t mi = t < o.triangleMaterial.size() ? o.triangleMaterial[t] : 0u;
+      triangleMaterials.push_back(mi);
+      const Material* mat = mi < scene.materials.size() ? &scene.materials[mi] : nullptr;
+      bool oneSided = mat && !mat->twoSided;
+      d.hasAlpha = d.hasAlpha || (mat && mat->hasAlpha && mat->alphaTexture.width > 0);
+      d.anyOneSided = d.anyOneSided || oneSided;
+      d.allOneSided = d.allOneSided && oneSided;
     }
     if (d.indexCount > 0) g.draws.push_back(d);
   }

@@ -19,6 +19,9 @@ struct Draw {
   int32_t vertexOffset = 0;
   uint32_t triangleBase = 0;
   bool castsShadow = true;
+  bool hasAlpha = false;     // some triangle's material is alpha-tested
+  bool anyOneSided = false;  // some triangle's material culls its back faces
+  bool allOneSided = false;  // every triangle's material culls its back faces
 };
 
 struct ProjectorImage {

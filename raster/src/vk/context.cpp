@@ -156,11 +156,11 @@ Context::Context(const ContextOptions& options) {
     supported.pNext = &supported13;
     vkGetPhysicalDeviceFeatures2(physical_, &supported);
     const VkPhysicalDeviceFeatures& f = supported.features;
-    if (!f.depthBiasClamp || !f.depthClamp || !f.geometryShader || !supported13.dynamicRendering ||
+    if (!f.depthBiasClamp || !f.depthClamp || !f.geometryShader || !f.fragmentStoresAndAtomics || !supported13.dynamicRendering ||
         !supported13.synchronization2 || !supported13.maintenance4)
       throw DriverError(std::string("device ") + properties_.deviceName +
                         " lacks one of the features shadowlab needs: depthBiasClamp, depthClamp, "
-                        "geometryShader, dynamicRendering, synchronization2, maintenance4");
+                        "geometryShader, fragmentStoresAndAtomics, dynamicRendering, synchronization2, maintenance4");
     VkPhysicalDeviceVulkan13Features features13{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_VULKAN_1_3_FEATURES};
     features13.dynamicRendering = VK_TRUE;
     features13.synchronization2 = VK_TRUE;
@@ -170,6 +170,7 @@ Context::Context(const ContextOptions& options) {
     features.features.depthBiasClamp = VK_TRUE;  // a nonzero bias.clamp is illegal without it
     features.features.depthClamp = VK_TRUE;      // directional maps keep casters behind the near plane
     features.features.geometryShader = VK_TRUE;  // gl_PrimitiveID in a fragment shader requires it
+    features.features.fragmentStoresAndAtomics = VK_TRUE;  // the resolve pass writes a storage buffer
 
     float priority = 1.0f;
     VkDeviceQueueCreateInfo queueInfo{VK_STRUCTURE_TYPE_DEVICE_QUEUE_CREATE_INFO};

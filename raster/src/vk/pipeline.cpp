@@ -22,6 +22,15 @@ PipelineHandle createGraphicsPipeline(const Context& context, const GraphicsPipe
   stages[1] = stages[0];
   stages[1].stage = VK_SHADER_STAGE_FRAGMENT_BIT;
   stages[1].module = desc.fragment;
+  std::vector<VkSpecializationMapEntry> entries(desc.fragmentSpecialization.size());
+  for (size_t i = 0; i < entries.size(); ++i)
+    entries[i] = {uint32_t(i), uint32_t(i * sizeof(uint32_t)), sizeof(uint32_t)};
+  VkSpecializationInfo spec{};
+  spec.mapEntryCount = uint32_t(entries.size());
+  spec.pMapEntries = entries.data();
+  spec.dataSize = entries.size() * sizeof(uint32_t);
+  spec.pData = desc.fragmentSpecialization.data();
+  if (!entries.empty()) stages[1].pSpecializationInfo = &spec;
 
   VkPipelineVertexInputStateCreateInfo vertexInput{VK_STRUCTURE_TYPE_PIPELINE_VERTEX_INPUT_STATE_CREATE_INFO};
   vertexInput.vertexBindingDescriptionCount = uint32_t(desc.bindings.size());
@@ -42,8 +51,8 @@ PipelineHandle createGraphicsPipeline(const Context& context, const GraphicsPipe
   VkPipelineMultisampleStateCreateInfo multisample{VK_STRUCTURE_TYPE_PIPELINE_MULTISAMPLE_STATE_CREATE_INFO};
   multisample.rasterizationSamples = VK_SAMPLE_COUNT_1_BIT;
   VkPipelineDepthStencilStateCreateInfo depth{VK_STRUCTURE_TYPE_PIPELINE_DEPTH_STENCIL_STATE_CREATE_INFO};
-  depth.depthTestEnable = VK_TRUE;
-  depth.depthWriteEnable = VK_TRUE;
+  depth.depthTestEnable = desc.depthTest;
+  depth.depthWriteEnable = desc.depthTest;
   depth.depthCompareOp = VK_COMPARE_OP_LESS;
   std::vector<VkPipelineColorBlendAttachmentState> blends(desc.colorFormats.size());
   for (auto& b : blends)

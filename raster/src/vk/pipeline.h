@@ -23,6 +23,8 @@ struct GraphicsPipelineDesc {
   VkFrontFace frontFace = VK_FRONT_FACE_COUNTER_CLOCKWISE;
   bool depthClamp = false;  // keeps casters outside [near, far] in the map (directional lights)
   bool depthBias = false;   // depth bias values come from vkCmdSetDepthBias
+  bool depthTest = true;    // less-than test and write (false: no depth attachment)
+  std::vector<uint32_t> fragmentSpecialization;  // 32-bit constants 0..n-1 of the fragment shader
 };
 
 PipelineHandle createGraphicsPipeline(const Context& context, const GraphicsPipelineDesc& desc);

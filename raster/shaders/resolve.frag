@@ -5,7 +5,9 @@
 // (texel footprint m, receiver plane) is taken analytically on that plane instead of from
 // 2x2-quad differences, so triangle edges do not smear neighbouring planes into each other.
 // Writes one float plane per output channel (see channel indices below) into `outPlanes`.
-layout(local_size_x = 8, local_size_y = 8) in;
+// A full-screen fragment shader rather than a compute shader: lavapipe's fragment path is its
+// fast one (tiled, multi-threaded), its compute dispatch costs ~0.2 us per invocation even empty.
+// One fragment per pixel, no attachments: the outputs go to the storage buffer only.
 
 // Specialized per filter so lavapipe compiles straight-line code for the cheap filters.
 layout(constant_id = 0) const uint kFilter = 0u;  // 0 none, 1 hw2x2, 2 bilinear4, 3 pcf, 4 poisson
@@ -29,6 +31,7 @@ layout(std140, set = 0, binding = 3) uniform Params {
   ivec4 sizes2;     // x width, y height, z poisson taps, w reverse guard (0/1)
   ivec4 projector[kMaxProjectors];  // x first texel in projectorTexels, y width, z height
   vec4 poisson[kMaxTaps];           // xy: unit-disc offsets
+  vec4 projectorPos[kMaxProjectors];  // xyz: world position
 } P;
 
 layout(set = 0, binding = 4) uniform sampler2DArray mapDepth;         // NEAREST, raw depth
@@ -60,8 +63,9 @@ vec3 vertexAt(uint v) { return vec3(positions[3u * v], positions[3u * v + 1u], p
 vec3 rayThrough(vec2 pixel) { return P.rayX.xyz * pixel.x + P.rayY.xyz * pixel.y + P.rayC.xyz; }
 
 int gLayer;
+mat4 gTexFromWorld;  // P.texFromWorld[gLayer], fetched once: dynamic UBO indexing is a gather on CPUs
 float gSize;
-vec4 project(vec3 pWorld) { return P.texFromWorld[gLayer] * vec4(pWorld, 1.0); }
+vec4 project(vec3 pWorld) { return gTexFromWorld * vec4(pWorld, 1.0); }
 vec3 mapCoords(vec3 pWorld) {  // (u, v in texels, depth)
   vec4 t = project(pWorld);
   return vec3(t.xy / t.w * gSize, t.z / t.w);
@@ -123,7 +127,7 @@ int cubeFace(vec3 v) {
 
 void main() {
   int width = P.sizes2.x, height = P.sizes2.y;
-  ivec2 px = ivec2(gl_GlobalInvocationID.xy);
+  ivec2 px = ivec2(gl_FragCoord.xy);
   if (px.x >= width || px.y >= height) return;
   gPixel = uint(px.y * width + px.x);
   gPlane = uint(width * height);
@@ -156,6 +160,7 @@ void main() {
   vec3 lightPos = P.lightPosType.xyz;
   gSize = float(P.sizes.x);
   gLayer = lightType == 2 ? cubeFace(p - lightPos) : 0;
+  gTexFromWorld = P.texFromWorld[gLayer];
   vec4 tP = project(p);
   float texelWorld = P.layerInfo[gLayer].x * abs(tP.w);
   vec3 q = p + normal * (P.bias.y * texelWorld);  // normal-offset lookup point
@@ -192,6 +197,10 @@ void main() {
     }
   }
   if (lightType == 1 && dot(normalize(p - lightPos), P.lightDirCos.xyz) < P.lightDirCos.w) vis = 0.0;
+  // Facing rule (the reference's): the side the camera sees is unlit when the light is behind
+  // it. A shadow map has no answer there (the surface against itself); N.L shading gives 0.
+  vec3 toLight = lightType == 0 ? -P.lightDirCos.xyz : normalize(lightPos - p);
+  if (!(dot(normal, toLight) > 0.0)) vis = 0.0;
 
   // Rasterizer depth bias the map texel carries when the receiver is its own caster:
   // constant * r + slope * maxDepthSlope, clamped (Vulkan's formula; maxDepthSlope per texel).
@@ -200,7 +209,6 @@ void main() {
   if (P.depthBias.z > 0.0) rasterBias = min(rasterBias, P.depthBias.z);
   if (P.depthBias.z < 0.0) rasterBias = max(rasterBias, P.depthBias.z);
   float biasDepth = P.bias.x + rasterBias + (depthP - uvz.z);
-  vec3 toLight = lightType == 0 ? -P.lightDirCos.xyz : normalize(lightPos - p);
   vec4 tL = project(p + toLight * texelWorld);
   float depthStep = abs(depthP - tL.z / tL.w);
   float worldPerDepth = depthStep > 0.0 ? texelWorld / depthStep : 0.0;
@@ -235,6 +243,7 @@ void main() {
   for (int j = 0; j < P.sizes.z; ++j) {
     uint base = kLightChannels + kProjectorChannels * uint(j);
     gLayer = P.sizes.y + j;
+    gTexFromWorld = P.texFromWorld[gLayer];
     vec4 t = project(p);
     vec3 puv = t.xyz / t.w;
     bool insideUv = all(greaterThanEqual(puv.xy, vec2(0.0))) && all(lessThanEqual(puv.xy, vec2(1.0)));
@@ -242,7 +251,10 @@ void main() {
     bool frontInFrustum = t.w > 0.0 && insideUv && puv.z >= 0.0 && puv.z <= 1.0;
     // Without the guard, points behind the projector are projected too; its depth map says
     // nothing about them (their depth lies outside [0, 1]), so nothing occludes them.
-    bool covered = frontInFrustum || (P.sizes2.w == 0 && reverse);
+    // Facing, as for lights: a surface whose hidden side faces the projector is not covered.
+    vec3 projectorPos = P.projectorPos[j].xyz;
+    bool facing = dot(normal, projectorPos - p) > 0.0;
+    bool covered = (frontInFrustum || (P.sizes2.w == 0 && reverse)) && facing;
     if (covered && frontInFrustum) covered = tap(ivec2(floor(puv.xy * gSize)), puv.z - P.bias.x) > 0.5;
     vec3 color = vec3(0.0);
     if (covered) {
