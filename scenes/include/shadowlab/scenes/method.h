@@ -20,7 +20,7 @@ struct Method {
   std::string name = "default";
   int mapSize = 2048;                    // map.size: texels per side, 16..16384 (and the device limit)
   DepthFormat mapFormat = DepthFormat::D24;  // map.format: d16 | d24 | d32f
-  CullMode cull = CullMode::Back;        // cull: back | front | none (shadow pass)
+  CullMode cull = CullMode::None;        // cull: back | front | none (shadow pass; none: open quads cast from both sides)
   Fit fit = Fit::Sphere;                 // fit: sphere | tight
   float biasConstant = 0.0f;             // bias.constant: Vulkan depthBiasConstantFactor (units of r)
   float biasSlope = 1.5f;                // bias.slope: Vulkan depthBiasSlopeFactor
