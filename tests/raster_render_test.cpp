@@ -4,6 +4,7 @@
 
 #include <cmath>
 #include <cstdio>
+#include <cstring>
 #include <memory>
 
 #include "shadowlab/raster/raster.h"
@@ -139,4 +140,181 @@ TEST_F(RasterTest, RoofShadowIsTheSquareUnderIt) {
     }
   EXPECT_GT(checked, 10000);
   EXPECT_EQ(wrong, 0) << "of " << checked;
+}
+
+TEST_F(RasterTest, OutputsAreBitIdenticalAcrossRuns) {
+  REQUIRE_DEVICE();
+  Scene s = roofScene(0.5f);
+  Method m;
+  m.filter = Filter::Poisson;
+  m.biasNormal = 1.0f;
+  m.biasReceiverPlane = true;
+  Frame a = R->render(s, m);
+  Frame b = R->render(s, m);
+  ASSERT_EQ(a.names, b.names);
+  for (size_t c = 0; c < a.names.size(); ++c)
+    EXPECT_EQ(0, std::memcmp(a.data[c].data(), b.data[c].data(), a.data[c].size() * sizeof(float))) << a.names[c];
+}
+
+TEST_F(RasterTest, MapSizeLimits) {
+  REQUIRE_DEVICE();
+  Scene s = roofScene();
+  s.camera.width = 32;
+  s.camera.height = 24;
+  Method m;
+  m.mapSize = 16;
+  EXPECT_NO_THROW(R->render(s, m));
+  m.mapSize = 0;
+  EXPECT_THROW(R->render(s, m), InputError);
+  m.mapSize = R->maxMapSize() + 1;
+  try {
+    R->render(s, m);
+    ADD_FAILURE() << "map.size above the device limit was accepted";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("map.size"), std::string::npos) << e.what();
+  }
+  // The limit itself renders (d16 keeps the 16384^2 map's memory down).
+  m.mapSize = R->maxMapSize();
+  m.mapFormat = DepthFormat::D16;
+  Frame f = R->render(s, m);
+  EXPECT_EQ(f.meta["method"]["map.size"], R->maxMapSize());
+}
+
+TEST_F(RasterTest, UnknownLightIsAnInputError) {
+  REQUIRE_DEVICE();
+  try {
+    R->render(roofScene(), Method{}, "moon");
+    ADD_FAILURE() << "unknown light accepted";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("sun"), std::string::npos) << "should list the lights: " << e.what();
+  }
+}
+
+// Every filter on the roof: exact inside and outside, fractional only in a band at the edge
+// whose width the kernel sets (pcf 5: 2.5 texels, poisson radius 3: 3 texels).
+TEST_F(RasterTest, FiltersBlendOnlyNearTheEdge) {
+  REQUIRE_DEVICE();
+  Scene s = roofScene();
+  const float texel = 2.0f * 5.0f * std::sqrt(3.0f) * 1.001f / 512.0f;  // 10x1x10 box's sphere
+  for (Filter filter : {Filter::None, Filter::Hw2x2, Filter::Bilinear4, Filter::Pcf, Filter::Poisson}) {
+    Method m;
+    m.mapSize = 512;
+    m.filter = filter;
+    m.filterSize = 5;
+    m.filterRadius = 3.0f;
+    Frame f = R->render(s, m);
+    const auto& vis = f.get("light.sun.vis");
+    const auto& id = f.get("object_id");
+    int wrong = 0, fractional = 0;
+    for (int j = 0; j < f.height; ++j)
+      for (int i = 0; i < f.width; ++i) {
+        size_t k = size_t(j) * f.width + i;
+        if (id[k] != 1.0f) continue;
+        float t;
+        glm::vec3 p = hitPlaneY(s.camera, i, j, 0.0f, &t);
+        float edge = std::max(std::abs(p.x), std::abs(p.z));
+        fractional += vis[k] > 0.0f && vis[k] < 1.0f;
+        if (std::abs(edge - 1.0f) < 5.0f * texel) continue;
+        wrong += vis[k] != (edge < 1.0f ? 0.0f : 1.0f);
+      }
+    EXPECT_EQ(wrong, 0) << toString(filter);
+    if (filter == Filter::None) EXPECT_EQ(fractional, 0);
+    else EXPECT_GT(fractional, 20) << toString(filter) << " must blend at the edge";
+  }
+}
+
+// Spot light straight down from (0, 4, 0) with a 60-degree cone over the floor: lit exactly
+// inside the circle r = 4 tan(30 deg) (minus the roof's shadow), 0 outside.
+TEST_F(RasterTest, SpotLightConeAndShadow) {
+  REQUIRE_DEVICE();
+  Scene s = roofScene(1.0f);
+  s.lights[0].type = LightType::Spot;
+  s.lights[0].position = {0, 4, 0};
+  s.lights[0].direction = {0, -1, 0};
+  s.lights[0].coneDeg = 60;
+  s.lights[0].nearPlane = 0.1f;
+  Frame f = R->render(s, Method{});
+  const auto& vis = f.get("light.sun.vis");
+  const auto& id = f.get("object_id");
+  const float radius = 4.0f * std::tan(glm::radians(30.0f));
+  int wrong = 0, checked = 0;
+  for (int j = 0; j < f.height; ++j)
+    for (int i = 0; i < f.width; ++i) {
+      size_t k = size_t(j) * f.width + i;
+      if (id[k] != 1.0f) continue;
+      float t;
+      glm::vec3 p = hitPlaneY(s.camera, i, j, 0.0f, &t);
+      float r = std::hypot(p.x, p.z);
+      // The roof (|x|,|z| <= 1 at y = 1) seen from (0,4,0) shadows |x|,|z| <= 4/3 on the floor.
+      float edge = std::max(std::abs(p.x), std::abs(p.z));
+      if (std::abs(r - radius) < 0.03f || std::abs(edge - 4.0f / 3.0f) < 0.03f) continue;
+      ++checked;
+      float expect = (r < radius && edge > 4.0f / 3.0f) ? 1.0f : 0.0f;
+      wrong += vis[k] != expect;
+    }
+  EXPECT_GT(checked, 5000);
+  EXPECT_EQ(wrong, 0) << "of " << checked;
+}
+
+// A point light at (0, 0.5, 0) between the floor and the roof (height 1): the roof's underside
+// is lit through the +Y face, the floor through -Y; a post beside the light in +X shadows the
+// floor behind it through the +X face.
+TEST_F(RasterTest, PointLightCubeFaces) {
+  REQUIRE_DEVICE();
+  Scene s = roofScene(1.0f);
+  s.camera.position = {0, 0.6f, 4};
+  s.camera.lookAt = {0, 0.3f, 0};
+  s.lights[0].type = LightType::Point;
+  s.lights[0].position = {0, 0.5f, 0};
+  s.lights[0].nearPlane = 0.05f;
+  // A vertical card at x = 1.5 facing -X: it shadows the floor at x > 1.5 * (0.5 / (0.5 - y))...
+  addQuad(s, "card", 3, {1.5f, 0.0f, 0.5f}, {0, 0, -1.0f}, {0, 0.4f, 0});
+  Frame f = R->render(s, Method{});
+  const auto& vis = f.get("light.sun.vis");
+  const auto& id = f.get("object_id");
+  const auto& inMap = f.get("light.sun.in_map");
+  int roofLit = 0, roofPixels = 0, floorNear = 0, floorNearLit = 0, behindCard = 0, behindCardLit = 0;
+  for (int j = 0; j < f.height; ++j)
+    for (int i = 0; i < f.width; ++i) {
+      size_t k = size_t(j) * f.width + i;
+      EXPECT_TRUE(id[k] == 0.0f || inMap[k] == 1.0f);
+      float t;
+      if (id[k] == 2.0f) ++roofPixels, roofLit += vis[k] == 1.0f;
+      if (id[k] != 1.0f) continue;
+      glm::vec3 p = hitPlaneY(s.camera, i, j, 0.0f, &t);
+      // The card (x = 1.5, 0 <= y <= 0.4, -0.5 <= z <= 0.5) seen from (0, 0.5, 0) shadows the
+      // floor for x >= 1.5 * 0.5 / (0.5 - 0.4) = 7.5 (beyond the floor) down to x >= 1.5 where
+      // |z| <= 0.5 * x / 1.5 ... keep to the safe core: 1.7 <= x <= 4, |z| <= 0.3.
+      if (p.x > 1.7f && p.x < 4.0f && std::abs(p.z) < 0.3f) ++behindCard, behindCardLit += vis[k] == 1.0f;
+      if (std::hypot(p.x, p.z) < 1.2f && p.x < 1.3f) ++floorNear, floorNearLit += vis[k] == 1.0f;
+    }
+  EXPECT_GT(roofPixels, 100);
+  EXPECT_EQ(roofLit, roofPixels) << "the roof's underside faces the light";
+  EXPECT_GT(floorNear, 100);
+  EXPECT_EQ(floorNearLit, floorNear);
+  EXPECT_GT(behindCard, 20);
+  EXPECT_EQ(behindCardLit, 0) << "the card must shadow the floor behind it (+X face)";
+}
+
+// Lloyd's m on the floor under an orthographic light straight down: one texel is
+// (2 R / size) world units wide; the camera at distance d sees it at most ~ that size * focal / d
+// pixels. Checked against the closed form at the image center.
+TEST_F(RasterTest, TexelFootprintMatchesTheClosedForm) {
+  REQUIRE_DEVICE();
+  Scene s = roofScene();
+  s.objects.pop_back();  // floor only
+  s.camera.position = {0, 5, 0.001f};
+  s.camera.lookAt = {0, 0, 0};
+  s.camera.up = {0, 0, -1};
+  s.camera.vfovDeg = 40;
+  s.camera.width = s.camera.height = 200;
+  Method m;
+  m.mapSize = 256;
+  Frame f = R->render(s, m);
+  // Floor box 10 x 0 x 10: sphere radius 5 sqrt(2) * 1.001; texel = 2 R / 256.
+  const double texel = 2.0 * 5.0 * std::sqrt(2.0) * 1.001 / 256.0;
+  // Straight down from height 5: one pixel covers 2 * 5 * tan(20 deg) / 200 world units.
+  const double pixel = 2.0 * 5.0 * std::tan(glm::radians(20.0)) / 200.0;
+  float mCenter = f.get("light.sun.m")[size_t(100) * 200 + 100];
+  EXPECT_NEAR(mCenter, texel / pixel, 0.02 * texel / pixel);
 }
