@@ -252,6 +252,35 @@ TEST(ReferenceRobustness, ChannelsMetadataAndHashes) {
   EXPECT_NE(*std::max_element(picture.begin(), picture.end()), *std::min_element(picture.begin(), picture.end()));
 }
 
+// Degenerate but legal inputs: no objects at all, an object with no triangles, a light and a
+// projector: everything misses, nothing throws, every channel holds its "no hit" value.
+TEST(ReferenceRobustness, EmptySceneRendersAllMisses) {
+  Scene scene;
+  scene.name = "empty";
+  scene.hash = "0000000000000000";
+  scene.camera.width = 40;
+  scene.camera.height = 30;
+  scene.materials.push_back(Material{});
+  Object nothing;
+  nothing.name = "nothing";
+  nothing.id = 7;
+  scene.objects.push_back(nothing);
+  Light sun;
+  sun.name = "sun";
+  scene.lights.push_back(sun);
+  Projector projector;
+  projector.name = "slide";
+  scene.projectors.push_back(projector);
+  ReferenceStats stats;
+  const Frame frame = renderReference(scene, {}, &stats);
+  EXPECT_EQ(stats.primaryRays, 40u * 30u);
+  EXPECT_EQ(stats.shadowRays, 0u);
+  for (size_t c = 0; c < frame.names.size(); ++c) {
+    const float expected = frame.names[c] == "light.sun.occluder_dist" ? -1.0f : 0.0f;
+    for (float value : frame.data[c]) ASSERT_EQ(value, expected) << frame.names[c];
+  }
+}
+
 TEST(ReferenceRobustness, RejectsBadOptions) {
   const Scene scene = loadScene(resolveScenePath("contact"), {{"/camera/width", 32}, {"/camera/height", 18}});
   for (int spp : {0, -1, 1025}) {
