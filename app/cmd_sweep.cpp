@@ -108,6 +108,12 @@ int run(const Options& o) {
     return 130;
   }
   for (const auto& n : summary.notes) std::fprintf(stderr, "sweep: note: %s\n", n.c_str());
+  if (gStop.load()) {
+    // Every row is saved; only the report may be incomplete (its chart script saw the Ctrl-C too).
+    std::fprintf(stderr, "sweep: interrupted while writing the report; every row is saved, run the same command "
+                         "again to regenerate it\n");
+    return 130;
+  }
   std::printf("sweep: %zu rows (%zu run, %zu resumed) in %.2f s\n", summary.configurations, summary.ran,
               summary.resumed, summary.totalSeconds);
   std::printf("sweep: wrote %s and %s\n", summary.resultsJson.c_str(), summary.resultsCsv.c_str());

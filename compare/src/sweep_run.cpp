@@ -129,7 +129,7 @@ class Journal {
       p += n;
       left -= size_t(n);
     }
-    if (sync && ::fsync(fd_) != 0)
+    if (sync && ::fdatasync(fd_) != 0)
       throw InputError(formatError(path_, "", std::string("cannot sync: ") + std::strerror(errno)));
   }
 
@@ -397,6 +397,11 @@ SweepSummary runSweep(const SweepPlan& plan, SweepRunner& runner, const SweepOpt
   writeResultsCsv(summary.resultsCsv, rows);
 
   if (options.writeReport) {
+    if (options.progress) {
+      std::fprintf(options.progress, "sweep: writing the report (charts, best/worst triptychs) into %s\n",
+                   options.outDir.c_str());
+      std::fflush(options.progress);
+    }
     const auto r0 = Clock::now();
     summary.notes = writeSweepReport(plan, rows, results, runner, options);
     summary.reportHtml = joinPath(options.outDir, "report.html");
