@@ -149,7 +149,6 @@ TimingTolerance parseTiming(const nlohmann::json& j, const std::string& file) {
 int verdictRank(Verdict v) {
   switch (v) {
     case Verdict::Regressed: return 0;
-    case Verdict::Missing: return 1;
     case Verdict::Improved: return 2;
     case Verdict::New: return 3;
     case Verdict::Pass: return 4;
@@ -232,7 +231,6 @@ std::string toString(Direction d) {
 std::string toString(Verdict v) {
   switch (v) {
     case Verdict::Regressed: return "REGRESSED";
-    case Verdict::Missing: return "MISSING";
     case Verdict::New: return "new";
     case Verdict::Improved: return "improved";
     case Verdict::Pass: return "pass";

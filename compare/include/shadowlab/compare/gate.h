@@ -99,7 +99,8 @@ Tolerances defaultTolerances();
 Tolerances parseTolerances(const nlohmann::json& j, const std::string& file);
 Tolerances loadTolerances(const std::string& path);
 
-enum class Verdict { Regressed, Missing, New, Improved, Pass, Reported };
+// Missing rows and metrics are not verdicts: they are bad input (exit 2).
+enum class Verdict { Regressed, New, Improved, Pass, Reported };
 std::string toString(Verdict v);
 
 struct GateCheck {
