@@ -49,7 +49,7 @@ struct LaneHit {
   glm::vec3 position{0.0f};  // world, on the triangle (barycentric interpolation in double)
   glm::vec3 normal{0.0f};    // unit geometric normal facing the camera
   float offset = 0.0f;       // world distance shadow origins move along `normal`
-  glm::vec3 shadowOrigin() const { return position + normal * offset; }
+  glm::vec3 origin{0.0f};    // shadow-ray origin: position + normal * offset
 };
 
 struct PreparedLight {
@@ -150,6 +150,7 @@ class Tracer {
       h.normal = glm::dot(normal, dir) > 0.0f ? -normal : normal;
       const float magnitude = std::max(std::max(maxAbs(h.position), maxAbs(p0)), std::max(maxAbs(p1), maxAbs(p2)));
       h.offset = kOriginOffsetScale * magnitude;
+      h.origin = h.position + h.normal * h.offset;
     }
   }
 
@@ -159,13 +160,13 @@ class Tracer {
                    bool wantDistance, bool* occluded, float* distance) {
     RTCRay8 ray;
     alignas(32) int valid[kLanes];
-    TraceContext context(RayKind::Shadow);
+    TraceContext& context = shadowContext_;
     int count = 0;
     for (int lane = 0; lane < kLanes; ++lane) {
       occluded[lane] = false;
       distance[lane] = -1.0f;
       valid[lane] = active[lane] ? -1 : 0;
-      const glm::vec3 origin = active[lane] ? hits[lane].shadowOrigin() : glm::vec3(0.0f);
+      const glm::vec3 origin = active[lane] ? hits[lane].origin : glm::vec3(0.0f);
       const glm::vec3 d = active[lane] ? dir[lane] : glm::vec3(0, 1, 0);
       ray.org_x[lane] = origin.x;
       ray.org_y[lane] = origin.y;
@@ -179,11 +180,9 @@ class Tracer {
       ray.mask[lane] = ~0u;
       ray.id[lane] = unsigned(lane);
       ray.flags[lane] = 0;
-      if (active[lane]) {
-        context.ignoreGeom[lane] = hits[lane].geom;
-        context.ignorePrim[lane] = hits[lane].prim;
-        ++count;
-      }
+      context.ignoreGeom[lane] = active[lane] ? hits[lane].geom : RTC_INVALID_GEOMETRY_ID;
+      context.ignorePrim[lane] = active[lane] ? hits[lane].prim : RTC_INVALID_GEOMETRY_ID;
+      if (active[lane]) ++count;
     }
     if (count == 0) return;
     shadowRays += count;
@@ -199,7 +198,7 @@ class Tracer {
     RTCRayHit8 rayHit;
     for (int lane = 0; lane < kLanes; ++lane) {
       valid[lane] = occluded[lane] ? -1 : 0;
-      const glm::vec3 origin = active[lane] ? hits[lane].shadowOrigin() : glm::vec3(0.0f);
+      const glm::vec3 origin = active[lane] ? hits[lane].origin : glm::vec3(0.0f);
       const glm::vec3 d = active[lane] ? dir[lane] : glm::vec3(0, 1, 0);
       rayHit.ray.org_x[lane] = origin.x;
       rayHit.ray.org_y[lane] = origin.y;
@@ -253,7 +252,7 @@ class Tracer {
           const double cosAngle = length > 0.0 ? glm::dot(fromLight, glm::dvec3(light.direction)) / length : -1.0;
           if (cosAngle < prepared.cosHalfCone) continue;  // outside the cone: unlit, no occluder
         }
-        const glm::vec3 segment = light.position - h.shadowOrigin();
+        const glm::vec3 segment = light.position - h.origin;
         tfar[lane] = glm::length(segment);
         if (!(tfar[lane] > 0.0f)) continue;
         dir[lane] = segment / tfar[lane];
@@ -296,7 +295,7 @@ class Tracer {
       const bool inside = w > 0.0 && u >= 0.0 && u <= 1.0 && v >= 0.0 && v <= 1.0 && depth >= 0.0 && depth <= 1.0;
       if (!inside) continue;
       if (!(glm::dot(h.normal, projector.position - h.position) > 0.0f)) continue;  // lights the hidden side
-      const glm::vec3 segment = projector.position - h.shadowOrigin();
+      const glm::vec3 segment = projector.position - h.origin;
       tfar[lane] = glm::length(segment);
       if (!(tfar[lane] > 0.0f)) continue;
       dir[lane] = segment / tfar[lane];
@@ -322,6 +321,7 @@ class Tracer {
   uint64_t shadowRays = 0;
 
  private:
+  TraceContext shadowContext_{RayKind::Shadow};  // lanes' ignore ids are rewritten per packet
   const Scene& scene_;
   const EmbreeScene& embree_;
   const std::vector<PreparedLight>& lights_;
