@@ -129,11 +129,6 @@ uint32_t floatBits(float v) {
   std::memcpy(&b, &v, 4);
   return b;
 }
-float bitsFloat(uint32_t b) {
-  float v;
-  std::memcpy(&v, &b, 4);
-  return v;
-}
 
 // A buffer reused across calls on the same thread (a sweep compares hundreds of frames): saves
 // the page faults of fresh multi-megabyte allocations. A thread waiting inside a TBB loop may run
@@ -300,16 +295,15 @@ Metrics compareFrames(const Frame& reference, const Frame& raster, const Compare
 
   const int blocks = (height + kBlockRows - 1) / kBlockRows;
   std::vector<BlockSums> sums(size_t(std::max(blocks, 0)));
-  tbb::enumerable_thread_specific<std::vector<uint64_t>> mHistLocal(
-      [&] { return std::vector<uint64_t>(mPlane ? 65536 : 0, 0); });
+  tbb::enumerable_thread_specific<std::vector<uint32_t>> mHistLocal(
+      [&] { return std::vector<uint32_t>(mPlane ? 65536 : 0, 0); });
 
   tbb::parallel_for(0, blocks, [&](int b) {
     BlockSums s;
-    uint64_t* hist = mPlane ? mHistLocal.local().data() : nullptr;
+    uint32_t* hist = mPlane ? mHistLocal.local().data() : nullptr;
     // m is smooth over the image, so neighbours share a histogram bin: count runs in a register
     // instead of incrementing the same memory counter back to back (a store-to-load chain).
-    uint32_t runBin = 0;
-    uint64_t runLength = 0;
+    uint32_t runBin = 0, runLength = 0;
     const size_t begin = size_t(b) * kBlockRows * width;
     const size_t end = std::min(n, size_t(b + 1) * kBlockRows * width);
     for (size_t i = begin; i < end; ++i) {
@@ -416,20 +410,40 @@ Metrics compareFrames(const Frame& reference, const Frame& raster, const Compare
   // rows and columns the transform has to visit; larger distances may come out overestimated, but
   // only beyond every limit, so no class changes.
   if (t.candidates > 0) {
-    const double maxLimitPx = double(options.boundaryTexels) * double(t.candidateLimitPx);
-    const int reach = int(std::min(double(width + height), std::ceil(maxLimitPx))) + 1;
-    // Rows to scan: those within `reach` of a row holding a candidate.
-    std::vector<uint8_t> rowHasCandidate(size_t(height), 0);
+    // Per row: the reach (largest limit in pixels, rounded up) of its candidates whose limit is
+    // shorter than the image diagonal; a candidate with a longer limit (m is huge near the
+    // horizon) is within it of any boundary pixel, so it needs no distance at all, only whether
+    // a boundary exists anywhere.
+    const float boundaryTexels = options.boundaryTexels;
+    const double diagonalPx = std::sqrt(double(width) * width + double(height) * height);
+    auto limitPx = [&](size_t i) { return double(boundaryTexels) * (mPlane ? double(sanitizeM(mPlane[i])) : 1.0); };
+    std::vector<int> rowReach(size_t(height), -1);  // -1: no candidate that needs a distance
+    std::vector<uint8_t> rowHasCandidate(size_t(height), 0), rowHasBoundary(size_t(height), 0);
     tbb::parallel_for(0, height, [&](int y) {
       const uint8_t* krow = klass + size_t(y) * width;
-      uint8_t any = 0;
-      for (int x = 0; x < width; ++x) any |= krow[x] >= kCandidateLeak;
+      const uint8_t* d = decision + size_t(y) * width;
+      const uint8_t* dd = y + 1 < height ? d + width : d;
+      uint8_t any = 0, boundary = 0;
+      int reachRow = -1;
+      for (int x = 0; x < width; ++x) {
+        boundary |= ((d[x] ^ dd[x]) == 3) | (x + 1 < width && (d[x] ^ d[x + 1]) == 3);
+        if (krow[x] < kCandidateLeak) continue;
+        any = 1;
+        const double limit = limitPx(size_t(y) * width + x);
+        if (limit < diagonalPx) reachRow = std::max(reachRow, int(std::ceil(limit)));
+      }
       rowHasCandidate[size_t(y)] = any;
+      rowHasBoundary[size_t(y)] = boundary;
+      rowReach[size_t(y)] = reachRow;
     });
-    std::vector<std::pair<int, int>> bands;  // [y0, y1) row intervals
+    const bool anyBoundary = std::find(rowHasBoundary.begin(), rowHasBoundary.end(), 1) != rowHasBoundary.end();
+    int reach = 0;  // the largest row reach: caps g
+    std::vector<std::pair<int, int>> bands;  // [y0, y1) row intervals to scan
     for (int y = 0; y < height; ++y) {
-      if (!rowHasCandidate[size_t(y)]) continue;
-      const int y0 = std::max(0, y - reach), y1 = std::min(height, y + reach + 1);
+      const int r = rowReach[size_t(y)];
+      if (r < 0) continue;
+      reach = std::max(reach, r + 1);
+      const int y0 = std::max(0, y - r - 1), y1 = std::min(height, y + r + 2);
       if (!bands.empty() && y0 <= bands.back().second) bands.back().second = std::max(bands.back().second, y1);
       else bands.emplace_back(y0, y1);
     }
@@ -464,7 +478,6 @@ Metrics compareFrames(const Frame& reference, const Frame& raster, const Compare
         for (int x = x0; x < x1; ++x) row[x] = uint16_t(std::min<int>(row[x], below[x] + 1));  // <= far
       }
     });
-    const float boundaryTexels = options.boundaryTexels;
     std::vector<std::array<uint64_t, 3>> rowCounts(size_t(height), {0, 0, 0});
     struct RowScratch {
       std::vector<int> v;
@@ -474,15 +487,31 @@ Metrics compareFrames(const Frame& reference, const Frame& raster, const Compare
     tbb::parallel_for(0, height, [&](int y) {
       if (!rowHasCandidate[size_t(y)]) return;
       uint8_t* krow = klass + size_t(y) * width;
+      std::array<uint64_t, 3> counts{0, 0, 0};  // aliasing, leak, other
+      auto resolve = [&](int x, bool withinLimit) {
+        const PixelClass c = withinLimit ? PixelClass::Aliasing
+                             : krow[x] == kCandidateLeak ? PixelClass::Leak
+                                                          : PixelClass::Other;
+        krow[x] = uint8_t(c);
+        ++counts[c == PixelClass::Aliasing ? 0 : c == PixelClass::Leak ? 1 : 2];
+      };
+      const int r = rowReach[size_t(y)];
       int xFirst = width, xLast = -1;
       for (int x = 0; x < width; ++x) {
-        if (krow[x] >= kCandidateLeak) {
+        if (krow[x] < kCandidateLeak) continue;
+        if (limitPx(size_t(y) * width + x) >= diagonalPx) {
+          resolve(x, anyBoundary);
+        } else {
           xFirst = std::min(xFirst, x);
           xLast = x;
         }
       }
-      // Columns farther than `reach` from every candidate cannot bring a distance under a limit.
-      const int q0 = std::max(0, xFirst - reach), q1 = std::min(width, xLast + reach + 1);
+      if (r < 0 || xLast < 0) {
+        rowCounts[size_t(y)] = counts;
+        return;
+      }
+      // Columns farther than the reach from every candidate cannot bring a distance under a limit.
+      const int q0 = std::max(0, xFirst - r - 1), q1 = std::min(width, xLast + r + 2);
       const uint16_t* grow = g + size_t(y) * width;
       RowScratch& rs = scratch.local();
       rs.v.resize(size_t(q1 - q0));
@@ -507,19 +536,13 @@ Metrics compareFrames(const Frame& reference, const Frame& raster, const Compare
         z[k + 1] = std::numeric_limits<double>::infinity();
       }
       k = 0;
-      std::array<uint64_t, 3> counts{0, 0, 0};  // aliasing, leak, other
       for (int x = xFirst; x <= xLast; ++x) {
         while (z[k + 1] < x) ++k;
-        if (krow[x] < kCandidateLeak) continue;
+        if (krow[x] < kCandidateLeak) continue;  // not a candidate, or resolved above
         const int p = v[k];
         const double dist2 = double(x - p) * double(x - p) + f(p);
-        const size_t i = size_t(y) * width + x;
-        const double limitPx = double(boundaryTexels) * (mPlane ? double(sanitizeM(mPlane[i])) : 1.0);
-        const PixelClass c = dist2 <= limitPx * limitPx ? PixelClass::Aliasing
-                             : krow[x] == kCandidateLeak ? PixelClass::Leak
-                                                          : PixelClass::Other;
-        krow[x] = uint8_t(c);
-        ++counts[c == PixelClass::Aliasing ? 0 : c == PixelClass::Leak ? 1 : 2];
+        const double limit = limitPx(size_t(y) * width + x);
+        resolve(x, dist2 <= limit * limit);
       }
       rowCounts[size_t(y)] = counts;
     });
@@ -552,9 +575,9 @@ Metrics compareFrames(const Frame& reference, const Frame& raster, const Compare
   out.mae = t.compared ? t.sumAbs / denom : 0.0;
   out.rmse = t.compared ? std::sqrt(t.sumSq / denom) : 0.0;
 
-  // m quantiles, exact, in linear time: a two-level radix select over the float bits (non-negative
-  // floats order like their bit patterns): 16 high bits in pass 1, then the 16 low bits of the
-  // values in the two bins that hold the ranks. Nearest rank: the value at sorted index
+  // m quantiles, exact, in linear time: a histogram of the 16 high bits of the float (non-negative
+  // floats order like their bit patterns) in pass 1 finds the bins that hold the ranks, then a
+  // selection among the values of those bins. Nearest rank: the value at sorted index
   // ceil(p * N) - 1.
   if (mPlane && t.compared > 0) {
     std::vector<uint64_t> high(65536, 0);
@@ -573,34 +596,32 @@ Metrics compareFrames(const Frame& reference, const Frame& raster, const Compare
       }
       bin[q] = b;  // rank[q] is now the rank within that bin
     }
-    tbb::enumerable_thread_specific<std::vector<uint64_t>> lowLocal([] { return std::vector<uint64_t>(2 * 65536, 0); });
+    // Second level: the values of those two bins (a small share of the pixels), then the k-th
+    // smallest of each. The k-th smallest of a multiset does not depend on the order the threads
+    // appended the values in: deterministic.
+    tbb::enumerable_thread_specific<std::array<std::vector<float>, 2>> inBins;
     tbb::parallel_for(0, blocks, [&](int b) {
-      // m is smooth over the image: most blocks hold no value of either bin.
+      // m is smooth over the image: many blocks hold no value of either bin.
       const uint32_t lo = floatBits(sums[size_t(b)].mMin) >> 16, hi = floatBits(sums[size_t(b)].mMax) >> 16;
       if (sums[size_t(b)].compared == 0 || ((bin[0] < lo || bin[0] > hi) && (bin[1] < lo || bin[1] > hi))) return;
-      uint64_t* h = lowLocal.local().data();
+      auto& values = inBins.local();
       const size_t begin = size_t(b) * kBlockRows * width;
       const size_t end = std::min(n, size_t(b + 1) * kBlockRows * width);
       for (size_t i = begin; i < end; ++i) {
         if (decision[i] == kDecisionNone) continue;
-        const uint32_t bits = floatBits(sanitizeM(mPlane[i]));
-        if ((bits >> 16) == bin[0]) ++h[bits & 0xffffu];
-        if ((bits >> 16) == bin[1]) ++h[65536 + (bits & 0xffffu)];
+        const float m = sanitizeM(mPlane[i]);
+        const uint32_t key = floatBits(m) >> 16;
+        if (key == bin[0]) values[0].push_back(m);
+        if (key == bin[1]) values[1].push_back(m);
       }
     });
-    std::vector<uint64_t> low(2 * 65536, 0);
-    for (const auto& h : lowLocal)
-      for (size_t k = 0; k < low.size(); ++k) low[k] += h[k];
     double value[2];
     for (int q = 0; q < 2; ++q) {
-      const uint64_t* lq = low.data() + size_t(q) * 65536;
-      uint64_t r = rank[q];
-      uint32_t lo = 0;
-      for (; lo < 65535; ++lo) {
-        if (lq[lo] > r) break;
-        r -= lq[lo];
-      }
-      value[q] = double(bitsFloat((bin[q] << 16) | lo));
+      std::vector<float> all;
+      for (auto& v : inBins) all.insert(all.end(), v[size_t(q)].begin(), v[size_t(q)].end());
+      if (rank[q] >= all.size()) throw DriverError("compare: m quantile bin holds fewer values than counted");
+      std::nth_element(all.begin(), all.begin() + std::ptrdiff_t(rank[q]), all.end());
+      value[q] = double(all[size_t(rank[q])]);
     }
     out.mMedian = value[0];
     out.mP95 = value[1];
