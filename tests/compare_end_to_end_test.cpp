@@ -104,7 +104,7 @@ TEST(CompareEndToEnd, HugeBiasOnContactAndThinWallIsLeak) {
   for (const char* scene : {"contact", "thin_wall"}) {
     const Shares s = run(*r, scene, {{"bias.compare", "0.1"}});
     expectDominated(s, s.m.leak, "leak", 0.005);
-    EXPECT_EQ(s.m.acne, 0u) << s.text;
+    EXPECT_LT(100 * s.m.acne, s.m.leak) << "a huge bias leaves (almost) no acne: " << s.text;
   }
 }
 
