@@ -107,6 +107,18 @@ std::string tempDir(const std::string& name) {
 
 const std::string kBinary = SHADOWLAB_BINARY;
 
+// sphere_on_plane at a quarter of its pixels (480x270), written as DIR/sphere_on_plane.json: the
+// same scene name and geometry, cheap enough for the suite. `run` reads the same file.
+std::string smallScene(const std::string& dir) {
+  auto doc = nlohmann::json::parse(readFile(std::string(SHADOWLAB_SOURCE_DIR) + "/scenes/data/sphere_on_plane.json"),
+                                   nullptr, true, /*ignore_comments=*/true);
+  doc["camera"]["width"] = 480;
+  doc["camera"]["height"] = 270;
+  const std::string path = dir + "/sphere_on_plane.json";
+  std::ofstream(path) << doc.dump(2);
+  return path;
+}
+
 std::vector<std::string> sweepArgs(std::vector<std::string> extra) {
   std::vector<std::string> a{kBinary, "sweep"};
   a.insert(a.end(), extra.begin(), extra.end());
@@ -150,8 +162,9 @@ TEST(SweepCli, BadGridValuesExit2AndWriteNothing) {
 
 TEST(SweepCli, SmallSweepRowsMatchShadowlabRunExactly) {
   const std::string dir = tempDir("small");
-  Child sweep = spawn(sweepArgs({"sphere_on_plane", "--grid", "map.size=256,512", "--grid", "bias.slope=0,2", "-o",
-                                 dir + "/sweep", "--cache", dir + "/cache", "--no-report"}),
+  const std::string scene = smallScene(dir);
+  Child sweep = spawn(sweepArgs({scene, "--grid", "map.size=256,512", "--grid", "bias.slope=0,2", "-o",
+                                 dir + "/sweep", "--cache", dir + "/cache", "--no-report", "--keep-images"}),
                       dir + "/sweep");
   int rc = waitFor(sweep);
   if (rc == 3) GTEST_SKIP() << "no Vulkan device (shadowlab exit 3): " << slurp(sweep.err);
@@ -161,6 +174,10 @@ TEST(SweepCli, SmallSweepRowsMatchShadowlabRunExactly) {
 
   auto rows = loadResultRows(dir + "/sweep/results.json");
   ASSERT_EQ(rows.size(), 4u);
+  // --keep-images: the raster frame and the error picture of every configuration.
+  for (const char* config : {"bias.slope=0,map.size=256", "bias.slope=2,map.size=512"})
+    for (const char* file : {"raster.exr", "errors.png"})
+      EXPECT_TRUE(fs::is_regular_file(dir + "/sweep/images/sphere_on_plane/" + config + "/" + file)) << config << file;
   const std::vector<std::pair<std::string, std::string>> configs = {
       {"256", "0"}, {"256", "2"}, {"512", "0"}, {"512", "2"}};
   // Columns of results.csv: identification, the method, every metric, every timing.
@@ -178,7 +195,7 @@ TEST(SweepCli, SmallSweepRowsMatchShadowlabRunExactly) {
     EXPECT_EQ(rows[i].scene, "sphere_on_plane");
     EXPECT_EQ(rows[i].light, "sun");
     const std::string runDir = dir + "/run" + std::to_string(i);
-    Child run = spawn({kBinary, "run", "sphere_on_plane", "--set", "map.size=" + size, "--set", "bias.slope=" + slope,
+    Child run = spawn({kBinary, "run", scene, "--set", "map.size=" + size, "--set", "bias.slope=" + slope,
                        "-o", runDir, "--cache", dir + "/cache"},
                       runDir);
     ASSERT_EQ(waitFor(run), 0) << slurp(run.err);
@@ -201,7 +218,7 @@ TEST(SweepCli, InterruptedAndKilledSweepResumesWithNothingLostOrRepeated) {
   const std::string out = dir + "/sweep";
   const std::string journal = out + "/rows.jsonl";
   // 40 configurations: slow enough to be caught midway.
-  std::vector<std::string> args = sweepArgs({"sphere_on_plane", "--grid", "map.size=64,128,256,512,1024",
+  std::vector<std::string> args = sweepArgs({smallScene(dir), "--grid", "map.size=64,128,256,512,1024",
                                              "--grid", "bias.slope=0,0.25,0.5,1,1.5,2,3,4", "-o", out, "--cache",
                                              dir + "/cache", "--no-report"});
   const size_t total = 40;
