@@ -321,7 +321,7 @@ TEST(Lights, DirectionalFromElevationAzimuthAndOthers) {
   const Light* sun = s.findLight("sun");
   ASSERT_TRUE(sun);
   EXPECT_EQ(s.findLight("moon"), nullptr);
-  glm::vec3 expected = -toLight(50, 30);
+  glm::vec3 expected = -toLight(50, -120);
   EXPECT_NEAR(glm::length(sun->direction - expected), 0.0f, 1e-6f);
   Scene m = loadText(mini(R"({"type": "plane", "size": [4, 4]})",
                           R"({"type": "spot", "name": "spot", "position": [0, 4, 0], "look_at": [0, 0, 0], "cone_deg": 50, "near": 0.2},
@@ -353,7 +353,7 @@ TEST(Overrides, ReplaceValuesBeforeResolving) {
   std::string path = resolveScenePath("sphere_on_plane");
   Scene base = loadScene(path);
   Scene low = loadScene(path, {{"/lights/0/elevation_deg", 30}});
-  EXPECT_NEAR(glm::length(low.lights[0].direction + toLight(30, 30)), 0.0f, 1e-6f);
+  EXPECT_NEAR(glm::length(low.lights[0].direction + toLight(30, -120)), 0.0f, 1e-6f);
   EXPECT_NE(low.hash, base.hash);
   // A new key in an existing object is allowed (and validated like any other).
   Scene rotated = loadScene(path, {{"/objects/1/transform/rotate_deg", {0, 45, 0}}});
@@ -453,4 +453,24 @@ TEST(Loader, HashCoversResolvedFiles) {
   // Comments and whitespace do not change it: the hash is over the canonical document.
   writeFileAtomic((dir / "s.json").string(), "// a comment\n" + text + "\n\n");
   EXPECT_EQ(loadScene((dir / "s.json").string()).hash, h2);
+}
+
+// Sweeps put each declared failure value at the declared pointer: every one must load, and
+// every value other than the file's own must change the scene (and its hash).
+TEST(Loader, EveryFailureValueLoadsAndChangesTheScene) {
+  for (const auto& n : bundledSceneNames()) {
+    std::string path = resolveScenePath(n);
+    Scene base = loadScene(path);
+    nlohmann::json doc = nlohmann::json::parse(readFile(path), nullptr, true, true);
+    double own = doc[nlohmann::json::json_pointer(base.failurePointer)].get<double>();
+    std::set<std::string> hashes;
+    for (double v : base.failureValues) {
+      SCOPED_TRACE(n + " " + base.failurePointer + "=" + std::to_string(v));
+      Scene s = loadScene(path, {{base.failurePointer, v}});
+      if (v == own) EXPECT_EQ(s.hash, base.hash);
+      else EXPECT_NE(s.hash, base.hash);
+      hashes.insert(s.hash);
+    }
+    EXPECT_EQ(hashes.size(), std::set<double>(base.failureValues.begin(), base.failureValues.end()).size()) << n;
+  }
 }

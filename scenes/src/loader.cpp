@@ -812,9 +812,26 @@ void readFailure(const Reader& r, const Node& root, Scene& scene) {
   if (Node d = r.child(f, "description")) r.string(d);
 }
 
-// FNV-1a over the canonical document and everything resolved from files.
+// Every number as a double, so 50 in the file and 50.0 from an override hash alike.
+json canonicalNumbers(const json& j) {
+  if (j.is_number()) return json(j.get<double>());
+  if (j.is_array()) {
+    json out = json::array();
+    for (const auto& v : j) out.push_back(canonicalNumbers(v));
+    return out;
+  }
+  if (j.is_object()) {
+    json out = json::object();
+    for (const auto& item : j.items()) out[item.key()] = canonicalNumbers(item.value());
+    return out;
+  }
+  return j;
+}
+
+// FNV-1a over the canonical document (sorted keys, no comments or whitespace, numbers as
+// doubles) and everything resolved from files.
 std::string sceneHash(const json& doc, const Scene& s) {
-  std::string canonical = doc.dump(-1, ' ', false, json::error_handler_t::replace);
+  std::string canonical = canonicalNumbers(doc).dump(-1, ' ', false, json::error_handler_t::replace);
   uint64_t h = fnv1a64(canonical.data(), canonical.size());
   auto mix = [&h](const void* p, size_t n) { h = fnv1a64(p, n, h); };
   for (const auto& o : s.objects) {
