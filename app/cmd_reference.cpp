@@ -4,6 +4,7 @@
 #include <chrono>
 #include <cstdio>
 #include <exception>
+#include <filesystem>
 #include <memory>
 #include <thread>
 
@@ -36,6 +37,13 @@ int run(const Options& options) {
   }
   if (options.outDir.empty()) {
     throw shadowlab::InputError("shadowlab reference: error: -o is empty; expected an output folder");
+  }
+  {
+    std::error_code error;
+    if (std::filesystem::exists(options.outDir, error) && !std::filesystem::is_directory(options.outDir, error)) {
+      throw shadowlab::InputError("shadowlab reference: error: -o " + options.outDir +
+                                  " is a file; expected a folder (created if missing)");
+    }
   }
   const shadowlab::Scene scene = shadowlab::loadScene(shadowlab::resolveScenePath(options.scene));
   const auto loaded = Clock::now();

@@ -90,6 +90,16 @@ TEST_F(ReferenceCli, BadThreadsExitsTwoAndWritesNothing) {
   EXPECT_FALSE(fs::exists(out));
 }
 
+TEST_F(ReferenceCli, OutputThatIsAFileExitsTwoBeforeTracing) {
+  const std::string scene = writeSmallScene();
+  const fs::path out = dir_ / "taken";
+  std::ofstream(out) << "a file";
+  const RunResult result = runShadowlab("reference '" + scene + "' -o '" + out.string() + "'");
+  EXPECT_EQ(result.exitCode, 2) << result.output;
+  EXPECT_NE(result.output.find("taken"), std::string::npos) << result.output;
+  EXPECT_TRUE(fs::is_regular_file(out));
+}
+
 TEST_F(ReferenceCli, MissingSceneExitsTwoNamingItAndWritesNothing) {
   for (const std::string& scene : {std::string("no_such_scene"), (dir_ / "missing.json").string()}) {
     SCOPED_TRACE(scene);
