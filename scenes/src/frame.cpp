@@ -9,6 +9,7 @@
 #include <map>
 
 #include <OpenImageIO/imageio.h>
+#include <fcntl.h>
 #include <unistd.h>
 
 #include "shadowlab/scenes/error.h"
@@ -43,6 +44,12 @@ void writeImageAtomic(const std::string& path, WriteFn&& write) {
   checkFolder(path);
   std::string tmp = tempImagePath(path);
   std::string err = write(tmp);
+  if (err.empty()) {
+    // OpenImageIO closed the file; flush it to disk before the rename publishes it.
+    int fd = ::open(tmp.c_str(), O_RDONLY);
+    if (fd < 0 || ::fdatasync(fd) != 0) err = "cannot flush the temporary file";
+    if (fd >= 0) ::close(fd);
+  }
   if (err.empty() && std::rename(tmp.c_str(), path.c_str()) != 0) err = "cannot rename the temporary file";
   if (!err.empty()) {
     std::error_code ec;

@@ -41,6 +41,9 @@ void writeFileAtomic(const std::string& path, const std::string& bytes) {
   size_t written = bytes.empty() ? 0 : std::fwrite(bytes.data(), 1, bytes.size(), f);
   bool ok = written == bytes.size();
   ok = (std::fflush(f) == 0) && ok;
+  // Data on disk before the rename publishes it: after a crash the name holds the old file or
+  // the whole new one, never an empty one.
+  ok = (::fdatasync(::fileno(f)) == 0) && ok;
   int err = errno;
   ok = (std::fclose(f) == 0) && ok;
   if (!ok) {
