@@ -281,6 +281,48 @@ TEST(ReferenceRobustness, EmptySceneRendersAllMisses) {
   }
 }
 
+// Inconsistent meshes are reported, never traced into a crash: an index past the positions or a
+// missing per-triangle material is an internal error (the loader never makes one), an
+// alpha-tested material on an object without texture coordinates is bad input.
+TEST(ReferenceRobustness, RejectsInconsistentMeshes) {
+  auto base = [] {
+    Scene scene;
+    scene.name = "broken";
+    scene.path = "broken.json";
+    scene.camera.width = 8;
+    scene.camera.height = 8;
+    scene.materials.push_back(Material{});
+    Object tri;
+    tri.name = "tri";
+    tri.id = 1;
+    tri.positions = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}};
+    tri.triangles = {{0, 1, 2}};
+    tri.triangleMaterial = {0};
+    scene.objects.push_back(tri);
+    return scene;
+  };
+  EXPECT_NO_THROW(renderReference(base(), {}));
+  Scene pastEnd = base();
+  pastEnd.objects[0].triangles[0].z = 3;
+  EXPECT_THROW(renderReference(pastEnd, {}), DriverError);
+  Scene noMaterial = base();
+  noMaterial.objects[0].triangleMaterial.clear();
+  EXPECT_THROW(renderReference(noMaterial, {}), DriverError);
+  Scene badMaterial = base();
+  badMaterial.objects[0].triangleMaterial[0] = 5;
+  EXPECT_THROW(renderReference(badMaterial, {}), DriverError);
+  Scene alphaWithoutUv = base();
+  alphaWithoutUv.materials[0].hasAlpha = true;
+  alphaWithoutUv.materials[0].alphaTexture = Image{1, 1, 1, {1.0f}};
+  try {
+    renderReference(alphaWithoutUv, {});
+    ADD_FAILURE() << "no error";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("broken.json"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("\"tri\""), std::string::npos) << e.what();
+  }
+}
+
 TEST(ReferenceRobustness, RejectsBadOptions) {
   const Scene scene = loadScene(resolveScenePath("contact"), {{"/camera/width", 32}, {"/camera/height", 18}});
   for (int spp : {0, -1, 1025}) {
