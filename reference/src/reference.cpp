@@ -97,9 +97,7 @@ float maxAbs(const glm::vec3& p) { return std::max(std::fabs(p.x), std::max(std:
 
 class Tracer {
  public:
-  Tracer(const Scene& scene, const EmbreeScene& embree, const std::vector<PreparedLight>& lights,
-         const std::vector<PreparedProjector>& projectors)
-      : scene_(scene), embree_(embree), lights_(lights), projectors_(projectors) {}
+  Tracer(const Scene& scene, const EmbreeScene& embree) : scene_(scene), embree_(embree) {}
 
   // Camera rays through (px + dx, py + dy) for the active lanes.
   void tracePrimary(const int* px, const int* py, const bool* active, float dx, float dy, LaneHit* hits) {
@@ -324,8 +322,6 @@ class Tracer {
   TraceContext shadowContext_{RayKind::Shadow};  // lanes' ignore ids are rewritten per packet
   const Scene& scene_;
   const EmbreeScene& embree_;
-  const std::vector<PreparedLight>& lights_;
-  const std::vector<PreparedProjector>& projectors_;
 };
 
 struct Planes {
@@ -453,7 +449,7 @@ Frame renderReference(const Scene& scene, const ReferenceOptions& options, Refer
 
   arena.execute([&] {
     tbb::parallel_for(tbb::blocked_range<int>(0, tilesX * tilesY), [&](const tbb::blocked_range<int>& range) {
-      Tracer tracer(scene, *embree, lights, projectors);
+      Tracer tracer(scene, *embree);
       LaneHit center[kLanes], sample[kLanes];
       std::vector<float> centerVis(lightCount * kLanes), centerDist(lightCount * kLanes);
       std::vector<ProjectorSample> centerProj(projectorCount * kLanes);
