@@ -9,6 +9,9 @@
 #include <tbb/global_control.h>
 
 #include "shadowlab/compare/compare.h"
+#include "shadowlab/raster/raster.h"
+#include "shadowlab/reference/reference.h"
+#include "shadowlab/scenes/loader.h"
 
 namespace {
 
@@ -96,6 +99,37 @@ void BM_CompareFramesOneThread(benchmark::State& state) {
   BM_CompareFrames(state);
 }
 BENCHMARK(BM_CompareFramesOneThread)->Args({1920, 1080, 2})->Args({1920, 1080, 32})->Unit(benchmark::kMillisecond);
+
+// Real frames: the bundled bunny scene rendered at 1920x1080 by both renderers (2048^2 map),
+// once, then compared repeatedly. Skipped when there is no Vulkan device.
+void BM_CompareBunny1080p(benchmark::State& state) {
+  static Pair frames;
+  static std::string error;
+  if (frames.reference.width == 0 && error.empty()) {
+    try {
+      const shadowlab::Scene scene = shadowlab::loadScene(shadowlab::resolveScenePath("bunny"),
+                                                          {{"/camera/width", 1920}, {"/camera/height", 1080}});
+      frames.reference = shadowlab::renderReference(scene, {});
+      shadowlab::Rasterizer rasterizer;
+      frames.raster = rasterizer.render(scene, shadowlab::Method{});
+    } catch (const std::exception& e) {
+      error = e.what();
+    }
+  }
+  if (!error.empty()) {
+    state.SkipWithError(error.c_str());
+    return;
+  }
+  shadowlab::Classification c;
+  shadowlab::Metrics m;
+  for (auto _ : state) {
+    m = shadowlab::compareFrames(frames.reference, frames.raster, {}, &c);
+    benchmark::DoNotOptimize(m);
+  }
+  state.counters["pixels"] = double(m.pixelsCompared);
+  state.counters["errors"] = double(m.errors);
+}
+BENCHMARK(BM_CompareBunny1080p)->Unit(benchmark::kMillisecond)->MeasureProcessCPUTime()->UseRealTime();
 
 void BM_ErrorsPicture(benchmark::State& state) {
   const Pair p = makeFrames(1920, 1080, 8);
