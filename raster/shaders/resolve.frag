@@ -11,6 +11,9 @@
 
 // Specialized per filter so lavapipe compiles straight-line code for the cheap filters.
 layout(constant_id = 0) const uint kFilter = 0u;  // 0 none, 1 hw2x2, 2 bilinear4, 3 pcf, 4 poisson
+// The scene's projector count: lavapipe runs every branch of a shader masked, so an empty
+// projector loop still costs unless it is compiled out.
+layout(constant_id = 1) const int kProjectorCount = 0;
 
 const int kMaxLayers = 14;  // 6 light layers (a cube) + 8 projectors
 const int kMaxProjectors = 8;
@@ -57,7 +60,10 @@ const uint kHit = 0u, kObjectId = 1u, kPrimId = 2u, kVis = 3u, kReceiverDepth = 
 
 uint gPixel;
 uint gPlane;
-void put(uint channel, float value) { outPlanes[channel * gPlane + gPixel] = value; }
+bool gHit;
+// Pixels without a hit get zeros. Every pixel stores each channel exactly once: on lavapipe an
+// early-out branch does not save work (both sides run masked), a second set of stores would.
+void put(uint channel, float value) { outPlanes[channel * gPlane + gPixel] = gHit ? value : 0.0; }
 
 vec3 vertexAt(uint v) { return vec3(positions[3u * v], positions[3u * v + 1u], positions[3u * v + 2u]); }
 vec3 rayThrough(vec2 pixel) { return P.rayX.xyz * pixel.x + P.rayY.xyz * pixel.y + P.rayC.xyz; }
@@ -131,14 +137,10 @@ void main() {
   if (px.x >= width || px.y >= height) return;
   gPixel = uint(px.y * width + px.x);
   gPlane = uint(width * height);
-  uint channelCount = kLightChannels + kProjectorChannels * uint(P.sizes.z);
 
   uvec2 ids = texelFetch(cameraIds, px, 0).xy;
-  if (ids.x == 0u) {
-    for (uint c = 0u; c < channelCount; ++c) put(c, 0.0);
-    return;
-  }
-  ObjectGpu obj = objects[ids.x - 1u];
+  gHit = ids.x != 0u;
+  ObjectGpu obj = objects[gHit ? ids.x - 1u : 0u];  // object 0 always exists (padded)
   uint tri = obj.triangleBase + ids.y;
   vec3 v0 = vertexAt(obj.vertexBase + indices[3u * tri]);
   vec3 v1 = vertexAt(obj.vertexBase + indices[3u * tri + 1u]);
@@ -187,9 +189,10 @@ void main() {
   float vis = 1.0;  // policy: points outside the map are lit
   float mapDepthCenter = 0.0, occluderId = 0.0, occluderPrim = 0.0;
   if (inMap) {
-    vis = filterVisibility();
     ivec2 c = clamp(ivec2(floor(gSt)), ivec2(0), ivec2(int(gSize) - 1));
     mapDepthCenter = texelFetch(mapDepth, ivec3(c, gLayer), 0).r;
+    // filter none is the center texel's comparison: no second fetch.
+    vis = kFilter == 0u ? (mapDepthCenter >= refAt(c) ? 1.0 : 0.0) : filterVisibility();
     uvec2 occ = texelFetch(mapIds, ivec3(c, gLayer), 0).xy;
     if (occ.x != 0u) {
       occluderId = float(objects[occ.x - 1u].id);
@@ -240,7 +243,7 @@ void main() {
   put(kBiasWorld, biasDepth * worldPerDepth);
 
   // ---- projectors ----
-  for (int j = 0; j < P.sizes.z; ++j) {
+  for (int j = 0; j < kProjectorCount; ++j) {
     uint base = kLightChannels + kProjectorChannels * uint(j);
     gLayer = P.sizes.y + j;
     gTexFromWorld = P.texFromWorld[gLayer];

@@ -15,8 +15,6 @@
 #include <set>
 #include <tuple>
 
-#include <sys/resource.h>
-
 #include <glm/gtc/matrix_inverse.hpp>
 
 #include "light_space.h"
@@ -157,7 +155,7 @@ struct Rasterizer::Impl {
   vk::QueryPool queries;
   // Keyed by what needs a new pipeline: (depth format, depth clamp, material tests, depth bias).
   std::map<std::tuple<VkFormat, bool, bool, bool>, vk::PipelineHandle> idPipelines;
-  std::map<Filter, vk::PipelineHandle> resolvePipelines;
+  std::map<std::pair<Filter, int>, vk::PipelineHandle> resolvePipelines;  // (filter, projector count)
   std::set<std::string> warmed;
   std::vector<glm::vec2> poisson = poissonDisc();
 
@@ -168,7 +166,7 @@ struct Rasterizer::Impl {
   explicit Impl(const RasterDeviceOptions& options);
   void createLayouts();
   VkPipeline idPipeline(VkFormat format, bool depthClamp, bool materialTests, bool depthBias);
-  VkPipeline resolvePipeline(Filter filter);
+  VkPipeline resolvePipeline(Filter filter, int projectorCount);
   void ensureImages(int mapSize, VkFormat mapFormat, int layers, int width, int height);
   void writeDescriptors();
   void record(VkCommandBuffer cmd, const std::vector<glm::mat4>& layerClip, int lightLayers,
@@ -207,7 +205,7 @@ Rasterizer::Impl::Impl(const RasterDeviceOptions& options) {
 
   VkQueryPoolCreateInfo q{VK_STRUCTURE_TYPE_QUERY_POOL_CREATE_INFO};
   q.queryType = VK_QUERY_TYPE_TIMESTAMP;
-  q.queryCount = 4;
+  q.queryCount = 3;
   VkQueryPool pool;
   VK_CHECK(vkCreateQueryPool(device, &q, nullptr, &pool));
   queries = vk::QueryPool(device, pool);
@@ -279,16 +277,17 @@ VkPipeline Rasterizer::Impl::idPipeline(VkFormat format, bool depthClamp, bool m
   return idPipelines.emplace(key, vk::createGraphicsPipeline(*context, d)).first->second.get();
 }
 
-VkPipeline Rasterizer::Impl::resolvePipeline(Filter filter) {
-  auto it = resolvePipelines.find(filter);
+VkPipeline Rasterizer::Impl::resolvePipeline(Filter filter, int projectorCount) {
+  auto key = std::make_pair(filter, projectorCount);
+  auto it = resolvePipelines.find(key);
   if (it != resolvePipelines.end()) return it->second.get();
   vk::GraphicsPipelineDesc d;
   d.vertex = fullscreenVert.get();
   d.fragment = resolveFrag.get();
   d.layout = pipelineLayout.get();
   d.depthTest = false;
-  d.fragmentSpecialization = {uint32_t(filter)};  // straight-line code per filter
-  return resolvePipelines.emplace(filter, vk::createGraphicsPipeline(*context, d)).first->second.get();
+  d.fragmentSpecialization = {uint32_t(filter), uint32_t(projectorCount)};  // straight-line code
+  return resolvePipelines.emplace(key, vk::createGraphicsPipeline(*context, d)).first->second.get();
 }
 
 void Rasterizer::Impl::ensureImages(int mapSize, VkFormat mapFormat, int layers, int width, int height) {
@@ -345,7 +344,7 @@ void Rasterizer::Impl::record(VkCommandBuffer cmd, const std::vector<glm::mat4>&
                               const glm::mat4& cameraClip, int width, int height) {
   const raster::SceneGpu& s = *scene;
   VkQueryPool pool = queries.get();
-  vkCmdResetQueryPool(cmd, pool, 0, 4);
+  vkCmdResetQueryPool(cmd, pool, 0, 3);
   vkCmdWriteTimestamp2(cmd, VK_PIPELINE_STAGE_2_TOP_OF_PIPE_BIT, pool, 0);
   VkDescriptorSet set = descriptorSet;
   vkCmdBindDescriptorSets(cmd, VK_PIPELINE_BIND_POINT_GRAPHICS, pipelineLayout.get(), 0, 1, &set, 0, nullptr);
@@ -361,7 +360,7 @@ void Rasterizer::Impl::record(VkCommandBuffer cmd, const std::vector<glm::mat4>&
     for (int tested = 0; tested < 2; ++tested)
       for (const raster::Draw& d : s.draws) {
         if (shadowPass && !d.castsShadow) continue;
-        VkCullModeFlags cull = shadowPass ? vkCull(method.cull) : VK_CULL_MODE_NONE;
+        VkCullModeFlags cull = shadowPass ? vkCull(method.cull) : VkCullModeFlags(VK_CULL_MODE_NONE);
         // One-sided back faces: the hardware cull removes them when the pass culls back faces
         // anyway (shadow pass with cull=back) or when every material of the object is one-sided.
         bool backCulled = cull == VK_CULL_MODE_BACK_BIT;
@@ -443,7 +442,6 @@ void Rasterizer::Impl::record(VkCommandBuffer cmd, const std::vector<glm::mat4>&
                  VK_PIPELINE_STAGE_2_FRAGMENT_SHADER_BIT, VK_ACCESS_2_SHADER_SAMPLED_READ_BIT);
 
   // ---- Pass 3: resolve, one fragment per pixel, no attachments ----
-  vkCmdWriteTimestamp2(cmd, VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT, pool, 3);
   {
     VkRenderingInfo info{VK_STRUCTURE_TYPE_RENDERING_INFO};
     info.renderArea = {{0, 0}, {uint32_t(width), uint32_t(height)}};
@@ -606,22 +604,17 @@ Frame Rasterizer::render(const Scene& scene, const Method& method, const std::st
   IdPipelines pipes{im.idPipeline(mapFormat, depthClamp, false, true), im.idPipeline(mapFormat, depthClamp, true, true),
                     im.idPipeline(kCameraDepthFormat, false, false, false),
                     im.idPipeline(kCameraDepthFormat, false, true, false)};
-  VkPipeline resolve = im.resolvePipeline(method.filter);
+  VkPipeline resolve = im.resolvePipeline(method.filter, projectorCount);
   std::string warmKey = std::to_string(int(mapFormat)) + "/" + std::to_string(depthClamp) + "/" +
-                        toString(method.filter);
+                        toString(method.filter) + "/" + std::to_string(projectorCount);
   int runs = im.warmed.insert(warmKey).second ? 2 : 1;  // lavapipe compiles shaders at first use
-  double cpuMs = 0;
   for (int run = 0; run < runs; ++run) {
-    struct rusage ru0, ru1;
-    getrusage(RUSAGE_SELF, &ru0);
     VkCommandBuffer cmd = im.commands->begin();
     im.record(cmd, layerClip, lightLayers, pipes, resolve, method, cameraClip, width, height);
     im.commands->submitAndWait();
-    getrusage(RUSAGE_SELF, &ru1);
-    cpuMs = (ru1.ru_utime.tv_sec - ru0.ru_utime.tv_sec) * 1e3 + (ru1.ru_utime.tv_usec - ru0.ru_utime.tv_usec) * 1e-3;
   }
-  uint64_t stamps[4] = {0, 0, 0, 0};
-  VK_CHECK(vkGetQueryPoolResults(im.context->device(), im.queries.get(), 0, 4, sizeof(stamps), stamps,
+  uint64_t stamps[3] = {0, 0, 0};
+  VK_CHECK(vkGetQueryPoolResults(im.context->device(), im.queries.get(), 0, 3, sizeof(stamps), stamps,
                                  sizeof(uint64_t), VK_QUERY_RESULT_64_BIT | VK_QUERY_RESULT_WAIT_BIT));
   double nsPerTick = im.context->properties().limits.timestampPeriod;
 
@@ -668,9 +661,6 @@ Frame Rasterizer::render(const Scene& scene, const Method& method, const std::st
                 {"projectors", projectors},
                 {"method", methodToJson(method)},
                 {"device", deviceName()}};
-  if (getenv("SHADOWLAB_RASTER_DEBUG"))
-    fprintf(stderr, "cpu %.1f ms visbuffer %.2f ms resolve %.2f ms\n", cpuMs, double(stamps[3] - stamps[1]) * nsPerTick * 1e-6,
-            double(stamps[2] - stamps[3]) * nsPerTick * 1e-6);
   if (timings) {
     timings->shadowMs = double(stamps[1] - stamps[0]) * nsPerTick * 1e-6;
     timings->cameraMs = double(stamps[2] - stamps[1]) * nsPerTick * 1e-6;

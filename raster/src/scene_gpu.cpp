@@ -80,6 +80,10 @@ SceneGpu uploadScene(const vk::Context& context, const Scene& scene, const std::
     }
     if (d.indexCount > 0) g.draws.push_back(d);
   }
+  // The resolve pass reads object 0 and its first triangle even for pixels without a hit.
+  if (objects.empty()) objects.push_back({0, 0, 0, 0});
+  while (positions.size() < 9) positions.push_back(0.0f);
+  while (indices.size() < 3) indices.push_back(0u);
   std::vector<MaterialGpu> materials;
   std::vector<float> alpha;
   for (const Material& m : scene.materials) {
