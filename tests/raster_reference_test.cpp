@@ -141,6 +141,29 @@ TEST_F(RasterVsReference, ZeroBiasOnGrazingShadowsLitPixels) {
   EXPECT_LT(goodShare, 0.01) << "the default bias must not";
 }
 
+// The engines' fixes work where zero bias fails: on grazing, receiver-plane depth bias alone,
+// or the normal offset alone, removes most of the acne.
+TEST_F(RasterVsReference, ReceiverPlaneAndNormalOffsetFixGrazingAcne) {
+  REQUIRE_DEVICE();
+  Scene s = halfScene("grazing");
+  Method zero;
+  zero.biasConstant = zero.biasSlope = zero.biasClamp = zero.biasCompare = zero.biasNormal = 0;
+  Method receiverPlane = zero;
+  receiverPlane.biasReceiverPlane = true;
+  receiverPlane.biasCompare = 0.00002f;  // a hair above d24 quantization (2^-24 * 256)
+  Method normalOffset = zero;
+  normalOffset.biasNormal = 1.5f;
+  const std::string light = s.lights[0].name;
+  auto acne = [&](const Method& m) {
+    VisStats st = visStats(reference(s), R->render(s, m), light);
+    return double(st.litShadowed) / double(st.refLit);
+  };
+  double z = acne(zero), rp = acne(receiverPlane), no = acne(normalOffset);
+  std::printf("  grazing acne: zero bias %.4f, receiver plane %.4f, normal offset 1.5 %.4f\n", z, rp, no);
+  EXPECT_LT(rp, 0.1 * z);
+  EXPECT_LT(no, 0.1 * z);
+}
+
 TEST_F(RasterVsReference, HugeBiasOnContactLightsShadowedPixels) {
   REQUIRE_DEVICE();
   Scene s = halfScene("contact");
