@@ -287,6 +287,8 @@ SweepSummary runSweep(const SweepPlan& plan, SweepRunner& runner, const SweepOpt
   SweepSummary summary;
   summary.configurations = plan.jobs.size();
   if (options.outDir.empty()) throw InputError("shadowlab sweep: error: no output folder; expected -o DIR");
+  // Device limits are input errors too: found before the output folder exists.
+  for (const auto& c : plan.configs) runner.checkMethod(c.method, "shadowlab sweep: configuration " + c.config);
   makeDirs(options.outDir);
   FolderLock lock(options.outDir);
   const std::string journalPath = joinPath(options.outDir, "rows.jsonl");

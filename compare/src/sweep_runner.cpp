@@ -68,6 +68,14 @@ class PipelineRunner final : public SweepRunner {
     return true;
   }
 
+  void checkMethod(const Method& method, const std::string& origin) override {
+    const int maxSize = rasterizer().maxMapSize();
+    if (method.mapSize > maxSize)
+      throw InputError(formatError(origin, "map.size", "got " + std::to_string(method.mapSize) + "; expected at most " +
+                                                           std::to_string(maxSize) + " (the largest image " +
+                                                           rasterizer().deviceName() + " allows)"));
+  }
+
   nlohmann::json info() const override {
     nlohmann::json j = nlohmann::json::object();
     j["device"] = rasterizer_ ? rasterizer_->deviceName() : std::string("(not started: every row was resumed)");

@@ -118,6 +118,12 @@ class SweepRunner {
   // Returns false when this runner cannot make pictures.
   virtual bool writeTriptych(const Scene& scene, const Method& method, const std::string& light,
                              const std::string& pngPath) = 0;
+  // Device-dependent checks of one configuration before anything is written (e.g. a map larger
+  // than the device allows); throws InputError prefixed by `origin`.
+  virtual void checkMethod(const Method& method, const std::string& origin) {
+    (void)method;
+    (void)origin;
+  }
   // Device and cache facts for results.json ("device", "reference_cache", ...).
   virtual nlohmann::json info() const { return nlohmann::json::object(); }
 };
