@@ -154,7 +154,9 @@ TEST_F(Golden, TwoRunsOfTheSameSweepPassEachOtherExactly) {
   EXPECT_GE(report["counts"]["rows_compared"].get<int>(), 8);
   EXPECT_GT(report["counts"]["reported"].get<int>(), 0);  // the timings, reported only
   for (const auto& check : report["checks"]) {
-    if (check["kind"] == "metric") EXPECT_EQ(check["baseline"], check["current"]) << check.dump();
+    if (check["kind"] == "metric") {
+      EXPECT_EQ(check["baseline"], check["current"]) << check.dump();
+    }
   }
 }
 
