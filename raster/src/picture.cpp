@@ -43,6 +43,11 @@ std::vector<uint8_t> rasterPicture(const Scene& scene, const Frame& frame) {
       }
       float v = vis ? (*vis)[i] : 1.0f;
       c = albedo * (0.15f + 0.85f * v);
+      // The frame has no normals: outline where the visible object changes, so shapes read.
+      size_t x = i % size_t(frame.width), y = i / size_t(frame.width);
+      bool edge = (x + 1 < size_t(frame.width) && objectId[i + 1] != objectId[i]) ||
+                  (y + 1 < size_t(frame.height) && objectId[i + size_t(frame.width)] != objectId[i]);
+      if (edge) c *= 0.5f;
       for (auto& p : projectors)
         c += 0.6f * (*p.coverage)[i] * glm::vec3((*p.r)[i], (*p.g)[i], (*p.b)[i]);
     }

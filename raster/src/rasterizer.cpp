@@ -38,7 +38,6 @@ namespace shadowlab {
 namespace {
 
 constexpr int kMaxLayers = 14;
-constexpr int kMaxLightLayers = 6;
 constexpr int kMaxProjectors = 8;
 constexpr int kMaxTaps = 64;
 constexpr int kLightChannels = 12;
@@ -169,7 +168,7 @@ struct Rasterizer::Impl {
   VkPipeline resolvePipeline(Filter filter, int projectorCount);
   void ensureImages(int mapSize, VkFormat mapFormat, int layers, int width, int height);
   void writeDescriptors();
-  void record(VkCommandBuffer cmd, const std::vector<glm::mat4>& layerClip, int lightLayers,
+  void record(VkCommandBuffer cmd, const std::vector<glm::mat4>& layerClip,
               const IdPipelines& pipes, VkPipeline resolve, const Method& method,
               const glm::mat4& cameraClip, int width, int height);
 };
@@ -339,7 +338,7 @@ void Rasterizer::Impl::writeDescriptors() {
   vkUpdateDescriptorSets(context->device(), uint32_t(writes.size()), writes.data(), 0, nullptr);
 }
 
-void Rasterizer::Impl::record(VkCommandBuffer cmd, const std::vector<glm::mat4>& layerClip, int lightLayers,
+void Rasterizer::Impl::record(VkCommandBuffer cmd, const std::vector<glm::mat4>& layerClip,
                               const IdPipelines& pipes, VkPipeline resolve, const Method& method,
                               const glm::mat4& cameraClip, int width, int height) {
   const raster::SceneGpu& s = *scene;
@@ -417,7 +416,6 @@ void Rasterizer::Impl::record(VkCommandBuffer cmd, const std::vector<glm::mat4>&
     drawAll(layerClip[layer], true);
     vkCmdEndRendering(cmd);
   }
-  (void)lightLayers;
   vkCmdWriteTimestamp2(cmd, VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT, pool, 1);
   vk::transition(cmd, mapDepth, VK_IMAGE_LAYOUT_DEPTH_ATTACHMENT_OPTIMAL, VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL,
                  VK_PIPELINE_STAGE_2_LATE_FRAGMENT_TESTS_BIT, VK_ACCESS_2_DEPTH_STENCIL_ATTACHMENT_WRITE_BIT,
@@ -610,7 +608,7 @@ Frame Rasterizer::render(const Scene& scene, const Method& method, const std::st
   int runs = im.warmed.insert(warmKey).second ? 2 : 1;  // lavapipe compiles shaders at first use
   for (int run = 0; run < runs; ++run) {
     VkCommandBuffer cmd = im.commands->begin();
-    im.record(cmd, layerClip, lightLayers, pipes, resolve, method, cameraClip, width, height);
+    im.record(cmd, layerClip, pipes, resolve, method, cameraClip, width, height);
     im.commands->submitAndWait();
   }
   uint64_t stamps[3] = {0, 0, 0};

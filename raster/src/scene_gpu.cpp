@@ -39,6 +39,7 @@ std::string sceneKey(const Scene& scene) {
   for (const Material& m : scene.materials) {
     h = fnv1a64(&m.alphaCutoff, sizeof(float), h);
     h = fnv1a64(&m.twoSided, sizeof(bool), h);
+    h = fnv1a64(&m.hasAlpha, sizeof(bool), h);
     h = fnv1a64(m.alphaTexture.pixels.data(), m.alphaTexture.pixels.size() * sizeof(float), h);
   }
   for (const Projector& p : scene.projectors)

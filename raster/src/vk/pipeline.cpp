@@ -90,27 +90,4 @@ PipelineHandle createGraphicsPipeline(const Context& context, const GraphicsPipe
   return PipelineHandle(context.device(), pipeline);
 }
 
-PipelineHandle createComputePipeline(const Context& context, VkShaderModule module,
-                                     VkPipelineLayout layout,
-                                     const std::vector<uint32_t>& specialization) {
-  std::vector<VkSpecializationMapEntry> entries(specialization.size());
-  for (size_t i = 0; i < entries.size(); ++i)
-    entries[i] = {uint32_t(i), uint32_t(i * sizeof(uint32_t)), sizeof(uint32_t)};
-  VkSpecializationInfo spec{};
-  spec.mapEntryCount = uint32_t(entries.size());
-  spec.pMapEntries = entries.data();
-  spec.dataSize = specialization.size() * sizeof(uint32_t);
-  spec.pData = specialization.data();
-  VkComputePipelineCreateInfo info{VK_STRUCTURE_TYPE_COMPUTE_PIPELINE_CREATE_INFO};
-  info.stage.sType = VK_STRUCTURE_TYPE_PIPELINE_SHADER_STAGE_CREATE_INFO;
-  info.stage.stage = VK_SHADER_STAGE_COMPUTE_BIT;
-  info.stage.module = module;
-  info.stage.pName = "main";
-  info.stage.pSpecializationInfo = specialization.empty() ? nullptr : &spec;
-  info.layout = layout;
-  VkPipeline pipeline;
-  VK_CHECK(vkCreateComputePipelines(context.device(), VK_NULL_HANDLE, 1, &info, nullptr, &pipeline));
-  return PipelineHandle(context.device(), pipeline);
-}
-
 }  // namespace shadowlab::vk

@@ -29,9 +29,4 @@ struct GraphicsPipelineDesc {
 
 PipelineHandle createGraphicsPipeline(const Context& context, const GraphicsPipelineDesc& desc);
 
-// A compute pipeline with 32-bit specialization constants 0..n-1.
-PipelineHandle createComputePipeline(const Context& context, VkShaderModule module,
-                                     VkPipelineLayout layout,
-                                     const std::vector<uint32_t>& specialization);
-
 }  // namespace shadowlab::vk
