@@ -30,9 +30,10 @@ int updateBaseline(const Options& o, const shadowlab::ResultFile& current) {
   // An existing baseline that does not load is an error: overwriting it blindly would hide
   // whatever wrote it wrong.
   if (existed) baseline = loadResultFile(o.baseline);
+  if (current.rows.empty())
+    throw InputError(formatError(current.path, "/rows", "no rows; expected at least one to make a baseline of"));
   // The rows are about to become the reference: refuse duplicates and NaN as the gate would.
-  GateResult self = runGate(current, current, defaultTolerances());
-  (void)self;
+  (void)runGate(current, current, defaultTolerances());
   std::vector<std::string> changes = describeBaselineUpdate(current, baseline);
   writeJsonAtomic(o.baseline, baselineDocument(current));
   std::printf("shadowlab gate: %s baseline %s from %s (%zu rows)\n", existed ? "updated" : "created",
