@@ -210,7 +210,7 @@ def pareto(points):
 
 
 def chart_accuracy_vs_time(scenes, rows_by_scene, out_dir):
-    fig, axes = panel_grid(len(scenes), width_per=5.6, height_per=4.0, max_cols=2)
+    fig, axes = panel_grid(len(scenes), width_per=9.0, height_per=4.0, max_cols=2)
     for ax, scene in zip(axes, scenes):
         pts = [(raster_ms(r), num(r["metrics"], "error_rate"), r["config"]) for r in rows_by_scene[scene]
                if num(r["metrics"], "error_rate") is not None]
@@ -222,21 +222,24 @@ def chart_accuracy_vs_time(scenes, rows_by_scene, out_dir):
         fy = [p[1] if p[1] > 0 else floor for p in front]
         ax.step(fx, fy, where="post", color="tab:orange", linewidth=1.6, label="Pareto front")
         ax.scatter(fx, fy, s=36, color="tab:orange", zorder=3)
-        # Label the front (its configurations are the answer to "what should I use at this budget").
-        for k, p in enumerate(front[:10]):
-            ax.annotate(p[2], (fx[k], fy[k]), textcoords="offset points", xytext=(5, 4), fontsize=6.5,
-                        color="tab:orange")
-        if len(front) > 10:
-            ax.text(0.99, 0.01, f"{len(front) - 10} more front points: see the table", transform=ax.transAxes,
-                    ha="right", va="bottom", fontsize=7)
+        # Number the front on the plot and name the numbers in the legend (outside the axes), so
+        # labels of nearby points never overlap: these configurations answer "what should I use
+        # at this time budget".
+        shown = front[:12]
+        for k, p in enumerate(shown):
+            ax.annotate(str(k + 1), (fx[k], fy[k]), textcoords="offset points", xytext=(4, 4), fontsize=7,
+                        color="tab:orange", fontweight="bold")
+            ax.plot([], [], " ", label=f"{k + 1}: {p[2]} ({p[0]:.1f} ms, {p[1]:.3%})")
+        if len(front) > len(shown):
+            ax.plot([], [], " ", label=f"... {len(front) - len(shown)} more on the front: see the report's table")
         ax.set_yscale("log")
         ax.set_title(f"{scene}: accuracy against time")
         ax.set_xlabel("raster time: shadow pass + camera pass (ms, GPU timestamps)")
         ax.set_ylabel("error_rate (fraction of compared pixels)")
         ax.grid(True, which="both", alpha=0.3)
-        ax.legend(fontsize=7, loc="best")
+        ax.legend(fontsize=6.5, loc="upper left", bbox_to_anchor=(1.02, 1.0), borderaxespad=0)
     caption = ("Accuracy against time: each dot is one configuration; the orange steps are the Pareto front (no other "
-               "configuration is both faster and more accurate), labelled with their configurations. Zero error rates "
+               "configuration is both faster and more accurate), numbered and named in the legend. Zero error rates "
                "are drawn at the panel's floor.")
     return save(fig, out_dir, "accuracy_vs_time"), caption
 
