@@ -31,7 +31,7 @@ std::vector<std::string> listing(const fs::path& dir) {
 
 }  // namespace
 
-TEST(Frame, AddGetHas) {
+TEST(ScenesFrame, AddGetHas) {
   Frame f;
   f.width = 3;
   f.height = 2;
@@ -54,7 +54,7 @@ TEST(Frame, AddGetHas) {
 // EXR sorts channels by name; reading must go by name. The channel names here are deliberately
 // out of order and the values cover the whole float range (denormals, -0, huge, ids near 2^24),
 // so any reordering or conversion shows as a bit difference.
-TEST(FrameExr, RoundTripIsBitExactWithNamesAndMeta) {
+TEST(ScenesFrameExr, RoundTripIsBitExactWithNamesAndMeta) {
   fs::path dir = freshDir("roundtrip");
   Frame f;
   f.width = 37;
@@ -92,7 +92,7 @@ TEST(FrameExr, RoundTripIsBitExactWithNamesAndMeta) {
   EXPECT_EQ(g.meta, f.meta);
 }
 
-TEST(FrameExr, OverwriteReplacesWholeFile) {
+TEST(ScenesFrameExr, OverwriteReplacesWholeFile) {
   fs::path dir = freshDir("overwrite");
   std::string path = (dir / "f.exr").string();
   Frame a;
@@ -112,7 +112,7 @@ TEST(FrameExr, OverwriteReplacesWholeFile) {
   EXPECT_EQ(listing(dir), std::vector<std::string>{"f.exr"});
 }
 
-TEST(FrameExr, ErrorsNameThePathAndWriteNothing) {
+TEST(ScenesFrameExr, ErrorsNameThePathAndWriteNothing) {
   fs::path dir = freshDir("errors");
   Frame f;
   f.width = f.height = 2;
@@ -142,7 +142,7 @@ TEST(FrameExr, ErrorsNameThePathAndWriteNothing) {
   EXPECT_THROW(readFrameExr((dir / "garbage.exr").string()), InputError);
 }
 
-TEST(RgbPng, WritesAtomicallyAndChecksSize) {
+TEST(ScenesRgbPng, WritesAtomicallyAndChecksSize) {
   fs::path dir = freshDir("png");
   std::vector<uint8_t> rgb(5 * 4 * 3, 200);
   std::string path = (dir / "pic.png").string();
@@ -155,7 +155,7 @@ TEST(RgbPng, WritesAtomicallyAndChecksSize) {
   EXPECT_EQ(listing(dir), std::vector<std::string>{"pic.png"});
 }
 
-TEST(Io, WriteFileAtomicReadFileMakeDirs) {
+TEST(ScenesIo, WriteFileAtomicReadFileMakeDirs) {
   fs::path dir = freshDir("io");
   std::string path = (dir / "a.txt").string();
   writeFileAtomic(path, "first");
@@ -182,7 +182,7 @@ TEST(Io, WriteFileAtomicReadFileMakeDirs) {
   EXPECT_THROW(makeDirs((dir / "a.txt" / "sub").string()), InputError);  // a file in the way
 }
 
-TEST(Io, FnvAndHex) {
+TEST(ScenesIo, FnvAndHex) {
   // Published FNV-1a 64-bit test vectors.
   EXPECT_EQ(fnv1a64("", 0), 0xcbf29ce484222325ull);
   EXPECT_EQ(fnv1a64("a", 1), 0xaf63dc4c8601ec8cull);
@@ -193,7 +193,7 @@ TEST(Io, FnvAndHex) {
   EXPECT_EQ(hashHex(1), "0000000000000001");
 }
 
-TEST(Error, Format) {
+TEST(ScenesError, Format) {
   EXPECT_EQ(formatError("s.json", "/lights/0", "got 2"), "s.json: /lights/0: error: got 2");
   EXPECT_EQ(formatError("s.json", "", "bad"), "s.json: error: bad");
 }

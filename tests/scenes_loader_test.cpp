@@ -72,7 +72,7 @@ glm::vec3 toLight(double elevationDeg, double azimuthDeg) {
 
 }  // namespace
 
-TEST(Loader, EveryBundledSceneLoads) {
+TEST(ScenesLoader, EveryBundledSceneLoads) {
   auto names = bundledSceneNames();
   EXPECT_EQ(names, (std::vector<std::string>{"sphere_on_plane", "grazing", "contact", "thin_wall", "alpha_fence",
                                              "projector", "bunny", "long_view"}));
@@ -104,14 +104,14 @@ TEST(Loader, EveryBundledSceneLoads) {
   }
 }
 
-TEST(Loader, ResolveScenePath) {
+TEST(ScenesLoader, ResolveScenePath) {
   EXPECT_EQ(resolveScenePath("grazing"), bundledScenesDir() + "/grazing.json");
   EXPECT_EQ(resolveScenePath("my/scene.json"), "my/scene.json");
   EXPECT_EQ(resolveScenePath("scene.json"), "scene.json");
   EXPECT_EQ(resolveScenePath("./grazing"), "./grazing");
 }
 
-TEST(Loader, ObjectIdsAreStable) {
+TEST(ScenesLoader, ObjectIdsAreStable) {
   Scene s = loadScene(resolveScenePath("sphere_on_plane"));
   ASSERT_EQ(s.objects.size(), 2u);
   EXPECT_EQ(s.objects[0].name, "ground");
@@ -133,7 +133,7 @@ TEST(Loader, ObjectIdsAreStable) {
 // The sphere is compared against the exact sphere by the analytic test: every point of every
 // triangle must lie within 1e-4 r of it, the mesh must be closed (each edge in exactly two
 // triangles, so no ray slips through) and face outward.
-TEST(Loader, SphereTessellationIsWithinToleranceClosedAndOutward) {
+TEST(ScenesLoader, SphereTessellationIsWithinToleranceClosedAndOutward) {
   Scene s = loadScene(resolveScenePath("sphere_on_plane"));
   const Object& ball = objectNamed(s, "ball");
   const glm::dvec3 center(0, 1, 0);
@@ -158,7 +158,7 @@ TEST(Loader, SphereTessellationIsWithinToleranceClosedAndOutward) {
   for (const auto& [e, count] : edges) ASSERT_EQ(count, 2) << "open edge " << e.first << "-" << e.second;
 }
 
-TEST(Loader, CylinderAndBoxAreClosedAndOutward) {
+TEST(ScenesLoader, CylinderAndBoxAreClosedAndOutward) {
   Scene m = loadText(mini(R"({"type": "cylinder", "radius": 0.5, "height": 2, "segments": 16},
                           {"type": "box", "size": [1, 2, 3], "transform": {"translate": [5, 0, 0]}})"));
   for (const auto& o : m.objects) {
@@ -176,7 +176,7 @@ TEST(Loader, CylinderAndBoxAreClosedAndOutward) {
   EXPECT_FLOAT_EQ(hi.z, 1.5f);
 }
 
-TEST(Loader, TransformAppliesXThenYThenZ) {
+TEST(ScenesLoader, TransformAppliesXThenYThenZ) {
   // The north pole (0, r, 0) of a sphere: X by 90 takes it to +z, then Y by 90 to +x.
   // (Y first would leave it on the y axis and X would then take it to +z.)
   Scene m = loadText(mini(R"({"type": "sphere", "radius": 2, "segments": 4, "rings": 2,
@@ -187,7 +187,7 @@ TEST(Loader, TransformAppliesXThenYThenZ) {
   EXPECT_NEAR(pole.z, 0.0f, 1e-5f);
 }
 
-TEST(Camera, RaysThroughPixelCenters) {
+TEST(ScenesCamera, RaysThroughPixelCenters) {
   Scene s = loadScene(resolveScenePath("sphere_on_plane"));
   const Camera& cam = s.camera;
   const float w = float(cam.width), h = float(cam.height);
@@ -212,7 +212,7 @@ TEST(Camera, RaysThroughPixelCenters) {
 
 // The rasterizer's matrices must put a point seen through image position (x, y) at exactly
 // that position after the Vulkan viewport transform px = (ndc.x + 1) / 2 * W, py = (ndc.y + 1) / 2 * H.
-TEST(Camera, ClipFromViewMatchesRayDirection) {
+TEST(ScenesCamera, ClipFromViewMatchesRayDirection) {
   for (const char* name : {"sphere_on_plane", "long_view", "projector"}) {
     Scene s = loadScene(resolveScenePath(name));
     const Camera& cam = s.camera;
@@ -247,7 +247,7 @@ TEST(Camera, ClipFromViewMatchesRayDirection) {
   EXPECT_NEAR(fa.z / fa.w, 1.0f, 1e-5f);
 }
 
-TEST(Projector, TexFromWorldAxisEdgesAndReverse) {
+TEST(ScenesProjector, TexFromWorldAxisEdgesAndReverse) {
   Scene s = loadScene(resolveScenePath("projector"));
   ASSERT_EQ(s.projectors.size(), 1u);
   const Projector& p = s.projectors[0];
@@ -285,7 +285,7 @@ TEST(Projector, TexFromWorldAxisEdgesAndReverse) {
   EXPECT_NEAR(p.image.at(30, 23, 1), 230 / 255.0f, 1e-6f);
 }
 
-TEST(Alpha, FenceTextureAndNearestRepeatLookup) {
+TEST(ScenesAlpha, FenceTextureAndNearestRepeatLookup) {
   Scene s = loadScene(resolveScenePath("alpha_fence"));
   ASSERT_EQ(s.materials.size(), 2u);
   EXPECT_EQ(s.materials[0].name, "default");
@@ -316,7 +316,7 @@ TEST(Alpha, FenceTextureAndNearestRepeatLookup) {
   EXPECT_EQ(sampleAlphaNearest(a, {1.0f, 30.5f / 64}), 1.0f);  // u = 1 wraps to column 0
 }
 
-TEST(Lights, DirectionalFromElevationAzimuthAndOthers) {
+TEST(ScenesLights, DirectionalFromElevationAzimuthAndOthers) {
   Scene s = loadScene(resolveScenePath("sphere_on_plane"));
   const Light* sun = s.findLight("sun");
   ASSERT_TRUE(sun);
@@ -337,7 +337,7 @@ TEST(Lights, DirectionalFromElevationAzimuthAndOthers) {
   EXPECT_EQ(m.lights[2].direction, glm::vec3(0, -1, 0));  // normalized
 }
 
-TEST(Lights, ProjectorOnlySceneIsValid) {
+TEST(ScenesLights, ProjectorOnlySceneIsValid) {
   fs::path dir = tempDir("projonly");
   fs::copy_file(bundledScenesDir() + "/projector_image.png", dir / "img.png");
   std::string text = mini(R"({"type": "plane", "size": [4, 4]})", "",
@@ -349,7 +349,7 @@ TEST(Lights, ProjectorOnlySceneIsValid) {
   EXPECT_EQ(s.projectors[0].name, "projector");
 }
 
-TEST(Overrides, ReplaceValuesBeforeResolving) {
+TEST(ScenesOverrides, ReplaceValuesBeforeResolving) {
   std::string path = resolveScenePath("sphere_on_plane");
   Scene base = loadScene(path);
   Scene low = loadScene(path, {{"/lights/0/elevation_deg", 30}});
@@ -370,7 +370,7 @@ TEST(Overrides, ReplaceValuesBeforeResolving) {
             std::string::npos);
 }
 
-TEST(Obj, BunnyFromSharedAssets) {
+TEST(ScenesObj, BunnyFromSharedAssets) {
   Scene s = loadScene(resolveScenePath("bunny"));
   const Object& bunny = objectNamed(s, "bunny");
   EXPECT_EQ(bunny.triangles.size(), 27864u);
@@ -385,7 +385,7 @@ TEST(Obj, BunnyFromSharedAssets) {
   EXPECT_NEAR(maxY, 1.86998f - 0.33f, 1e-5f);
 }
 
-TEST(Obj, MtlMaterialsAndMapD) {
+TEST(ScenesObj, MtlMaterialsAndMapD) {
   fs::path dir = tempDir("objmtl");
   // A unit quad as two faces, uvs from OBJ (v up) and an MTL with a map_d alpha texture.
   writeFileAtomic((dir / "leaf.obj").string(),
@@ -421,7 +421,7 @@ TEST(Obj, MtlMaterialsAndMapD) {
   EXPECT_FALSE(s2.materials[1].twoSided);
 }
 
-TEST(Obj, SharedDirFromEnvironment) {
+TEST(ScenesObj, SharedDirFromEnvironment) {
   fs::path dir = tempDir("shared");
   fs::create_directories(dir / "assets");
   writeFileAtomic((dir / "assets" / "tri.obj").string(), "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n");
@@ -439,7 +439,7 @@ TEST(Obj, SharedDirFromEnvironment) {
   else ::unsetenv("SHADOWLAB_SHARED_DIR");
 }
 
-TEST(Loader, HashCoversResolvedFiles) {
+TEST(ScenesLoader, HashCoversResolvedFiles) {
   // Same JSON, different texture content: different hash.
   fs::path dir = tempDir("hash");
   std::string text = mini(R"({"type": "quad", "size": [1, 1], "material": "m"})", R"({"type": "directional", "elevation_deg": 45})",
@@ -457,7 +457,7 @@ TEST(Loader, HashCoversResolvedFiles) {
 
 // Sweeps put each declared failure value at the declared pointer: every one must load, and
 // every value other than the file's own must change the scene (and its hash).
-TEST(Loader, EveryFailureValueLoadsAndChangesTheScene) {
+TEST(ScenesLoader, EveryFailureValueLoadsAndChangesTheScene) {
   for (const auto& n : bundledSceneNames()) {
     std::string path = resolveScenePath(n);
     Scene base = loadScene(path);

@@ -40,14 +40,14 @@ fs::path tempFile(const std::string& name, const std::string& text) {
 
 }  // namespace
 
-TEST(Method, KeysInDocumentationOrder) {
+TEST(ScenesMethod, KeysInDocumentationOrder) {
   EXPECT_EQ(methodKeys(), (std::vector<std::string>{"map.size", "map.format", "cull", "fit", "bias.constant", "bias.slope",
                                                     "bias.clamp", "bias.compare", "bias.normal", "bias.receiver_plane",
                                                     "filter", "filter.size", "filter.taps", "filter.radius",
                                                     "projector.reverse_guard"}));
 }
 
-TEST(Method, SetEveryKeyFromText) {
+TEST(ScenesMethod, SetEveryKeyFromText) {
   Method m;
   applyMethodSetting(m, "map.size", "4096", "--set");
   applyMethodSetting(m, "map.format", "d32f", "--set");
@@ -92,7 +92,7 @@ TEST(Method, SetEveryKeyFromText) {
   EXPECT_FALSE(m.biasReceiverPlane);
 }
 
-TEST(Method, JsonRoundTrip) {
+TEST(ScenesMethod, JsonRoundTrip) {
   Method m;
   m.name = "rt";
   m.mapSize = 512;
@@ -111,7 +111,7 @@ TEST(Method, JsonRoundTrip) {
   EXPECT_EQ(j["filter"], "bilinear4");
 }
 
-TEST(Method, TextErrorsAreExact) {
+TEST(ScenesMethod, TextErrorsAreExact) {
   EXPECT_EQ(setError("map.size", "abc"), "--set: map.size: error: got \"abc\"; expected an integer 16..16384");
   EXPECT_EQ(setError("map.size", "8"), "--set: map.size: error: got \"8\"; expected an integer 16..16384");
   EXPECT_EQ(setError("map.size", "1024.5"), "--set: map.size: error: got \"1024.5\"; expected an integer 16..16384");
@@ -132,7 +132,7 @@ TEST(Method, TextErrorsAreExact) {
     EXPECT_NE(setError("bias.slope", v).find("--set: bias.slope: error: got \""), std::string::npos) << v;
 }
 
-TEST(Method, JsonErrors) {
+TEST(ScenesMethod, JsonErrors) {
   Method m;
   EXPECT_EQ(errorOf([&] { applyMethodJson(m, "map.size", "2048", "grid.json: /grid/map.size/1"); }),
             "grid.json: /grid/map.size/1: map.size: error: got \"2048\"; expected an integer 16..16384");
@@ -147,7 +147,7 @@ TEST(Method, JsonErrors) {
   EXPECT_NE(errorOf([&] { applyMethodJson(m, "map.size", 1024.5, "g"); }).find("got 1024.5"), std::string::npos);
 }
 
-TEST(Method, ValidateCrossField) {
+TEST(ScenesMethod, ValidateCrossField) {
   Method m;
   m.filterSize = 4;
   EXPECT_EQ(errorOf([&] { validateMethod(m, "x.json"); }), "x.json: filter.size: error: got 4; expected an odd integer 3..15");
@@ -155,7 +155,7 @@ TEST(Method, ValidateCrossField) {
   validateMethod(m, "x.json");
 }
 
-TEST(MethodFile, LoadsWithCommentsAndDefaultsTheName) {
+TEST(ScenesMethodFile, LoadsWithCommentsAndDefaultsTheName) {
   fs::path p = tempFile("pcf5.json", R"(// a comment
   { "map.size": 1024, /* inline */ "filter": "pcf", "filter.size": 5, "bias.slope": 2 })");
   Method m = loadMethodFile(p.string());
@@ -170,7 +170,7 @@ TEST(MethodFile, LoadsWithCommentsAndDefaultsTheName) {
 }
 
 // Each tests/bad_input/method_*.json states its expected message in a "// expect: " line.
-TEST(MethodFile, BadInputsAreRejectedWithTheirMessage) {
+TEST(ScenesMethodFile, BadInputsAreRejectedWithTheirMessage) {
   int count = 0;
   for (const auto& e : fs::directory_iterator(badInputDir())) {
     std::string name = e.path().filename().string();
@@ -186,7 +186,7 @@ TEST(MethodFile, BadInputsAreRejectedWithTheirMessage) {
   EXPECT_GE(count, 8);
 }
 
-TEST(MethodFile, MissingFile) {
+TEST(ScenesMethodFile, MissingFile) {
   std::string msg = errorOf([] { loadMethodFile("/nonexistent/m.json"); });
   EXPECT_EQ(msg.rfind("/nonexistent/m.json: error: cannot open file", 0), 0u) << msg;
 }
