@@ -318,3 +318,42 @@ TEST_F(RasterTest, TexelFootprintMatchesTheClosedForm) {
   float mCenter = f.get("light.sun.m")[size_t(100) * 200 + 100];
   EXPECT_NEAR(mCenter, texel / pixel, 0.02 * texel / pixel);
 }
+
+// The roof's square, exact for every depth format and both fits; and the cull convention:
+// the roof quad faces the light (counter-clockwise seen from above), so cull=back keeps it and
+// cull=front removes it (a single quad lit from its front casts nothing: the classic failure).
+TEST_F(RasterTest, FormatsFitsAndCullOnTheRoof) {
+  REQUIRE_DEVICE();
+  Scene s = roofScene();
+  s.camera.width = 120;
+  s.camera.height = 90;
+  auto countWrong = [&](const Method& m, bool expectShadow) {
+    Frame f = R->render(s, m);
+    const auto& vis = f.get("light.sun.vis");
+    const auto& id = f.get("object_id");
+    int wrong = 0;
+    for (int j = 0; j < f.height; ++j)
+      for (int i = 0; i < f.width; ++i) {
+        size_t k = size_t(j) * f.width + i;
+        if (id[k] != 1.0f) continue;
+        float t;
+        glm::vec3 p = hitPlaneY(s.camera, i, j, 0.0f, &t);
+        float edge = std::max(std::abs(p.x), std::abs(p.z));
+        if (std::abs(edge - 1.0f) < 0.03f) continue;
+        wrong += vis[k] != ((expectShadow && edge < 1.0f) ? 0.0f : 1.0f);
+      }
+    return wrong;
+  };
+  for (DepthFormat format : {DepthFormat::D16, DepthFormat::D24, DepthFormat::D32F})
+    for (Fit fit : {Fit::Sphere, Fit::Tight}) {
+      Method m;
+      m.mapFormat = format;
+      m.fit = fit;
+      EXPECT_EQ(countWrong(m, true), 0) << toString(format) << " " << toString(fit);
+    }
+  Method back, front;
+  back.cull = CullMode::Back;
+  front.cull = CullMode::Front;
+  EXPECT_EQ(countWrong(back, true), 0) << "cull=back keeps the light-facing roof";
+  EXPECT_EQ(countWrong(front, false), 0) << "cull=front removes the roof from the map";
+}
