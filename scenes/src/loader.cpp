@@ -272,8 +272,8 @@ void addQuad(Mesh& m, glm::vec3 a, glm::vec3 b, glm::vec3 c, glm::vec3 d, bool w
   m.triangles.push_back({base, base + 2, base + 3});
 }
 
-// Square in xz at y = 0 facing +y; uv (0,0) at (-x, -z) corner... v grows toward +z, so a
-// texture reads upright when seen from above with -z at the top.
+// Rectangle in xz at y = 0 facing +y; uv (0, 0) at the (-x, -z) corner, u along +x, v along +z
+// (seen from above with -z at the top, a texture reads upright).
 Mesh makePlane(glm::vec2 size, glm::vec2 uvScale) {
   Mesh m;
   float hx = size.x * 0.5f, hz = size.y * 0.5f;
@@ -307,7 +307,7 @@ Mesh makeBox(glm::vec3 size) {
   return m;
 }
 
-// Flips any triangle whose normal points toward `inward(centroid)`.
+// Flips any triangle whose normal points against `outward(centroid)`.
 template <class Fn>
 void orientOutward(Mesh& m, Fn outward) {
   for (auto& t : m.triangles) {
