@@ -18,18 +18,18 @@ using namespace shadowlab;
 namespace {
 
 Rasterizer* rasterizer() {
-  static std::unique_ptr<Rasterizer> r;
-  static bool tried = false;
-  if (!tried) {
-    tried = true;
+  // Initialized in one expression: the static's destructor is registered after the device's
+  // own exit handlers (Mesa's thread queues), so it runs before them at exit.
+  static std::unique_ptr<Rasterizer> r = []() -> std::unique_ptr<Rasterizer> {
     try {
       RasterDeviceOptions o;
       o.validation = true;
-      r = std::make_unique<Rasterizer>(o);
+      return std::make_unique<Rasterizer>(o);
     } catch (const std::exception& e) {
       std::fprintf(stderr, "\n*** NO VULKAN DEVICE: raster tests are SKIPPED: %s ***\n\n", e.what());
+      return nullptr;
     }
-  }
+  }();
   return r.get();
 }
 
