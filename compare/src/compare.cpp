@@ -300,30 +300,44 @@ Metrics compareFrames(const Frame& reference, const Frame& raster, const Compare
 
   tbb::parallel_for(0, blocks, [&](int b) {
     BlockSums s;
-    uint32_t* hist = mPlane ? mHistLocal.local().data() : nullptr;
+    // Local copies: the byte stores below may alias anything, and pointers reached through the
+    // lambda's captures would be reloaded after every one of them.
+    const float* const refHit_ = refHit;
+    const float* const rasHit_ = rasHit;
+    const float* const refObj_ = refObj;
+    const float* const rasObj_ = rasObj;
+    const float* const refVis_ = refVis;
+    const float* const rasVis_ = rasVis;
+    const float* const mPlane_ = mPlane;
+    uint8_t* const klass_ = klass;
+    uint8_t* const refLit_ = refLit;
+    uint8_t* const decision_ = decision;
+    const float* const inMap_ = inMap;
+    const float* const occId_ = occId;
+    uint32_t* hist = mPlane_ ? mHistLocal.local().data() : nullptr;
     // m is smooth over the image, so neighbours share a histogram bin: count runs in a register
     // instead of incrementing the same memory counter back to back (a store-to-load chain).
     uint32_t runBin = 0, runLength = 0;
     const size_t begin = size_t(b) * kBlockRows * width;
     const size_t end = std::min(n, size_t(b + 1) * kBlockRows * width);
     for (size_t i = begin; i < end; ++i) {
-      const bool hr = refHit[i] >= 0.5f, hs = rasHit[i] >= 0.5f;
-      refLit[i] = 0;
-      decision[i] = kDecisionNone;
+      const bool hr = refHit_[i] >= 0.5f, hs = rasHit_[i] >= 0.5f;
+      refLit_[i] = 0;
+      decision_[i] = kDecisionNone;
       if (!hr && !hs) {
-        klass[i] = uint8_t(PixelClass::NotCompared);
+        klass_[i] = uint8_t(PixelClass::NotCompared);
         continue;
       }
-      if (!(hr && hs) || refObj[i] != rasObj[i]) {
-        klass[i] = uint8_t(PixelClass::GeometryMismatch);
+      if (!(hr && hs) || refObj_[i] != rasObj_[i]) {
+        klass_[i] = uint8_t(PixelClass::GeometryMismatch);
         ++s.mismatch;
         continue;
       }
       ++s.compared;
-      const float rv = clamp01(refVis[i]), sv = clamp01(rasVis[i]);
+      const float rv = clamp01(refVis_[i]), sv = clamp01(rasVis_[i]);
       const bool rLit = rv >= 0.5f, sLit = sv >= 0.5f;
-      refLit[i] = rLit;
-      decision[i] = rLit ? kDecisionLit : kDecisionShadowed;
+      refLit_[i] = rLit;
+      decision_[i] = rLit ? kDecisionLit : kDecisionShadowed;
       const double d = double(rv) - double(sv);
       s.sumAbs += std::fabs(d);
       s.sumSq += d * d;
@@ -331,8 +345,8 @@ Metrics compareFrames(const Frame& reference, const Frame& raster, const Compare
       s.rasShadow += !sLit;
       s.bothShadow += !rLit && !sLit;
       float m = 0.0f;
-      if (mPlane) {
-        m = sanitizeM(mPlane[i]);
+      if (mPlane_) {
+        m = sanitizeM(mPlane_[i]);
         s.mMax = std::max(s.mMax, m);
         s.mMin = std::min(s.mMin, m);
         const uint32_t bin = floatBits(m) >> 16;
@@ -359,24 +373,24 @@ Metrics compareFrames(const Frame& reference, const Frame& raster, const Compare
       PixelClass c;
       if (rLit == sLit) {
         c = PixelClass::Correct;
-      } else if (inMap && !(inMap[i] >= 0.5f)) {
+      } else if (inMap_ && !(inMap_[i] >= 0.5f)) {
         c = PixelClass::Coverage;
-      } else if (rLit && occId && occId[i] == rasObj[i]) {
+      } else if (rLit && occId_ && occId_[i] == rasObj_[i]) {
         c = PixelClass::Acne;
       } else {
         // Aliasing or, beyond the boundary band, leak (with its evidence) or other: pass 2.
         const bool leakEvidence =
-            !rLit && ((depthEvidence && occId[i] != 0.0f && occId[i] != rasObj[i] && recvDepth[i] > mapDepth[i] &&
+            !rLit && ((depthEvidence && occId_[i] != 0.0f && occId_[i] != rasObj_[i] && recvDepth[i] > mapDepth[i] &&
                        recvDepth[i] <= mapDepth[i] + biasDepth[i]) ||  // (a) an occluder in the map, let through by the bias
                       (refOccDist && biasWorld && refOccDist[i] >= 0.0f &&
                        refOccDist[i] <= leakFactor * biasWorld[i]));  // (b) the true occluder within the bias distance
-        klass[i] = leakEvidence ? kCandidateLeak : kCandidate;
+        klass_[i] = leakEvidence ? kCandidateLeak : kCandidate;
         ++s.candidates;
-        s.candidateLimitPx = std::max(s.candidateLimitPx, mPlane ? m : 1.0f);
+        s.candidateLimitPx = std::max(s.candidateLimitPx, mPlane_ ? m : 1.0f);
         continue;
       }
       ++s.counts[size_t(c)];
-      klass[i] = uint8_t(c);
+      klass_[i] = uint8_t(c);
     }
     if (hist) hist[runBin] += runLength;
     sums[size_t(b)] = s;
