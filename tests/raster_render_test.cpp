@@ -357,3 +357,15 @@ TEST_F(RasterTest, FormatsFitsAndCullOnTheRoof) {
   EXPECT_EQ(countWrong(back, true), 0) << "cull=back keeps the light-facing roof";
   EXPECT_EQ(countWrong(front, false), 0) << "cull=front removes the roof from the map";
 }
+
+TEST_F(RasterTest, SceneWithoutLightsHasOnlyCameraChannels) {
+  REQUIRE_DEVICE();
+  Scene s = roofScene();
+  s.lights.clear();
+  Frame f = R->render(s, Method{});
+  EXPECT_EQ(f.names, (std::vector<std::string>{"hit", "object_id", "prim_id"}));
+  EXPECT_EQ(f.meta["light"], "");
+  double hits = 0;
+  for (float h : f.get("hit")) hits += h;
+  EXPECT_GT(hits, 1000);
+}
