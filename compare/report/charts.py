@@ -244,19 +244,42 @@ def chart_accuracy_vs_time(scenes, rows_by_scene, out_dir):
     return save(fig, out_dir, "accuracy_vs_time"), caption
 
 
-def chart_m_footprint(scenes, rows_by_scene, out_dir):
+def footprint_groups(rows, swept):
+    """Configurations with identical (m_median, m_p95, m_max), in sweep order. m depends on the map
+    size and the fit, not on biases or filters, so a grid of 4 sizes x 8 biases has 4 distinct
+    footprints; each group is labelled with the swept keys it shares and '*' for those it spans."""
+    groups = []
+    index = {}
+    for r in rows:
+        m = tuple(num(r["metrics"], k) for k in ("m_median", "m_p95", "m_max"))
+        if m not in index:
+            index[m] = len(groups)
+            groups.append((m, []))
+        groups[index[m]][1].append(r)
+    labelled = []
+    for m, members in groups:
+        parts = []
+        for k in swept:
+            values = {swept_values(r, [k])[0] for r in members}
+            parts.append(f"{k}={values.pop() if len(values) == 1 else '*'}")
+        labelled.append((",".join(parts) if parts else members[0]["config"], m, len(members)))
+    return labelled
+
+
+def chart_m_footprint(scenes, rows_by_scene, swept, out_dir):
     have = any(num(r["metrics"], "m_p95") is not None for rs in rows_by_scene.values() for r in rs)
     if not have:
         return None, "the rows have no m_median/m_p95/m_max metrics"
-    n_configs = max(len(rs) for rs in rows_by_scene.values())
-    fig, axes = panel_grid(len(scenes), width_per=max(4.6, min(14.0, 0.22 * n_configs + 2.5)), height_per=3.8,
-                           max_cols=1 if n_configs > 12 else 2)
+    per_scene = {s: footprint_groups(rows_by_scene[s], swept) for s in scenes}
+    n_groups = max(len(g) for g in per_scene.values())
+    fig, axes = panel_grid(len(scenes), width_per=max(4.6, min(14.0, 0.3 * n_groups + 3.0)),
+                           height_per=3.2 + (1.6 if n_groups <= 40 else 0.4), max_cols=1 if n_groups > 12 else 2)
     for ax, scene in zip(axes, scenes):
-        rows = rows_by_scene[scene]
-        xs = list(range(len(rows)))
-        med = [num(r["metrics"], "m_median") for r in rows]
-        p95 = [num(r["metrics"], "m_p95") for r in rows]
-        mx = [num(r["metrics"], "m_max") for r in rows]
+        groups = per_scene[scene]
+        xs = list(range(len(groups)))
+        med = [g[1][0] for g in groups]
+        p95 = [g[1][1] for g in groups]
+        mx = [g[1][2] for g in groups]
         floor = positive_floor(med + p95 + mx)
         fix = lambda v: v if v is not None and v > 0 else floor  # noqa: E731
         ax.vlines(xs, [fix(v) for v in med], [fix(v) for v in mx], color="0.6", linewidth=1.2, label="median..max")
@@ -267,18 +290,19 @@ def chart_m_footprint(scenes, rows_by_scene, out_dir):
         ax.axhline(10.0, color="tab:red", linestyle=":", linewidth=1, label="m = 10 (severe)")
         ax.set_yscale("log")
         ax.set_xticks(xs)
-        if len(rows) <= 40:
-            ax.set_xticklabels([r["config"] for r in rows], rotation=60, ha="right", fontsize=6)
+        if len(groups) <= 40:
+            ax.set_xticklabels([g[0] for g in groups], rotation=35, ha="right", fontsize=6.5)
         else:
             ax.set_xticklabels([str(x) if x % 5 == 0 else "" for x in xs], fontsize=6)
-            ax.set_xlabel("configuration (index in sweep order; see the rows table)")
-        ax.set_title(f"{scene}: texel footprint m per configuration")
-        ax.set_ylabel("m: screen extent of one map texel (pixels)")
+            ax.set_xlabel("distinct footprint (index in sweep order)")
+        ax.set_title(f"{scene}: texel footprint m")
+        ax.set_ylabel("m (pixels per map texel)")
         ax.grid(True, axis="y", which="both", alpha=0.3)
         ax.legend(fontsize=6.5, ncol=2)
     caption = ("Distribution of Lloyd et al.'s texel footprint m (the largest screen extent of one shadow-map texel, in "
-               "pixels) over the compared pixels of each configuration: median, 95th percentile and maximum. m <= 1: no "
-               "perspective/projective aliasing; m > 10: severe.")
+               "pixels) over the compared pixels: median, 95th percentile and maximum. m <= 1: no perspective/projective "
+               "aliasing; m > 10: severe. Configurations with the same footprint are drawn once; '*' marks a swept key "
+               "whose values all share it (m does not depend on biases or filters).")
     return save(fig, out_dir, "m_footprint"), caption
 
 
@@ -322,7 +346,7 @@ def main(argv):
                 chart_bias_tradeoff(scenes, rows_by_scene, swept, out_dir, key, label))
         add("accuracy_vs_time", "Accuracy against time (Pareto front)",
             chart_accuracy_vs_time(scenes, rows_by_scene, out_dir))
-        add("m_footprint", "Texel footprint m per configuration", chart_m_footprint(scenes, rows_by_scene, out_dir))
+        add("m_footprint", "Texel footprint m per configuration", chart_m_footprint(scenes, rows_by_scene, swept, out_dir))
 
     manifest = {"charts": charts, "skipped": skipped}
     tmp = os.path.join(out_dir, ".charts.json.tmp")
