@@ -160,8 +160,9 @@ struct SweepSummary {
   std::vector<std::string> notes;                   // e.g. charts skipped or failed
 };
 
-// Runs the plan into options.outDir (created), appending each finished row durably to
-// outDir/rows.jsonl (fsync'd); rows already there for the same scene content and method are not
+// Checks every configuration with runner.checkMethod, then runs the plan into options.outDir
+// (created), appending each finished row durably to outDir/rows.jsonl (one write + fdatasync per
+// row); rows already there for the same scene content and method are not
 // run again; a torn last line is dropped. At the end writes results.json, results.csv, figures/
 // and report.html. Log of starts/finishes: outDir/sweep.log.
 SweepSummary runSweep(const SweepPlan& plan, SweepRunner& runner, const SweepOptions& options);
