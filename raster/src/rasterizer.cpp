@@ -2,7 +2,7 @@
 //   Pass 1 (shadow): depth + (object, primitive) ids from the light into one layer per map
 //                    (cube faces for point lights), then one layer per projector.
 //   Pass 2 (camera): the camera's visibility buffer: depth + (object, primitive) per pixel.
-//   Pass 3 (resolve, compute): per pixel, the visible point, the map lookup with the method's
+//   Pass 3 (resolve, a full-screen fragment pass): per pixel, the visible point, the map lookup with the method's
 //                    bias and filter, the evidence channels, the projectors; one float plane
 //                    per output channel, read back into the Frame with one copy per channel.
 #include "shadowlab/raster/raster.h"
