@@ -175,7 +175,7 @@ TEST(SweepResume, TornLastLineIsDroppedAndRunAgain) {
   EXPECT_NE(second.runs.begin()->first.find("|1024|"), std::string::npos);
   auto now = lines(dir + "/rows.jsonl");
   ASSERT_EQ(now.size(), 3u) << "the torn line is truncated away, not left before the new row";
-  for (const auto& l : now) EXPECT_NO_THROW((void)nlohmann::json::parse(l)) << l;
+  for (const auto& l : now) EXPECT_TRUE(nlohmann::json::accept(l)) << l;
   fs::remove_all(dir);
 }
 
