@@ -304,6 +304,8 @@ std::vector<std::string> writeSweepReport(const SweepPlan& plan, const std::vect
     std::string file;  // relative to outDir, empty when not rendered
   };
   std::map<std::string, std::vector<Pick>> picks;
+  std::map<std::string, size_t> jobOfKey;  // rows need not be in plan order
+  for (size_t j = 0; j < plan.jobs.size(); ++j) jobOfKey[plan.jobs[j].key()] = j;
   if (options.triptychs) {
     for (size_t s = 0; s < plan.sceneNames.size(); ++s) {
       const std::string& name = plan.sceneNames[s];
@@ -319,7 +321,12 @@ std::vector<std::string> writeSweepReport(const SweepPlan& plan, const std::vect
       std::vector<Pick> list{{"best", *best, ""}};
       if (*worst != *best) list.push_back({"worst", *worst, ""});
       for (auto& p : list) {
-        const SweepJob& job = plan.jobs[p.row];
+        auto found = jobOfKey.find(rows[p.row].key());
+        if (found == jobOfKey.end()) {
+          notes.push_back("no triptych for " + rows[p.row].key() + ": the row is not part of this sweep's plan");
+          continue;
+        }
+        const SweepJob& job = plan.jobs[found->second];
         std::string rel = "figures/triptych_" + fileSafe(name) + "_" + p.label + ".png";
         std::string abs = joinPath(options.outDir, rel);
         fs::remove(abs, ec);
