@@ -121,19 +121,6 @@ double msSince(std::chrono::steady_clock::time_point t0) {
   return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
 }
 
-// The frame metadata's "camera_hash", defined exactly as the reference defines it
-// (reference/src/detail.h): FNV-1a over position, lookAt, up, vfovDeg (10 float32) and
-// width, height (2 int32), so compare can match the two frames.
-std::string cameraHashOf(const Camera& camera) {
-  float floats[10] = {camera.position.x, camera.position.y, camera.position.z, camera.lookAt.x,
-                      camera.lookAt.y,   camera.lookAt.z,   camera.up.x,       camera.up.y,
-                      camera.up.z,       camera.vfovDeg};
-  int32_t ints[2] = {camera.width, camera.height};
-  unsigned char bytes[sizeof(floats) + sizeof(ints)];
-  std::memcpy(bytes, floats, sizeof(floats));
-  std::memcpy(bytes + sizeof(floats), ints, sizeof(ints));
-  return hashHex(fnv1a64(bytes, sizeof(bytes)));
-}
 
 }  // namespace
 
@@ -665,7 +652,7 @@ Frame Rasterizer::render(const Scene& scene, const Method& method, const std::st
   frame.meta = {{"kind", "raster"},
                 {"scene", scene.name},
                 {"scene_hash", scene.hash},
-                {"camera_hash", cameraHashOf(camera)},
+                {"camera_hash", camera.hash()},
                 {"width", width},
                 {"height", height},
                 {"light", light ? light->name : ""},

@@ -4,32 +4,17 @@
 #include <cstring>
 #include <unordered_map>
 
-#include "detail.h"
 #include "shadowlab/reference/reference.h"
 #include "shadowlab/scenes/io.h"
 
 namespace shadowlab {
 
-namespace reference_detail {
-
-std::string cameraHash(const Camera& camera) {
-  float floats[10] = {camera.position.x, camera.position.y, camera.position.z, camera.lookAt.x,
-                      camera.lookAt.y,   camera.lookAt.z,   camera.up.x,       camera.up.y,
-                      camera.up.z,       camera.vfovDeg};
-  int32_t ints[2] = {camera.width, camera.height};
-  unsigned char bytes[sizeof(floats) + sizeof(ints)];
-  std::memcpy(bytes, floats, sizeof(floats));
-  std::memcpy(bytes + sizeof(floats), ints, sizeof(ints));
-  return hashHex(fnv1a64(bytes, sizeof(bytes)));
-}
-
-}  // namespace reference_detail
 
 std::string referenceHash(const Scene& scene, const ReferenceOptions& options) {
   // Version tag first: bump it whenever the reference's output changes for the same inputs
   // (channels, origin offset, sample pattern), so stale cache entries stop matching.
   std::string key = "shadowlab.reference/1;scene=" + scene.hash +
-                    ";camera=" + reference_detail::cameraHash(scene.camera) +
+                    ";camera=" + scene.camera.hash() +
                     ";spp=" + std::to_string(options.spp);
   return hashHex(fnv1a64(key.data(), key.size()));
 }

@@ -15,7 +15,6 @@
 #include <tbb/parallel_for.h>
 #include <tbb/task_arena.h>
 
-#include "detail.h"
 #include "embree_scene.h"
 #include "shadowlab/scenes/error.h"
 #include "shadowlab/scenes/io.h"
@@ -419,7 +418,7 @@ Frame renderReference(const Scene& scene, const ReferenceOptions& options, Refer
   frame.meta = {{"kind", "reference"},
                 {"scene", scene.name},
                 {"scene_hash", scene.hash},
-                {"camera_hash", reference_detail::cameraHash(scene.camera)},
+                {"camera_hash", scene.camera.hash()},
                 {"width", width},
                 {"height", height},
                 {"lights", lightNames},

@@ -4,9 +4,12 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <limits>
 
 #include <glm/gtc/matrix_transform.hpp>
+
+#include "shadowlab/scenes/io.h"
 
 namespace shadowlab {
 
@@ -87,6 +90,16 @@ glm::vec3 Camera::rayDirection(float x, float y) const {
   double ndcX = 2.0 * x / width - 1.0;
   double ndcY = 2.0 * y / height - 1.0;
   return glm::vec3(glm::normalize(forward + (ndcX * aspect * t) * right - (ndcY * t) * trueUp));
+}
+
+std::string Camera::hash() const {
+  float floats[10] = {position.x, position.y, position.z, lookAt.x, lookAt.y,
+                      lookAt.z,   up.x,       up.y,       up.z,     vfovDeg};
+  int32_t ints[2] = {width, height};
+  unsigned char bytes[sizeof(floats) + sizeof(ints)];
+  std::memcpy(bytes, floats, sizeof(floats));
+  std::memcpy(bytes + sizeof(floats), ints, sizeof(ints));
+  return hashHex(fnv1a64(bytes, sizeof(bytes)));
 }
 
 glm::vec3 Scene::boundsMin() const {

@@ -89,6 +89,10 @@ struct Camera {
   // Unit world-space direction through the point (x, y) of the image plane, in pixels
   // (x = i + 0.5, y = j + 0.5 is the center of pixel (i, j)).
   glm::vec3 rayDirection(float x, float y) const;
+  // The frames' "camera_hash": hashHex(fnv1a64) over the packed bytes of position.xyz, lookAt.xyz,
+  // up.xyz, vfovDeg (10 float32) then width, height (2 int32): exactly the fields that decide which
+  // ray each pixel casts. One definition, so compare can match a reference and a raster frame.
+  std::string hash() const;
 };
 
 struct Scene {
