@@ -4,6 +4,8 @@
 #include <cmath>
 #include <limits>
 
+#include "shadowlab/raster/cascades.h"
+
 #include <glm/gtc/matrix_transform.hpp>
 
 namespace shadowlab::raster {
@@ -69,7 +71,8 @@ int cubeFace(glm::vec3 v) {
   return v.z > 0 ? 4 : 5;
 }
 
-LightSpace fitLight(const Scene& scene, const Light& light, Fit fit, int mapSize) {
+LightSpace fitLight(const Scene& scene, const Light& light, const Method& method) {
+  const int mapSize = method.mapSize;
   LightSpace out;
   glm::vec3 lo = scene.boundsMin(), hi = scene.boundsMax();
   glm::vec3 center = 0.5f * (lo + hi);
@@ -78,28 +81,87 @@ LightSpace fitLight(const Scene& scene, const Light& light, Fit fit, int mapSize
     out.depthClamp = true;
     glm::vec3 dir = glm::normalize(light.direction);
     glm::mat4 viewFromWorld = glm::lookAt(center, center + dir, upFor(dir));
-    MapLayer layer;
-    if (fit == Fit::Sphere) {
+    if (method.fit == Fit::Sphere) {
+      MapLayer layer;
       layer.texFromWorld = texFromViewOrtho(-radius, radius, -radius, radius, -radius, radius) * viewFromWorld;
       layer.texelWorldPerW = 2.0f * radius / float(mapSize);
-    } else {
-      float inf = std::numeric_limits<float>::infinity();
-      glm::vec3 vmin(inf), vmax(-inf);
-      for (const Object& o : scene.objects)
-        for (const glm::vec3& p : o.positions) {
-          glm::vec3 v = glm::vec3(viewFromWorld * glm::vec4(p, 1.0f));
-          vmin = glm::min(vmin, v);
-          vmax = glm::max(vmax, v);
-        }
-      if (!(vmin.x <= vmax.x)) vmin = vmax = glm::vec3(0);
-      // A hair of margin so the extreme vertices rasterize inside the map, not on its border.
-      glm::vec3 pad = glm::max((vmax - vmin) * 1e-4f, glm::vec3(1e-5f));
-      vmin -= pad;
-      vmax += pad;
-      layer.texFromWorld = texFromViewOrtho(vmin.x, vmax.x, vmin.y, vmax.y, -vmax.z, -vmin.z) * viewFromWorld;
-      layer.texelWorldPerW = std::max(vmax.x - vmin.x, vmax.y - vmin.y) / float(mapSize);
+      out.layers.push_back(layer);
+      return out;
     }
-    out.layers.push_back(layer);
+    // The scene's bounds in light space (the box of all vertices): the depth range of every
+    // layer (the near plane pulled back to the scene bounds, so a caster between the light and a
+    // slice still writes the slice's map) and the clip of the x/y crops (texels outside the
+    // scene are wasted).
+    float inf = std::numeric_limits<float>::infinity();
+    glm::vec3 sceneMin(inf), sceneMax(-inf);
+    for (const Object& o : scene.objects)
+      for (const glm::vec3& p : o.positions) {
+        glm::vec3 v = glm::vec3(viewFromWorld * glm::vec4(p, 1.0f));
+        sceneMin = glm::min(sceneMin, v);
+        sceneMax = glm::max(sceneMax, v);
+      }
+    if (!(sceneMin.x <= sceneMax.x)) sceneMin = sceneMax = glm::vec3(0);
+    // A hair of margin so the extreme vertices rasterize inside the map, not on its border.
+    glm::vec3 scenePad = glm::max((sceneMax - sceneMin) * 1e-4f, glm::vec3(1e-5f));
+    sceneMin -= scenePad;
+    sceneMax += scenePad;
+    const Camera& camera = scene.camera;
+    ViewDepthRange range = cascadeDepthRange(camera, lo, hi);
+    int count = method.fit == Fit::Cascades ? std::clamp(method.cascadeCount, 1, 8) : 1;
+    std::vector<double> splits = cascadeSplits(range.nearView, range.farView, count, method.cascadeLambda);
+    glm::mat4 worldFromCamera = glm::inverse(camera.viewFromWorld());
+    float tanY = std::tan(0.5f * glm::radians(camera.vfovDeg));
+    float tanX = tanY * float(camera.width) / float(std::max(camera.height, 1));
+    bool stabilize = method.fit == Fit::Cascades && method.cascadeStabilize;
+    for (int i = 0; i < count; ++i) {
+      glm::vec3 cornersLight[8];
+      glm::vec3 centroidWorld(0);
+      glm::vec3 cornersWorld[8];
+      for (int k = 0; k < 8; ++k) {
+        float d = float(splits[size_t(i + ((k & 4) ? 1 : 0))]);
+        glm::vec4 inCamera((k & 1) ? tanX * d : -tanX * d, (k & 2) ? tanY * d : -tanY * d, -d, 1.0f);
+        cornersWorld[k] = glm::vec3(worldFromCamera * inCamera);
+        centroidWorld += cornersWorld[k] / 8.0f;
+        cornersLight[k] = glm::vec3(viewFromWorld * glm::vec4(cornersWorld[k], 1.0f));
+      }
+      float left, right, bottom, top;
+      MapLayer layer;
+      if (stabilize) {
+        // Constant size: the slice's bounding sphere (about its centroid) depends only on fov,
+        // aspect and the splits, not on the camera's position or direction. Its center snapped
+        // to whole texels of a grid fixed in light space, so a moving camera moves the crop by
+        // whole texels and every texel keeps its footprint. Two texels of slack keep the sphere
+        // inside after the snap (which moves the center by less than one texel).
+        float r = 0;
+        for (const glm::vec3& c : cornersWorld) r = std::max(r, glm::length(c - centroidWorld));
+        r = std::max(r, 1e-4f);
+        float texel = 2.0f * r / float(mapSize - 2);
+        float half = 0.5f * texel * float(mapSize);
+        glm::vec3 c = glm::vec3(viewFromWorld * glm::vec4(centroidWorld, 1.0f));
+        float cx = std::floor(c.x / texel) * texel, cy = std::floor(c.y / texel) * texel;
+        left = cx - half, right = cx + half, bottom = cy - half, top = cy + half;
+        layer.texelWorldPerW = texel;
+      } else {
+        glm::vec2 bmin(inf), bmax(-inf);
+        for (const glm::vec3& c : cornersLight) {
+          bmin = glm::min(bmin, glm::vec2(c));
+          bmax = glm::max(bmax, glm::vec2(c));
+        }
+        // The frustum intersected with the scene: clip to the scene's light-space box. A slice
+        // that misses the scene entirely keeps its own box (a cascade with nothing in it).
+        glm::vec2 cmin = glm::max(bmin, glm::vec2(sceneMin)), cmax = glm::min(bmax, glm::vec2(sceneMax));
+        if (cmin.x < cmax.x && cmin.y < cmax.y) bmin = cmin, bmax = cmax;
+        glm::vec2 pad = glm::max((bmax - bmin) * 1e-4f, glm::vec2(1e-5f));
+        bmin -= pad;
+        bmax += pad;
+        left = bmin.x, right = bmax.x, bottom = bmin.y, top = bmax.y;
+        layer.texelWorldPerW = std::max(right - left, top - bottom) / float(mapSize);
+      }
+      layer.texFromWorld = texFromViewOrtho(left, right, bottom, top, -sceneMax.z, -sceneMin.z) * viewFromWorld;
+      out.layers.push_back(layer);
+    }
+    if (method.fit == Fit::Cascades)
+      for (double c : splits) out.cascadeSplitsView.push_back(float(c));
     return out;
   }
   float nearZ = std::max(light.nearPlane, 1e-5f);
