@@ -106,58 +106,23 @@ LightSpace fitLight(const Scene& scene, const Light& light, const Method& method
     sceneMin -= scenePad;
     sceneMax += scenePad;
     const Camera& camera = scene.camera;
+    bool stabilize = method.fit == Fit::Cascades && method.cascadeStabilize;
     ViewDepthRange range = cascadeDepthRange(camera, lo, hi);
+    if (stabilize) {
+      // Stabilized crops must keep their size while the camera moves: the clipped range (and so
+      // every split) would change with the camera's position, the camera's own range does not.
+      range = cameraDepthRange(camera);
+    }
     int count = method.fit == Fit::Cascades ? std::clamp(method.cascadeCount, 1, 8) : 1;
     std::vector<double> splits = cascadeSplits(range.nearView, range.farView, count, method.cascadeLambda);
-    glm::mat4 worldFromCamera = glm::inverse(camera.viewFromWorld());
-    float tanY = std::tan(0.5f * glm::radians(camera.vfovDeg));
-    float tanX = tanY * float(camera.width) / float(std::max(camera.height, 1));
-    bool stabilize = method.fit == Fit::Cascades && method.cascadeStabilize;
     for (int i = 0; i < count; ++i) {
-      glm::vec3 cornersLight[8];
-      glm::vec3 centroidWorld(0);
-      glm::vec3 cornersWorld[8];
-      for (int k = 0; k < 8; ++k) {
-        float d = float(splits[size_t(i + ((k & 4) ? 1 : 0))]);
-        glm::vec4 inCamera((k & 1) ? tanX * d : -tanX * d, (k & 2) ? tanY * d : -tanY * d, -d, 1.0f);
-        cornersWorld[k] = glm::vec3(worldFromCamera * inCamera);
-        centroidWorld += cornersWorld[k] / 8.0f;
-        cornersLight[k] = glm::vec3(viewFromWorld * glm::vec4(cornersWorld[k], 1.0f));
-      }
-      float left, right, bottom, top;
+      CascadeCrop crop = cascadeCrop(camera, viewFromWorld, splits[size_t(i)], splits[size_t(i) + 1], mapSize,
+                                     stabilize, glm::vec2(sceneMin), glm::vec2(sceneMax));
       MapLayer layer;
-      if (stabilize) {
-        // Constant size: the slice's bounding sphere (about its centroid) depends only on fov,
-        // aspect and the splits, not on the camera's position or direction. Its center snapped
-        // to whole texels of a grid fixed in light space, so a moving camera moves the crop by
-        // whole texels and every texel keeps its footprint. Two texels of slack keep the sphere
-        // inside after the snap (which moves the center by less than one texel).
-        float r = 0;
-        for (const glm::vec3& c : cornersWorld) r = std::max(r, glm::length(c - centroidWorld));
-        r = std::max(r, 1e-4f);
-        float texel = 2.0f * r / float(mapSize - 2);
-        float half = 0.5f * texel * float(mapSize);
-        glm::vec3 c = glm::vec3(viewFromWorld * glm::vec4(centroidWorld, 1.0f));
-        float cx = std::floor(c.x / texel) * texel, cy = std::floor(c.y / texel) * texel;
-        left = cx - half, right = cx + half, bottom = cy - half, top = cy + half;
-        layer.texelWorldPerW = texel;
-      } else {
-        glm::vec2 bmin(inf), bmax(-inf);
-        for (const glm::vec3& c : cornersLight) {
-          bmin = glm::min(bmin, glm::vec2(c));
-          bmax = glm::max(bmax, glm::vec2(c));
-        }
-        // The frustum intersected with the scene: clip to the scene's light-space box. A slice
-        // that misses the scene entirely keeps its own box (a cascade with nothing in it).
-        glm::vec2 cmin = glm::max(bmin, glm::vec2(sceneMin)), cmax = glm::min(bmax, glm::vec2(sceneMax));
-        if (cmin.x < cmax.x && cmin.y < cmax.y) bmin = cmin, bmax = cmax;
-        glm::vec2 pad = glm::max((bmax - bmin) * 1e-4f, glm::vec2(1e-5f));
-        bmin -= pad;
-        bmax += pad;
-        left = bmin.x, right = bmax.x, bottom = bmin.y, top = bmax.y;
-        layer.texelWorldPerW = std::max(right - left, top - bottom) / float(mapSize);
-      }
-      layer.texFromWorld = texFromViewOrtho(left, right, bottom, top, -sceneMax.z, -sceneMin.z) * viewFromWorld;
+      layer.texelWorldPerW = crop.texelWorld;
+      layer.texFromWorld = texFromViewOrtho(crop.minLight.x, crop.maxLight.x, crop.minLight.y, crop.maxLight.y,
+                                            -sceneMax.z, -sceneMin.z) *
+                           viewFromWorld;
       out.layers.push_back(layer);
     }
     if (method.fit == Fit::Cascades)
