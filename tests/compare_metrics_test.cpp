@@ -518,5 +518,54 @@ TEST(CompareMetrics, ErrorsPictureHasLegendAndClassColors) {
   EXPECT_GT(textPixels, 100);
 }
 
+// Per-cascade metrics. Three cascades by rows: rows 0..13 cascade 0, 14..27 cascade 1, 28..43
+// cascade 2 (rows 44..47 are background), 64 columns each, so 896, 896 and 1024 compared pixels.
+// The method declares 5 cascades: 3 and 4 hold nothing and must still be listed, NaN-free.
+// Acne planted: 5 pixels in cascade 0, 7 in cascade 2 (lit pixels whose raster vis is 0 while the
+// map texel holds the receiver itself). m: cascade 0 has m = x + 1 (values 1..64, 14 times each:
+// nearest rank ceil(0.95 * 896) - 1 = 851, the value at sorted index 851 is 851 / 14 + 1 = 61),
+// cascade 1 m = 2, cascade 2 m = 0.5.
+TEST(CompareMetrics, PerCascadeErrorRateAndFootprint) {
+  Pair p = makeAgreeingPair();
+  p.raster.meta["method"] = {{"fit", "cascades"}, {"cascades.count", 5}};
+  p.raster.add("light.sun.cascade", 0.0f);
+  for (int y = 0; y < kH - kBackgroundRows; ++y)
+    for (int x = 0; x < kW; ++x) {
+      int c = y < 14 ? 0 : y < 28 ? 1 : 2;
+      p.ras("light.sun.cascade", x, y) = float(c);
+      p.ras("light.sun.m", x, y) = c == 0 ? float(x + 1) : c == 1 ? 2.0f : 0.5f;
+    }
+  p.ras("light.sun.cascade", 40, 3) = std::nanf("");  // read as cascade 0, never NaN out
+  for (int x = 1; x <= 5; ++x) p.ras("light.sun.vis", x, 0) = 0.0f;
+  for (int x = 1; x <= 7; ++x) p.ras("light.sun.vis", x, 30) = 0.0f;
+  Metrics m = compareFrames(p.reference, p.raster);
+  EXPECT_EQ(m.acne, 12u);
+  ASSERT_EQ(m.cascades.size(), 5u);
+  const uint64_t pixels[5] = {896, 896, 1024, 0, 0}, errors[5] = {5, 0, 7, 0, 0};
+  const double p95[5] = {61.0, 2.0, 0.5, 0.0, 0.0};
+  for (int k = 0; k < 5; ++k) {
+    const CascadeMetrics& c = m.cascades[size_t(k)];
+    EXPECT_EQ(c.index, k);
+    EXPECT_EQ(c.pixels, pixels[k]) << "cascade " << k;
+    EXPECT_EQ(c.errors, errors[k]) << "cascade " << k;
+    EXPECT_EQ(c.errorRate, pixels[k] ? double(errors[k]) / double(pixels[k]) : 0.0) << "cascade " << k;
+    EXPECT_EQ(c.mP95, p95[k]) << "cascade " << k;
+  }
+  nlohmann::json j = m.toJson();
+  ASSERT_TRUE(j["cascades"].is_array());
+  ASSERT_EQ(j["cascades"].size(), 5u);
+  EXPECT_EQ(j["cascades"][2]["index"], 2);
+  EXPECT_EQ(j["cascades"][2]["pixels"], 1024);
+  EXPECT_EQ(j["cascades"][2]["error_rate"].get<double>(), 7.0 / 1024.0);
+  EXPECT_EQ(j["cascades"][0]["m_p95"].get<double>(), 61.0);
+  for (const auto& c : j["cascades"]) expectFiniteJson(c);
+
+  // The same frame from a non-cascaded fit (channel all 0): no per-cascade list, keys unchanged.
+  p.raster.meta["method"] = {{"fit", "sphere"}, {"cascades.count", 4}};
+  Metrics sphere = compareFrames(p.reference, p.raster);
+  EXPECT_TRUE(sphere.cascades.empty());
+  EXPECT_FALSE(sphere.toJson().contains("cascades"));
+}
+
 }  // namespace
 }  // namespace shadowlab

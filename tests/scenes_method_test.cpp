@@ -41,7 +41,8 @@ fs::path tempFile(const std::string& name, const std::string& text) {
 }  // namespace
 
 TEST(ScenesMethod, KeysInDocumentationOrder) {
-  EXPECT_EQ(methodKeys(), (std::vector<std::string>{"map.size", "map.format", "cull", "fit", "bias.constant", "bias.slope",
+  EXPECT_EQ(methodKeys(), (std::vector<std::string>{"map.size", "map.format", "cull", "fit", "cascades.count",
+                                                    "cascades.lambda", "cascades.blend", "cascades.stabilize", "bias.constant", "bias.slope",
                                                     "bias.clamp", "bias.compare", "bias.normal", "bias.receiver_plane",
                                                     "filter", "filter.size", "filter.taps", "filter.radius",
                                                     "projector.reverse_guard"}));
@@ -189,4 +190,42 @@ TEST(ScenesMethodFile, BadInputsAreRejectedWithTheirMessage) {
 TEST(ScenesMethodFile, MissingFile) {
   std::string msg = errorOf([] { loadMethodFile("/nonexistent/m.json"); });
   EXPECT_EQ(msg.rfind("/nonexistent/m.json: error: cannot open file", 0), 0u) << msg;
+}
+
+// The cascade keys: defaults as documented in raster/METHODS.md, ranges enforced with the key
+// named, and the JSON round trip keeps them.
+TEST(ScenesMethod, CascadeKeys) {
+  Method d;
+  EXPECT_EQ(d.cascadeCount, 4);
+  EXPECT_FLOAT_EQ(d.cascadeLambda, 0.75f);
+  EXPECT_FLOAT_EQ(d.cascadeBlend, 0.0f);
+  EXPECT_FALSE(d.cascadeStabilize);
+  Method m;
+  applyMethodSetting(m, "fit", "cascades", "--set");
+  applyMethodSetting(m, "cascades.count", "8", "--set");
+  applyMethodSetting(m, "cascades.lambda", "0.5", "--set");
+  applyMethodSetting(m, "cascades.blend", "0.1", "--set");
+  applyMethodSetting(m, "cascades.stabilize", "true", "--set");
+  EXPECT_EQ(m.fit, Fit::Cascades);
+  EXPECT_EQ(m.cascadeCount, 8);
+  EXPECT_FLOAT_EQ(m.cascadeLambda, 0.5f);
+  EXPECT_FLOAT_EQ(m.cascadeBlend, 0.1f);
+  EXPECT_TRUE(m.cascadeStabilize);
+  nlohmann::json j = methodToJson(m);
+  EXPECT_EQ(j["fit"], "cascades");
+  EXPECT_EQ(j["cascades.count"], 8);
+  Method back;
+  for (const auto& [k, v] : j.items()) applyMethodJson(back, k, v, "rt");
+  EXPECT_EQ(methodToJson(back), j);
+  EXPECT_EQ(setError("cascades.count", "0"), "--set: cascades.count: error: got \"0\"; expected an integer 1..8");
+  EXPECT_EQ(setError("cascades.count", "9"), "--set: cascades.count: error: got \"9\"; expected an integer 1..8");
+  EXPECT_EQ(setError("cascades.lambda", "1.5"),
+            "--set: cascades.lambda: error: got \"1.5\"; expected a number 0..1 (0 uniform, 1 logarithmic splits)");
+  EXPECT_EQ(setError("cascades.blend", "0.6"),
+            "--set: cascades.blend: error: got \"0.6\"; expected a number 0..0.5 (fraction of a cascade's depth range)");
+  EXPECT_EQ(setError("cascades.stabilize", "maybe"),
+            "--set: cascades.stabilize: error: got \"maybe\"; expected true, false, 1 or 0");
+  Method hand;
+  hand.cascadeCount = 0;
+  EXPECT_THROW(validateMethod(hand, "code"), InputError);
 }

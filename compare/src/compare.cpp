@@ -61,6 +61,12 @@ nlohmann::json Metrics::toJson() const {
     j["reverse_projection_pixels"] = reverseProjectionPixels;
     j["projector_color_mae"] = projectorColorMae;
   }
+  if (!cascades.empty()) {
+    nlohmann::json list = nlohmann::json::array();
+    for (const CascadeMetrics& c : cascades)
+      list.push_back({{"index", c.index}, {"pixels", c.pixels}, {"error_rate", c.errorRate}, {"m_p95", c.mP95}});
+    j["cascades"] = list;
+  }
   return j;
 }
 
@@ -251,6 +257,19 @@ Metrics compareFrames(const Frame& reference, const Frame& raster, const Compare
   const float* biasWorld = optional(raster, lp + "bias_world");
   const float* mPlane = optional(raster, lp + "m");
   const bool depthEvidence = recvDepth && mapDepth && biasDepth && occId;
+  // Per-cascade metrics: only for cascaded frames, so every other row keeps its keys (the channel
+  // is 0 everywhere for the other fits). Frames built in code without metadata count as cascaded.
+  const float* cascadePlane = optional(raster, lp + "cascade");
+  int cascadeCount = 0;  // from the method, so that an empty cascade is still listed
+  if (cascadePlane) {
+    auto method = raster.meta.find("method");
+    if (method != raster.meta.end() && method->is_object()) {
+      auto fit = method->find("fit");
+      if (fit != method->end() && fit->is_string() && fit->get<std::string>() != "cascades") cascadePlane = nullptr;
+      auto count = method->find("cascades.count");
+      if (count != method->end() && count->is_number_integer()) cascadeCount = std::clamp(count->get<int>(), 0, 8);
+    }
+  }
 
   std::string projector = firstName(reference, "projectors");
   if (projector.empty()) projector = firstName(raster, "projectors");
@@ -568,6 +587,36 @@ Metrics compareFrames(const Frame& reference, const Frame& raster, const Compare
   }
 
   Metrics out;
+  if (cascadePlane) {
+    // After pass 2, so `klass` holds every pixel's final class. Cascade indices come from a float
+    // channel: anything not an integer 0..7 (NaN included) is read as the nearest valid index.
+    constexpr int kMaxCascades = 8;
+    std::vector<uint64_t> pixels(kMaxCascades, 0), errors(kMaxCascades, 0);
+    std::vector<std::vector<float>> mValues(kMaxCascades);
+    for (size_t i = 0; i < n; ++i) {
+      if (decision[i] == kDecisionNone) continue;  // not compared
+      const float v = cascadePlane[i];
+      const int k = v >= 0.0f ? (v < float(kMaxCascades - 1) ? int(v + 0.5f) : kMaxCascades - 1) : 0;
+      ++pixels[size_t(k)];
+      errors[size_t(k)] += klass[i] >= uint8_t(PixelClass::Acne) && klass[i] <= uint8_t(PixelClass::Other);
+      if (mPlane) mValues[size_t(k)].push_back(sanitizeM(mPlane[i]));
+      cascadeCount = std::max(cascadeCount, k + 1);
+    }
+    for (int k = 0; k < cascadeCount; ++k) {
+      CascadeMetrics c;
+      c.index = k;
+      c.pixels = pixels[size_t(k)];
+      c.errors = errors[size_t(k)];
+      c.errorRate = c.pixels ? double(c.errors) / double(c.pixels) : 0.0;
+      std::vector<float>& m = mValues[size_t(k)];
+      if (!m.empty()) {  // nearest rank, as m_p95: sorted index ceil(0.95 N) - 1
+        const size_t rank = size_t(std::ceil(0.95 * double(m.size()))) - 1;
+        std::nth_element(m.begin(), m.begin() + std::ptrdiff_t(rank), m.end());
+        c.mP95 = double(m[rank]);
+      }
+      out.cascades.push_back(c);
+    }
+  }
   out.acne = t.counts[size_t(PixelClass::Acne)];
   out.leak = t.counts[size_t(PixelClass::Leak)];
   out.aliasing = t.counts[size_t(PixelClass::Aliasing)];

@@ -15,7 +15,7 @@ layout(constant_id = 0) const uint kFilter = 0u;  // 0 none, 1 hw2x2, 2 bilinear
 // projector loop still costs unless it is compiled out.
 layout(constant_id = 1) const int kProjectorCount = 0;
 
-const int kMaxLayers = 14;  // 6 light layers (a cube) + 8 projectors
+const int kMaxLayers = 16;  // 8 light layers (cascades; a cube: 6) + 8 projectors
 const int kMaxProjectors = 8;
 const int kMaxTaps = 64;
 
@@ -35,6 +35,9 @@ layout(std140, set = 0, binding = 3) uniform Params {
   ivec4 projector[kMaxProjectors];  // x first texel in projectorTexels, y width, z height
   vec4 poisson[kMaxTaps];           // xy: unit-disc offsets
   vec4 projectorPos[kMaxProjectors];  // xyz: world position
+  vec4 cascadeView;   // xyz camera forward (unit), w cascade count (0: not cascaded)
+  vec4 cascadeFar[2]; // C_1..C_8: far view depth of cascade 0..7, world units
+  vec4 cascadeInfo;   // x blend band (fraction of a cascade's depth range), y C_0
 } P;
 
 layout(set = 0, binding = 4) uniform sampler2DArray mapDepth;         // NEAREST, raw depth
@@ -56,7 +59,7 @@ layout(std430, set = 0, binding = 12) writeonly buffer OutPlanes { float outPlan
 
 const uint kHit = 0u, kObjectId = 1u, kPrimId = 2u, kVis = 3u, kReceiverDepth = 4u, kMapDepth = 5u,
            kOccluderId = 6u, kOccluderPrim = 7u, kInMap = 8u, kM = 9u, kBiasDepth = 10u,
-           kBiasWorld = 11u, kLightChannels = 12u, kProjectorChannels = 5u;
+           kBiasWorld = 11u, kCascade = 12u, kLightChannels = 13u, kProjectorChannels = 5u;
 
 uint gPixel;
 uint gPlane;
@@ -124,6 +127,39 @@ float filterVisibility() {
   return tap(center, refAt(center));
 }
 
+// The receiver's plane in map space, from two tangent points one texel away: the same
+// (dz/du, dz/dv) the dFdx/dFdy solve yields, without its singularity at grazing views.
+vec2 planeSlope(vec3 q, vec3 normal, vec3 e1, float texelWorld) {
+  vec3 e2 = cross(normal, e1);
+  vec3 m0 = mapCoords(q), m1 = mapCoords(q + e1 * texelWorld), m2 = mapCoords(q + e2 * texelWorld);
+  vec2 a1 = m1.xy - m0.xy, a2 = m2.xy - m0.xy;
+  float det = a1.x * a2.y - a1.y * a2.x;
+  return abs(det) > 1e-12 ? vec2((m1.z - m0.z) * a2.y - (m2.z - m0.z) * a1.y,
+                                 (m2.z - m0.z) * a1.x - (m1.z - m0.z) * a2.x) / det
+                          : vec2(0.0);
+}
+
+float cascadeFar(int k) { return P.cascadeFar[k / 4][k % 4]; }
+
+// The filtered map visibility of point p in another layer (the next cascade of a blend band):
+// the same lookup as the main one (normal offset, receiver plane, filter), policy lit outside
+// the map. Leaves gLayer, gTexFromWorld, gSt, gRef, gSlope set to that layer.
+float layerVisibility(int layer, vec3 p, vec3 normal, vec3 e1) {
+  gLayer = layer;
+  gTexFromWorld = P.texFromWorld[layer];
+  float texelWorld = P.layerInfo[layer].x * abs(project(p).w);
+  vec3 q = p + normal * (P.bias.y * texelWorld);
+  vec4 tQ = project(q);
+  vec3 uvz = tQ.xyz / tQ.w;
+  gSt = uvz.xy * gSize;
+  bool inMap = tQ.w > 0.0 && all(greaterThanEqual(uvz.xy, vec2(0.0))) && all(lessThanEqual(uvz.xy, vec2(1.0)));
+  if (!inMap) return 1.0;
+  gSlope = P.bias.z > 0.5 ? planeSlope(q, normal, e1, texelWorld) : vec2(0.0);
+  gRef = uvz.z - P.bias.x;
+  ivec2 c = clamp(ivec2(floor(gSt)), ivec2(0), ivec2(int(gSize) - 1));
+  return kFilter == 0u ? (texelFetch(mapDepth, ivec3(c, gLayer), 0).r >= refAt(c) ? 1.0 : 0.0) : filterVisibility();
+}
+
 int cubeFace(vec3 v) {
   vec3 a = abs(v);
   if (a.x >= a.y && a.x >= a.z) return v.x > 0.0 ? 0 : 1;
@@ -161,7 +197,24 @@ void main() {
   int lightType = int(P.lightPosType.w);
   vec3 lightPos = P.lightPosType.xyz;
   gSize = float(P.sizes.x);
-  gLayer = lightType == 2 ? cubeFace(p - lightPos) : 0;
+  // Cascades (directional only): the pixel's view depth picks the first cascade whose far split
+  // is not nearer; beyond the last split, the last cascade. In the blend band at a cascade's far
+  // end, blendT goes 0 -> 1 towards the next cascade.
+  int cascadeCount = lightType == 0 ? int(P.cascadeView.w) : 0;
+  int cascade = 0;
+  float blendT = 0.0;
+  if (cascadeCount > 0) {
+    float viewDepth = dot(p - origin, P.cascadeView.xyz);
+    for (int k = 0; k + 1 < cascadeCount; ++k)
+      if (viewDepth > cascadeFar(k)) cascade = k + 1;
+    if (P.cascadeInfo.x > 0.0 && cascade + 1 < cascadeCount) {
+      float farSplit = cascadeFar(cascade);
+      float nearSplit = cascade == 0 ? P.cascadeInfo.y : cascadeFar(cascade - 1);
+      float band = P.cascadeInfo.x * (farSplit - nearSplit);
+      blendT = band > 0.0 ? clamp((viewDepth - (farSplit - band)) / band, 0.0, 1.0) : 0.0;
+    }
+  }
+  gLayer = lightType == 2 ? cubeFace(p - lightPos) : cascade;
   gTexFromWorld = P.texFromWorld[gLayer];
   vec4 tP = project(p);
   float texelWorld = P.layerInfo[gLayer].x * abs(tP.w);
@@ -173,16 +226,8 @@ void main() {
   bool inMap = inFront && all(greaterThanEqual(uvz.xy, vec2(0.0))) && all(lessThanEqual(uvz.xy, vec2(1.0)));
   float depthP = tP.z / tP.w;
 
-  // The receiver's plane in map space, from two tangent points one texel away: the same
-  // (dz/du, dz/dv) the dFdx/dFdy solve yields, without its singularity at grazing views.
   vec3 e1 = normalize(v1 - v0);
-  vec3 e2 = cross(normal, e1);
-  vec3 m0 = mapCoords(q), m1 = mapCoords(q + e1 * texelWorld), m2 = mapCoords(q + e2 * texelWorld);
-  vec2 a1 = m1.xy - m0.xy, a2 = m2.xy - m0.xy;
-  float det = a1.x * a2.y - a1.y * a2.x;
-  vec2 slope = abs(det) > 1e-12 ? vec2((m1.z - m0.z) * a2.y - (m2.z - m0.z) * a1.y,
-                                       (m2.z - m0.z) * a1.x - (m1.z - m0.z) * a2.x) / det
-                                : vec2(0.0);
+  vec2 slope = planeSlope(q, normal, e1, texelWorld);
   gSlope = P.bias.z > 0.5 ? slope : vec2(0.0);
   gRef = uvz.z - P.bias.x;
 
@@ -199,11 +244,11 @@ void main() {
       occluderPrim = float(occ.y);
     }
   }
-  if (lightType == 1 && dot(normalize(p - lightPos), P.lightDirCos.xyz) < P.lightDirCos.w) vis = 0.0;
+  bool outsideCone = lightType == 1 && dot(normalize(p - lightPos), P.lightDirCos.xyz) < P.lightDirCos.w;
   // Facing rule (the reference's): the side the camera sees is unlit when the light is behind
   // it. A shadow map has no answer there (the surface against itself); N.L shading gives 0.
   vec3 toLight = lightType == 0 ? -P.lightDirCos.xyz : normalize(lightPos - p);
-  if (!(dot(normal, toLight) > 0.0)) vis = 0.0;
+  bool facesAway = !(dot(normal, toLight) > 0.0);
 
   // Rasterizer depth bias the map texel carries when the receiver is its own caster:
   // constant * r + slope * maxDepthSlope, clamped (Vulkan's formula; maxDepthSlope per texel).
@@ -232,6 +277,10 @@ void main() {
   float sMin = sMax > 0.0 ? abs(detJ) / sMax : 0.0;
   float m = sMin > 1e-6 ? min(1.0 / sMin, 1e6) : 1e6;
 
+  // Last, because it moves the lookup globals to the next cascade's layer.
+  if (blendT > 0.0) vis = mix(vis, layerVisibility(cascade + 1, p, normal, e1), blendT);
+  if (outsideCone || facesAway) vis = 0.0;
+
   put(kVis, vis);
   put(kReceiverDepth, uvz.z);
   put(kMapDepth, mapDepthCenter);
@@ -241,6 +290,7 @@ void main() {
   put(kM, m);
   put(kBiasDepth, biasDepth);
   put(kBiasWorld, biasDepth * worldPerDepth);
+  put(kCascade, float(cascade));
 
   // ---- projectors ----
   for (int j = 0; j < kProjectorCount; ++j) {

@@ -4,6 +4,8 @@
 #include <cmath>
 #include <limits>
 
+#include "shadowlab/raster/cascades.h"
+
 #include <glm/gtc/matrix_transform.hpp>
 
 namespace shadowlab::raster {
@@ -69,7 +71,8 @@ int cubeFace(glm::vec3 v) {
   return v.z > 0 ? 4 : 5;
 }
 
-LightSpace fitLight(const Scene& scene, const Light& light, Fit fit, int mapSize) {
+LightSpace fitLight(const Scene& scene, const Light& light, const Method& method) {
+  const int mapSize = method.mapSize;
   LightSpace out;
   glm::vec3 lo = scene.boundsMin(), hi = scene.boundsMax();
   glm::vec3 center = 0.5f * (lo + hi);
@@ -78,28 +81,52 @@ LightSpace fitLight(const Scene& scene, const Light& light, Fit fit, int mapSize
     out.depthClamp = true;
     glm::vec3 dir = glm::normalize(light.direction);
     glm::mat4 viewFromWorld = glm::lookAt(center, center + dir, upFor(dir));
-    MapLayer layer;
-    if (fit == Fit::Sphere) {
+    if (method.fit == Fit::Sphere) {
+      MapLayer layer;
       layer.texFromWorld = texFromViewOrtho(-radius, radius, -radius, radius, -radius, radius) * viewFromWorld;
       layer.texelWorldPerW = 2.0f * radius / float(mapSize);
-    } else {
-      float inf = std::numeric_limits<float>::infinity();
-      glm::vec3 vmin(inf), vmax(-inf);
-      for (const Object& o : scene.objects)
-        for (const glm::vec3& p : o.positions) {
-          glm::vec3 v = glm::vec3(viewFromWorld * glm::vec4(p, 1.0f));
-          vmin = glm::min(vmin, v);
-          vmax = glm::max(vmax, v);
-        }
-      if (!(vmin.x <= vmax.x)) vmin = vmax = glm::vec3(0);
-      // A hair of margin so the extreme vertices rasterize inside the map, not on its border.
-      glm::vec3 pad = glm::max((vmax - vmin) * 1e-4f, glm::vec3(1e-5f));
-      vmin -= pad;
-      vmax += pad;
-      layer.texFromWorld = texFromViewOrtho(vmin.x, vmax.x, vmin.y, vmax.y, -vmax.z, -vmin.z) * viewFromWorld;
-      layer.texelWorldPerW = std::max(vmax.x - vmin.x, vmax.y - vmin.y) / float(mapSize);
+      out.layers.push_back(layer);
+      return out;
     }
-    out.layers.push_back(layer);
+    // The scene's bounds in light space (the box of all vertices): the depth range of every
+    // layer (the near plane pulled back to the scene bounds, so a caster between the light and a
+    // slice still writes the slice's map) and the clip of the x/y crops (texels outside the
+    // scene are wasted).
+    float inf = std::numeric_limits<float>::infinity();
+    glm::vec3 sceneMin(inf), sceneMax(-inf);
+    for (const Object& o : scene.objects)
+      for (const glm::vec3& p : o.positions) {
+        glm::vec3 v = glm::vec3(viewFromWorld * glm::vec4(p, 1.0f));
+        sceneMin = glm::min(sceneMin, v);
+        sceneMax = glm::max(sceneMax, v);
+      }
+    if (!(sceneMin.x <= sceneMax.x)) sceneMin = sceneMax = glm::vec3(0);
+    // A hair of margin so the extreme vertices rasterize inside the map, not on its border.
+    glm::vec3 scenePad = glm::max((sceneMax - sceneMin) * 1e-4f, glm::vec3(1e-5f));
+    sceneMin -= scenePad;
+    sceneMax += scenePad;
+    const Camera& camera = scene.camera;
+    bool stabilize = method.fit == Fit::Cascades && method.cascadeStabilize;
+    ViewDepthRange range = cascadeDepthRange(camera, lo, hi);
+    if (stabilize) {
+      // Stabilized crops must keep their size while the camera moves: the clipped range (and so
+      // every split) would change with the camera's position, the camera's own range does not.
+      range = cameraDepthRange(camera);
+    }
+    int count = method.fit == Fit::Cascades ? std::clamp(method.cascadeCount, 1, 8) : 1;
+    std::vector<double> splits = cascadeSplits(range.nearView, range.farView, count, method.cascadeLambda);
+    for (int i = 0; i < count; ++i) {
+      CascadeCrop crop = cascadeCrop(camera, viewFromWorld, splits[size_t(i)], splits[size_t(i) + 1], mapSize,
+                                     stabilize, glm::vec2(sceneMin), glm::vec2(sceneMax));
+      MapLayer layer;
+      layer.texelWorldPerW = crop.texelWorld;
+      layer.texFromWorld = texFromViewOrtho(crop.minLight.x, crop.maxLight.x, crop.minLight.y, crop.maxLight.y,
+                                            -sceneMax.z, -sceneMin.z) *
+                           viewFromWorld;
+      out.layers.push_back(layer);
+    }
+    if (method.fit == Fit::Cascades)
+      for (double c : splits) out.cascadeSplitsView.push_back(float(c));
     return out;
   }
   float nearZ = std::max(light.nearPlane, 1e-5f);

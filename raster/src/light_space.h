@@ -20,14 +20,22 @@ struct MapLayer {
 };
 
 struct LightSpace {
-  std::vector<MapLayer> layers;  // directional and spot: 1; point: 6 cube faces (+X -X +Y -Y +Z -Z)
+  // directional: 1, or one per cascade (fit=cascades); spot: 1; point: 6 cube faces (+X -X +Y -Y +Z -Z)
+  std::vector<MapLayer> layers;
   bool depthClamp = false;       // directional: casters outside [near, far] still write the map
+  // fit=cascades: the split distances C_0..C_N (view depth, world units); empty otherwise.
+  std::vector<float> cascadeSplitsView;
 };
 
-// Directional: orthographic, fit to the bounding sphere of the scene's box (Fit::Sphere) or to
-// the light-space box of all vertices (Fit::Tight). Spot: perspective with fov = cone angle,
-// near = light.nearPlane, far = the farthest corner of the scene's box. Point: six 90-degree faces.
-LightSpace fitLight(const Scene& scene, const Light& light, Fit fit, int mapSize);
+// Directional: orthographic. Fit::Sphere: the bounding sphere of the scene's box. Fit::Tight:
+// the camera's view frustum (its [near, far] clipped to the scene box, cascadeDepthRange)
+// intersected with the scene box, in light space: x/y the box of the frustum's 8 corners clipped
+// to the scene box's light-space x/y. Fit::Cascades: the same per slice [C_i, C_(i+1)] of the
+// practical split scheme (stabilized: a square of the slice's bounding-sphere diameter, snapped to
+// whole texels). The depth range is always the scene box's in light space: casters between the
+// light and the slice still cast. Spot: perspective with fov = cone angle, near = light.nearPlane,
+// far = the farthest corner of the scene's box. Point: six 90-degree faces.
+LightSpace fitLight(const Scene& scene, const Light& light, const Method& method);
 MapLayer projectorLayer(const Projector& projector, int mapSize);
 
 // (u, v, depth, w) -> Vulkan clip space (x = 2u - 1, y = 2v - 1: v = 0 is the framebuffer's top).

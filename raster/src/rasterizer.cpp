@@ -38,10 +38,10 @@ namespace shadowlab {
 
 namespace {
 
-constexpr int kMaxLayers = 14;
+constexpr int kMaxLayers = 16;  // 8 cascades (or 6 cube faces) + 8 projectors
 constexpr int kMaxProjectors = 8;
 constexpr int kMaxTaps = 64;
-constexpr int kLightChannels = 12;
+constexpr int kLightChannels = 13;
 constexpr int kProjectorChannels = 5;
 constexpr VkFormat kIdFormat = VK_FORMAT_R32G32_UINT;
 constexpr VkFormat kCameraDepthFormat = VK_FORMAT_D32_SFLOAT;
@@ -55,6 +55,9 @@ struct Params {
   glm::ivec4 projector[kMaxProjectors];
   glm::vec4 poisson[kMaxTaps];
   glm::vec4 projectorPos[kMaxProjectors];
+  glm::vec4 cascadeView;      // xyz camera forward (unit, world), w cascade count (0: not cascaded)
+  glm::vec4 cascadeFar[2];    // C_1..C_8: far view depth of each cascade, world units
+  glm::vec4 cascadeInfo;      // x blend band (fraction of a cascade's depth range), y C_0
 };
 
 struct DrawPush {
@@ -527,7 +530,7 @@ Frame Rasterizer::render(const Scene& scene, const Method& method, const std::st
 
   // ---- map layers: the light's, then one per projector ----
   raster::LightSpace lightSpace;
-  if (light) lightSpace = raster::fitLight(scene, *light, method.fit, method.mapSize);
+  if (light) lightSpace = raster::fitLight(scene, *light, method);
   std::vector<raster::MapLayer> layers = lightSpace.layers;
   int lightLayers = int(layers.size());
   for (const Projector& p : scene.projectors) layers.push_back(raster::projectorLayer(p, method.mapSize));
@@ -583,6 +586,13 @@ Frame Rasterizer::render(const Scene& scene, const Method& method, const std::st
     prm.projector[j] = glm::ivec4(pi.firstTexel, pi.width, pi.height, lightLayers + j);
     prm.projectorPos[j] = glm::vec4(scene.projectors[size_t(j)].position, 1);
   }
+  if (!lightSpace.cascadeSplitsView.empty()) {
+    const std::vector<float>& c = lightSpace.cascadeSplitsView;
+    int count = int(c.size()) - 1;
+    prm.cascadeView = glm::vec4(glm::normalize(camera.lookAt - camera.position), float(count));
+    for (int i = 0; i < count; ++i) prm.cascadeFar[i / 4][i % 4] = c[size_t(i) + 1];
+    prm.cascadeInfo = glm::vec4(method.cascadeBlend, c[0], 0, 0);
+  }
   for (int i = 0; i < kMaxTaps; ++i) prm.poisson[i] = glm::vec4(im.poisson[size_t(i)], 0, 0);
   im.params.upload(&prm, sizeof(prm));
 
@@ -624,8 +634,8 @@ Frame Rasterizer::render(const Scene& scene, const Method& method, const std::st
   if (light) {
     const std::string p = "light." + light->name + ".";
     const char* names[] = {"vis", "receiver_depth", "map_depth", "occluder_id", "occluder_prim",
-                           "in_map", "m", "bias_depth", "bias_world"};
-    for (int i = 0; i < 9; ++i) take(p + names[i], 3 + i);
+                           "in_map", "m", "bias_depth", "bias_world", "cascade"};
+    for (int i = 0; i < kLightChannels - 3; ++i) take(p + names[i], 3 + i);
   }
   for (int j = 0; j < projectorCount; ++j) {
     const std::string p = "proj." + scene.projectors[size_t(j)].name + ".";

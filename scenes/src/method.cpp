@@ -144,7 +144,7 @@ const std::vector<std::pair<const char*, DepthFormat>> kFormats = {
     {"d16", DepthFormat::D16}, {"d24", DepthFormat::D24}, {"d32f", DepthFormat::D32F}};
 const std::vector<std::pair<const char*, CullMode>> kCulls = {
     {"back", CullMode::Back}, {"front", CullMode::Front}, {"none", CullMode::None}};
-const std::vector<std::pair<const char*, Fit>> kFits = {{"sphere", Fit::Sphere}, {"tight", Fit::Tight}};
+const std::vector<std::pair<const char*, Fit>> kFits = {{"sphere", Fit::Sphere}, {"tight", Fit::Tight}, {"cascades", Fit::Cascades}};
 const std::vector<std::pair<const char*, Filter>> kFilters = {{"none", Filter::None},
                                                               {"hw2x2", Filter::Hw2x2},
                                                               {"bilinear4", Filter::Bilinear4},
@@ -163,6 +163,16 @@ const std::vector<std::pair<std::string, Setter>>& setters() {
       {"map.format", [](Method& m, const Value& v, const Where& w) { m.mapFormat = enumOf(v, w, kFormats); }},
       {"cull", [](Method& m, const Value& v, const Where& w) { m.cull = enumOf(v, w, kCulls); }},
       {"fit", [](Method& m, const Value& v, const Where& w) { m.fit = enumOf(v, w, kFits); }},
+      {"cascades.count", [](Method& m, const Value& v, const Where& w) { m.cascadeCount = intIn(v, w, 1, 8); }},
+      {"cascades.lambda",
+       [](Method& m, const Value& v, const Where& w) {
+         m.cascadeLambda = floatIn(v, w, 0.0, 1.0, false, "a number 0..1 (0 uniform, 1 logarithmic splits)");
+       }},
+      {"cascades.blend",
+       [](Method& m, const Value& v, const Where& w) {
+         m.cascadeBlend = floatIn(v, w, 0.0, 0.5, false, "a number 0..0.5 (fraction of a cascade's depth range)");
+       }},
+      {"cascades.stabilize", [](Method& m, const Value& v, const Where& w) { m.cascadeStabilize = boolOf(v, w); }},
       {"bias.constant",
        [](Method& m, const Value& v, const Where& w) {
          m.biasConstant = floatIn(v, w, -kBiasLimit, kBiasLimit, false, "a finite number -1e6..1e6 (units of r)");
@@ -238,6 +248,12 @@ void crossCheck(const Method& m, const std::string& file, const std::string& pre
   for (auto [key, v] : {std::pair<const char*, float>{"bias.constant", m.biasConstant}, {"bias.slope", m.biasSlope},
                         {"bias.clamp", m.biasClamp}, {"bias.compare", m.biasCompare}, {"bias.normal", m.biasNormal}})
     if (!std::isfinite(v)) bad(key, nlohmann::json(double(v)).dump(), "a finite number");
+  if (m.cascadeCount < 1 || m.cascadeCount > 8)
+    bad("cascades.count", std::to_string(m.cascadeCount), "an integer 1..8");
+  if (!(m.cascadeLambda >= 0.0f && m.cascadeLambda <= 1.0f))
+    bad("cascades.lambda", nlohmann::json(double(m.cascadeLambda)).dump(), "a number 0..1");
+  if (!(m.cascadeBlend >= 0.0f && m.cascadeBlend <= 0.5f))
+    bad("cascades.blend", nlohmann::json(double(m.cascadeBlend)).dump(), "a number 0..0.5");
   if (m.name.empty()) bad("name", "\"\"", "a non-empty string");
 }
 
@@ -288,6 +304,10 @@ nlohmann::json methodToJson(const Method& m) {
   j["map.format"] = toString(m.mapFormat);
   j["cull"] = toString(m.cull);
   j["fit"] = toString(m.fit);
+  j["cascades.count"] = m.cascadeCount;
+  j["cascades.lambda"] = m.cascadeLambda;
+  j["cascades.blend"] = m.cascadeBlend;
+  j["cascades.stabilize"] = m.cascadeStabilize;
   j["bias.constant"] = m.biasConstant;
   j["bias.slope"] = m.biasSlope;
   j["bias.clamp"] = m.biasClamp;

@@ -36,6 +36,15 @@ struct CompareOptions {
   std::string rasterName = "raster frame";
 };
 
+// Metrics of the compared pixels whose raster lookup used one cascade (raster `light.L.cascade`).
+struct CascadeMetrics {
+  int index = 0;           // cascade, 0-based
+  uint64_t pixels = 0;     // compared pixels of this cascade (the denominator)
+  uint64_t errors = 0;     // of them, pixels of an error class
+  double errorRate = 0;    // errors / pixels, 0 when pixels = 0
+  double mP95 = 0;         // nearest-rank 95th percentile of m over these pixels, 0 when none
+};
+
 struct Metrics {
   uint64_t pixelsCompared = 0;
   uint64_t geometryMismatch = 0;
@@ -49,6 +58,9 @@ struct Metrics {
   double projectorCoverageIou = 1;
   uint64_t reverseProjectionPixels = 0;
   double projectorColorMae = 0;
+  // Per cascade (index 0..): present when the raster frame has `light.L.cascade` and was not
+  // rendered with a non-cascaded fit (meta method "fit"); empty otherwise (absent in JSON).
+  std::vector<CascadeMetrics> cascades;
 
   nlohmann::json toJson() const;  // stable keys: pixels_compared, geometry_mismatch, error_rate, ...
 };

@@ -32,6 +32,9 @@
 //     light.LIGHT.bias_depth   total effective bias at this pixel in map depth units (compare bias
 //                              + rasterizer depth bias + normal offset's depth change)
 //     light.LIGHT.bias_world   the same bias as a world-space distance along the light ray
+//     light.LIGHT.cascade      the cascade (map layer) the lookup used, 0-based, picked by the
+//                              point's view depth (fit=cascades); 0 for every other fit and light
+//                              type, and where no hit
 //     proj.PROJ.reverse        1 where the point is behind the projector (w < 0) but its divided
 //                              coordinates land in [0,1]^2: what reverse projection would colour
 //
