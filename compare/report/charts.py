@@ -306,6 +306,46 @@ def chart_m_footprint(scenes, rows_by_scene, swept, out_dir):
     return save(fig, out_dir, "m_footprint"), caption
 
 
+def chart_frontiers(frontiers, out_dir):
+    """Error against each swept scene: parameter, one line per method configuration, easy values on
+    the left (the axis is flipped when smaller values are harder), each frontier marked with an X."""
+    panels = []
+    for f in frontiers:
+        key = (f["scene"], f["parameter"])
+        if key not in panels:
+            panels.append(key)
+    fig, axes = panel_grid(len(panels))
+    metric, threshold = frontiers[0]["metric"], frontiers[0]["threshold"]
+    for ax, (scene, parameter) in zip(axes, panels):
+        lines = [f for f in frontiers if f["scene"] == scene and f["parameter"] == parameter]
+        numeric = all(isinstance(p["value"], (int, float)) for f in lines for p in f["points"])
+        values = [p["metric"] for f in lines for p in f["points"]]
+        floor = positive_floor(values + [threshold])
+        for i, f in enumerate(lines):
+            xs = [p["value"] if numeric else k for k, p in enumerate(f["points"])]
+            ys = [max(p["metric"], floor) for p in f["points"]]
+            (line,) = ax.plot(xs, ys, marker="o", markersize=3, label=f["method"])
+            if not f["holds"]:
+                k = next(k for k, p in enumerate(f["points"]) if p["value"] == f["breaks_at"])
+                ax.plot([xs[k]], [ys[k]], marker="X", markersize=10, color=line.get_color(),
+                        markeredgecolor="black", linestyle="none")
+        ax.axhline(max(threshold, floor), color="grey", linestyle="--", linewidth=0.8)
+        ax.set_yscale("log")
+        if numeric and lines[0]["direction"] == "decreasing":
+            ax.invert_xaxis()  # easy (large) values on the left, like every other panel
+        if not numeric:
+            ax.set_xticks(range(len(lines[0]["points"])))
+            ax.set_xticklabels([str(p["value"]) for p in lines[0]["points"]])
+        ax.set_title(scene)
+        ax.set_xlabel(parameter + " (easy to hard)")
+        ax.set_ylabel(metric)
+        ax.legend(fontsize=6)
+    caption = (f"{metric} against each swept scene parameter, one line per method configuration, easy values "
+               f"on the left; the dashed line is the threshold ({threshold:g}) and an X marks each frontier, the "
+               "first value above it (zeros are drawn at the floor of the log axis).")
+    return save(fig, out_dir, "frontiers"), caption
+
+
 def main(argv):
     if len(argv) != 3:
         sys.stderr.write("usage: charts.py RESULTS_JSON FIGURES_DIR\n")
@@ -347,6 +387,10 @@ def main(argv):
         add("accuracy_vs_time", "Accuracy against time (Pareto front)",
             chart_accuracy_vs_time(scenes, rows_by_scene, out_dir))
         add("m_footprint", "Texel footprint m per configuration", chart_m_footprint(scenes, rows_by_scene, swept, out_dir))
+        # Only a sweep of a scene: parameter has frontiers; other sweeps get no chart and no note.
+        frontiers = [f for f in results.get("frontiers", []) if f.get("points")]
+        if frontiers:
+            add("frontiers", "Failure frontiers", chart_frontiers(frontiers, out_dir))
 
     manifest = {"charts": charts, "skipped": skipped}
     tmp = os.path.join(out_dir, ".charts.json.tmp")

@@ -462,6 +462,27 @@ std::vector<std::string> writeSweepReport(const SweepPlan& plan, const std::vect
     h << "</table>\n";
   }
 
+  // Failure frontiers (only when a scene: parameter is swept).
+  const nlohmann::json frontiers = results.value("frontiers", nlohmann::json::array());
+  if (frontiers.is_array() && !frontiers.empty()) {
+    const nlohmann::json fr = results.value("sweep", nlohmann::json::object()).value("frontier", nlohmann::json::object());
+    h << "<h2>Failure frontiers</h2>\n<p>For each scene parameter swept with <code>scene:</code> and each method "
+         "configuration, the values walked from easy to hard (the direction of the scene's declared "
+         "<code>failure</code> values; the grid's order for other parameters) and the first value where <code>"
+      << html(fr.value("metric", std::string("error_rate"))) << "</code> exceeds "
+      << pct(fr.value("threshold", 0.01)) << ".</p>\n<table>\n<tr><th class=\"t\">scene</th><th class=\"t\">parameter</th>"
+         "<th class=\"t\">method</th><th>holds to</th><th>breaks at</th><th class=\"t\">frontier</th></tr>\n";
+    for (const auto& f : frontiers) {
+      auto val = [](const nlohmann::json& v) { return v.is_null() ? std::string("&ndash;") : html(canonicalValueText(v)); };
+      h << "<tr><td class=\"t\">" << html(f.value("scene", std::string())) << "</td><td class=\"t\">"
+        << html(f.value("parameter", std::string())) << "</td><td class=\"t\">" << html(f.value("method", std::string()))
+        << "</td><td>" << val(f.value("holds_to", nlohmann::json())) << "</td><td>"
+        << val(f.value("breaks_at", nlohmann::json())) << "</td><td class=\"t\">" << html(f.value("sentence", std::string()))
+        << "</td></tr>\n";
+    }
+    h << "</table>\n";
+  }
+
   // Charts.
   h << "<h2>Charts</h2>\n";
   for (const auto& n : notes)
