@@ -5,6 +5,8 @@
 #include <unistd.h>
 
 #include <atomic>
+#include <cmath>
+#include <cstdlib>
 #include <cstdio>
 #include <filesystem>
 #include <memory>
@@ -31,6 +33,8 @@ struct Options {
   std::string device;
   bool keepImages = false;
   bool noReport = false;
+  std::string frontierMetric;    // empty: not given (error_rate)
+  std::string frontierThreshold; // text, checked here so "abc" is a GCC-style InputError, not CLI11's
 };
 
 std::atomic<bool> gStop{false};
@@ -81,6 +85,15 @@ int run(const Options& o) {
     spec.spp = o.spp;
   }
   if (o.keepImages) spec.keepImages = true;
+  if (!o.frontierMetric.empty()) spec.frontierMetric = o.frontierMetric;
+  if (!o.frontierThreshold.empty()) {
+    char* end = nullptr;
+    double t = std::strtod(o.frontierThreshold.c_str(), &end);
+    if (!end || *end != '\0' || !std::isfinite(t) || t < 0)
+      throw InputError("--frontier-threshold: error: got \"" + o.frontierThreshold +
+                       "\"; expected a number >= 0 (a rate, e.g. 0.01)");
+    spec.frontierThreshold = t;
+  }
   std::error_code ec;
   if (fs::exists(o.outDir, ec) && !fs::is_directory(o.outDir, ec))
     throw InputError(formatError(o.outDir, "", "exists and is not a folder; expected an output folder for -o"));
@@ -139,6 +152,10 @@ app::Registrar reg{"sweep", [](CLI::App& app) {
                   "Reference cache folder (default: $SHADOWLAB_CACHE, else .shadowlab-cache beside the output folder)");
   sub->add_option("--device", opts->device, "Vulkan device name substring (default: lavapipe)");
   sub->add_flag("--keep-images", opts->keepImages, "Write raster.exr and errors.png per configuration under DIR/images/");
+  sub->add_option("--frontier-metric", opts->frontierMetric,
+                  "Metric walked along swept scene: parameters for failure frontiers (default error_rate)");
+  sub->add_option("--frontier-threshold", opts->frontierThreshold,
+                  "Rate above which a configuration counts as broken (default 0.01)");
   sub->add_flag("--no-report", opts->noReport, "Write results.json/csv only: no charts, triptychs or report.html");
   return std::function<int()>([opts] { return run(*opts); });
 }};

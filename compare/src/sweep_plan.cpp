@@ -7,6 +7,7 @@
 #include <set>
 
 #include "shadowlab/compare/sweep.h"
+#include "shadowlab/compare/compare.h"
 #include "shadowlab/compare/gate.h"
 #include "shadowlab/scenes/error.h"
 #include "shadowlab/scenes/io.h"
@@ -262,6 +263,21 @@ SweepPlan planSweep(const SweepSpec& spec) {
   SweepPlan plan;
   plan.spec = spec;
   if (spec.spp < 1) throw InputError(formatError("--spp", "", "got " + std::to_string(spec.spp) + "; expected 1 or more"));
+  // Frontier settings: NaN or a negative threshold would make every comparison meaningless.
+  if (!std::isfinite(spec.frontierThreshold) || spec.frontierThreshold < 0) {
+    char b[64];
+    std::snprintf(b, sizeof b, "%g", spec.frontierThreshold);
+    throw InputError(formatError("--frontier-threshold", "", std::string("got ") + b + "; expected a number >= 0 (a rate, e.g. 0.01)"));
+  }
+  {
+    // The metric names a compared frame always has (Metrics::toJson of an empty comparison).
+    const nlohmann::json known = Metrics().toJson();
+    std::string names;
+    for (auto it = known.begin(); it != known.end(); ++it)
+      if (it.value().is_number()) names += (names.empty() ? "" : ", ") + it.key();
+    if (!known.contains(spec.frontierMetric) || !known[spec.frontierMetric].is_number())
+      throw InputError(formatError("--frontier-metric", "", "unknown metric \"" + spec.frontierMetric + "\"; expected one of " + names));
+  }
 
   // Base method: file, then fixed settings.
   Method base;

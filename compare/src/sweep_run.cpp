@@ -21,6 +21,7 @@
 #include <thread>
 
 #include "shadowlab/compare/sweep.h"
+#include "shadowlab/compare/sweep_frontier.h"
 #include "shadowlab/scenes/error.h"
 #include "shadowlab/scenes/io.h"
 
@@ -269,6 +270,7 @@ nlohmann::json sweepDescription(const SweepPlan& plan) {
   d["light"] = plan.spec.light;
   d["spp"] = plan.spec.spp;
   d["keep_images"] = plan.spec.keepImages;
+  d["frontier"] = {{"metric", plan.spec.frontierMetric}, {"threshold", plan.spec.frontierThreshold}};
   return d;
 }
 
@@ -388,6 +390,7 @@ SweepSummary runSweep(const SweepPlan& plan, SweepRunner& runner, const SweepOpt
   results["config_seconds"] = configSeconds;
   results["config_seconds_sum"] = secondsSum;  // includes rows finished by earlier invocations
   results["sweep"] = sweepDescription(plan);
+  results["frontiers"] = computeFrontiers(plan, rows, plan.spec.frontierMetric, plan.spec.frontierThreshold);
   results["machine"] = machineInfo();
   results["runner"] = runner.info();
   results["report_seconds"] = nullptr;

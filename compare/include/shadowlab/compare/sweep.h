@@ -53,6 +53,10 @@ struct SweepSpec {
   std::string light;                   // empty: each scene's first light
   int spp = 1;                         // reference samples per pixel
   bool keepImages = false;             // write raster.exr + errors.png per configuration
+  // Failure frontiers (sweep_frontier.h): the metric walked along swept scene: parameters and the
+  // rate above which a configuration counts as broken. Checked by planSweep.
+  std::string frontierMetric = "error_rate";
+  double frontierThreshold = 0.01;
 };
 
 // "map.size=256,512" (from --grid). InputError when there is no '=', no key or an empty list;
