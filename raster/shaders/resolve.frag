@@ -35,9 +35,9 @@ layout(std140, set = 0, binding = 3) uniform Params {
   ivec4 projector[kMaxProjectors];  // x first texel in projectorTexels, y width, z height
   vec4 poisson[kMaxTaps];           // xy: unit-disc offsets
   vec4 projectorPos[kMaxProjectors];  // xyz: world position
-  vec4 cascadeView;   // xyz camera forward (unit), w cascade count (0: not cascaded)
+  vec4 cascadeView;   // xyz fit camera forward (unit), w cascade count (0: not cascaded)
   vec4 cascadeFar[2]; // C_1..C_8: far view depth of cascade 0..7, world units
-  vec4 cascadeInfo;   // x blend band (fraction of a cascade's depth range), y C_0
+  vec4 cascadeInfo;   // x blend band (fraction of a cascade's depth range), y C_0, z fit depth - eval depth
 } P;
 
 layout(set = 0, binding = 4) uniform sampler2DArray mapDepth;         // NEAREST, raw depth
@@ -204,7 +204,7 @@ void main() {
   int cascade = 0;
   float blendT = 0.0;
   if (cascadeCount > 0) {
-    float viewDepth = dot(p - origin, P.cascadeView.xyz);
+    float viewDepth = dot(p - origin, P.cascadeView.xyz) + P.cascadeInfo.z;  // fit camera depth
     for (int k = 0; k + 1 < cascadeCount; ++k)
       if (viewDepth > cascadeFar(k)) cascade = k + 1;
     if (P.cascadeInfo.x > 0.0 && cascade + 1 < cascadeCount) {

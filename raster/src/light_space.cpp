@@ -71,7 +71,7 @@ int cubeFace(glm::vec3 v) {
   return v.z > 0 ? 4 : 5;
 }
 
-LightSpace fitLight(const Scene& scene, const Light& light, const Method& method) {
+LightSpace fitLight(const Scene& scene, const Light& light, const Method& method, const Camera& fitCamera) {
   const int mapSize = method.mapSize;
   LightSpace out;
   glm::vec3 lo = scene.boundsMin(), hi = scene.boundsMax();
@@ -105,7 +105,7 @@ LightSpace fitLight(const Scene& scene, const Light& light, const Method& method
     glm::vec3 scenePad = glm::max((sceneMax - sceneMin) * 1e-4f, glm::vec3(1e-5f));
     sceneMin -= scenePad;
     sceneMax += scenePad;
-    const Camera& camera = scene.camera;
+    const Camera& camera = fitCamera;
     bool stabilize = method.fit == Fit::Cascades && method.cascadeStabilize;
     ViewDepthRange range = cascadeDepthRange(camera, lo, hi);
     if (stabilize) {

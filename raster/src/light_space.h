@@ -35,7 +35,9 @@ struct LightSpace {
 // whole texels). The depth range is always the scene box's in light space: casters between the
 // light and the slice still cast. Spot: perspective with fov = cone angle, near = light.nearPlane,
 // far = the farthest corner of the scene's box. Point: six 90-degree faces.
-LightSpace fitLight(const Scene& scene, const Light& light, const Method& method);
+// `fitCamera` is the camera the tight and cascaded fits (and their splits) follow; normally
+// scene.camera, another one to measure shimmer with a fixed evaluation view (raster.h).
+LightSpace fitLight(const Scene& scene, const Light& light, const Method& method, const Camera& fitCamera);
 MapLayer projectorLayer(const Projector& projector, int mapSize);
 
 // (u, v, depth, w) -> Vulkan clip space (x = 2u - 1, y = 2v - 1: v = 0 is the framebuffer's top).

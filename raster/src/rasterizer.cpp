@@ -55,9 +55,9 @@ struct Params {
   glm::ivec4 projector[kMaxProjectors];
   glm::vec4 poisson[kMaxTaps];
   glm::vec4 projectorPos[kMaxProjectors];
-  glm::vec4 cascadeView;      // xyz camera forward (unit, world), w cascade count (0: not cascaded)
+  glm::vec4 cascadeView;      // xyz fit camera forward (unit, world), w cascade count (0: not cascaded)
   glm::vec4 cascadeFar[2];    // C_1..C_8: far view depth of each cascade, world units
-  glm::vec4 cascadeInfo;      // x blend band (fraction of a cascade's depth range), y C_0
+  glm::vec4 cascadeInfo;      // x blend band (fraction of a cascade's depth range), y C_0, z fit-camera view depth of the eval camera origin
 };
 
 struct DrawPush {
@@ -473,7 +473,7 @@ int Rasterizer::maxMapSize() const {
 int Rasterizer::validationMessages() const { return impl_->context->validationMessages(); }
 
 Frame Rasterizer::render(const Scene& scene, const Method& method, const std::string& lightName,
-                         RasterTimings* timings) {
+                         RasterTimings* timings, const Camera* fitCamera) {
   auto t0 = std::chrono::steady_clock::now();
   Impl& im = *impl_;
   const std::string where = scene.path.empty() ? scene.name : scene.path;
@@ -508,6 +508,7 @@ Frame Rasterizer::render(const Scene& scene, const Method& method, const std::st
     throw InputError(formatError(where, "/projectors", "got " + std::to_string(scene.projectors.size()) +
                                                            " projectors; the rasterizer renders at most 8"));
   const Camera& camera = scene.camera;
+  const Camera& fit = fitCamera ? *fitCamera : scene.camera;  // what the light frustum follows
   if (camera.width < 1 || camera.height < 1 || camera.width > maxMapSize() || camera.height > maxMapSize())
     throw InputError(formatError(where, "/camera", "image size " + std::to_string(camera.width) + "x" +
                                                        std::to_string(camera.height) + " is not renderable"));
@@ -530,7 +531,7 @@ Frame Rasterizer::render(const Scene& scene, const Method& method, const std::st
 
   // ---- map layers: the light's, then one per projector ----
   raster::LightSpace lightSpace;
-  if (light) lightSpace = raster::fitLight(scene, *light, method);
+  if (light) lightSpace = raster::fitLight(scene, *light, method, fit);
   std::vector<raster::MapLayer> layers = lightSpace.layers;
   int lightLayers = int(layers.size());
   for (const Projector& p : scene.projectors) layers.push_back(raster::projectorLayer(p, method.mapSize));
@@ -589,9 +590,14 @@ Frame Rasterizer::render(const Scene& scene, const Method& method, const std::st
   if (!lightSpace.cascadeSplitsView.empty()) {
     const std::vector<float>& c = lightSpace.cascadeSplitsView;
     int count = int(c.size()) - 1;
-    prm.cascadeView = glm::vec4(glm::normalize(camera.lookAt - camera.position), float(count));
+    // The splits are view depths of the fit camera: the shader measures a pixel's depth from the
+    // evaluation camera's origin, so z carries the shift between the two origins along the fit
+    // camera's forward axis (0 when they are the same camera).
+    glm::vec3 forward = glm::normalize(fit.lookAt - fit.position);
+    prm.cascadeView = glm::vec4(forward, float(count));
     for (int i = 0; i < count; ++i) prm.cascadeFar[i / 4][i % 4] = c[size_t(i) + 1];
-    prm.cascadeInfo = glm::vec4(method.cascadeBlend, c[0], 0, 0);
+    float originShiftView = glm::dot(camera.position - fit.position, forward);
+    prm.cascadeInfo = glm::vec4(method.cascadeBlend, c[0], originShiftView, 0);
   }
   for (int i = 0; i < kMaxTaps; ++i) prm.poisson[i] = glm::vec4(im.poisson[size_t(i)], 0, 0);
   im.params.upload(&prm, sizeof(prm));
@@ -663,6 +669,7 @@ Frame Rasterizer::render(const Scene& scene, const Method& method, const std::st
                 {"scene", scene.name},
                 {"scene_hash", scene.hash},
                 {"camera_hash", camera.hash()},
+                {"fit_camera_hash", fit.hash()},
                 {"width", width},
                 {"height", height},
                 {"light", light ? light->name : ""},

@@ -40,8 +40,12 @@ class Rasterizer {
   // same, so a sweep uploads geometry once. A warm-up frame runs before the timed one the first
   // time a pipeline is used. Throws InputError for an impossible method (map larger than the
   // device allows, unknown light) and DriverError for Vulkan failures.
+  // `fitCamera` (null: scene.camera) is the camera the light's frustum fit follows: the tight and
+  // cascaded crops and the cascade splits (picked by the pixel's view depth along this camera's
+  // forward axis). The image is always rendered from scene.camera, so a fixed scene.camera with a
+  // moving fit camera shows the same surface point in every pixel of every frame (shimmer).
   Frame render(const Scene& scene, const Method& method, const std::string& light = "",
-               RasterTimings* timings = nullptr);
+               RasterTimings* timings = nullptr, const Camera* fitCamera = nullptr);
 
  private:
   struct Impl;
