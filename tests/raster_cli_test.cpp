@@ -2,6 +2,7 @@
 #include <gtest/gtest.h>
 
 #include <sys/wait.h>
+#include <unistd.h>
 
 #include <cstdlib>
 #include <filesystem>
@@ -15,7 +16,9 @@ namespace fs = std::filesystem;
 namespace {
 
 int run(const std::string& args, std::string* output = nullptr) {
-  std::string log = (fs::temp_directory_path() / "shadowlab_raster_cli_test.log").string();
+  // Per process: ctest -j runs this file's tests at once, and a shared log mixes their outputs.
+  std::string log =
+      (fs::temp_directory_path() / ("shadowlab_raster_cli_test_" + std::to_string(::getpid()) + ".log")).string();
   int status = std::system((std::string(SHADOWLAB_BINARY) + " " + args + " > " + log + " 2>&1").c_str());
   if (output) {
     std::ifstream in(log);
@@ -25,7 +28,7 @@ int run(const std::string& args, std::string* output = nullptr) {
 }
 
 fs::path freshDir(const std::string& name) {
-  fs::path d = fs::temp_directory_path() / ("shadowlab_raster_cli_" + name);
+  fs::path d = fs::temp_directory_path() / ("shadowlab_raster_cli_" + name + "_" + std::to_string(::getpid()));
   fs::remove_all(d);
   return d;
 }
