@@ -11,6 +11,7 @@
 #include <memory>
 
 #include "shadowlab/raster/raster.h"
+#include "support/raster_device.h"
 #include "shadowlab/reference/reference.h"
 #include "shadowlab/scenes/loader.h"
 
@@ -18,36 +19,7 @@ using namespace shadowlab;
 
 namespace {
 
-Rasterizer* rasterizer() {
-  // Initialized in one expression: the static's destructor is registered after the device's
-  // own exit handlers (Mesa's thread queues), so it runs before them at exit.
-  static std::unique_ptr<Rasterizer> r = []() -> std::unique_ptr<Rasterizer> {
-    try {
-      RasterDeviceOptions o;
-      o.validation = true;
-      return std::make_unique<Rasterizer>(o);
-    } catch (const std::exception& e) {
-      std::fprintf(stderr, "\n*** NO VULKAN DEVICE: raster tests are SKIPPED: %s ***\n\n", e.what());
-      return nullptr;
-    }
-  }();
-  return r.get();
-}
-
-#define REQUIRE_DEVICE()                                                      \
-  Rasterizer* R = rasterizer();                                               \
-  if (!R) {                                                                   \
-    GTEST_SKIP() << "no Vulkan device (lavapipe) found: test NOT run";        \
-  }
-
-class CascadesVsReference : public ::testing::Test {
- protected:
-  void TearDown() override {
-    if (Rasterizer* r = rasterizer()) {
-      EXPECT_EQ(r->validationMessages(), 0) << "validation messages (printed above)";
-    }
-  }
-};
+using CascadesVsReference = shadowlab::testing::ValidatedRasterTest;
 
 struct Score {
   size_t both = 0;      // pixels where both renderers see the same object

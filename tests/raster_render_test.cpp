@@ -8,6 +8,7 @@
 #include <memory>
 
 #include "shadowlab/raster/raster.h"
+#include "support/raster_device.h"
 #include "shadowlab/scenes/error.h"
 
 using namespace shadowlab;
@@ -16,32 +17,7 @@ namespace {
 
 // One Rasterizer for the whole executable: device creation and pipeline compilation are the
 // slow part on lavapipe, and reusing it also exercises the scene/pipeline caches.
-Rasterizer* rasterizer() {
-  // Initialized in one expression: the static's destructor is registered after the device's
-  // own exit handlers (Mesa's thread queues), so it runs before them at exit.
-  static std::unique_ptr<Rasterizer> r = []() -> std::unique_ptr<Rasterizer> {
-    try {
-      RasterDeviceOptions o;
-      o.validation = true;
-      return std::make_unique<Rasterizer>(o);
-    } catch (const std::exception& e) {
-      std::fprintf(stderr, "\n*** NO VULKAN DEVICE: raster tests are SKIPPED: %s ***\n\n", e.what());
-      return nullptr;
-    }
-  }();
-  return r.get();
-}
-
-#define REQUIRE_DEVICE()                                                      \
-  Rasterizer* R = rasterizer();                                               \
-  if (!R) GTEST_SKIP() << "no Vulkan device (lavapipe) found: test NOT run";
-
-class RasterTest : public ::testing::Test {
- protected:
-  void TearDown() override {
-    if (Rasterizer* r = rasterizer()) EXPECT_EQ(r->validationMessages(), 0) << "validation messages (printed above)";
-  }
-};
+using RasterTest = shadowlab::testing::ValidatedRasterTest;
 
 void addQuad(Scene& s, const std::string& name, uint32_t id, glm::vec3 corner, glm::vec3 edgeU, glm::vec3 edgeV,
              uint32_t material = 0) {
