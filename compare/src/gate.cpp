@@ -1,6 +1,7 @@
 // The regression gate: tolerances as data, row matching, verdicts, and the three outputs (table,
 // JSON, JUnit XML). compare/GATE.md is the user-facing description; keep the two in step.
 #include "shadowlab/compare/gate.h"
+#include "json_text.h"
 
 #include <algorithm>
 #include <array>
@@ -15,27 +16,11 @@
 namespace shadowlab {
 namespace {
 
+using json_text::pointerToken;
+using json_text::typeName;
+
 constexpr const char* kTolerancesSchema = "shadowlab.tolerances/1";
 constexpr const char* kGateSchema = "shadowlab.gate/1";
-
-std::string typeName(const nlohmann::json& v) {
-  if (v.is_number()) return "a number";
-  if (v.is_string()) return "a string";
-  if (v.is_boolean()) return "a boolean";
-  if (v.is_null()) return "null";
-  if (v.is_array()) return "an array";
-  return "an object";
-}
-
-std::string pointerToken(const std::string& key) {
-  std::string out;
-  for (char c : key) {
-    if (c == '~') out += "~0";
-    else if (c == '/') out += "~1";
-    else out += c;
-  }
-  return out;
-}
 
 // %.6g reads well; when two different values would print the same (an exact-equality tolerance
 // failing on the 9th digit), more digits until they differ, so a message never says "0.1 > 0.1".

@@ -2,6 +2,7 @@
 // files from CI artifacts and user checkouts, so every shape error names the file and the JSON
 // pointer of the offending value.
 #include "shadowlab/compare/results.h"
+#include "json_text.h"
 
 #include <regex>
 #include <set>
@@ -13,28 +14,11 @@
 namespace shadowlab {
 namespace {
 
+using json_text::pointerToken;
+using json_text::typeName;
+
 constexpr const char* kMetricsSchema = "shadowlab.metrics/1";
 constexpr const char* kResultsSchema = "shadowlab.results/1";
-
-std::string typeName(const nlohmann::json& v) {
-  if (v.is_number()) return "a number";
-  if (v.is_string()) return "a string";
-  if (v.is_boolean()) return "a boolean";
-  if (v.is_null()) return "null";
-  if (v.is_array()) return "an array";
-  return "an object";
-}
-
-// Escapes a key for use in a JSON pointer (RFC 6901).
-std::string pointerToken(const std::string& key) {
-  std::string out;
-  for (char c : key) {
-    if (c == '~') out += "~0";
-    else if (c == '/') out += "~1";
-    else out += c;
-  }
-  return out;
-}
 
 ResultRow rowFromJson(const nlohmann::json& j, const std::string& file, const std::string& pointer) {
   auto fail = [&](const std::string& place, const std::string& what) {

@@ -11,9 +11,13 @@
 #include "shadowlab/compare/gate.h"
 #include "shadowlab/scenes/error.h"
 #include "shadowlab/scenes/io.h"
+#include "json_text.h"
 
 namespace shadowlab {
 namespace {
+
+using json_text::pointerToken;
+
 
 using ojson = nlohmann::ordered_json;
 
@@ -26,17 +30,6 @@ std::string trim(const std::string& s) {
   if (b == std::string::npos) return "";
   size_t e = s.find_last_not_of(" \t\r\n");
   return s.substr(b, e - b + 1);
-}
-
-// RFC 6901 escaping of one reference token ("scene:/a/b" holds slashes).
-std::string pointerToken(const std::string& token) {
-  std::string out;
-  for (char c : token) {
-    if (c == '~') out += "~0";
-    else if (c == '/') out += "~1";
-    else out += c;
-  }
-  return out;
 }
 
 std::string joinKeys(const std::vector<std::string>& keys) {
