@@ -63,6 +63,7 @@ int run(const Options& o) {
                            {"device", rasterizer.deviceName()},
                            {"shadow_ms", t.shadowMs},
                            {"camera_ms", t.cameraMs},
+                           {"camera_visibility_ms", t.visibilityMs},
                            {"readback_ms", t.readbackMs},
                            {"total_ms", t.totalMs}};
   writeJsonAtomic(o.outDir + "/raster.json", report);

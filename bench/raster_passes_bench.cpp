@@ -60,15 +60,16 @@ void passes(benchmark::State& state, Filter filter, int copies) {
   m.filterSize = 5;
   RasterTimings t;
   rasterizer().render(s, m, "", &t);  // warm-up: pipelines, upload
-  double shadow = 0, camera = 0, readback = 0, total = 0;
+  double shadow = 0, camera = 0, visibility = 0, readback = 0, total = 0;
   for (auto _ : state) {
     rasterizer().render(s, m, "", &t);
     state.SetIterationTime((t.shadowMs + t.cameraMs) * 1e-3);
-    shadow += t.shadowMs, camera += t.cameraMs, readback += t.readbackMs, total += t.totalMs;
+    shadow += t.shadowMs, camera += t.cameraMs, visibility += t.visibilityMs, readback += t.readbackMs, total += t.totalMs;
   }
   double n = double(state.iterations());
   state.counters["shadow_ms"] = shadow / n;
   state.counters["camera_ms"] = camera / n;
+  state.counters["visibility_ms"] = visibility / n;
   state.counters["readback_ms"] = readback / n;
   state.counters["total_ms"] = total / n;
   state.counters["triangles"] = double(s.triangleCount());

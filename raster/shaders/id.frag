@@ -1,5 +1,7 @@
 #version 460
-// Writes (object index + 1, primitive id) beside the depth. Alpha-tested materials discard
+// Writes (object index + 1, global triangle index) beside the depth: the global index (the
+// object's triangle base + its primitive id) lets the resolve pass find the triangle's plane with
+// one fetch; the readback turns it back into the object's primitive id. Alpha-tested materials discard
 // below their cutoff, sampling the alpha texture exactly like scenes' sampleAlphaNearest
 // (nearest texel, repeat addressing, texel (0,0) top-left) so both renderers agree on holes.
 // One-sided materials discard back faces (as seen from the camera or the light).
@@ -35,7 +37,7 @@ layout(std430, set = 0, binding = 2) readonly buffer AlphaTexels { float alphaTe
 
 void main() {
   if (!kMaterialTests) {
-    outId = uvec2(draw.objectIndex + 1u, uint(gl_PrimitiveID));
+    outId = uvec2(draw.objectIndex + 1u, draw.triangleBase + uint(gl_PrimitiveID));
     return;
   }
   MaterialGpu m = materials[triangleMaterial[draw.triangleBase + uint(gl_PrimitiveID)]];
@@ -46,5 +48,5 @@ void main() {
     int y = clamp(int(floor(fract(uv.y) * float(h))), 0, h - 1);
     if (alphaTexels[m.alphaOffset + uint(y * w + x)] < m.cutoff) discard;
   }
-  outId = uvec2(draw.objectIndex + 1u, uint(gl_PrimitiveID));
+  outId = uvec2(draw.objectIndex + 1u, draw.triangleBase + uint(gl_PrimitiveID));
 }

@@ -4,16 +4,23 @@
 // triangle's plane (the reference's hit point up to float rounding), and every derivative
 // (texel footprint m, receiver plane) is taken analytically on that plane instead of from
 // 2x2-quad differences, so triangle edges do not smear neighbouring planes into each other.
-// Writes one float plane per output channel (see channel indices below) into `outPlanes`.
+// Writes the light's channels into three color attachments (outA, outB, outC) and each
+// projector's channels as float planes into `outPlanes`.
 // A full-screen fragment shader rather than a compute shader: lavapipe's fragment path is its
 // fast one (tiled, multi-threaded), its compute dispatch costs ~0.2 us per invocation even empty.
-// One fragment per pixel, no attachments: the outputs go to the storage buffer only.
+// One fragment per pixel. Attachments rather than storage-buffer stores for the per-pixel
+// outputs: on lavapipe a store at a per-pixel address is a loop over the SIMD lanes.
 
 // Specialized per filter so lavapipe compiles straight-line code for the cheap filters.
 layout(constant_id = 0) const uint kFilter = 0u;  // 0 none, 1 hw2x2, 2 bilinear4, 3 pcf, 4 poisson
 // The scene's projector count: lavapipe runs every branch of a shader masked, so an empty
 // projector loop still costs unless it is compiled out.
 layout(constant_id = 1) const int kProjectorCount = 0;
+// Cascades (directional light, fit=cascades), a blend band, a float depth format: off, their
+// code is compiled out (lavapipe would run it masked for every pixel).
+layout(constant_id = 2) const bool kCascaded = false;
+layout(constant_id = 3) const bool kBlend = false;
+layout(constant_id = 4) const bool kFloatDepth = false;
 
 const int kMaxLayers = 16;  // 8 light layers (cascades; a cube: 6) + 8 projectors
 const int kMaxProjectors = 8;
@@ -45,21 +52,20 @@ layout(set = 0, binding = 5) uniform sampler2DArrayShadow mapShadow;  // LINEAR,
 layout(set = 0, binding = 6) uniform usampler2DArray mapIds;
 layout(set = 0, binding = 7) uniform usampler2D cameraIds;
 
-struct ObjectGpu {
-  uint id;
-  uint vertexBase;
-  uint triangleBase;
-  uint pad;
-};
-layout(std430, set = 0, binding = 8) readonly buffer Positions { float positions[]; };
-layout(std430, set = 0, binding = 9) readonly buffer Indices { uint indices[]; };
-layout(std430, set = 0, binding = 10) readonly buffer Objects { ObjectGpu objects[]; };
-layout(std430, set = 0, binding = 11) readonly buffer ProjectorTexels { float projectorTexels[]; };
-layout(std430, set = 0, binding = 12) writeonly buffer OutPlanes { float outPlanes[]; };
+// Per triangle (global index), its plane relative to the camera origin o: (n, dot(n, v0 - o)), n
+// the unit normal (v1 - v0) x (v2 - v0), computed in double on the CPU. A texel buffer: on
+// lavapipe a storage-buffer load at a per-pixel address is a bounds-checked loop over the SIMD
+// lanes, a texel fetch one gather; and one fetch per pixel, since each costs about as much as the
+// rest of the arithmetic.
+layout(set = 0, binding = 8) uniform samplerBuffer trianglePlanes;
+layout(std430, set = 0, binding = 9) readonly buffer ProjectorTexels { float projectorTexels[]; };
+layout(std430, set = 0, binding = 10) writeonly buffer OutPlanes { float outPlanes[]; };
 
-const uint kHit = 0u, kObjectId = 1u, kPrimId = 2u, kVis = 3u, kReceiverDepth = 4u, kMapDepth = 5u,
-           kOccluderId = 6u, kOccluderPrim = 7u, kInMap = 8u, kM = 9u, kBiasDepth = 10u,
-           kBiasWorld = 11u, kCascade = 12u, kLightChannels = 13u, kProjectorChannels = 5u;
+// The rasterizer splits these into the frame's channels (rasterizer.cpp, readback).
+layout(location = 0) out vec4 outA;  // vis, receiver_depth, map_depth, m
+layout(location = 1) out vec4 outB;  // bias_depth, bias_world, occluder_id, occluder_prim
+layout(location = 2) out vec2 outC;  // in_map, cascade
+const uint kProjectorChannels = 5u;
 
 uint gPixel;
 uint gPlane;
@@ -68,8 +74,12 @@ bool gHit;
 // early-out branch does not save work (both sides run masked), a second set of stores would.
 void put(uint channel, float value) { outPlanes[channel * gPlane + gPixel] = gHit ? value : 0.0; }
 
-vec3 vertexAt(uint v) { return vec3(positions[3u * v], positions[3u * v + 1u], positions[3u * v + 2u]); }
 vec3 rayThrough(vec2 pixel) { return P.rayX.xyz * pixel.x + P.rayY.xyz * pixel.y + P.rayC.xyz; }
+// Where the camera ray through an image point meets a plane (n, dot(n, v0 - origin)).
+vec3 planePoint(vec2 pixel, vec4 plane) {
+  vec3 d = rayThrough(pixel);
+  return P.cameraOrigin.xyz + d * (plane.w / dot(d, plane.xyz));
+}
 
 int gLayer;
 mat4 gTexFromWorld;  // P.texFromWorld[gLayer], fetched once: dynamic UBO indexing is a gather on CPUs
@@ -168,30 +178,25 @@ int cubeFace(vec3 v) {
 }
 
 void main() {
-  int width = P.sizes2.x, height = P.sizes2.y;
-  ivec2 px = ivec2(gl_FragCoord.xy);
-  if (px.x >= width || px.y >= height) return;
+  int width = P.sizes2.x;
+  ivec2 px = ivec2(gl_FragCoord.xy);  // the viewport is the image: every pixel, once
   gPixel = uint(px.y * width + px.x);
-  gPlane = uint(width * height);
+  gPlane = uint(width * P.sizes2.y);
 
-  uvec2 ids = texelFetch(cameraIds, px, 0).xy;
+  uvec2 ids = texelFetch(cameraIds, px, 0).xy;  // (object index + 1, global triangle)
   gHit = ids.x != 0u;
-  ObjectGpu obj = objects[gHit ? ids.x - 1u : 0u];  // object 0 always exists (padded)
-  uint tri = obj.triangleBase + ids.y;
-  vec3 v0 = vertexAt(obj.vertexBase + indices[3u * tri]);
-  vec3 v1 = vertexAt(obj.vertexBase + indices[3u * tri + 1u]);
-  vec3 v2 = vertexAt(obj.vertexBase + indices[3u * tri + 2u]);
-  vec3 nTri = cross(v1 - v0, v2 - v0);
+  vec4 plane = texelFetch(trianglePlanes, int(ids.y));  // triangle 0 always exists (padded)
+  vec3 nTri = plane.xyz;
   vec3 origin = P.cameraOrigin.xyz;
   vec2 pixelCenter = vec2(px) + 0.5;
   vec3 dir = rayThrough(pixelCenter);
-  vec3 p = origin + dir * (dot(v0 - origin, nTri) / dot(dir, nTri));
-  vec3 normal = normalize(nTri);
+  vec3 p = planePoint(pixelCenter, plane);
+  vec3 normal = nTri;
   if (dot(normal, dir) > 0.0) normal = -normal;  // face the camera, like the reference's N
-
-  put(kHit, 1.0);
-  put(kObjectId, float(obj.id));
-  put(kPrimId, float(ids.y));
+  // A unit tangent (Duff et al. 2017's branchless basis), for the receiver plane's slope.
+  float sgn = normal.z >= 0.0 ? 1.0 : -1.0;
+  float ta = -1.0 / (sgn + normal.z);
+  vec3 e1 = vec3(1.0 + sgn * normal.x * normal.x * ta, sgn * normal.x * normal.y * ta, -sgn * normal.x);
 
   // ---- the light ----
   int lightType = int(P.lightPosType.w);
@@ -200,14 +205,14 @@ void main() {
   // Cascades (directional only): the pixel's view depth picks the first cascade whose far split
   // is not nearer; beyond the last split, the last cascade. In the blend band at a cascade's far
   // end, blendT goes 0 -> 1 towards the next cascade.
-  int cascadeCount = lightType == 0 ? int(P.cascadeView.w) : 0;
+  int cascadeCount = kCascaded ? int(P.cascadeView.w) : 0;
   int cascade = 0;
   float blendT = 0.0;
-  if (cascadeCount > 0) {
+  if (kCascaded) {
     float viewDepth = dot(p - origin, P.cascadeView.xyz) + P.cascadeInfo.z;  // fit camera depth
     for (int k = 0; k + 1 < cascadeCount; ++k)
       if (viewDepth > cascadeFar(k)) cascade = k + 1;
-    if (P.cascadeInfo.x > 0.0 && cascade + 1 < cascadeCount) {
+    if (kBlend && cascade + 1 < cascadeCount) {
       float farSplit = cascadeFar(cascade);
       float nearSplit = cascade == 0 ? P.cascadeInfo.y : cascadeFar(cascade - 1);
       float band = P.cascadeInfo.x * (farSplit - nearSplit);
@@ -226,7 +231,6 @@ void main() {
   bool inMap = inFront && all(greaterThanEqual(uvz.xy, vec2(0.0))) && all(lessThanEqual(uvz.xy, vec2(1.0)));
   float depthP = tP.z / tP.w;
 
-  vec3 e1 = normalize(v1 - v0);
   vec2 slope = planeSlope(q, normal, e1, texelWorld);
   gSlope = P.bias.z > 0.5 ? slope : vec2(0.0);
   gRef = uvz.z - P.bias.x;
@@ -238,11 +242,9 @@ void main() {
     mapDepthCenter = texelFetch(mapDepth, ivec3(c, gLayer), 0).r;
     // filter none is the center texel's comparison: no second fetch.
     vis = kFilter == 0u ? (mapDepthCenter >= refAt(c) ? 1.0 : 0.0) : filterVisibility();
-    uvec2 occ = texelFetch(mapIds, ivec3(c, gLayer), 0).xy;
-    if (occ.x != 0u) {
-      occluderId = float(objects[occ.x - 1u].id);
-      occluderPrim = float(occ.y);
-    }
+    uvec2 occ = texelFetch(mapIds, ivec3(c, gLayer), 0).xy;  // the readback maps these to ids
+    occluderId = float(occ.x);
+    occluderPrim = float(occ.y);
   }
   bool outsideCone = lightType == 1 && dot(normalize(p - lightPos), P.lightDirCos.xyz) < P.lightDirCos.w;
   // Facing rule (the reference's): the side the camera sees is unlit when the light is behind
@@ -252,7 +254,7 @@ void main() {
 
   // Rasterizer depth bias the map texel carries when the receiver is its own caster:
   // constant * r + slope * maxDepthSlope, clamped (Vulkan's formula; maxDepthSlope per texel).
-  float r = P.depthBias.w > 0.0 ? P.depthBias.w : exp2(floor(log2(max(depthP, 1e-30))) - 23.0);
+  float r = kFloatDepth ? exp2(floor(log2(max(depthP, 1e-30))) - 23.0) : P.depthBias.w;
   float rasterBias = P.depthBias.x * r + P.depthBias.y * max(abs(slope.x), abs(slope.y));
   if (P.depthBias.z > 0.0) rasterBias = min(rasterBias, P.depthBias.z);
   if (P.depthBias.z < 0.0) rasterBias = max(rasterBias, P.depthBias.z);
@@ -262,14 +264,10 @@ void main() {
   float worldPerDepth = depthStep > 0.0 ? texelWorld / depthStep : 0.0;
 
   // Lloyd's m: the Jacobian d(texel)/d(pixel) by central differences of exact plane points.
-  vec2 tx0, tx1, ty0, ty1;
-  {
-    vec3 d;
-    d = rayThrough(pixelCenter + vec2(0.5, 0.0)); tx1 = mapCoords(origin + d * (dot(v0 - origin, nTri) / dot(d, nTri))).xy;
-    d = rayThrough(pixelCenter - vec2(0.5, 0.0)); tx0 = mapCoords(origin + d * (dot(v0 - origin, nTri) / dot(d, nTri))).xy;
-    d = rayThrough(pixelCenter + vec2(0.0, 0.5)); ty1 = mapCoords(origin + d * (dot(v0 - origin, nTri) / dot(d, nTri))).xy;
-    d = rayThrough(pixelCenter - vec2(0.0, 0.5)); ty0 = mapCoords(origin + d * (dot(v0 - origin, nTri) / dot(d, nTri))).xy;
-  }
+  vec2 tx1 = mapCoords(planePoint(pixelCenter + vec2(0.5, 0.0), plane)).xy;
+  vec2 tx0 = mapCoords(planePoint(pixelCenter - vec2(0.5, 0.0), plane)).xy;
+  vec2 ty1 = mapCoords(planePoint(pixelCenter + vec2(0.0, 0.5), plane)).xy;
+  vec2 ty0 = mapCoords(planePoint(pixelCenter - vec2(0.0, 0.5), plane)).xy;
   vec2 jx = tx1 - tx0, jy = ty1 - ty0;
   float sumSq = dot(jx, jx) + dot(jy, jy);
   float detJ = jx.x * jy.y - jy.x * jx.y;
@@ -278,23 +276,16 @@ void main() {
   float m = sMin > 1e-6 ? min(1.0 / sMin, 1e6) : 1e6;
 
   // Last, because it moves the lookup globals to the next cascade's layer.
-  if (blendT > 0.0) vis = mix(vis, layerVisibility(cascade + 1, p, normal, e1), blendT);
+  if (kBlend && blendT > 0.0) vis = mix(vis, layerVisibility(cascade + 1, p, normal, e1), blendT);
   if (outsideCone || facesAway) vis = 0.0;
 
-  put(kVis, vis);
-  put(kReceiverDepth, uvz.z);
-  put(kMapDepth, mapDepthCenter);
-  put(kOccluderId, occluderId);
-  put(kOccluderPrim, occluderPrim);
-  put(kInMap, inMap ? 1.0 : 0.0);
-  put(kM, m);
-  put(kBiasDepth, biasDepth);
-  put(kBiasWorld, biasDepth * worldPerDepth);
-  put(kCascade, float(cascade));
+  outA = gHit ? vec4(vis, uvz.z, mapDepthCenter, m) : vec4(0.0);
+  outB = gHit ? vec4(biasDepth, biasDepth * worldPerDepth, occluderId, occluderPrim) : vec4(0.0);
+  outC = gHit ? vec2(inMap ? 1.0 : 0.0, float(cascade)) : vec2(0.0);
 
   // ---- projectors ----
   for (int j = 0; j < kProjectorCount; ++j) {
-    uint base = kLightChannels + kProjectorChannels * uint(j);
+    uint base = kProjectorChannels * uint(j);
     gLayer = P.sizes.y + j;
     gTexFromWorld = P.texFromWorld[gLayer];
     vec4 t = project(p);

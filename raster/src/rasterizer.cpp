@@ -3,12 +3,16 @@
 //                    (cube faces for point lights), then one layer per projector.
 //   Pass 2 (camera): the camera's visibility buffer: depth + (object, primitive) per pixel.
 //   Pass 3 (resolve, a full-screen fragment pass): per pixel, the visible point, the map lookup with the method's
-//                    bias and filter, the evidence channels, the projectors; one float plane
-//                    per output channel, read back into the Frame with one copy per channel.
+//                    bias and filter, the evidence channels into three color attachments
+//                    (kResolveFormats), the projectors into a storage buffer (one plane per channel).
+// The visibility buffer and the resolve attachments are linear images in host memory: the CPU
+// splits them into the Frame's channel planes in place, without a copy to a buffer first.
 #include "shadowlab/raster/raster.h"
 
 #include <algorithm>
+#include <array>
 #include <chrono>
+#include <malloc.h>
 #include <cmath>
 #include <cstring>
 #include <map>
@@ -41,8 +45,10 @@ namespace {
 constexpr int kMaxLayers = 16;  // 8 cascades (or 6 cube faces) + 8 projectors
 constexpr int kMaxProjectors = 8;
 constexpr int kMaxTaps = 64;
-constexpr int kLightChannels = 13;
 constexpr int kProjectorChannels = 5;
+// The resolve pass's color attachments (resolve.frag's outA, outB, outC).
+constexpr VkFormat kResolveFormats[3] = {VK_FORMAT_R32G32B32A32_SFLOAT, VK_FORMAT_R32G32B32A32_SFLOAT,
+                                         VK_FORMAT_R32G32_SFLOAT};
 constexpr VkFormat kIdFormat = VK_FORMAT_R32G32_UINT;
 constexpr VkFormat kCameraDepthFormat = VK_FORMAT_D32_SFLOAT;
 
@@ -145,26 +151,35 @@ struct Rasterizer::Impl {
   vk::QueryPool queries;
   // Keyed by what needs a new pipeline: (depth format, depth clamp, material tests, depth bias).
   std::map<std::tuple<VkFormat, bool, bool, bool>, vk::PipelineHandle> idPipelines;
-  std::map<std::pair<Filter, int>, vk::PipelineHandle> resolvePipelines;  // (filter, projector count)
+  // resolve.frag's specialization constants: filter, projector count, cascaded, blend, float depth.
+  using ResolveKey = std::array<uint32_t, 5>;
+  std::map<ResolveKey, vk::PipelineHandle> resolvePipelines;
   std::set<std::string> warmed;
   std::vector<glm::vec2> poisson = poissonDisc();
 
   std::unique_ptr<raster::SceneGpu> scene;
   vk::Image mapDepth, mapIds, cameraDepth, cameraIds;
-  vk::Buffer params, output;
+  vk::Image resolveOut[3];
+  vk::Buffer params, output;  // output: the projector channels
 
   explicit Impl(const RasterDeviceOptions& options);
   void createLayouts();
   VkPipeline idPipeline(VkFormat format, bool depthClamp, bool materialTests, bool depthBias);
-  VkPipeline resolvePipeline(Filter filter, int projectorCount);
+  VkPipeline resolvePipeline(const ResolveKey& key);
   void ensureImages(int mapSize, VkFormat mapFormat, int layers, int width, int height);
   void writeDescriptors();
+  Frame readback(const Scene& scene, const Light* light, int width, int height);
   void record(VkCommandBuffer cmd, const std::vector<glm::mat4>& layerClip,
               const IdPipelines& pipes, VkPipeline resolve, const Method& method,
               const glm::mat4& cameraClip, int width, int height);
 };
 
 Rasterizer::Impl::Impl(const RasterDeviceOptions& options) {
+  // Every render hands out ~100 MB of fresh channel planes (1080p) that the caller frees soon
+  // after: keep freed memory in the heap for the next frame instead of returning it to the OS,
+  // where each reuse would page-fault every 4 KiB back in (26k faults, ~40 ms at 1080p).
+  mallopt(M_MMAP_THRESHOLD, 32 << 20);
+  mallopt(M_TRIM_THRESHOLD, 1 << 30);
   vk::ContextOptions co;
   co.device = options.device;
   co.validation = options.validation;
@@ -195,7 +210,7 @@ Rasterizer::Impl::Impl(const RasterDeviceOptions& options) {
 
   VkQueryPoolCreateInfo q{VK_STRUCTURE_TYPE_QUERY_POOL_CREATE_INFO};
   q.queryType = VK_QUERY_TYPE_TIMESTAMP;
-  q.queryCount = 3;
+  q.queryCount = 4;
   VkQueryPool pool;
   VK_CHECK(vkCreateQueryPool(device, &q, nullptr, &pool));
   queries = vk::QueryPool(device, pool);
@@ -214,7 +229,8 @@ void Rasterizer::Impl::createLayouts() {
   add(2, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, fragCompute);
   add(3, VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER, fragCompute);
   for (uint32_t b = 4; b <= 7; ++b) add(b, VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER, fragCompute);
-  for (uint32_t b = 8; b <= 12; ++b) add(b, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, fragCompute);
+  add(8, VK_DESCRIPTOR_TYPE_UNIFORM_TEXEL_BUFFER, fragCompute);  // triangle planes
+  for (uint32_t b = 9; b <= 10; ++b) add(b, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, fragCompute);
   VkDescriptorSetLayoutCreateInfo info{VK_STRUCTURE_TYPE_DESCRIPTOR_SET_LAYOUT_CREATE_INFO};
   info.bindingCount = uint32_t(bindings.size());
   info.pBindings = bindings.data();
@@ -232,12 +248,13 @@ void Rasterizer::Impl::createLayouts() {
   VK_CHECK(vkCreatePipelineLayout(device, &pl, nullptr, &pipeLayout));
   pipelineLayout = vk::PipelineLayout(device, pipeLayout);
 
-  VkDescriptorPoolSize sizes[] = {{VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, 8},
+  VkDescriptorPoolSize sizes[] = {{VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, 5},
                                   {VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER, 1},
-                                  {VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER, 4}};
+                                  {VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER, 4},
+                                  {VK_DESCRIPTOR_TYPE_UNIFORM_TEXEL_BUFFER, 1}};
   VkDescriptorPoolCreateInfo dp{VK_STRUCTURE_TYPE_DESCRIPTOR_POOL_CREATE_INFO};
   dp.maxSets = 1;
-  dp.poolSizeCount = 3;
+  dp.poolSizeCount = 4;
   dp.pPoolSizes = sizes;
   VkDescriptorPool pool;
   VK_CHECK(vkCreateDescriptorPool(device, &dp, nullptr, &pool));
@@ -267,8 +284,7 @@ VkPipeline Rasterizer::Impl::idPipeline(VkFormat format, bool depthClamp, bool m
   return idPipelines.emplace(key, vk::createGraphicsPipeline(*context, d)).first->second.get();
 }
 
-VkPipeline Rasterizer::Impl::resolvePipeline(Filter filter, int projectorCount) {
-  auto key = std::make_pair(filter, projectorCount);
+VkPipeline Rasterizer::Impl::resolvePipeline(const ResolveKey& key) {
   auto it = resolvePipelines.find(key);
   if (it != resolvePipelines.end()) return it->second.get();
   vk::GraphicsPipelineDesc d;
@@ -276,7 +292,8 @@ VkPipeline Rasterizer::Impl::resolvePipeline(Filter filter, int projectorCount) 
   d.fragment = resolveFrag.get();
   d.layout = pipelineLayout.get();
   d.depthTest = false;
-  d.fragmentSpecialization = {uint32_t(filter), uint32_t(projectorCount)};  // straight-line code
+  d.colorFormats.assign(std::begin(kResolveFormats), std::end(kResolveFormats));
+  d.fragmentSpecialization.assign(key.begin(), key.end());  // straight-line code per case
   return resolvePipelines.emplace(key, vk::createGraphicsPipeline(*context, d)).first->second.get();
 }
 
@@ -295,23 +312,27 @@ void Rasterizer::Impl::ensureImages(int mapSize, VkFormat mapFormat, int layers,
                             VK_IMAGE_USAGE_DEPTH_STENCIL_ATTACHMENT_BIT, VK_IMAGE_ASPECT_DEPTH_BIT);
     cameraIds = vk::Image(c, width, height, 1, kIdFormat,
                           VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT | VK_IMAGE_USAGE_SAMPLED_BIT,
-                          VK_IMAGE_ASPECT_COLOR_BIT);
+                          VK_IMAGE_ASPECT_COLOR_BIT, true);
+    for (int i = 0; i < 3; ++i)
+      resolveOut[i] = vk::Image(c, width, height, 1, kResolveFormats[i], VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT,
+                                VK_IMAGE_ASPECT_COLOR_BIT, true);
   }
 }
 
 void Rasterizer::Impl::writeDescriptors() {
   const raster::SceneGpu& s = *scene;
-  const vk::Buffer* buffers[13] = {&s.triangleMaterials, &s.materials, &s.alphaTexels, &params,
+  const vk::Buffer* buffers[11] = {&s.triangleMaterials, &s.materials, &s.alphaTexels, &params,
                                    nullptr, nullptr, nullptr, nullptr,
-                                   &s.positions, &s.indices, &s.objects, &s.projectorTexels, &output};
-  VkDescriptorBufferInfo bufferInfos[13]{};
+                                   nullptr, &s.projectorTexels, &output};
+  VkBufferView planes = s.trianglePlanesView.get();
+  VkDescriptorBufferInfo bufferInfos[11]{};
   VkDescriptorImageInfo imageInfos[4] = {
       {nearestSampler.get(), mapDepth.arrayView(), VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL},
       {compareSampler.get(), mapDepth.arrayView(), VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL},
       {nearestSampler.get(), mapIds.arrayView(), VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL},
-      {nearestSampler.get(), cameraIds.layerView(0), VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL}};
+      {nearestSampler.get(), cameraIds.layerView(0), VK_IMAGE_LAYOUT_GENERAL}};
   std::vector<VkWriteDescriptorSet> writes;
-  for (uint32_t b = 0; b < 13; ++b) {
+  for (uint32_t b = 0; b < 11; ++b) {
     VkWriteDescriptorSet w{VK_STRUCTURE_TYPE_WRITE_DESCRIPTOR_SET};
     w.dstSet = descriptorSet;
     w.dstBinding = b;
@@ -319,6 +340,9 @@ void Rasterizer::Impl::writeDescriptors() {
     if (b >= 4 && b <= 7) {
       w.descriptorType = VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER;
       w.pImageInfo = &imageInfos[b - 4];
+    } else if (b == 8) {
+      w.descriptorType = VK_DESCRIPTOR_TYPE_UNIFORM_TEXEL_BUFFER;
+      w.pTexelBufferView = &planes;
     } else {
       bufferInfos[b] = {buffers[b]->get(), 0, VK_WHOLE_SIZE};
       w.descriptorType = b == 3 ? VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER : VK_DESCRIPTOR_TYPE_STORAGE_BUFFER;
@@ -334,7 +358,7 @@ void Rasterizer::Impl::record(VkCommandBuffer cmd, const std::vector<glm::mat4>&
                               const glm::mat4& cameraClip, int width, int height) {
   const raster::SceneGpu& s = *scene;
   VkQueryPool pool = queries.get();
-  vkCmdResetQueryPool(cmd, pool, 0, 3);
+  vkCmdResetQueryPool(cmd, pool, 0, 4);
   vkCmdWriteTimestamp2(cmd, VK_PIPELINE_STAGE_2_TOP_OF_PIPE_BIT, pool, 0);
   VkDescriptorSet set = descriptorSet;
   vkCmdBindDescriptorSets(cmd, VK_PIPELINE_BIND_POINT_GRAPHICS, pipelineLayout.get(), 0, 1, &set, 0, nullptr);
@@ -367,10 +391,11 @@ void Rasterizer::Impl::record(VkCommandBuffer cmd, const std::vector<glm::mat4>&
         vkCmdDrawIndexed(cmd, d.indexCount, 1, d.firstIndex, d.vertexOffset, 0);
       }
   };
-  auto beginRendering = [&](VkImageView depthView, VkImageView idView, int w, int h) {
+  auto beginRendering = [&](VkImageView depthView, VkImageView idView, int w, int h,
+                            VkImageLayout idLayout = VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL) {
     VkRenderingAttachmentInfo color{VK_STRUCTURE_TYPE_RENDERING_ATTACHMENT_INFO};
     color.imageView = idView;
-    color.imageLayout = VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL;
+    color.imageLayout = idLayout;
     color.loadOp = VK_ATTACHMENT_LOAD_OP_CLEAR;
     color.storeOp = VK_ATTACHMENT_STORE_OP_STORE;
     color.clearValue.color.uint32[0] = 0;  // id 0: nothing drawn here
@@ -421,21 +446,36 @@ void Rasterizer::Impl::record(VkCommandBuffer cmd, const std::vector<glm::mat4>&
                  VK_PIPELINE_STAGE_2_NONE, 0,
                  VK_PIPELINE_STAGE_2_EARLY_FRAGMENT_TESTS_BIT | VK_PIPELINE_STAGE_2_LATE_FRAGMENT_TESTS_BIT,
                  VK_ACCESS_2_DEPTH_STENCIL_ATTACHMENT_READ_BIT | VK_ACCESS_2_DEPTH_STENCIL_ATTACHMENT_WRITE_BIT);
-  vk::transition(cmd, cameraIds, VK_IMAGE_LAYOUT_UNDEFINED, VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL,
-                 VK_PIPELINE_STAGE_2_FRAGMENT_SHADER_BIT, 0, VK_PIPELINE_STAGE_2_COLOR_ATTACHMENT_OUTPUT_BIT,
-                 VK_ACCESS_2_COLOR_ATTACHMENT_WRITE_BIT);
-  beginRendering(cameraDepth.layerView(0), cameraIds.layerView(0), width, height);
+  // GENERAL throughout: the camera ids are an attachment, then sampled, then read by the host.
+  vk::transition(cmd, cameraIds, VK_IMAGE_LAYOUT_UNDEFINED, VK_IMAGE_LAYOUT_GENERAL,
+                 VK_PIPELINE_STAGE_2_FRAGMENT_SHADER_BIT | VK_PIPELINE_STAGE_2_HOST_BIT, 0,
+                 VK_PIPELINE_STAGE_2_COLOR_ATTACHMENT_OUTPUT_BIT, VK_ACCESS_2_COLOR_ATTACHMENT_WRITE_BIT);
+  beginRendering(cameraDepth.layerView(0), cameraIds.layerView(0), width, height, VK_IMAGE_LAYOUT_GENERAL);
   drawAll(cameraClip, false);
   vkCmdEndRendering(cmd);
-  vk::transition(cmd, cameraIds, VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL, VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL,
+  vk::transition(cmd, cameraIds, VK_IMAGE_LAYOUT_GENERAL, VK_IMAGE_LAYOUT_GENERAL,
                  VK_PIPELINE_STAGE_2_COLOR_ATTACHMENT_OUTPUT_BIT, VK_ACCESS_2_COLOR_ATTACHMENT_WRITE_BIT,
                  VK_PIPELINE_STAGE_2_FRAGMENT_SHADER_BIT, VK_ACCESS_2_SHADER_SAMPLED_READ_BIT);
+  vkCmdWriteTimestamp2(cmd, VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT, pool, 3);
 
-  // ---- Pass 3: resolve, one fragment per pixel, no attachments ----
+  // ---- Pass 3: resolve, one fragment per pixel, into the resolve attachments ----
   {
+    VkRenderingAttachmentInfo colors[3];
+    for (int i = 0; i < 3; ++i) {
+      vk::transition(cmd, resolveOut[i], VK_IMAGE_LAYOUT_UNDEFINED, VK_IMAGE_LAYOUT_GENERAL,
+                     VK_PIPELINE_STAGE_2_HOST_BIT, 0, VK_PIPELINE_STAGE_2_COLOR_ATTACHMENT_OUTPUT_BIT,
+                     VK_ACCESS_2_COLOR_ATTACHMENT_WRITE_BIT);
+      colors[i] = {VK_STRUCTURE_TYPE_RENDERING_ATTACHMENT_INFO};
+      colors[i].imageView = resolveOut[i].layerView(0);
+      colors[i].imageLayout = VK_IMAGE_LAYOUT_GENERAL;
+      colors[i].loadOp = VK_ATTACHMENT_LOAD_OP_DONT_CARE;  // every pixel is written
+      colors[i].storeOp = VK_ATTACHMENT_STORE_OP_STORE;
+    }
     VkRenderingInfo info{VK_STRUCTURE_TYPE_RENDERING_INFO};
     info.renderArea = {{0, 0}, {uint32_t(width), uint32_t(height)}};
     info.layerCount = 1;
+    info.colorAttachmentCount = 3;
+    info.pColorAttachments = colors;
     vkCmdBeginRendering(cmd, &info);
     VkViewport viewport{0, 0, float(width), float(height), 0.0f, 1.0f};
     VkRect2D scissor{{0, 0}, {uint32_t(width), uint32_t(height)}};
@@ -447,8 +487,8 @@ void Rasterizer::Impl::record(VkCommandBuffer cmd, const std::vector<glm::mat4>&
     vkCmdEndRendering(cmd);
   }
   VkMemoryBarrier2 toHost{VK_STRUCTURE_TYPE_MEMORY_BARRIER_2};
-  toHost.srcStageMask = VK_PIPELINE_STAGE_2_FRAGMENT_SHADER_BIT;
-  toHost.srcAccessMask = VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT;
+  toHost.srcStageMask = VK_PIPELINE_STAGE_2_FRAGMENT_SHADER_BIT | VK_PIPELINE_STAGE_2_COLOR_ATTACHMENT_OUTPUT_BIT;
+  toHost.srcAccessMask = VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT | VK_ACCESS_2_COLOR_ATTACHMENT_WRITE_BIT;
   toHost.dstStageMask = VK_PIPELINE_STAGE_2_HOST_BIT;
   toHost.dstAccessMask = VK_ACCESS_2_HOST_READ_BIT;
   VkDependencyInfo dep{VK_STRUCTURE_TYPE_DEPENDENCY_INFO};
@@ -456,6 +496,91 @@ void Rasterizer::Impl::record(VkCommandBuffer cmd, const std::vector<glm::mat4>&
   dep.pMemoryBarriers = &toHost;
   vkCmdPipelineBarrier2(cmd, &dep);
   vkCmdWriteTimestamp2(cmd, VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT, pool, 2);
+}
+
+// The frame's channels from the visibility buffer (hit, object_id, prim_id), the resolve
+// attachments (the light's channels, see resolve.frag's outA/outB/outC) and the projector planes.
+// Each attachment is read once, row by row, its components scattered to their planes; the rows
+// are split over two threads (the split is bound by memory bandwidth, which one core does not
+// saturate). Ids arrive as (object index + 1, global triangle index) and leave as the object's id
+// and its own primitive index.
+Frame Rasterizer::Impl::readback(const Scene& sc, const Light* light, int width, int height) {
+  output.invalidate(*context);
+  cameraIds.invalidate(*context);
+  for (const vk::Image& img : resolveOut) img.invalidate(*context);
+  Frame frame;
+  frame.width = width;
+  frame.height = height;
+  const size_t n = size_t(width) * size_t(height);
+  const bool hasLight = light != nullptr;
+  const int projectorCount = int(sc.projectors.size());
+  frame.names = {"hit", "object_id", "prim_id"};
+  if (light) {
+    const std::string p = "light." + light->name + ".";
+    for (const char* name : {"vis", "receiver_depth", "map_depth", "m", "bias_depth", "bias_world", "occluder_id",
+                             "occluder_prim", "in_map", "cascade"})
+      frame.names.push_back(p + name);
+  }
+  for (int j = 0; j < projectorCount; ++j) {
+    const std::string p = "proj." + sc.projectors[size_t(j)].name + ".";
+    for (const char* name : {"coverage", "R", "G", "B", "reverse"}) frame.names.push_back(p + name);
+  }
+  frame.data.resize(frame.names.size());
+  auto allocate = [&](size_t first, size_t step) {
+    for (size_t c = first; c < frame.data.size(); c += step) frame.data[c].resize(n);
+  };
+  {
+    std::thread helper(allocate, 1, 2);
+    allocate(0, 2);
+    helper.join();
+  }
+  const std::vector<uint32_t>& objectIds = scene->objectIds;
+  const std::vector<uint32_t>& triangleBase = scene->objectTriangleBase;
+  const float* planes = static_cast<const float*>(output.mapped());
+  auto rowOf = [](const vk::Image& img, int y) {
+    return static_cast<const char*>(img.mapped()) + size_t(y) * img.rowPitch();
+  };
+  auto split = [&](int y0, int y1) {
+    for (int y = y0; y < y1; ++y) {
+      const size_t o = size_t(y) * size_t(width);
+      float* hit = frame.data[0].data() + o;
+      float* objectId = frame.data[1].data() + o;
+      float* primId = frame.data[2].data() + o;
+      const uint32_t* ids = reinterpret_cast<const uint32_t*>(rowOf(cameraIds, y));
+      for (int x = 0; x < width; ++x) {
+        uint32_t object = ids[2 * x], tri = ids[2 * x + 1];
+        hit[x] = object ? 1.0f : 0.0f;
+        objectId[x] = object ? float(objectIds[object - 1]) : 0.0f;
+        primId[x] = object ? float(tri - triangleBase[object - 1]) : 0.0f;
+      }
+      if (hasLight) {
+        float* out[10];
+        for (int c = 0; c < 10; ++c) out[c] = frame.data[size_t(3 + c)].data() + o;
+        const float* a = reinterpret_cast<const float*>(rowOf(resolveOut[0], y));
+        const float* b = reinterpret_cast<const float*>(rowOf(resolveOut[1], y));
+        const float* c = reinterpret_cast<const float*>(rowOf(resolveOut[2], y));
+        for (int x = 0; x < width; ++x) {
+          for (int k = 0; k < 4; ++k) out[k][x] = a[4 * x + k];
+          out[4][x] = b[4 * x];
+          out[5][x] = b[4 * x + 1];
+          uint32_t object = uint32_t(b[4 * x + 2]), tri = uint32_t(b[4 * x + 3]);  // exact below 2^24
+          out[6][x] = object ? float(objectIds[object - 1]) : 0.0f;
+          out[7][x] = object ? float(tri - triangleBase[object - 1]) : 0.0f;
+          out[8][x] = c[2 * x];
+          out[9][x] = c[2 * x + 1];
+        }
+      }
+      const size_t first = hasLight ? 13 : 3;
+      for (int p = 0; p < kProjectorChannels * projectorCount; ++p) {
+        const float* in = planes + size_t(p) * n + o;
+        std::copy(in, in + width, frame.data[first + size_t(p)].data() + o);
+      }
+    }
+  };
+  std::thread helper(split, height / 2, height);
+  split(0, height / 2);
+  helper.join();
+  return frame;
 }
 
 Rasterizer::Rasterizer(const RasterDeviceOptions& options) : impl_(std::make_unique<Impl>(options)) {}
@@ -539,12 +664,13 @@ Frame Rasterizer::render(const Scene& scene, const Method& method, const std::st
   for (auto& l : layers) layerClip.push_back(raster::clipFromTex() * l.texFromWorld);
   int width = camera.width, height = camera.height;
   int projectorCount = int(scene.projectors.size());
-  int channelCount = kLightChannels + kProjectorChannels * projectorCount;
+  int channelCount = kProjectorChannels * projectorCount;
 
   im.ensureImages(method.mapSize, mapFormat, std::max(1, int(layers.size())), width, height);
-  size_t outputBytes = size_t(channelCount) * size_t(width) * size_t(height) * sizeof(float);
+  size_t outputBytes = std::max<size_t>(1, size_t(channelCount) * size_t(width) * size_t(height)) * sizeof(float);
   if (im.output.size() != outputBytes)
     im.output = vk::Buffer(*im.context, outputBytes, VK_BUFFER_USAGE_STORAGE_BUFFER_BIT);
+  raster::updatePlanes(*im.scene, glm::dvec3(camera.position));
   im.writeDescriptors();
 
   // ---- parameters ----
@@ -607,59 +733,27 @@ Frame Rasterizer::render(const Scene& scene, const Method& method, const std::st
   IdPipelines pipes{im.idPipeline(mapFormat, depthClamp, false, true), im.idPipeline(mapFormat, depthClamp, true, true),
                     im.idPipeline(kCameraDepthFormat, false, false, false),
                     im.idPipeline(kCameraDepthFormat, false, true, false)};
-  VkPipeline resolve = im.resolvePipeline(method.filter, projectorCount);
-  std::string warmKey = std::to_string(int(mapFormat)) + "/" + std::to_string(depthClamp) + "/" +
-                        toString(method.filter) + "/" + std::to_string(projectorCount);
+  bool cascaded = !lightSpace.cascadeSplitsView.empty();
+  Impl::ResolveKey resolveKey{uint32_t(method.filter), uint32_t(projectorCount), cascaded ? 1u : 0u,
+                              cascaded && method.cascadeBlend > 0.0f ? 1u : 0u,
+                              depthResolution(method.mapFormat) > 0.0f ? 0u : 1u};
+  VkPipeline resolve = im.resolvePipeline(resolveKey);
+  std::string warmKey = std::to_string(int(mapFormat)) + "/" + std::to_string(depthClamp);
+  for (uint32_t k : resolveKey) warmKey += "/" + std::to_string(k);
   int runs = im.warmed.insert(warmKey).second ? 2 : 1;  // lavapipe compiles shaders at first use
   for (int run = 0; run < runs; ++run) {
     VkCommandBuffer cmd = im.commands->begin();
     im.record(cmd, layerClip, pipes, resolve, method, cameraClip, width, height);
     im.commands->submitAndWait();
   }
-  uint64_t stamps[3] = {0, 0, 0};
-  VK_CHECK(vkGetQueryPoolResults(im.context->device(), im.queries.get(), 0, 3, sizeof(stamps), stamps,
+  uint64_t stamps[4] = {0, 0, 0, 0};
+  VK_CHECK(vkGetQueryPoolResults(im.context->device(), im.queries.get(), 0, 4, sizeof(stamps), stamps,
                                  sizeof(uint64_t), VK_QUERY_RESULT_64_BIT | VK_QUERY_RESULT_WAIT_BIT));
   double nsPerTick = im.context->properties().limits.timestampPeriod;
 
-  // ---- readback: one copy per channel plane ----
+  // ---- readback: the channel planes, split out of the attachments in place ----
   auto tRead = std::chrono::steady_clock::now();
-  im.output.invalidate(*im.context);
-  Frame frame;
-  frame.width = width;
-  frame.height = height;
-  const float* planes = static_cast<const float*>(im.output.mapped());
-  size_t n = size_t(width) * size_t(height);
-  std::vector<int> sources;  // output plane of each frame channel
-  auto take = [&](const std::string& name, int channel) {
-    frame.names.push_back(name);
-    sources.push_back(channel);
-  };
-  take("hit", 0);
-  take("object_id", 1);
-  take("prim_id", 2);
-  if (light) {
-    const std::string p = "light." + light->name + ".";
-    const char* names[] = {"vis", "receiver_depth", "map_depth", "occluder_id", "occluder_prim",
-                           "in_map", "m", "bias_depth", "bias_world", "cascade"};
-    for (int i = 0; i < kLightChannels - 3; ++i) take(p + names[i], 3 + i);
-  }
-  for (int j = 0; j < projectorCount; ++j) {
-    const std::string p = "proj." + scene.projectors[size_t(j)].name + ".";
-    const char* names[] = {"coverage", "R", "G", "B", "reverse"};
-    for (int i = 0; i < kProjectorChannels; ++i) take(p + names[i], kLightChannels + kProjectorChannels * j + i);
-  }
-  // One copy per plane (no zero-fill first), planes split over two threads: the copy is bound
-  // by memory bandwidth, which one core does not saturate.
-  frame.data.resize(sources.size());
-  auto copyPlanes = [&](size_t first, size_t step) {
-    for (size_t c = first; c < sources.size(); c += step) {
-      const float* src = planes + size_t(sources[c]) * n;
-      frame.data[c].assign(src, src + n);
-    }
-  };
-  std::thread helper(copyPlanes, 1, 2);
-  copyPlanes(0, 2);
-  helper.join();
+  Frame frame = im.readback(scene, light, width, height);
   double readbackMs = msSince(tRead);
 
   nlohmann::json lights = nlohmann::json::array(), projectors = nlohmann::json::array();
@@ -680,6 +774,7 @@ Frame Rasterizer::render(const Scene& scene, const Method& method, const std::st
   if (timings) {
     timings->shadowMs = double(stamps[1] - stamps[0]) * nsPerTick * 1e-6;
     timings->cameraMs = double(stamps[2] - stamps[1]) * nsPerTick * 1e-6;
+    timings->visibilityMs = double(stamps[3] - stamps[1]) * nsPerTick * 1e-6;
     timings->readbackMs = readbackMs;
     timings->totalMs = msSince(t0);
   }

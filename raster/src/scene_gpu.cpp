@@ -2,7 +2,9 @@
 
 #include <algorithm>
 
+#include "shadowlab/scenes/error.h"
 #include "shadowlab/scenes/io.h"
+#include "vk/check.h"
 
 namespace shadowlab::raster {
 
@@ -12,15 +14,22 @@ struct MaterialGpu {
   uint32_t alphaOffset, width, height, flags;
   float cutoff, pad0, pad1, pad2;
 };
-struct ObjectGpu {
-  uint32_t id, vertexBase, triangleBase, pad;
-};
 
 template <typename T>
 vk::Buffer makeBuffer(const vk::Context& context, const std::vector<T>& data, VkBufferUsageFlags usage) {
   vk::Buffer b(context, data.size() * sizeof(T), usage);
   b.upload(data.data(), data.size() * sizeof(T));
   return b;
+}
+
+vk::BufferView makeView(const vk::Context& context, const vk::Buffer& buffer, VkFormat format) {
+  VkBufferViewCreateInfo info{VK_STRUCTURE_TYPE_BUFFER_VIEW_CREATE_INFO};
+  info.buffer = buffer.get();
+  info.format = format;
+  info.range = VK_WHOLE_SIZE;
+  VkBufferView view;
+  VK_CHECK(vkCreateBufferView(context.device(), &info, nullptr, &view));
+  return vk::BufferView(context.device(), view);
 }
 
 }  // namespace
@@ -50,27 +59,27 @@ std::string sceneKey(const Scene& scene) {
 SceneGpu uploadScene(const vk::Context& context, const Scene& scene, const std::string& hash) {
   SceneGpu g;
   g.hash = hash;
-  std::vector<float> vertices, positions;
+  std::vector<float> vertices;
   std::vector<uint32_t> indices, triangleMaterials;
-  std::vector<ObjectGpu> objects;
   for (size_t i = 0; i < scene.objects.size(); ++i) {
     const Object& o = scene.objects[i];
     Draw d;
     d.objectIndex = uint32_t(i);
     d.firstIndex = uint32_t(indices.size());
     d.indexCount = uint32_t(o.triangles.size() * 3);
-    d.vertexOffset = int32_t(positions.size() / 3);
+    d.vertexOffset = int32_t(vertices.size() / 5);
     d.triangleBase = uint32_t(triangleMaterials.size());
     d.castsShadow = o.castsShadow;
-    objects.push_back({o.id, uint32_t(d.vertexOffset), d.triangleBase, 0});
+    g.objectIds.push_back(o.id);
+    g.objectTriangleBase.push_back(d.triangleBase);
     for (size_t v = 0; v < o.positions.size(); ++v) {
       glm::vec2 uv = v < o.uvs.size() ? o.uvs[v] : glm::vec2(0);
       vertices.insert(vertices.end(), {o.positions[v].x, o.positions[v].y, o.positions[v].z, uv.x, uv.y});
-      positions.insert(positions.end(), {o.positions[v].x, o.positions[v].y, o.positions[v].z});
     }
     d.allOneSided = !o.triangles.empty();
     for (size_t t = 0; t < o.triangles.size(); ++t) {
       indices.insert(indices.end(), {o.triangles[t].x, o.triangles[t].y, o.triangles[t].z});
+      for (int k = 0; k < 3; ++k) g.triangleVertices.push_back(o.positions[o.triangles[t][k]]);
       uint32_t mi = t < o.triangleMaterial.size() ? o.triangleMaterial[t] : 0u;
       triangleMaterials.push_back(mi);
       const Material* mat = mi < scene.materials.size() ? &scene.materials[mi] : nullptr;
@@ -81,9 +90,8 @@ SceneGpu uploadScene(const vk::Context& context, const Scene& scene, const std::
     }
     if (d.indexCount > 0) g.draws.push_back(d);
   }
-  // The resolve pass reads object 0 and its first triangle even for pixels without a hit.
-  if (objects.empty()) objects.push_back({0, 0, 0, 0});
-  while (positions.size() < 9) positions.push_back(0.0f);
+  // The resolve pass reads triangle 0 even for pixels without a hit.
+  if (g.triangleVertices.empty()) g.triangleVertices.resize(3, glm::vec3(0.0f));
   while (indices.size() < 3) indices.push_back(0u);
   std::vector<MaterialGpu> materials;
   std::vector<float> alpha;
@@ -124,13 +132,37 @@ SceneGpu uploadScene(const vk::Context& context, const Scene& scene, const std::
   const VkBufferUsageFlags ssbo = VK_BUFFER_USAGE_STORAGE_BUFFER_BIT;
   g.vertices = makeBuffer(context, vertices, VK_BUFFER_USAGE_VERTEX_BUFFER_BIT);
   g.indices = makeBuffer(context, indices, VK_BUFFER_USAGE_INDEX_BUFFER_BIT | ssbo);
-  g.positions = makeBuffer(context, positions, ssbo);
-  g.objects = makeBuffer(context, objects, ssbo);
+  // Triangle indices travel as floats through the resolve pass (occluder_prim), exact below 2^24;
+  // the plane table is a texel buffer.
+  size_t triangles = g.triangleVertices.size() / 3;
+  size_t limit = std::min<size_t>(size_t(1) << 24, context.properties().limits.maxTexelBufferElements);
+  if (triangles > limit)
+    throw InputError(formatError(scene.path.empty() ? scene.name : scene.path, "/objects",
+                                 std::to_string(triangles) + " triangles; the rasterizer takes at most " +
+                                     std::to_string(limit)));
+  g.trianglePlanes = vk::Buffer(context, triangles * sizeof(glm::vec4), VK_BUFFER_USAGE_UNIFORM_TEXEL_BUFFER_BIT);
+  g.trianglePlanesView = makeView(context, g.trianglePlanes, VK_FORMAT_R32G32B32A32_SFLOAT);
   g.triangleMaterials = makeBuffer(context, triangleMaterials, ssbo);
   g.materials = makeBuffer(context, materials, ssbo);
   g.alphaTexels = makeBuffer(context, alpha, ssbo);
   g.projectorTexels = makeBuffer(context, projectorTexels, ssbo);
   return g;
+}
+
+void updatePlanes(SceneGpu& g, glm::dvec3 origin) {
+  if (g.planesValid && g.planesOrigin == origin) return;
+  size_t triangles = g.triangleVertices.size() / 3;
+  auto* out = static_cast<glm::vec4*>(g.trianglePlanes.mapped());
+  for (size_t t = 0; t < triangles; ++t) {
+    glm::dvec3 v0(g.triangleVertices[3 * t]), v1(g.triangleVertices[3 * t + 1]), v2(g.triangleVertices[3 * t + 2]);
+    glm::dvec3 n = glm::cross(v1 - v0, v2 - v0);
+    double len = glm::length(n);
+    // A degenerate triangle covers no pixel; any finite plane will do.
+    n = len > 0.0 ? n / len : glm::dvec3(0.0, 0.0, 1.0);
+    out[t] = glm::vec4(glm::vec3(n), float(glm::dot(n, v0 - origin)));
+  }
+  g.planesOrigin = origin;
+  g.planesValid = true;
 }
 
 }  // namespace shadowlab::raster

@@ -1,7 +1,10 @@
 #pragma once
 // The scene as the GPU sees it: one interleaved vertex buffer (position, uv), one index buffer
 // with per-object local indices, and the tables the shaders read (triangle materials, material
-// alpha textures, positions and objects for the resolve pass, projector images).
+// alpha textures, the triangle and object tables of the resolve pass, projector images).
+// The resolve pass reads its per-pixel tables through texel buffers (texelFetch): on lavapipe a
+// storage-buffer load at a per-pixel address is a bounds-checked loop over the SIMD lanes, a
+// texel fetch one gather.
 // Uploaded once per scene hash and reused across a sweep.
 #include <cstdint>
 #include <string>
@@ -9,6 +12,7 @@
 
 #include "shadowlab/scenes/scene.h"
 #include "vk/buffer.h"
+#include "vk/handle.h"
 
 namespace shadowlab::raster {
 
@@ -34,10 +38,17 @@ struct SceneGpu {
   std::string hash;
   std::vector<Draw> draws;
   std::vector<ProjectorImage> projectors;
+  std::vector<uint32_t> objectIds;            // Object::id by object index
+  std::vector<uint32_t> objectTriangleBase;   // first global triangle index by object index
   vk::Buffer vertices;           // vec3 position + vec2 uv per vertex
-  vk::Buffer indices;            // uint32 local indices (also the resolve pass's index table)
-  vk::Buffer positions;          // float[3] per vertex (resolve pass)
-  vk::Buffer objects;            // ObjectGpu per object
+  vk::Buffer indices;            // uint32 local indices
+  // resolve: one RGBA32F texel per triangle, its plane relative to the camera: (n, dot(n, v0 - o)),
+  // n the unit normal (v1 - v0) x (v2 - v0), o = planesOrigin (updatePlanes).
+  vk::Buffer trianglePlanes;
+  vk::BufferView trianglePlanesView;
+  glm::dvec3 planesOrigin{0.0};
+  bool planesValid = false;
+  std::vector<glm::vec3> triangleVertices;  // host: 3 per triangle, world space
   vk::Buffer triangleMaterials;  // uint per triangle
   vk::Buffer materials;          // MaterialGpu per material
   vk::Buffer alphaTexels;        // all alpha textures, float
@@ -45,6 +56,8 @@ struct SceneGpu {
 };
 
 SceneGpu uploadScene(const vk::Context& context, const Scene& scene, const std::string& hash);
+// Fills trianglePlanes for a camera at `origin` (in double; a no-op when it already is).
+void updatePlanes(SceneGpu& scene, glm::dvec3 origin);
 
 // The scene's content hash (Scene::hash, or one computed over the geometry when the scene was
 // built in code and has none).

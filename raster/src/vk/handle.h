@@ -41,6 +41,7 @@ using Memory = DeviceHandle<VkDeviceMemory, vkFreeMemory>;
 using BufferHandle = DeviceHandle<VkBuffer, vkDestroyBuffer>;
 using ImageHandle = DeviceHandle<VkImage, vkDestroyImage>;
 using ImageView = DeviceHandle<VkImageView, vkDestroyImageView>;
+using BufferView = DeviceHandle<VkBufferView, vkDestroyBufferView>;
 using Sampler = DeviceHandle<VkSampler, vkDestroySampler>;
 using ShaderModule = DeviceHandle<VkShaderModule, vkDestroyShaderModule>;
 using PipelineHandle = DeviceHandle<VkPipeline, vkDestroyPipeline>;

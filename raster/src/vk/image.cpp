@@ -1,13 +1,24 @@
 #include "vk/image.h"
 
+#include "shadowlab/scenes/error.h"
 #include "vk/check.h"
 
 namespace shadowlab::vk {
 
 Image::Image(const Context& context, int width, int height, int layers, VkFormat format,
-             VkImageUsageFlags usage, VkImageAspectFlags aspect)
+             VkImageUsageFlags usage, VkImageAspectFlags aspect, bool hostReadable)
     : width_(width), height_(height), layers_(layers), format_(format), aspect_(aspect) {
   VkDevice device = context.device();
+  if (hostReadable) {
+    VkFormatProperties fp;
+    vkGetPhysicalDeviceFormatProperties(context.physical(), format, &fp);
+    VkFormatFeatureFlags need = 0;
+    if (usage & VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT) need |= VK_FORMAT_FEATURE_COLOR_ATTACHMENT_BIT;
+    if (usage & VK_IMAGE_USAGE_SAMPLED_BIT) need |= VK_FORMAT_FEATURE_SAMPLED_IMAGE_BIT;
+    if ((fp.linearTilingFeatures & need) != need || layers != 1)
+      throw DriverError("device " + context.deviceName() + " cannot render to linear images of format " +
+                        std::to_string(int(format)));
+  }
   VkImageCreateInfo info{VK_STRUCTURE_TYPE_IMAGE_CREATE_INFO};
   info.imageType = VK_IMAGE_TYPE_2D;
   info.format = format;
@@ -15,7 +26,7 @@ Image::Image(const Context& context, int width, int height, int layers, VkFormat
   info.mipLevels = 1;
   info.arrayLayers = uint32_t(layers);
   info.samples = VK_SAMPLE_COUNT_1_BIT;
-  info.tiling = VK_IMAGE_TILING_OPTIMAL;
+  info.tiling = hostReadable ? VK_IMAGE_TILING_LINEAR : VK_IMAGE_TILING_OPTIMAL;
   info.usage = usage;
   info.sharingMode = VK_SHARING_MODE_EXCLUSIVE;
   info.initialLayout = VK_IMAGE_LAYOUT_UNDEFINED;
@@ -27,11 +38,25 @@ Image::Image(const Context& context, int width, int height, int layers, VkFormat
   vkGetImageMemoryRequirements(device, image, &req);
   VkMemoryAllocateInfo alloc{VK_STRUCTURE_TYPE_MEMORY_ALLOCATE_INFO};
   alloc.allocationSize = req.size;
-  alloc.memoryTypeIndex = context.memoryType(req.memoryTypeBits, 0, VK_MEMORY_PROPERTY_DEVICE_LOCAL_BIT);
+  alloc.memoryTypeIndex =
+      hostReadable ? context.memoryType(req.memoryTypeBits, VK_MEMORY_PROPERTY_HOST_VISIBLE_BIT,
+                                        VK_MEMORY_PROPERTY_HOST_CACHED_BIT | VK_MEMORY_PROPERTY_HOST_COHERENT_BIT)
+                   : context.memoryType(req.memoryTypeBits, 0, VK_MEMORY_PROPERTY_DEVICE_LOCAL_BIT);
   VkDeviceMemory memory;
   VK_CHECK(vkAllocateMemory(device, &alloc, nullptr, &memory));
   memory_ = Memory(device, memory);
   VK_CHECK(vkBindImageMemory(device, image, memory, 0));
+  if (hostReadable) {
+    VkImageSubresource sub{aspect, 0, 0};
+    VkSubresourceLayout layout;
+    vkGetImageSubresourceLayout(device, image, &sub, &layout);
+    VK_CHECK(vkMapMemory(device, memory, 0, VK_WHOLE_SIZE, 0, &mapped_));
+    mapped_ = static_cast<char*>(mapped_) + layout.offset;
+    rowPitch_ = size_t(layout.rowPitch);
+    VkPhysicalDeviceMemoryProperties props;
+    vkGetPhysicalDeviceMemoryProperties(context.physical(), &props);
+    coherent_ = props.memoryTypes[alloc.memoryTypeIndex].propertyFlags & VK_MEMORY_PROPERTY_HOST_COHERENT_BIT;
+  }
 
   auto makeView = [&](VkImageViewType type, int first, int count) {
     VkImageViewCreateInfo v{VK_STRUCTURE_TYPE_IMAGE_VIEW_CREATE_INFO};
@@ -45,6 +70,14 @@ Image::Image(const Context& context, int width, int height, int layers, VkFormat
   };
   arrayView_ = makeView(VK_IMAGE_VIEW_TYPE_2D_ARRAY, 0, layers);
   for (int i = 0; i < layers; ++i) layerViews_.push_back(makeView(VK_IMAGE_VIEW_TYPE_2D, i, 1));
+}
+
+void Image::invalidate(const Context& context) const {
+  if (coherent_ || !mapped_) return;
+  VkMappedMemoryRange range{VK_STRUCTURE_TYPE_MAPPED_MEMORY_RANGE};
+  range.memory = memory_.get();
+  range.size = VK_WHOLE_SIZE;
+  VK_CHECK(vkInvalidateMappedMemoryRanges(context.device(), 1, &range));
 }
 
 void transition(VkCommandBuffer cmd, const Image& image, VkImageLayout from, VkImageLayout to,

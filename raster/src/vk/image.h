@@ -11,8 +11,11 @@ namespace shadowlab::vk {
 class Image {
  public:
   Image() = default;
+  // hostReadable: linear tiling in host-visible memory, mapped (one layer): the CPU reads the
+  // texels in place at mapped() + y * rowPitch(), no copy to a buffer first. Throws DriverError
+  // when the device cannot render to such an image.
   Image(const Context& context, int width, int height, int layers, VkFormat format,
-        VkImageUsageFlags usage, VkImageAspectFlags aspect);
+        VkImageUsageFlags usage, VkImageAspectFlags aspect, bool hostReadable = false);
   Image(Image&&) noexcept = default;
   Image& operator=(Image&&) noexcept = default;
 
@@ -25,6 +28,10 @@ class Image {
   VkFormat format() const { return format_; }
   VkImageAspectFlags aspect() const { return aspect_; }
   VkImageSubresourceRange range() const { return {aspect_, 0, 1, 0, uint32_t(layers_)}; }
+  const void* mapped() const { return mapped_; }  // hostReadable images only
+  size_t rowPitch() const { return rowPitch_; }
+  // Makes device writes visible to mapped() when the memory is not host-coherent.
+  void invalidate(const Context& context) const;
 
  private:
   ImageHandle image_;
@@ -34,6 +41,9 @@ class Image {
   int width_ = 0, height_ = 0, layers_ = 0;
   VkFormat format_ = VK_FORMAT_UNDEFINED;
   VkImageAspectFlags aspect_ = 0;
+  void* mapped_ = nullptr;
+  size_t rowPitch_ = 0;
+  bool coherent_ = true;
 };
 
 // One image layout transition (synchronization2), whole image.

@@ -18,7 +18,8 @@ struct RasterDeviceOptions {
 
 struct RasterTimings {
   double shadowMs = 0;    // GPU timestamps of the shadow pass (all maps)
-  double cameraMs = 0;    // GPU timestamps of the camera pass
+  double cameraMs = 0;    // GPU timestamps of the camera pass (visibility buffer + resolve)
+  double visibilityMs = 0;  // the camera pass's first part: rasterizing the visibility buffer
   double readbackMs = 0;  // CPU wall time to copy the outputs back into the Frame
   double totalMs = 0;     // CPU wall time of render()
 };
