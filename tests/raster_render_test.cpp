@@ -132,6 +132,48 @@ TEST_F(RasterTest, OutputsAreBitIdenticalAcrossRuns) {
     EXPECT_EQ(0, std::memcmp(a.data[c].data(), b.data[c].data(), a.data[c].size() * sizeof(float))) << a.names[c];
 }
 
+// The visibility buffer is kept while the scene and the camera stay the same (a sweep over
+// methods) and drawn again when either changes: every frame must equal one from a fresh device,
+// whatever was rendered before it.
+TEST_F(RasterTest, KeptVisibilityBufferNeverOutlivesItsCamera) {
+  REQUIRE_DEVICE();
+  auto fresh = [](const Scene& scene, const Method& method) {  // a new device: nothing kept
+    RasterDeviceOptions o;
+    o.validation = true;
+    Rasterizer r(o);
+    Frame f = r.render(scene, method);
+    EXPECT_EQ(r.validationMessages(), 0);
+    return f;
+  };
+  auto expectSame = [](const Frame& a, const Frame& b, const std::string& what) {
+    ASSERT_EQ(a.names, b.names) << what;
+    for (size_t c = 0; c < a.names.size(); ++c)
+      EXPECT_EQ(0, std::memcmp(a.data[c].data(), b.data[c].data(), a.data[c].size() * sizeof(float)))
+          << what << ": " << a.names[c];
+  };
+  Scene s = roofScene(0.5f);
+  Method m;
+  RasterTimings first, kept;
+  R->render(s, m, "", &first);
+  m.biasSlope = 4.0f;  // another method: the same visibility buffer, its time carried over
+  Frame sameCamera = R->render(s, m, "", &kept);
+  EXPECT_EQ(first.visibilityMs, kept.visibilityMs);
+  EXPECT_GE(kept.cameraMs, kept.visibilityMs);
+  expectSame(sameCamera, fresh(s, m), "same camera, other method");
+
+  Scene moved = s;  // the camera moves: the roof covers other pixels
+  moved.camera.position = {1.5f, 5.0f, 6.5f};
+  expectSame(R->render(moved, m), fresh(moved, m), "moved camera");
+  Scene nearer = moved;  // only the near plane changes: the roof's corner is clipped away
+  nearer.camera.nearPlane = 6.5f;
+  Frame clipped = R->render(nearer, m);
+  expectSame(clipped, fresh(nearer, m), "near plane");
+  Scene other = nearer;  // other geometry under the same camera
+  other.objects[1].positions[0].y += 0.25f;
+  other.hash.clear();
+  expectSame(R->render(other, m), fresh(other, m), "other scene");
+}
+
 TEST_F(RasterTest, MapSizeLimits) {
   REQUIRE_DEVICE();
   Scene s = roofScene();

@@ -18,7 +18,10 @@ struct RasterDeviceOptions {
 
 struct RasterTimings {
   double shadowMs = 0;    // GPU timestamps of the shadow pass (all maps)
-  double cameraMs = 0;    // GPU timestamps of the camera pass (visibility buffer + resolve)
+  // GPU timestamps of the camera pass: the visibility buffer + the resolve. The visibility buffer
+  // does not depend on the method: while the scene and the camera stay the same, the rasterizer
+  // keeps it and adds the time it took when it was drawn (visibilityMs).
+  double cameraMs = 0;
   double visibilityMs = 0;  // the camera pass's first part: rasterizing the visibility buffer
   double readbackMs = 0;  // CPU wall time to copy the outputs back into the Frame
   double totalMs = 0;     // CPU wall time of render()
