@@ -12,6 +12,7 @@
 
 #include "shadowlab/raster/raster.h"
 #include "support/raster_device.h"
+#include "support/reference_score.h"
 #include "shadowlab/reference/reference.h"
 #include "shadowlab/scenes/loader.h"
 
@@ -20,42 +21,8 @@ using namespace shadowlab;
 namespace {
 
 using CascadesVsReference = shadowlab::testing::ValidatedRasterTest;
-
-struct Score {
-  size_t both = 0;      // pixels where both renderers see the same object
-  size_t wrong = 0;     // ... and disagree on lit (vis >= 0.5) vs shadowed
-  size_t refShadow = 0, refShadowRasShadow = 0;
-  double errorRate = 0;
-  double mP95 = 0;      // 95th percentile (nearest rank) of light.L.m over `both`, pixels per texel
-};
-
-Score score(const Frame& ref, const Frame& ras, const std::string& light) {
-  Score s;
-  const auto& rh = ref.get("hit");
-  const auto& ro = ref.get("object_id");
-  const auto& rv = ref.get("light." + light + ".vis");
-  const auto& ah = ras.get("hit");
-  const auto& ao = ras.get("object_id");
-  const auto& av = ras.get("light." + light + ".vis");
-  const auto& am = ras.get("light." + light + ".m");
-  std::vector<float> m;
-  for (size_t i = 0; i < ref.pixelCount(); ++i) {
-    if (rh[i] < 0.5f || ah[i] < 0.5f || ro[i] != ao[i]) continue;
-    ++s.both;
-    bool refLit = rv[i] >= 0.5f, rasLit = av[i] >= 0.5f;
-    s.wrong += refLit != rasLit;
-    s.refShadow += !refLit;
-    s.refShadowRasShadow += !refLit && !rasLit;
-    m.push_back(am[i]);
-  }
-  s.errorRate = s.both ? double(s.wrong) / double(s.both) : 0.0;
-  if (!m.empty()) {
-    size_t rank = size_t(std::ceil(0.95 * double(m.size()))) - 1;
-    std::nth_element(m.begin(), m.begin() + std::ptrdiff_t(rank), m.end());
-    s.mP95 = m[rank];
-  }
-  return s;
-}
+using shadowlab::testing::Score;
+using shadowlab::testing::score;
 
 }  // namespace
 

@@ -69,6 +69,8 @@ TEST(RasterCli, BadMethodValuesExitTwoAndWriteNothing) {
       {"--set filter.size=4", "filter.size"},
       {"--set filter.taps=-3", "filter.taps"},
       {"--set nonsense=1", "nonsense"},
+      {"--set fit=lispsm --set lispsm.n_scale=0", "lispsm.n_scale"},
+      {"--set fit=lispsm --set lispsm.n_scale=nan", "lispsm.n_scale"},
       {"--light moon", "moon"},
   };
   for (const Case& c : cases) {

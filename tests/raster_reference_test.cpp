@@ -11,6 +11,7 @@
 
 #include "shadowlab/raster/raster.h"
 #include "support/raster_device.h"
+#include "support/reference_score.h"
 #include "shadowlab/reference/reference.h"
 #include "shadowlab/scenes/loader.h"
 
@@ -19,6 +20,8 @@ using namespace shadowlab;
 namespace {
 
 using RasterVsReference = shadowlab::testing::ValidatedRasterTest;
+using shadowlab::testing::Score;
+using shadowlab::testing::score;
 
 Scene halfScene(const std::string& name) {
   Scene s = loadScene(resolveScenePath(name));
@@ -34,39 +37,6 @@ const Frame& reference(const Scene& s) {
   auto it = cache.find(key);
   if (it != cache.end()) return it->second;
   return cache.emplace(key, renderReference(s, ReferenceOptions{})).first->second;
-}
-
-struct VisStats {
-  size_t both = 0;          // pixels where both renderers see the same object
-  size_t agree = 0;         // ... and agree on lit (vis >= 0.5) vs shadowed
-  size_t refLit = 0;        // ... the reference says lit
-  size_t litShadowed = 0;   // ... lit in the reference, shadowed (vis < 0.5) by the raster: acne-like
-  size_t refShadow = 0;     // ... the reference says shadowed
-  size_t shadowLit = 0;     // ... shadowed in the reference, lit by the raster: leak-like
-};
-
-VisStats visStats(const Frame& ref, const Frame& ras, const std::string& light) {
-  VisStats st;
-  const auto& rh = ref.get("hit");
-  const auto& ro = ref.get("object_id");
-  const auto& rv = ref.get("light." + light + ".vis");
-  const auto& ah = ras.get("hit");
-  const auto& ao = ras.get("object_id");
-  const auto& av = ras.get("light." + light + ".vis");
-  for (size_t i = 0; i < ref.pixelCount(); ++i) {
-    if (rh[i] < 0.5f || ah[i] < 0.5f || ro[i] != ao[i]) continue;
-    ++st.both;
-    bool refLit = rv[i] >= 0.5f, rasLit = av[i] >= 0.5f;
-    st.agree += refLit == rasLit;
-    if (refLit) {
-      ++st.refLit;
-      st.litShadowed += !rasLit;
-    } else {
-      ++st.refShadow;
-      st.shadowLit += rasLit;
-    }
-  }
-  return st;
 }
 
 }  // namespace
@@ -106,8 +76,8 @@ TEST_F(RasterVsReference, SphereOnPlaneAt4096AgreesWithTheReference) {
   Scene s = halfScene("sphere_on_plane");
   Method m;
   m.mapSize = 4096;
-  VisStats st = visStats(reference(s), R->render(s, m), s.lights[0].name);
-  double share = double(st.agree) / double(st.both);
+  Score st = score(reference(s), R->render(s, m), s.lights[0].name);
+  double share = double(st.both - st.wrong) / double(st.both);
   std::printf("  sphere_on_plane 4096: agreement %.5f of %zu pixels both see\n", share, st.both);
   EXPECT_GE(share, 0.995) << "got " << share << ", expected >= 0.995";
 }
@@ -117,8 +87,8 @@ TEST_F(RasterVsReference, ZeroBiasOnGrazingShadowsLitPixels) {
   Scene s = halfScene("grazing");
   Method zero;
   zero.biasConstant = zero.biasSlope = zero.biasClamp = zero.biasCompare = zero.biasNormal = 0;
-  VisStats bad = visStats(reference(s), R->render(s, zero), s.lights[0].name);
-  VisStats good = visStats(reference(s), R->render(s, Method{}), s.lights[0].name);
+  Score bad = score(reference(s), R->render(s, zero), s.lights[0].name);
+  Score good = score(reference(s), R->render(s, Method{}), s.lights[0].name);
   double badShare = double(bad.litShadowed) / double(bad.refLit);
   double goodShare = double(good.litShadowed) / double(good.refLit);
   std::printf("  grazing: lit pixels shadowed: zero bias %.4f, default bias %.4f\n", badShare, goodShare);
@@ -140,7 +110,7 @@ TEST_F(RasterVsReference, ReceiverPlaneAndNormalOffsetFixGrazingAcne) {
   normalOffset.biasNormal = 1.5f;
   const std::string light = s.lights[0].name;
   auto acne = [&](const Method& m) {
-    VisStats st = visStats(reference(s), R->render(s, m), light);
+    Score st = score(reference(s), R->render(s, m), light);
     return double(st.litShadowed) / double(st.refLit);
   };
   double z = acne(zero), rp = acne(receiverPlane), no = acne(normalOffset);
@@ -155,8 +125,8 @@ TEST_F(RasterVsReference, HugeBiasOnContactLightsShadowedPixels) {
   Method huge;
   huge.biasCompare = 0.05f;  // 5% of the map's depth range
   huge.biasSlope = 50.0f;
-  VisStats bad = visStats(reference(s), R->render(s, huge), s.lights[0].name);
-  VisStats good = visStats(reference(s), R->render(s, Method{}), s.lights[0].name);
+  Score bad = score(reference(s), R->render(s, huge), s.lights[0].name);
+  Score good = score(reference(s), R->render(s, Method{}), s.lights[0].name);
   double badShare = double(bad.shadowLit) / double(bad.refShadow);
   double goodShare = double(good.shadowLit) / double(good.refShadow);
   std::printf("  contact: shadowed pixels lit: huge bias %.4f, default bias %.4f\n", badShare, goodShare);
@@ -200,8 +170,8 @@ TEST_F(RasterVsReference, AlphaFenceShadowsFollowTheAlpha) {
       holesLit += ras.get(vis)[i] >= 0.5f;
     }
   }
-  VisStats st = visStats(ref, ras, s.lights[0].name);
-  double share = double(st.agree) / double(st.both);
+  Score st = score(ref, ras, s.lights[0].name);
+  double share = double(st.both - st.wrong) / double(st.both);
   std::printf("  alpha_fence: agreement %.5f; solid-rectangle shadow %zu px, holes %zu, holes lit by raster %zu\n",
               share, rectangle, holes, holesLit);
   EXPECT_GE(share, 0.99);

@@ -2,6 +2,7 @@
 // origin and the key (or the JSON pointer in files) with what was found and what was expected.
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <regex>
@@ -38,11 +39,21 @@ fs::path tempFile(const std::string& name, const std::string& text) {
   return dir / name;
 }
 
+// methodToJson(m), after checking that it reads back into the same Method.
+nlohmann::json roundTripped(const Method& m) {
+  nlohmann::json j = methodToJson(m);
+  Method back;
+  for (const auto& [k, v] : j.items()) applyMethodJson(back, k, v, "rt");
+  EXPECT_EQ(methodToJson(back), j);
+  return j;
+}
+
 }  // namespace
 
 TEST(ScenesMethod, KeysInDocumentationOrder) {
   EXPECT_EQ(methodKeys(), (std::vector<std::string>{"map.size", "map.format", "cull", "fit", "cascades.count",
-                                                    "cascades.lambda", "cascades.blend", "cascades.stabilize", "bias.constant", "bias.slope",
+                                                    "cascades.lambda", "cascades.blend", "cascades.stabilize", "lispsm.n_scale",
+                                                    "bias.constant", "bias.slope",
                                                     "bias.clamp", "bias.compare", "bias.normal", "bias.receiver_plane",
                                                     "filter", "filter.size", "filter.taps", "filter.radius",
                                                     "projector.reverse_guard"}));
@@ -211,12 +222,9 @@ TEST(ScenesMethod, CascadeKeys) {
   EXPECT_FLOAT_EQ(m.cascadeLambda, 0.5f);
   EXPECT_FLOAT_EQ(m.cascadeBlend, 0.1f);
   EXPECT_TRUE(m.cascadeStabilize);
-  nlohmann::json j = methodToJson(m);
+  nlohmann::json j = roundTripped(m);
   EXPECT_EQ(j["fit"], "cascades");
   EXPECT_EQ(j["cascades.count"], 8);
-  Method back;
-  for (const auto& [k, v] : j.items()) applyMethodJson(back, k, v, "rt");
-  EXPECT_EQ(methodToJson(back), j);
   EXPECT_EQ(setError("cascades.count", "0"), "--set: cascades.count: error: got \"0\"; expected an integer 1..8");
   EXPECT_EQ(setError("cascades.count", "9"), "--set: cascades.count: error: got \"9\"; expected an integer 1..8");
   EXPECT_EQ(setError("cascades.lambda", "1.5"),
@@ -227,5 +235,41 @@ TEST(ScenesMethod, CascadeKeys) {
             "--set: cascades.stabilize: error: got \"maybe\"; expected true, false, 1 or 0");
   Method hand;
   hand.cascadeCount = 0;
+  EXPECT_THROW(validateMethod(hand, "code"), InputError);
+}
+
+// fit=lispsm and its one key: the default 1 (n_opt itself), a positive finite scale, and the
+// JSON round trip; 0, negatives, NaN and infinity are refused with the key named.
+TEST(ScenesMethod, LispsmKeys) {
+  Method d;
+  EXPECT_FLOAT_EQ(d.lispsmNScale, 1.0f);
+  Method m;
+  applyMethodSetting(m, "fit", "lispsm", "--set");
+  applyMethodSetting(m, "lispsm.n_scale", "2.5", "--set");
+  EXPECT_EQ(m.fit, Fit::Lispsm);
+  EXPECT_FLOAT_EQ(m.lispsmNScale, 2.5f);
+  validateMethod(m, "--set");
+  nlohmann::json j = roundTripped(m);
+  EXPECT_EQ(j["fit"], "lispsm");
+  EXPECT_EQ(j["lispsm.n_scale"], 2.5);
+  const std::string expected = "expected a number > 0 and <= 1e6 (1: the optimal n of Wimmer et al.)";
+  EXPECT_EQ(setError("lispsm.n_scale", "0"), "--set: lispsm.n_scale: error: got \"0\"; " + expected);
+  EXPECT_EQ(setError("lispsm.n_scale", "-1"), "--set: lispsm.n_scale: error: got \"-1\"; " + expected);
+  EXPECT_EQ(setError("lispsm.n_scale", "nan"), "--set: lispsm.n_scale: error: got \"nan\"; " + expected);
+  EXPECT_EQ(setError("lispsm.n_scale", "inf"), "--set: lispsm.n_scale: error: got \"inf\"; " + expected);
+  EXPECT_EQ(setError("lispsm.n_scale", "2e6"), "--set: lispsm.n_scale: error: got \"2e6\"; " + expected);
+  EXPECT_EQ(setError("fit", "psm"), "--set: fit: error: got \"psm\"; expected one of sphere, tight, cascades, lispsm");
+  Method json;
+  EXPECT_EQ(errorOf([&] { applyMethodJson(json, "lispsm.n_scale", 0.0, "grid"); }),
+            "grid: lispsm.n_scale: error: got 0.0; " + expected);
+  // A file: the JSON pointer names the key.
+  fs::path file = tempFile("nscale.json", R"({"fit": "lispsm", "lispsm.n_scale": -0.5})");
+  EXPECT_EQ(errorOf([&] { loadMethodFile(file.string()); }), file.string() + ": /lispsm.n_scale: error: got -0.5; " + expected);
+  fs::remove_all(file.parent_path());
+  // A hand-built Method with a NaN scale is refused by the cross-field check.
+  Method hand;
+  hand.lispsmNScale = std::nanf("");
+  EXPECT_THROW(validateMethod(hand, "code"), InputError);
+  hand.lispsmNScale = 0.0f;
   EXPECT_THROW(validateMethod(hand, "code"), InputError);
 }

@@ -5,6 +5,7 @@
 #include <limits>
 
 #include "shadowlab/raster/cascades.h"
+#include "shadowlab/raster/lispsm.h"
 
 #include <glm/gtc/matrix_transform.hpp>
 
@@ -53,6 +54,81 @@ float farthestCorner(const Scene& scene, glm::vec3 from) {
   return best;
 }
 
+// The box of all scene vertices in a light's view space, padded by a hair so the extreme
+// vertices rasterize inside the map, not on its border. All zero for a scene without vertices.
+void sceneBoundsIn(const Scene& scene, const glm::mat4& lightFromWorld, glm::vec3& boundsMin, glm::vec3& boundsMax) {
+  float inf = std::numeric_limits<float>::infinity();
+  boundsMin = glm::vec3(inf);
+  boundsMax = glm::vec3(-inf);
+  for (const Object& o : scene.objects)
+    for (const glm::vec3& p : o.positions) {
+      glm::vec3 v = glm::vec3(lightFromWorld * glm::vec4(p, 1.0f));
+      boundsMin = glm::min(boundsMin, v);
+      boundsMax = glm::max(boundsMax, v);
+    }
+  if (!(boundsMin.x <= boundsMax.x)) boundsMin = boundsMax = glm::vec3(0);
+  glm::vec3 pad = glm::max((boundsMax - boundsMin) * 1e-4f, glm::vec3(1e-5f));
+  boundsMin -= pad;
+  boundsMax += pad;
+}
+
+// Warps below this strength (d / n: how much denser the near face's texels are along the axis,
+// minus 1) are not worth a second basis: the fit falls back to fit=tight exactly. It also covers
+// the view along the light, where the warp has no axis (sin(gamma) = 0, d / n = 0).
+constexpr double kLispsmMinWarp = 1e-3;
+
+// fit=lispsm for a directional light; false where it falls back to fit=tight.
+bool lispsmLayer(const Scene& scene, const Camera& camera, const glm::mat4& lightViewFromWorld, const Method& method,
+                 MapLayer& layer) {
+  glm::vec3 forward = glm::normalize(camera.lookAt - camera.position);
+  LispsmBasis basis = lispsmBasis(lightViewFromWorld, forward);
+  if (!(basis.sinGamma > 0.0)) return false;
+  glm::mat4 lightFromWorld(basis.lightFromWorld);
+  // The body: the part of the scene in the view frustum, as the union of the frustum's exact
+  // intersections with each object's box (lispsm.h; one box for the whole scene would count the
+  // empty air around a camera standing inside it as visible, z_n would drop to the near plane),
+  // its light-space x/y box clipped to the scene's as fit=tight does, extended towards the light
+  // to the scene bounds so that every caster lies in it. Every visible point is in it.
+  std::vector<glm::dvec3> corners;
+  for (const Object& o : scene.objects) {
+    if (o.positions.empty()) continue;
+    glm::vec3 objectMin = o.positions.front(), objectMax = objectMin;
+    for (const glm::vec3& p : o.positions) {
+      objectMin = glm::min(objectMin, p);
+      objectMax = glm::max(objectMax, p);
+    }
+    std::vector<glm::dvec3> c = viewBoxIntersection(camera, objectMin, objectMax);
+    corners.insert(corners.end(), c.begin(), c.end());
+  }
+  if (corners.empty()) return false;  // nothing of the scene in view: no body to warp for
+  glm::dvec3 forward64 = glm::normalize(glm::dvec3(camera.lookAt) - glm::dvec3(camera.position));
+  double inf = std::numeric_limits<double>::infinity();
+  double zNear = inf, zFar = -inf;
+  glm::dvec2 lo(inf), hi(-inf);
+  for (const glm::dvec3& c : corners) {
+    double depth = glm::dot(c - glm::dvec3(camera.position), forward64);
+    zNear = std::min(zNear, depth);
+    zFar = std::max(zFar, depth);
+    glm::dvec2 l(basis.lightFromWorld * glm::dvec4(c, 1.0));
+    lo = glm::min(lo, l);
+    hi = glm::max(hi, l);
+  }
+  glm::vec3 sceneMin, sceneMax;
+  sceneBoundsIn(scene, lightFromWorld, sceneMin, sceneMax);
+  glm::dvec2 clippedLo = glm::max(lo, glm::dvec2(sceneMin)), clippedHi = glm::min(hi, glm::dvec2(sceneMax));
+  if (clippedLo.x < clippedHi.x && clippedLo.y < clippedHi.y) lo = clippedLo, hi = clippedHi;
+  glm::dvec2 pad = glm::max((hi - lo) * 1e-4, glm::dvec2(1e-5));
+  glm::dvec3 bodyMin(lo - pad, sceneMin.z), bodyMax(hi + pad, sceneMax.z);
+  double inverseNear = lispsmInverseNear(std::max(zNear, 1e-4), std::max(zFar, zNear), basis.sinGamma,
+                                         method.lispsmNScale);
+  if (!(inverseNear * (bodyMax.y - bodyMin.y) >= kLispsmMinWarp)) return false;
+  double eyeX = (basis.lightFromWorld * glm::dvec4(glm::dvec3(camera.position), 1.0)).x;
+  LispsmMap map = lispsmTexFromLight(bodyMin, bodyMax, eyeX, inverseNear, method.mapSize);
+  layer.texFromWorld = glm::mat4(map.texFromLight * basis.lightFromWorld);
+  layer.texelWorldPerW = float(map.texelWorldPerW);
+  return true;
+}
+
 }  // namespace
 
 glm::mat4 clipFromTex() {
@@ -88,24 +164,20 @@ LightSpace fitLight(const Scene& scene, const Light& light, const Method& method
       out.layers.push_back(layer);
       return out;
     }
+    const Camera& camera = fitCamera;
+    if (method.fit == Fit::Lispsm) {
+      MapLayer layer;
+      if (lispsmLayer(scene, camera, viewFromWorld, method, layer)) {
+        out.layers.push_back(layer);
+        return out;
+      }
+    }
     // The scene's bounds in light space (the box of all vertices): the depth range of every
     // layer (the near plane pulled back to the scene bounds, so a caster between the light and a
     // slice still writes the slice's map) and the clip of the x/y crops (texels outside the
     // scene are wasted).
-    float inf = std::numeric_limits<float>::infinity();
-    glm::vec3 sceneMin(inf), sceneMax(-inf);
-    for (const Object& o : scene.objects)
-      for (const glm::vec3& p : o.positions) {
-        glm::vec3 v = glm::vec3(viewFromWorld * glm::vec4(p, 1.0f));
-        sceneMin = glm::min(sceneMin, v);
-        sceneMax = glm::max(sceneMax, v);
-      }
-    if (!(sceneMin.x <= sceneMax.x)) sceneMin = sceneMax = glm::vec3(0);
-    // A hair of margin so the extreme vertices rasterize inside the map, not on its border.
-    glm::vec3 scenePad = glm::max((sceneMax - sceneMin) * 1e-4f, glm::vec3(1e-5f));
-    sceneMin -= scenePad;
-    sceneMax += scenePad;
-    const Camera& camera = fitCamera;
+    glm::vec3 sceneMin, sceneMax;
+    sceneBoundsIn(scene, viewFromWorld, sceneMin, sceneMax);
     bool stabilize = method.fit == Fit::Cascades && method.cascadeStabilize;
     ViewDepthRange range = cascadeDepthRange(camera, lo, hi);
     if (stabilize) {

@@ -16,7 +16,9 @@ namespace shadowlab::raster {
 
 struct MapLayer {
   glm::mat4 texFromWorld{1.0f};
-  float texelWorldPerW = 0;  // world size of one texel at w = 1 (orthographic: everywhere)
+  // World size of one texel at w = 1 (orthographic: everywhere; fit=lispsm: an upper bound of the
+  // texel's larger side per unit of w, see lispsm.h).
+  float texelWorldPerW = 0;
 };
 
 struct LightSpace {
@@ -32,7 +34,10 @@ struct LightSpace {
 // intersected with the scene box, in light space: x/y the box of the frustum's 8 corners clipped
 // to the scene box's light-space x/y. Fit::Cascades: the same per slice [C_i, C_(i+1)] of the
 // practical split scheme (stabilized: a square of the slice's bounding-sphere diameter, snapped to
-// whole texels). The depth range is always the scene box's in light space: casters between the
+// whole texels). Fit::Lispsm: the light-space perspective warp of lispsm.h of the view
+// frustum's part of the scene (in a basis rotated about the light so that y follows the view
+// direction), one perspective layer; where the warp is negligible (view nearly along the light)
+// exactly Fit::Tight. The depth range is always the scene box's in light space: casters between the
 // light and the slice still cast. Spot: perspective with fov = cone angle, near = light.nearPlane,
 // far = the farthest corner of the scene's box. Point: six 90-degree faces.
 // `fitCamera` is the camera the tight and cascaded fits (and their splits) follow; normally

@@ -144,7 +144,7 @@ const std::vector<std::pair<const char*, DepthFormat>> kFormats = {
     {"d16", DepthFormat::D16}, {"d24", DepthFormat::D24}, {"d32f", DepthFormat::D32F}};
 const std::vector<std::pair<const char*, CullMode>> kCulls = {
     {"back", CullMode::Back}, {"front", CullMode::Front}, {"none", CullMode::None}};
-const std::vector<std::pair<const char*, Fit>> kFits = {{"sphere", Fit::Sphere}, {"tight", Fit::Tight}, {"cascades", Fit::Cascades}};
+const std::vector<std::pair<const char*, Fit>> kFits = {{"sphere", Fit::Sphere}, {"tight", Fit::Tight}, {"cascades", Fit::Cascades}, {"lispsm", Fit::Lispsm}};
 const std::vector<std::pair<const char*, Filter>> kFilters = {{"none", Filter::None},
                                                               {"hw2x2", Filter::Hw2x2},
                                                               {"bilinear4", Filter::Bilinear4},
@@ -154,6 +154,11 @@ const std::vector<std::pair<const char*, Filter>> kFilters = {{"none", Filter::N
 // Depth-bias factors are free in Vulkan (negative ones are legal and a sweep may probe them);
 // the bound only keeps a typo like 1e30 from overflowing the shader's arithmetic.
 constexpr double kBiasLimit = 1e6;
+
+// lispsm.n_scale multiplies a distance: 0 would put the warp's projection center on the body
+// (a singular warp), and beyond 1e6 the warp is gone long before (fit=tight in all but rounding).
+constexpr double kNScaleLimit = 1e6;
+const char* const kNScaleExpected = "a number > 0 and <= 1e6 (1: the optimal n of Wimmer et al.)";
 
 using Setter = std::function<void(Method&, const Value&, const Where&)>;
 
@@ -173,6 +178,10 @@ const std::vector<std::pair<std::string, Setter>>& setters() {
          m.cascadeBlend = floatIn(v, w, 0.0, 0.5, false, "a number 0..0.5 (fraction of a cascade's depth range)");
        }},
       {"cascades.stabilize", [](Method& m, const Value& v, const Where& w) { m.cascadeStabilize = boolOf(v, w); }},
+      {"lispsm.n_scale",
+       [](Method& m, const Value& v, const Where& w) {
+         m.lispsmNScale = floatIn(v, w, 0.0, kNScaleLimit, true, kNScaleExpected);
+       }},
       {"bias.constant",
        [](Method& m, const Value& v, const Where& w) {
          m.biasConstant = floatIn(v, w, -kBiasLimit, kBiasLimit, false, "a finite number -1e6..1e6 (units of r)");
@@ -254,6 +263,8 @@ void crossCheck(const Method& m, const std::string& file, const std::string& pre
     bad("cascades.lambda", nlohmann::json(double(m.cascadeLambda)).dump(), "a number 0..1");
   if (!(m.cascadeBlend >= 0.0f && m.cascadeBlend <= 0.5f))
     bad("cascades.blend", nlohmann::json(double(m.cascadeBlend)).dump(), "a number 0..0.5");
+  if (!(m.lispsmNScale > 0.0f && m.lispsmNScale <= kNScaleLimit))
+    bad("lispsm.n_scale", nlohmann::json(double(m.lispsmNScale)).dump(), kNScaleExpected);
   if (m.name.empty()) bad("name", "\"\"", "a non-empty string");
 }
 
@@ -308,6 +319,7 @@ nlohmann::json methodToJson(const Method& m) {
   j["cascades.lambda"] = m.cascadeLambda;
   j["cascades.blend"] = m.cascadeBlend;
   j["cascades.stabilize"] = m.cascadeStabilize;
+  j["lispsm.n_scale"] = m.lispsmNScale;
   j["bias.constant"] = m.biasConstant;
   j["bias.slope"] = m.biasSlope;
   j["bias.clamp"] = m.biasClamp;

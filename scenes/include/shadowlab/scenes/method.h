@@ -13,7 +13,7 @@ namespace shadowlab {
 
 enum class DepthFormat { D16, D24, D32F };
 enum class CullMode { Back, Front, None };
-enum class Fit { Sphere, Tight, Cascades };
+enum class Fit { Sphere, Tight, Cascades, Lispsm };
 enum class Filter { None, Hw2x2, Bilinear4, Pcf, Poisson };
 
 struct Method {
@@ -21,13 +21,16 @@ struct Method {
   int mapSize = 2048;                    // map.size: texels per side, 16..16384 (and the device limit)
   DepthFormat mapFormat = DepthFormat::D24;  // map.format: d16 | d24 | d32f
   CullMode cull = CullMode::None;        // cull: back | front | none (shadow pass; none: open quads cast from both sides)
-  Fit fit = Fit::Sphere;                 // fit: sphere | tight | cascades
+  Fit fit = Fit::Sphere;                 // fit: sphere | tight | cascades | lispsm
   // Cascaded shadow maps (fit=cascades, directional lights): the view depth range is split by the
   // practical scheme into cascadeCount slices, one map layer (map.size squared) each.
   int cascadeCount = 4;                  // cascades.count: 1..8 slices
   float cascadeLambda = 0.75f;           // cascades.lambda: 0 uniform .. 1 logarithmic splits
   float cascadeBlend = 0.0f;             // cascades.blend: blend band, fraction of a cascade's depth range, 0..0.5
   bool cascadeStabilize = false;         // cascades.stabilize: constant-size crops snapped to whole texels
+  // Light-space perspective shadow maps (fit=lispsm, directional lights): the warp's projection
+  // center lies lispsmNScale * n_opt before the body's near face (larger: closer to uniform).
+  float lispsmNScale = 1.0f;             // lispsm.n_scale: > 0, <= 1e6
   float biasConstant = 0.0f;             // bias.constant: Vulkan depthBiasConstantFactor (units of r)
   float biasSlope = 1.5f;                // bias.slope: Vulkan depthBiasSlopeFactor
   float biasClamp = 0.0f;                // bias.clamp: Vulkan depthBiasClamp (0 = no clamp)
