@@ -66,19 +66,6 @@ void checkKey(const std::string& key, const std::string& origin) {
                                                joinKeys(methodKeys()) + ", or scene:/json/pointer"));
 }
 
-// Text from the command line given to a scene value: a JSON literal when it parses as one
-// (30 -> number, true -> bool), else the text as a string.
-nlohmann::json sceneValueFromText(const nlohmann::json& v) {
-  if (!v.is_string()) return v;
-  const std::string text = v.get<std::string>();
-  try {
-    auto parsed = nlohmann::json::parse(text);
-    if (parsed.is_primitive()) return parsed;
-  } catch (const std::exception&) {
-  }
-  return v;
-}
-
 void applyValue(Method& m, const std::string& key, const nlohmann::json& value, const std::string& origin) {
   // Command-line values arrive as text, sweep-file values typed: each goes through the parser
   // meant for it so that "256" and 256 are checked by the same rules.
@@ -100,6 +87,17 @@ std::string dirOf(const std::string& path) {
 std::string typeName(const ojson& j) { return j.type_name(); }
 
 }  // namespace
+
+nlohmann::json sceneValueFromText(const nlohmann::json& v) {
+  if (!v.is_string()) return v;
+  const std::string text = v.get<std::string>();
+  try {
+    auto parsed = nlohmann::json::parse(text);
+    if (parsed.is_primitive()) return parsed;
+  } catch (const std::exception&) {
+  }
+  return v;
+}
 
 std::string canonicalValueText(const nlohmann::json& value) {
   if (value.is_string()) return value.get<std::string>();

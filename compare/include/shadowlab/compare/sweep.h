@@ -69,6 +69,10 @@ SweepSetting parseSetArgument(const std::string& text);
 // InputError naming the file and line:col (syntax) or JSON pointer (shape, keys, values).
 void loadSweepFile(const std::string& path, SweepSpec& spec);
 
+// A scene value from the command line (--set scene:/pointer=TEXT): a JSON literal when TEXT parses
+// as one (30 -> number, true -> bool), else TEXT as a string. Typed values pass unchanged.
+nlohmann::json sceneValueFromText(const nlohmann::json& value);
+
 // The canonical text of one value: strings as they are, integers plainly, other numbers with
 // %.6g (so "0.50" and 0.5 are the same configuration), booleans true/false, anything else as
 // compact JSON.
