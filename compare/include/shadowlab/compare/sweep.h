@@ -31,6 +31,9 @@ namespace shadowlab {
 // Swept keys are method keys (methodKeys(), e.g. "map.size") or scene values written
 // "scene:" + a JSON pointer into the scene file (e.g. "scene:/lights/0/elevation_deg").
 inline constexpr const char* kSceneKeyPrefix = "scene:";
+// "scene:failure": the value each scene's declared failure pointer names (scenes/FORMAT.md,
+// "failure"), resolved per scene by planSweep (a scene without "failure" is an InputError).
+inline constexpr const char* kSceneFailureKey = "scene:failure";
 
 struct SweepAxis {
   std::string key;
@@ -84,7 +87,9 @@ struct SweepConfig {
   std::string config;
   std::vector<std::pair<std::string, std::string>> values;  // swept key -> canonical value, sorted
   Method method;                                            // base + fixed + this point of the grid
-  std::vector<SceneOverride> sceneOverrides;                // the scene: keys of this point
+  // The scene: keys of this point; scene:failure has the pointer "failure" here, replaced by each
+  // scene's own failure pointer when the scene is loaded.
+  std::vector<SceneOverride> sceneOverrides;
 };
 
 struct SweepJob {
