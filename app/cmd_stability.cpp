@@ -262,7 +262,8 @@ app::Registrar reg{"stability", [](CLI::App& app) {
   sub->add_option("--method", opts->methodFile, "Method file (JSON, see raster/METHODS.md)");
   sub->add_option("--set", opts->sets,
                   "key=value, repeatable: a method key (e.g. fit=cascades) or scene:/json/pointer (e.g. "
-                  "scene:/camera/width=320)");
+                  "scene:/camera/width=320)")
+      ->allow_extra_args(false);  // one value per --set: SCENE may follow it
   sub->add_option("--light", opts->light, "Light to render, compare and move (default: the scene's first)");
   sub->add_option("--path", opts->path, "Fit camera path: dolly, orbit, or a path the scene file declares");
   opts->framesOpt = sub->add_option("--frames", opts->frames,
@@ -274,7 +275,8 @@ app::Registrar reg{"stability", [](CLI::App& app) {
                        ->capture_default_str();
   sub->add_option("--light-path", opts->lightPaths,
                   "Moving light, repeatable: KEY=FROM:TO:FRAMES with KEY elevation_deg or azimuth_deg "
-                  "(e.g. elevation_deg=60:10:11); the camera stays fixed");
+                  "(e.g. elevation_deg=60:10:11); the camera stays fixed")
+      ->allow_extra_args(false);  // one value per --light-path: SCENE may follow it
   sub->add_option("-o,--out", opts->outDir, "Output folder")->required();
   sub->add_option("--cache", opts->cacheDir, "Reference cache folder (default: $SHADOWLAB_CACHE, else .shadowlab-cache)");
   sub->add_option("--device", opts->device, "Vulkan device name substring (default: lavapipe)");
