@@ -54,7 +54,7 @@ int run(const Options& o) {
   if (o.updateBaseline) return updateBaseline(o, current);
   if (!std::filesystem::exists(o.baseline))
     throw InputError(formatError(o.baseline, "",
-                                 "baseline file not found; expected a metrics.json or results.json "
+                                 "baseline file not found; expected a metrics.json, results.json or stability.json "
                                  "(create it on purpose with --update-baseline)"));
   ResultFile baseline = loadResultFile(o.baseline);
   GateResult result = runGate(current, baseline, tolerances);
@@ -76,9 +76,9 @@ shadowlab::app::Registrar reg{"gate", [](CLI::App& app) {
                                  "Compare results against a baseline under tolerances; exit 1 on a regression");
   auto o = std::make_shared<Options>();
   sub->add_option("current", o->currents,
-                  "Current metrics.json or results.json files (several are gated as one set of rows)")
+                  "Current metrics.json, results.json or stability.json files (several are gated as one set of rows)")
       ->required();
-  sub->add_option("--baseline", o->baseline, "Baseline metrics.json or results.json")->required();
+  sub->add_option("--baseline", o->baseline, "Baseline metrics.json, results.json or stability.json")->required();
   sub->add_option("--tolerances", o->tolerances,
                   "Tolerance file (JSON, see compare/GATE.md); default: exact metrics, timings reported");
   sub->add_option("--json", o->jsonOut, "Write the verdicts as JSON here");

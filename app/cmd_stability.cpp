@@ -1,16 +1,26 @@
-// `shadowlab stability SCENE [--method M.json] [--set key=value ...] --path dolly|orbit --frames N
-//  [--distance D | --angle-deg A] -o DIR`: shimmer measured exactly. The evaluation camera (the
-// scene's) stays fixed while the camera the light's fit follows moves along the path, so every
-// pixel shows the same surface in every frame and one reference (cached) serves all frames.
-// Writes DIR/stability.json (compare/METRICS.md, "Temporal stability"). Every input is validated
-// before anything is traced, rendered or written.
+// `shadowlab stability SCENE [--method M.json] [--set key=value ...]
+//      (--path dolly|orbit|NAME [--frames N] [--distance D | --angle-deg A] | --light-path KEY=FROM:TO:FRAMES ...)
+//      -o DIR`
+// Temporal stability (compare/METRICS.md, "Temporal stability"):
+// - a camera path (--path): the evaluation camera (the scene's) stays fixed while the camera the
+//   light's fit follows moves along a generated path (dolly, orbit) or one the scene file declares
+//   ("paths"); every pixel shows the same surface in every frame and one reference (cached) serves
+//   all frames: shimmer measured exactly.
+// - a light path (--light-path): the camera stays fixed and a directional light's elevation and/or
+//   azimuth steps along the path; each frame is its own scene with its own reference (cached).
+// Writes DIR/stability.json: the per-frame numbers and a result row (schema shadowlab.stability/1)
+// that `shadowlab gate` checks (compare/GATE.md). Every input is validated before anything is
+// traced, rendered or written.
+#include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <map>
 #include <memory>
 
 #include "command.h"
 #include "shadowlab/compare/pipeline.h"
 #include "shadowlab/compare/stability.h"
+#include "shadowlab/compare/sweep.h"
 #include "shadowlab/scenes/error.h"
 #include "shadowlab/scenes/io.h"
 #include "shadowlab/scenes/loader.h"
@@ -18,8 +28,6 @@
 namespace {
 
 using namespace shadowlab;
-
-constexpr int kMaxFrames = 1024;  // a path longer than this is a mistake, not a measurement
 
 struct Options {
   std::string scene;
@@ -30,102 +38,245 @@ struct Options {
   int frames = 0;
   double distanceWorld = 1.0;  // dolly: total travel along the view direction, world units
   double angleDeg = 10.0;      // orbit: total rotation about look_at, degrees
+  std::vector<std::string> lightPaths;
   std::string outDir;
   std::string cacheDir;
   std::string device;
   CLI::Option* distanceOpt = nullptr;
   CLI::Option* angleOpt = nullptr;
+  CLI::Option* framesOpt = nullptr;
 };
 
 const char* kWhere = "shadowlab stability";
+constexpr const char* kStabilitySchema = "shadowlab.stability/1";
+
+std::string numberText(double v) { return canonicalValueText(nlohmann::json(v)); }
 
 int run(const Options& o) {
+  const auto t0 = std::chrono::steady_clock::now();
   // ---- inputs: every error surfaces before anything is traced, rendered or written ------------
   auto bad = [](const std::string& opt, const std::string& what) {
     return InputError(std::string(kWhere) + ": " + opt + ": error: " + what);
   };
   if (o.outDir.empty()) throw bad("-o", "the output folder is empty; expected a folder");
-  if (o.path != "dolly" && o.path != "orbit")
-    throw bad("--path", "got \"" + o.path + "\"; expected dolly or orbit");
-  if (o.frames < 2 || o.frames > kMaxFrames)
-    throw bad("--frames", "got " + std::to_string(o.frames) + "; expected 2.." + std::to_string(kMaxFrames));
+  const bool lightPath = !o.lightPaths.empty();
+  if (lightPath == !o.path.empty())
+    throw bad(lightPath ? "--light-path" : "--path",
+              lightPath ? "given with --path; expected one of them (a moving light or a moving fit camera)"
+                        : "neither --path nor --light-path given; expected one of them");
+  const bool generated = o.path == "dolly" || o.path == "orbit";
   const bool dolly = o.path == "dolly";
-  if (dolly && o.angleOpt->count() > 0) throw bad("--angle-deg", "given with --path dolly; expected --distance");
-  if (!dolly && o.distanceOpt->count() > 0) throw bad("--distance", "given with --path orbit; expected --angle-deg");
+  const bool framesGiven = o.framesOpt->count() > 0;
+  if (framesGiven && (o.frames < 2 || o.frames > kMaxPathFrames))
+    throw bad("--frames", "got " + std::to_string(o.frames) + "; expected 2.." + std::to_string(kMaxPathFrames));
+  if (generated && !framesGiven) throw bad("--frames", "missing; expected the number of frames of the " + o.path + " path");
+  if (lightPath && framesGiven) throw bad("--frames", "given with --light-path; expected the frames in KEY=FROM:TO:FRAMES");
+  if (o.angleOpt->count() > 0 && o.path != "orbit")
+    throw bad("--angle-deg", "given with " + (lightPath ? std::string("--light-path") : "--path " + o.path) +
+                                 "; expected it only with --path orbit");
+  if (o.distanceOpt->count() > 0 && o.path != "dolly")
+    throw bad("--distance", "given with " + (lightPath ? std::string("--light-path") : "--path " + o.path) +
+                                "; expected it only with --path dolly");
   if (!std::isfinite(o.distanceWorld))
     throw bad("--distance", "got " + std::to_string(o.distanceWorld) + "; expected a finite distance (world units)");
   if (!(std::isfinite(o.angleDeg) && std::abs(o.angleDeg) <= 360.0))
     throw bad("--angle-deg", "got " + std::to_string(o.angleDeg) + "; expected a finite angle in -360..360 degrees");
+  std::vector<LightPathAxis> axes;
+  for (const auto& text : o.lightPaths) axes.push_back(parseLightPath(text));
+
+  // --set: method keys, or scene values as in sweeps (scene:/json/pointer=value).
   Method method;
   if (!o.methodFile.empty()) method = loadMethodFile(o.methodFile);
+  std::map<std::string, std::string> given;  // key -> canonical value, sorted: the row's config
+  std::vector<SceneOverride> sceneOverrides;
   for (const auto& s : o.sets) {
     const auto eq = s.find('=');
     if (eq == std::string::npos || eq == 0)
       throw InputError("--set " + s + ": error: got \"" + s + "\"; expected key=value (e.g. cascades.stabilize=true)");
-    applyMethodSetting(method, s.substr(0, eq), s.substr(eq + 1), "--set " + s);
+    const std::string key = s.substr(0, eq), value = s.substr(eq + 1);
+    if (key.rfind(kSceneKeyPrefix, 0) == 0) {
+      const nlohmann::json v = sceneValueFromText(value);
+      sceneOverrides.push_back({key.substr(std::string(kSceneKeyPrefix).size()), v});
+      given[key] = canonicalValueText(v);
+    } else {
+      applyMethodSetting(method, key, value, "--set " + s);
+      given[key] = "";  // filled from the resolved method below
+    }
   }
   validateMethod(method, o.methodFile.empty() ? "--set" : o.methodFile);
-  const Scene scene = loadScene(resolveScenePath(o.scene));
+  const nlohmann::json resolvedMethod = methodToJson(method);
+  for (auto& [key, text] : given)
+    if (key.rfind(kSceneKeyPrefix, 0) != 0) text = canonicalValueText(resolvedMethod.at(key));
+
+  const std::string scenePath = resolveScenePath(o.scene);
+  const Scene scene = loadScene(scenePath, sceneOverrides);
   if (scene.lights.empty())
     throw InputError(formatError(scene.path, "/lights", "the scene has no light; expected at least one to compare"));
   if (!o.light.empty() && !scene.findLight(o.light))
     throw bad("--light", "scene " + scene.path + " has no light \"" + o.light + "\"");
   const std::string light = o.light.empty() ? scene.lights.front().name : o.light;
-  // The path generators validate the camera (a dolly needs a view direction, an orbit an up).
-  const std::vector<Camera> path = dolly ? dollyPath(scene.camera, float(o.distanceWorld), o.frames)
-                                         : orbitPath(scene.camera, float(o.angleDeg), o.frames);
+
+  // The path: fit cameras (camera path) or per-frame scene overrides (light path).
+  std::vector<Camera> fitCameras;
+  nlohmann::json pathJson;
+  std::string pathConfig;
+  const nlohmann::json sceneDocument = lightPath ? nlohmann::json::parse(readFile(scene.path), nullptr, false, true)
+                                                 : nlohmann::json();
+  int frames = 0;
+  if (lightPath) {
+    frames = axes.front().frames;
+    // Checks the light and the axes; the user's own scene: values must not move the same light.
+    (void)lightPathOverrides(sceneDocument, scene, light, axes, 0);
+    std::string axisText;
+    nlohmann::json axisJson = nlohmann::json::array();
+    for (const auto& a : axes) {
+      axisText += (axisText.empty() ? "" : "+") + a.key + ":" + numberText(a.from) + ":" + numberText(a.to);
+      axisJson.push_back({{"key", a.key}, {"from", a.from}, {"to", a.to}});
+    }
+    pathJson = {{"kind", "light"}, {"frames", frames}, {"light_path", axisJson}};
+    pathConfig = "light_path=" + axisText + ",frames=" + std::to_string(frames);
+  } else if (generated) {
+    // The path generators validate the camera (a dolly needs a view direction, an orbit an up).
+    fitCameras = dolly ? dollyPath(scene.camera, float(o.distanceWorld), o.frames)
+                       : orbitPath(scene.camera, float(o.angleDeg), o.frames);
+    pathJson = {{"kind", o.path}, {"frames", o.frames}};
+    if (dolly) pathJson["distance_world"] = o.distanceWorld;
+    else pathJson["angle_deg"] = o.angleDeg;
+    pathConfig = "path=" + o.path + "," + (dolly ? "distance=" + numberText(o.distanceWorld)
+                                                 : "angle_deg=" + numberText(o.angleDeg)) +
+                 ",frames=" + std::to_string(o.frames);
+  } else {
+    const CameraPath* declared = scene.findPath(o.path);
+    if (!declared) {
+      std::string names;
+      for (const auto& p : scene.paths) names += " " + p.name;
+      throw bad("--path", "got \"" + o.path + "\"; expected dolly, orbit or a path of " + scene.path +
+                              (names.empty() ? std::string(" (it declares none)") : ":" + names));
+    }
+    fitCameras = expandCameraPath(scene.camera, *declared, framesGiven ? o.frames : 0);
+    pathJson = {{"kind", toString(declared->kind)}, {"name", declared->name}, {"frames", int(fitCameras.size())}};
+    if (declared->kind == CameraPathKind::Dolly) pathJson["distance_world"] = declared->distanceWorld;
+    if (declared->kind == CameraPathKind::Orbit) pathJson["angle_deg"] = declared->angleDeg;
+    pathConfig = "path=" + declared->name + ",frames=" + std::to_string(fitCameras.size());
+  }
+  if (!lightPath) frames = int(fitCameras.size());
+  // Light path: every frame's scene is the same file under other angles; the ends are loaded here
+  // so that a value the loader refuses surfaces before any work (the frames between lie between).
+  auto frameScene = [&](int k) {
+    std::vector<SceneOverride> overrides = sceneOverrides;
+    for (auto& l : lightPathOverrides(sceneDocument, scene, light, axes, k)) {
+      for (const auto& u : sceneOverrides)
+        if (u.pointer == l.pointer || l.pointer.rfind(u.pointer + "/", 0) == 0 || u.pointer.rfind(l.pointer + "/", 0) == 0)
+          throw bad("--set scene:" + u.pointer, "the light path moves " + l.pointer + "; expected it set by one of them");
+      overrides.push_back(l);
+    }
+    return loadScene(scenePath, overrides);
+  };
+  if (lightPath) {
+    (void)frameScene(0);
+    (void)frameScene(frames - 1);
+  }
+
+  std::string config;
+  for (const auto& [key, text] : given) config += (config.empty() ? "" : ",") + key + "=" + text;
+  if (config.empty()) config = method.name.empty() ? "default" : method.name;
+  config += " @ " + pathConfig;
 
   // ---- work ------------------------------------------------------------------------------------
   RasterDeviceOptions deviceOptions;
   deviceOptions.device = o.device;
   Rasterizer rasterizer(deviceOptions);
   ReferenceCache cache(o.cacheDir);
-  bool traced = false;
-  const Frame reference = cache.get(scene, ReferenceOptions{}, &traced);
-  std::vector<Frame> rasters;
-  for (const Camera& fit : path) rasters.push_back(rasterizer.render(scene, method, light, nullptr, &fit));
   CompareOptions compareOptions;
   compareOptions.light = light;
-  const StabilityMetrics s = measureStability(reference, rasters, compareOptions);
+  StabilityMetrics s;
+  int traced = 0;
+  nlohmann::json perFrame = nlohmann::json::array();
+  if (lightPath) {
+    // One frame at a time (its scene, reference, raster): memory stays that of one frame.
+    std::vector<double> errors;
+    for (int k = 0; k < frames; ++k) {
+      const Scene frameSceneK = frameScene(k);
+      bool t = false;
+      const Frame reference = cache.get(frameSceneK, ReferenceOptions{}, &t);
+      traced += t;
+      const Frame raster = rasterizer.render(frameSceneK, method, light);
+      const Metrics m = compareFrames(reference, raster, compareOptions);
+      errors.push_back(m.errorRate);
+      nlohmann::json values = nlohmann::json::object();
+      for (const auto& a : axes) values[a.key] = a.value(k);
+      perFrame.push_back({{"light", values},
+                          {"error_rate", m.errorRate},
+                          {"acne_rate", m.acneRate},
+                          {"leak_rate", m.leakRate},
+                          {"pixels_compared", m.pixelsCompared}});
+    }
+    setErrorStatistics(s, errors);
+  } else {
+    bool t = false;
+    const Frame reference = cache.get(scene, ReferenceOptions{}, &t);
+    traced += t;
+    std::vector<Frame> rasters;
+    for (const Camera& fit : fitCameras) rasters.push_back(rasterizer.render(scene, method, light, nullptr, &fit));
+    s = measureStability(reference, rasters, compareOptions);
+    nlohmann::json cameras = nlohmann::json::array();
+    for (const Camera& c : fitCameras)
+      cameras.push_back({{"position", {c.position.x, c.position.y, c.position.z}},
+                         {"look_at", {c.lookAt.x, c.lookAt.y, c.lookAt.z}},
+                         {"up", {c.up.x, c.up.y, c.up.z}}});
+    pathJson["fit_cameras"] = cameras;
+  }
+  const double totalMs = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
 
-  nlohmann::json cameras = nlohmann::json::array();
-  for (const Camera& c : path)
-    cameras.push_back({{"position", {c.position.x, c.position.y, c.position.z}},
-                       {"look_at", {c.lookAt.x, c.lookAt.y, c.lookAt.z}}});
-  nlohmann::json pathJson = {{"kind", o.path}, {"frames", o.frames}, {"fit_cameras", cameras}};
-  if (dolly) pathJson["distance_world"] = o.distanceWorld;
-  else pathJson["angle_deg"] = o.angleDeg;
+  // stability.json: the per-frame numbers at the top level, and a result row (scene, config, light,
+  // method, metrics, timings) the gate reads like a metrics.json.
   nlohmann::json report = s.toJson();
+  report["schema"] = kStabilitySchema;
   report["scene"] = scene.name;
+  report["config"] = config;
+  report["light"] = light;
+  report["method"] = resolvedMethod;
+  report["metrics"] = s.gateMetrics();
+  report["timings"] = {{"total_ms", totalMs}};
   report["scene_hash"] = scene.hash;
   report["camera_hash"] = scene.camera.hash();
-  report["light"] = light;
-  report["method"] = methodToJson(method);
   report["path"] = pathJson;
+  if (lightPath) report["per_frame"] = perFrame;
+  report["references_traced"] = traced;
   report["device"] = rasterizer.deviceName();
   makeDirs(o.outDir);
   writeJsonAtomic(o.outDir + "/stability.json", report);
-  std::printf("stability: %s %s %d frames, reference %s: shimmer_rate %.6g, error_rate mean %.5f max %.5f std %.5f"
-              " -> %s/stability.json\n",
-              scene.name.c_str(), o.path.c_str(), o.frames, traced ? "traced" : "cached", s.shimmerRate,
-              s.errorRateMean, s.errorRateMax, s.errorRateStd, o.outDir.c_str());
+  std::printf("stability: %s %s, %d frames, %d reference(s) traced: ", scene.name.c_str(), pathConfig.c_str(), frames,
+              traced);
+  if (s.hasShimmer()) std::printf("shimmer_rate %.6g, ", s.shimmerRate);
+  std::printf("error_rate mean %.5f max %.5f std %.5f, error_jump_max %.5f -> %s/stability.json\n", s.errorRateMean,
+              s.errorRateMax, s.errorRateStd, s.errorJumpMax, o.outDir.c_str());
   return 0;
 }
 
 app::Registrar reg{"stability", [](CLI::App& app) {
   auto opts = std::make_shared<Options>();
-  auto* sub = app.add_subcommand("stability", "Shimmer: a fixed view while the light's fit follows a moving camera");
+  auto* sub = app.add_subcommand("stability",
+                                 "Temporal stability: shimmer along a fit-camera path, or error along a light path");
   sub->add_option("SCENE", opts->scene, "Bundled scene name or path to a scene file")->required();
   sub->add_option("--method", opts->methodFile, "Method file (JSON, see raster/METHODS.md)");
-  sub->add_option("--set", opts->sets, "Method setting key=value, repeatable (e.g. --set fit=cascades)");
-  sub->add_option("--light", opts->light, "Light to render and compare (default: the scene's first)");
-  sub->add_option("--path", opts->path, "Fit camera path: dolly or orbit")->required();
-  sub->add_option("--frames", opts->frames, "Frames on the path, 2..1024")->required();
+  sub->add_option("--set", opts->sets,
+                  "key=value, repeatable: a method key (e.g. fit=cascades) or scene:/json/pointer (e.g. "
+                  "scene:/camera/width=320)")
+      ->allow_extra_args(false);  // one value per --set: SCENE may follow it
+  sub->add_option("--light", opts->light, "Light to render, compare and move (default: the scene's first)");
+  sub->add_option("--path", opts->path, "Fit camera path: dolly, orbit, or a path the scene file declares");
+  opts->framesOpt = sub->add_option("--frames", opts->frames,
+                                    "Frames on the path, 2..1024 (dolly, orbit; replaces a scene path's own count)");
   opts->distanceOpt = sub->add_option("--distance", opts->distanceWorld,
                                       "dolly: total travel along the view direction, world units")
                           ->capture_default_str();
   opts->angleOpt = sub->add_option("--angle-deg", opts->angleDeg, "orbit: total rotation about look_at, degrees")
                        ->capture_default_str();
+  sub->add_option("--light-path", opts->lightPaths,
+                  "Moving light, repeatable: KEY=FROM:TO:FRAMES with KEY elevation_deg or azimuth_deg "
+                  "(e.g. elevation_deg=60:10:11); the camera stays fixed")
+      ->allow_extra_args(false);  // one value per --light-path: SCENE may follow it
   sub->add_option("-o,--out", opts->outDir, "Output folder")->required();
   sub->add_option("--cache", opts->cacheDir, "Reference cache folder (default: $SHADOWLAB_CACHE, else .shadowlab-cache)");
   sub->add_option("--device", opts->device, "Vulkan device name substring (default: lavapipe)");

@@ -211,7 +211,7 @@ TEST_F(GateCli, MissingBaselineExits2AndWritesNothing) {
                path("gate.xml"));
   EXPECT_EQ(r.code, 2) << r.out << r.err;
   EXPECT_EQ(r.err, path("nope.json") +
-                       ": error: baseline file not found; expected a metrics.json or results.json (create it on "
+                       ": error: baseline file not found; expected a metrics.json, results.json or stability.json (create it on "
                        "purpose with --update-baseline)\n");
   EXPECT_FALSE(fs::exists(dir_ / "gate.json"));
   EXPECT_FALSE(fs::exists(dir_ / "gate.xml"));

@@ -80,10 +80,12 @@ TEST_F(Results, ResultsJsonRowsKeepOrderAndPointers) {
 TEST_F(Results, MalformedFilesNameFileAndPlace) {
   std::string noSchema = write("a.json", R"({"scene": "a", "config": "default", "light": "sun", "metrics": {}})");
   EXPECT_EQ(errorOf(noSchema), noSchema + ": error: missing \"schema\"; expected \"shadowlab.metrics/1\" "
-                                          "(metrics.json) or \"shadowlab.results/1\" (results.json)");
+                                          "(metrics.json), \"shadowlab.results/1\" (results.json) or "
+                                          "\"shadowlab.stability/1\" (stability.json)");
   std::string badSchema = write("b.json", R"({"schema": "shadowlab.results/2", "rows": []})");
   EXPECT_EQ(errorOf(badSchema), badSchema + ": /schema: error: got \"shadowlab.results/2\"; expected "
-                                            "\"shadowlab.metrics/1\" or \"shadowlab.results/1\"");
+                                            "\"shadowlab.metrics/1\", \"shadowlab.results/1\" or "
+                                            "\"shadowlab.stability/1\"");
   std::string noMetrics = write("c.json", R"({"schema": "shadowlab.results/1", "rows": [
       {"scene": "a", "config": "default", "light": "sun"}]})");
   EXPECT_EQ(errorOf(noMetrics), noMetrics + ": /rows/0: error: missing \"metrics\"; expected an object");

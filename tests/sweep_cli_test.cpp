@@ -131,6 +131,11 @@ TEST(SweepCli, BadGridValuesExit2AndWriteNothing) {
   const std::string dir = tempDir("bad");
   const std::string badFile = dir + "/bad_sweep.json";
   std::ofstream(badFile) << "{\n  \"grid\": {\"map.size\": [256, \"big\"]}\n}\n";
+  // A scene that declares no "failure": scene:failure names nothing in it.
+  const std::string plainScene = dir + "/plain.json";
+  std::ofstream(plainScene) << R"({"camera": {"position": [0, 2, 5], "look_at": [0, 0, 0], "vfov_deg": 45,
+    "width": 64, "height": 48}, "objects": [{"type": "plane", "size": [10, 10]}],
+    "lights": [{"type": "directional", "elevation_deg": 45}]})";
   struct Case {
     std::vector<std::string> args;
     std::string message;
@@ -142,6 +147,8 @@ TEST(SweepCli, BadGridValuesExit2AndWriteNothing) {
       {{"--grid", "map.size=256", "--grid", "bias.slope=0,,1"}, "value 2 of \"bias.slope\" is empty"},
       {{"--sweep", badFile}, badFile + ": /grid/map.size/1"},
       {{"--light", "moon"}, "no light named \"moon\""},
+      {{plainScene, "--grid", "scene:failure=30,20"},
+       plainScene + ": error: the scene declares no \"failure\", so scene:failure names nothing in it"},
   };
   int i = 0;
   for (const auto& c : cases) {

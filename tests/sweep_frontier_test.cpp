@@ -106,6 +106,26 @@ TEST(FrontierFunction, WalksTheDeclaredFailureDirectionWhateverTheGridOrder) {
   for (const auto& f : fr) std::printf("  %s\n", f["sentence"].get<std::string>().c_str());
 }
 
+// scene:failure is walked like the pointer it stands for: grazing's declared elevation, from high
+// to low, and the sentence names the declared parameter.
+TEST(FrontierFunction, SceneFailureKeyWalksTheDeclaredParameter) {
+  SweepPlan plan = grazingPlan({"scene:failure=4,60,30", "bias.slope=0,2"});
+  auto rows = rowsOf(plan, [](const std::map<std::string, std::string>& v) -> nlohmann::json {
+    double e = std::stod(v.at("scene:failure"));
+    return v.at("bias.slope") == "0" && e <= 30 ? 0.2 : 0.001;
+  });
+  nlohmann::json fr = computeFrontiers(plan, rows, "error_rate", 0.01);
+  ASSERT_EQ(fr.size(), 2u) << fr.dump(1);
+  const auto& s0 = frontierOf(fr, "bias.slope=0");
+  EXPECT_EQ(s0["parameter"], "scene:failure");
+  EXPECT_EQ(s0["pointer"], "/lights/0/elevation_deg");
+  EXPECT_EQ(s0["direction"], "decreasing");
+  EXPECT_EQ(s0["breaks_at"], 30.0);
+  EXPECT_EQ(s0["holds_to"], 60.0);
+  EXPECT_EQ(s0["sentence"], "bias.slope=0: breaks at elevation_deg=30 (error_rate 20% > 1%), holds to 60");
+  EXPECT_TRUE(frontierOf(fr, "bias.slope=2")["holds"].get<bool>());
+}
+
 TEST(FrontierFunction, HoldsBreaksAtFirstMissingAndNoSceneKey) {
   SweepPlan plan = grazingPlan({kElevation + "=60,30,8", "bias.slope=0,1,2"});
   auto rows = rowsOf(plan, [](const std::map<std::string, std::string>& v) -> nlohmann::json {

@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cmath>
 
 #include <filesystem>
@@ -10,9 +11,11 @@
 
 #include "shadowlab/compare/sweep.h"
 #include "shadowlab/scenes/error.h"
+#include "support/input_error.h"
 
 namespace fs = std::filesystem;
 using namespace shadowlab;
+using shadowlab::testing::inputErrorOf;
 
 namespace {
 
@@ -26,18 +29,6 @@ std::string tempDir(const std::string& name) {
 std::string writeText(const std::string& path, const std::string& text) {
   std::ofstream(path) << text;
   return path;
-}
-
-// The message of the InputError `f` throws ("" when it throws nothing: the test then fails).
-template <class F>
-std::string inputErrorOf(F&& f) {
-  try {
-    f();
-  } catch (const InputError& e) {
-    return e.what();
-  }
-  ADD_FAILURE() << "expected an InputError";
-  return "";
 }
 
 SweepSpec specWithGrid(std::vector<std::string> grid) {
@@ -232,4 +223,56 @@ TEST(SweepPlan, DefaultCacheDirSitsBesideTheOutputFolder) {
   ::setenv("SHADOWLAB_CACHE", "/tmp/elsewhere", 1);
   EXPECT_EQ(defaultSweepCacheDir("/tmp/x/sweep1"), "/tmp/elsewhere");
   ::unsetenv("SHADOWLAB_CACHE");
+}
+
+// scene:failure sweeps the value each scene's declared "failure" pointer names: the sun's elevation
+// in grazing, the wall's thickness in thin_wall, within one grid.
+TEST(SweepPlan, SceneFailureKeySweepsEachScenesOwnFailurePointer) {
+  SweepSpec spec = specWithGrid({"scene:failure=30,0.05"});
+  spec.scenes = {"grazing", "thin_wall"};
+  SweepPlan plan = planSweep(spec);
+  ASSERT_EQ(plan.configs.size(), 2u);
+  EXPECT_EQ(plan.configs[0].config, "scene:failure=30");
+  EXPECT_EQ(plan.configs[1].config, "scene:failure=0.05");
+  ASSERT_EQ(plan.jobs.size(), 4u);
+  const Scene& grazing30 = plan.variants[plan.jobs[0].variantIndex];
+  const Scene& thin005 = plan.variants[plan.jobs[3].variantIndex];
+  EXPECT_EQ(grazing30.name, "grazing");
+  EXPECT_EQ(grazing30.failurePointer, "/lights/0/elevation_deg");
+  // The sun at 30 degrees: the direction's y is -sin(30 deg).
+  EXPECT_NEAR(grazing30.lights[0].direction.y, -0.5f, 1e-6f);
+  EXPECT_EQ(thin005.name, "thin_wall");
+  EXPECT_EQ(thin005.failurePointer, "/objects/1/size/0");
+  // The wall (object 1, a box 0.05 thick along x): its x extent.
+  float lo = 1e9f, hi = -1e9f;
+  for (const auto& p : thin005.objects[1].positions) {
+    lo = std::min(lo, p.x);
+    hi = std::max(hi, p.x);
+  }
+  EXPECT_NEAR(hi - lo, 0.05f, 1e-6f);
+  // Unchanged elsewhere: grazing's thickness-valued configuration still moved only the sun.
+  const Scene& grazing005 = plan.variants[plan.jobs[1].variantIndex];
+  EXPECT_NEAR(grazing005.lights[0].direction.y, -std::sin(0.05f * 3.14159265f / 180.0f), 1e-6f);
+}
+
+TEST(SweepPlan, SceneFailureKeyNeedsADeclaredFailureAndNoSecondNameForIt) {
+  const std::string dir = tempDir("failure");
+  const std::string plain = writeText(dir + "/plain.json", R"({
+    "camera": {"position": [0, 2, 5], "look_at": [0, 0, 0], "vfov_deg": 45, "width": 64, "height": 48},
+    "objects": [{"type": "plane", "size": [10, 10]}],
+    "lights": [{"type": "directional", "elevation_deg": 45}]})");
+  SweepSpec spec = specWithGrid({"scene:failure=30,20"});
+  spec.scenes = {"grazing", plain};
+  EXPECT_EQ(inputErrorOf([&] { planSweep(spec); }),
+            plain + ": error: the scene declares no \"failure\", so scene:failure names nothing in it; expected a scene "
+                    "with \"failure\" (scenes/FORMAT.md) or a JSON pointer: scene:/path/to/value");
+  // The same value under two names is ambiguous.
+  SweepSpec twice = specWithGrid({"scene:failure=30,20"});
+  twice.scenes = {"grazing"};
+  twice.fixed.push_back(parseSetArgument("scene:/lights/0/elevation_deg=10"));
+  EXPECT_NE(inputErrorOf([&] { planSweep(twice); })
+                .find("scene:failure is /lights/0/elevation_deg in this scene, which scene:/lights/0/elevation_deg also "
+                      "sets; expected one of them"),
+            std::string::npos);
+  fs::remove_all(dir);
 }

@@ -337,7 +337,10 @@ def chart_frontiers(frontiers, out_dir):
             ax.set_xticks(range(len(lines[0]["points"])))
             ax.set_xticklabels([str(p["value"]) for p in lines[0]["points"]])
         ax.set_title(scene)
-        ax.set_xlabel(parameter + " (easy to hard)")
+        # scene:failure stands for each scene's own declared pointer: name it.
+        pointer = lines[0].get("pointer", "")
+        shown = parameter if parameter == "scene:" + pointer else f"{parameter} = scene:{pointer}"
+        ax.set_xlabel(shown + " (easy to hard)")
         ax.set_ylabel(metric)
         ax.legend(fontsize=6)
     caption = (f"{metric} against each swept scene parameter, one line per method configuration, easy values "

@@ -256,6 +256,14 @@ Direction builtinDirection(const std::string& metric, bool* known) {
       {"projector_coverage_iou", Direction::HigherIsBetter},
       {"reverse_projection_pixels", Direction::LowerIsBetter},
       {"projector_color_mae", Direction::LowerIsBetter},
+      // stability.json (compare/METRICS.md, "Temporal stability"): shimmer and the per-frame error
+      // rate's statistics only get better by going down; the path's frame count must not move.
+      {"frames", Direction::Equal},
+      {"shimmer_rate", Direction::LowerIsBetter},
+      {"error_rate_mean", Direction::LowerIsBetter},
+      {"error_rate_max", Direction::LowerIsBetter},
+      {"error_rate_std", Direction::LowerIsBetter},
+      {"error_jump_max", Direction::LowerIsBetter},
   };
   auto it = kBuiltin.find(metric);
   if (known) *known = it != kBuiltin.end();
@@ -719,7 +727,9 @@ ResultFile mergeResultFiles(const std::vector<ResultFile>& files) {
 }
 
 nlohmann::json baselineDocument(const ResultFile& f) {
-  if (f.schema == "shadowlab.metrics/1" && f.rows.size() == 1) {
+  // One metrics.json or stability.json stays one row of its kind (the row only: a stability
+  // baseline keeps no per-frame numbers).
+  if ((f.schema == "shadowlab.metrics/1" || f.schema == "shadowlab.stability/1") && f.rows.size() == 1) {
     nlohmann::json j = f.rows[0].toJson();
     j["schema"] = f.schema;
     return j;

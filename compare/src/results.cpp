@@ -19,6 +19,9 @@ using json_text::typeName;
 
 constexpr const char* kMetricsSchema = "shadowlab.metrics/1";
 constexpr const char* kResultsSchema = "shadowlab.results/1";
+// stability.json (`shadowlab stability`): one result row at the top level, like metrics.json, beside
+// its per-frame numbers (compare/METRICS.md, "Temporal stability").
+constexpr const char* kStabilitySchema = "shadowlab.stability/1";
 
 ResultRow rowFromJson(const nlohmann::json& j, const std::string& file, const std::string& pointer) {
   auto fail = [&](const std::string& place, const std::string& what) {
@@ -108,12 +111,13 @@ ResultFile loadResultFile(const std::string& path) {
   auto schema = doc.find("schema");
   if (schema == doc.end())
     throw InputError(formatError(path, "", std::string("missing \"schema\"; expected \"") + kMetricsSchema +
-                                                "\" (metrics.json) or \"" + kResultsSchema + "\" (results.json)"));
-  if (!schema->is_string() || (*schema != kMetricsSchema && *schema != kResultsSchema))
+                                                "\" (metrics.json), \"" + kResultsSchema + "\" (results.json) or \"" +
+                                                kStabilitySchema + "\" (stability.json)"));
+  if (!schema->is_string() || (*schema != kMetricsSchema && *schema != kResultsSchema && *schema != kStabilitySchema))
     throw InputError(formatError(path, "/schema", "got " + schema->dump() + "; expected \"" + kMetricsSchema +
-                                                      "\" or \"" + kResultsSchema + "\""));
+                                                      "\", \"" + kResultsSchema + "\" or \"" + kStabilitySchema + "\""));
   file.schema = schema->get<std::string>();
-  if (file.schema == kMetricsSchema) {
+  if (file.schema == kMetricsSchema || file.schema == kStabilitySchema) {
     file.rows.push_back(rowFromJson(doc, path, ""));
     file.pointers.push_back("");
     return file;

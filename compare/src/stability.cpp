@@ -4,19 +4,11 @@
 #include <algorithm>
 #include <cmath>
 
-#include <glm/gtc/matrix_transform.hpp>
-
 #include "shadowlab/scenes/error.h"
 
 namespace shadowlab {
 
 namespace {
-
-void requireFrames(int frames, const char* what) {
-  if (frames < 2)
-    throw InputError(std::string(what) + ": error: frames is " + std::to_string(frames) +
-                     "; expected at least 2 (a path needs a start and an end)");
-}
 
 const float* plane(const Frame& f, const std::string& name, const char* which) {
   if (!f.has(name))
@@ -29,45 +21,6 @@ const float* plane(const Frame& f, const std::string& name, const char* which) {
 }
 
 }  // namespace
-
-std::vector<Camera> dollyPath(const Camera& start, float distanceWorld, int frames) {
-  requireFrames(frames, "dolly");
-  glm::vec3 view = start.lookAt - start.position;
-  float len = glm::length(view);
-  if (!(len > 0.0f) || !std::isfinite(distanceWorld))
-    throw InputError("dolly: error: the camera has no view direction (position == look_at) or the distance is "
-                     "not finite; expected a camera that looks somewhere and a finite distance");
-  glm::vec3 forward = view / len;
-  std::vector<Camera> path;
-  for (int k = 0; k < frames; ++k) {
-    // Computed from the start each time (not accumulated), so the last frame lands on the end.
-    float t = float(k) / float(frames - 1);
-    Camera c = start;
-    glm::vec3 offset = forward * (distanceWorld * t);
-    c.position = start.position + offset;
-    c.lookAt = start.lookAt + offset;
-    path.push_back(c);
-  }
-  return path;
-}
-
-std::vector<Camera> orbitPath(const Camera& start, float angleDeg, int frames) {
-  requireFrames(frames, "orbit");
-  float upLen = glm::length(start.up);
-  if (!(upLen > 0.0f) || !std::isfinite(angleDeg))
-    throw InputError("orbit: error: the camera's up vector is zero or the angle is not finite; expected a "
-                     "non-zero up and a finite angle");
-  glm::vec3 axis = start.up / upLen;
-  std::vector<Camera> path;
-  for (int k = 0; k < frames; ++k) {
-    float t = float(k) / float(frames - 1);
-    glm::mat4 rot = glm::rotate(glm::mat4(1.0f), glm::radians(angleDeg * t), axis);
-    Camera c = start;
-    c.position = start.lookAt + glm::vec3(rot * glm::vec4(start.position - start.lookAt, 0.0f));
-    path.push_back(c);
-  }
-  return path;
-}
 
 double decisionFlipRate(const Frame& reference, const Frame& rasterA, const Frame& rasterB,
                         const std::string& light, uint64_t* pixelsCompared) {
@@ -102,8 +55,6 @@ StabilityMetrics measureStability(const Frame& reference, const std::vector<Fram
     throw InputError("stability: error: got " + std::to_string(rasters.size()) +
                      " raster frame(s); expected at least 2 to measure change between frames");
   StabilityMetrics s;
-  s.frames = int(rasters.size());
-  for (const Frame& f : rasters) s.errorRatePerFrame.push_back(compareFrames(reference, f, options).errorRate);
   const std::string light = resolveCompareLight(reference, rasters.front(), options);
   double sum = 0;
   for (size_t k = 0; k + 1 < rasters.size(); ++k) {
@@ -114,28 +65,142 @@ StabilityMetrics measureStability(const Frame& reference, const std::vector<Fram
     sum += r;
   }
   s.shimmerRate = sum / double(s.flipRatePerPair.size());
-  double esum = 0, emax = 0;
-  for (double e : s.errorRatePerFrame) {
-    esum += e;
-    emax = std::max(emax, e);
-  }
-  s.errorRateMean = esum / double(s.frames);
-  double var = 0;
-  for (double e : s.errorRatePerFrame) var += (e - s.errorRateMean) * (e - s.errorRateMean);
-  s.errorRateStd = std::sqrt(var / double(s.frames));
-  s.errorRateMax = emax;
+  std::vector<double> errors;
+  for (const Frame& f : rasters) errors.push_back(compareFrames(reference, f, options).errorRate);
+  setErrorStatistics(s, errors);
   return s;
 }
 
+void setErrorStatistics(StabilityMetrics& s, const std::vector<double>& e) {
+  if (e.empty()) throw InputError("stability: error: no frames; expected at least one error rate");
+  for (double v : e)
+    if (!std::isfinite(v)) throw InputError("stability: error: a frame's error rate is not finite; expected a rate");
+  s.frames = int(e.size());
+  s.errorRatePerFrame = e;
+  double sum = 0, emax = e.front(), jump = 0;
+  for (size_t k = 0; k < e.size(); ++k) {
+    sum += e[k];
+    emax = std::max(emax, e[k]);
+    if (k + 1 < e.size()) jump = std::max(jump, std::fabs(e[k + 1] - e[k]));
+  }
+  s.errorRateMean = sum / double(e.size());
+  double var = 0;
+  for (double v : e) var += (v - s.errorRateMean) * (v - s.errorRateMean);
+  s.errorRateStd = std::sqrt(var / double(e.size()));
+  s.errorRateMax = emax;
+  s.errorJumpMax = jump;
+}
+
 nlohmann::json StabilityMetrics::toJson() const {
-  return {{"frames", frames},
-          {"shimmer_rate", shimmerRate},
-          {"flip_rate_per_pair", flipRatePerPair},
-          {"pixels_compared_per_pair", pixelsComparedPerPair},
-          {"error_rate_per_frame", errorRatePerFrame},
-          {"error_rate_mean", errorRateMean},
-          {"error_rate_max", errorRateMax},
-          {"error_rate_std", errorRateStd}};
+  nlohmann::json j = gateMetrics();
+  if (hasShimmer()) {
+    j["flip_rate_per_pair"] = flipRatePerPair;
+    j["pixels_compared_per_pair"] = pixelsComparedPerPair;
+  }
+  j["error_rate_per_frame"] = errorRatePerFrame;
+  return j;
+}
+
+nlohmann::json StabilityMetrics::gateMetrics() const {
+  nlohmann::json j = {{"frames", frames},
+                      {"error_rate_mean", errorRateMean},
+                      {"error_rate_max", errorRateMax},
+                      {"error_rate_std", errorRateStd},
+                      {"error_jump_max", errorJumpMax}};
+  if (hasShimmer()) j["shimmer_rate"] = shimmerRate;
+  return j;
+}
+
+LightPathAxis parseLightPath(const std::string& text) {
+  auto bad = [&](const std::string& what) { return InputError("--light-path " + text + ": error: " + what); };
+  const std::string form = "KEY=FROM:TO:FRAMES, e.g. elevation_deg=60:10:11";
+  const auto eq = text.find('=');
+  if (eq == std::string::npos) throw bad("no '=' found; expected " + form);
+  LightPathAxis a;
+  a.key = text.substr(0, eq);
+  if (a.key != "elevation_deg" && a.key != "azimuth_deg")
+    throw bad("unknown key \"" + a.key + "\"; expected elevation_deg or azimuth_deg (a directional light's angles)");
+  std::vector<std::string> parts;
+  std::string rest = text.substr(eq + 1);
+  for (size_t start = 0;;) {
+    const auto colon = rest.find(':', start);
+    parts.push_back(rest.substr(start, colon == std::string::npos ? std::string::npos : colon - start));
+    if (colon == std::string::npos) break;
+    start = colon + 1;
+  }
+  if (parts.size() != 3) throw bad("got " + std::to_string(parts.size()) + " field(s) after '='; expected 3: " + form);
+  auto number = [&](const std::string& p, const char* what) {
+    size_t used = 0;
+    double v = 0;
+    try {
+      v = std::stod(p, &used);
+    } catch (const std::exception&) {
+      used = 0;
+    }
+    if (p.empty() || used != p.size() || !std::isfinite(v))
+      throw bad(std::string(what) + " is \"" + p + "\"; expected a finite number of degrees");
+    return v;
+  };
+  a.from = number(parts[0], "FROM");
+  a.to = number(parts[1], "TO");
+  size_t used = 0;
+  long frames = -1;
+  try {
+    frames = std::stol(parts[2], &used);
+  } catch (const std::exception&) {
+    used = 0;
+  }
+  if (parts[2].empty() || used != parts[2].size() || frames < 2 || frames > kMaxPathFrames)
+    throw bad("FRAMES is \"" + parts[2] + "\"; expected an integer 2.." + std::to_string(kMaxPathFrames));
+  a.frames = int(frames);
+  if (a.key == "elevation_deg" && (std::fabs(a.from) > 90 || std::fabs(a.to) > 90))
+    throw bad("an elevation outside -90..90 degrees; expected elevations in -90..90");
+  return a;
+}
+
+std::vector<SceneOverride> lightPathOverrides(const nlohmann::json& doc, const Scene& scene, const std::string& lightName,
+                                              const std::vector<LightPathAxis>& axes, int k) {
+  if (axes.empty()) throw InputError("--light-path: error: no axis; expected KEY=FROM:TO:FRAMES");
+  for (size_t i = 0; i < axes.size(); ++i)
+    for (size_t j = i + 1; j < axes.size(); ++j) {
+      if (axes[i].key == axes[j].key)
+        throw InputError("--light-path " + axes[j].key + ": error: given twice; expected each angle once");
+      if (axes[i].frames != axes[j].frames)
+        throw InputError("--light-path: error: " + axes[i].key + " has " + std::to_string(axes[i].frames) +
+                         " frames and " + axes[j].key + " " + std::to_string(axes[j].frames) +
+                         "; expected the same number of frames");
+    }
+  size_t index = scene.lights.size();
+  for (size_t i = 0; i < scene.lights.size(); ++i)
+    if (scene.lights[i].name == lightName) index = i;
+  if (index == scene.lights.size())
+    throw InputError(formatError(scene.path, "/lights", "no light named \"" + lightName + "\"; expected the light to move"));
+  const Light& light = scene.lights[index];
+  const std::string ptr = "/lights/" + std::to_string(index);
+  if (light.type != LightType::Directional)
+    throw InputError(formatError(scene.path, ptr, "light \"" + lightName +
+                                                      "\" is not directional; expected a directional light for "
+                                                      "--light-path (elevation_deg and azimuth_deg move a sun)"));
+  const nlohmann::json* declared = nullptr;
+  if (doc.is_object() && doc.contains("lights") && doc["lights"].is_array() && doc["lights"].size() > index)
+    declared = &doc["lights"][index];
+  const bool byAngles = declared && declared->is_object() && !declared->contains("direction");
+  std::vector<SceneOverride> out;
+  if (byAngles) {
+    for (const LightPathAxis& a : axes) out.push_back({ptr + "/" + a.key, a.value(k)});
+    return out;
+  }
+  // Declared by direction: its angles from the direction to the light (the inverse of the loader's
+  // (cos e sin a, sin e, cos e cos a)), the moved ones replaced, written back as a direction.
+  constexpr double kDeg = 3.14159265358979323846 / 180.0;
+  const glm::dvec3 toLight = -glm::dvec3(light.direction);
+  double elevation = std::asin(std::clamp(toLight.y, -1.0, 1.0)) / kDeg;
+  double azimuth = std::atan2(toLight.x, toLight.z) / kDeg;
+  for (const LightPathAxis& a : axes) (a.key == "elevation_deg" ? elevation : azimuth) = a.value(k);
+  const double e = elevation * kDeg, az = azimuth * kDeg;
+  const glm::dvec3 d = -glm::dvec3(std::cos(e) * std::sin(az), std::sin(e), std::cos(e) * std::cos(az));
+  out.push_back({ptr + "/direction", nlohmann::json::array({d.x, d.y, d.z})});
+  return out;
 }
 
 }  // namespace shadowlab

@@ -41,11 +41,18 @@ std::string pct(double rate) {
   return b;
 }
 
-// The last segment of a JSON pointer, for sentences ("/lights/0/elevation_deg" -> "elevation_deg").
+// The last segment of a JSON pointer, for sentences ("/lights/0/elevation_deg" -> "elevation_deg");
+// an array index keeps its array's name ("/objects/1/size/0" -> "size/0").
 std::string shortName(const std::string& key) {
   std::string p = key.substr(std::string(kSceneKeyPrefix).size());
   size_t slash = p.rfind('/');
-  return slash == std::string::npos ? p : p.substr(slash + 1);
+  if (slash == std::string::npos) return p;
+  const std::string last = p.substr(slash + 1);
+  if (slash > 0 && !last.empty() && last.find_first_not_of("0123456789") == std::string::npos) {
+    size_t before = p.rfind('/', slash - 1);
+    return p.substr(before == std::string::npos ? 0 : before + 1);
+  }
+  return last;
 }
 
 }  // namespace
@@ -75,7 +82,9 @@ nlohmann::json computeFrontiers(const SweepPlan& plan, const std::vector<ResultR
         break;
       }
     for (const SweepAxis* axis : walked) {
-      const std::string pointer = axis->key.substr(prefix.size());
+      std::string pointer = axis->key.substr(prefix.size());
+      // scene:failure is this scene's declared failure pointer.
+      if (axis->key == kSceneFailureKey && declared) pointer = declared->failurePointer;
       // Direction: the declared failure list goes from easy to hard; values are walked numerically in
       // that direction, so swept values need not be among the declared ones.
       int harder = 0;  // +1: larger is harder, -1: smaller is harder, 0: grid order
@@ -149,6 +158,7 @@ nlohmann::json computeFrontiers(const SweepPlan& plan, const std::vector<ResultR
         nlohmann::json e;
         e["scene"] = scene;
         e["parameter"] = axis->key;
+        e["pointer"] = pointer;
         e["direction"] = dir > 0 ? "increasing" : (dir < 0 ? "decreasing" : "grid order");
         e["declared"] = dir != 0;
         e["method"] = label;
@@ -162,7 +172,7 @@ nlohmann::json computeFrontiers(const SweepPlan& plan, const std::vector<ResultR
         // The last value that still passed before the frontier (null: the easiest value already fails).
         e["holds_to"] = f.holds ? valueJson(used.size() - 1)
                                 : (f.breakIndex == 0 ? nlohmann::json(nullptr) : valueJson(f.breakIndex - 1));
-        const std::string name = shortName(axis->key);
+        const std::string name = shortName(prefix + pointer);
         std::string sentence = label + ": ";
         if (f.holds) {
           sentence += "holds to " + name + "=" + used.back()->text + " (" + metric + " at most " +

@@ -49,6 +49,7 @@ std::string scenePointerOf(const std::string& key) { return key.substr(std::stri
 
 void checkKey(const std::string& key, const std::string& origin) {
   if (isMethodKey(key)) return;
+  if (key == kSceneFailureKey) return;
   if (isSceneKey(key)) {
     std::string pointer = scenePointerOf(key);
     try {
@@ -59,24 +60,11 @@ void checkKey(const std::string& key, const std::string& origin) {
     } catch (const std::exception&) {
       throw InputError(formatError(origin, "", "scene key \"" + key +
                                                    "\" has no valid JSON pointer; expected scene:/path/to/value, "
-                                                   "e.g. scene:/lights/0/elevation_deg"));
+                                                   "e.g. scene:/lights/0/elevation_deg, or scene:failure"));
     }
   }
   throw InputError(formatError(origin, "", "unknown key \"" + key + "\"; expected one of " +
-                                               joinKeys(methodKeys()) + ", or scene:/json/pointer"));
-}
-
-// Text from the command line given to a scene value: a JSON literal when it parses as one
-// (30 -> number, true -> bool), else the text as a string.
-nlohmann::json sceneValueFromText(const nlohmann::json& v) {
-  if (!v.is_string()) return v;
-  const std::string text = v.get<std::string>();
-  try {
-    auto parsed = nlohmann::json::parse(text);
-    if (parsed.is_primitive()) return parsed;
-  } catch (const std::exception&) {
-  }
-  return v;
+                                               joinKeys(methodKeys()) + ", scene:/json/pointer or scene:failure"));
 }
 
 void applyValue(Method& m, const std::string& key, const nlohmann::json& value, const std::string& origin) {
@@ -100,6 +88,17 @@ std::string dirOf(const std::string& path) {
 std::string typeName(const ojson& j) { return j.type_name(); }
 
 }  // namespace
+
+nlohmann::json sceneValueFromText(const nlohmann::json& v) {
+  if (!v.is_string()) return v;
+  const std::string text = v.get<std::string>();
+  try {
+    auto parsed = nlohmann::json::parse(text);
+    if (parsed.is_primitive()) return parsed;
+  } catch (const std::exception&) {
+  }
+  return v;
+}
 
 std::string canonicalValueText(const nlohmann::json& value) {
   if (value.is_string()) return value.get<std::string>();
@@ -369,18 +368,42 @@ SweepPlan planSweep(const SweepSpec& spec) {
     plan.scenePaths.push_back(p);
   }
   std::map<std::string, size_t> variantOf;  // scene index + overrides -> variant
+  const std::string failurePointer = scenePointerOf(kSceneFailureKey);  // "failure"
+  bool usesFailure = false;
+  for (const auto& c : plan.configs)
+    for (const auto& o : c.sceneOverrides) usesFailure = usesFailure || o.pointer == failurePointer;
   for (size_t si = 0; si < plan.scenePaths.size(); ++si) {
     std::string sceneName;
     std::string light;
+    // scene:failure names this scene's declared failure pointer.
+    std::string declared;
+    if (usesFailure) {
+      declared = loadScene(plan.scenePaths[si]).failurePointer;
+      if (declared.empty())
+        throw InputError(formatError(plan.scenePaths[si], "", std::string("the scene declares no \"failure\", so ") +
+                                                                 kSceneFailureKey + " names nothing in it; expected a "
+                                                                 "scene with \"failure\" (scenes/FORMAT.md) or a "
+                                                                 "JSON pointer: scene:/path/to/value"));
+    }
     for (size_t ci = 0; ci < plan.configs.size(); ++ci) {
       const SweepConfig& c = plan.configs[ci];
+      std::vector<SceneOverride> overrides = c.sceneOverrides;
+      for (auto& o : overrides)
+        if (o.pointer == failurePointer) {
+          o.pointer = declared;
+          for (const auto& other : c.sceneOverrides)
+            if (other.pointer == declared)
+              throw InputError(formatError(plan.scenePaths[si], "", std::string(kSceneFailureKey) + " is " + declared +
+                                                                       " in this scene, which scene:" + declared +
+                                                                       " also sets; expected one of them"));
+        }
       std::string vkey = std::to_string(si);
-      for (const auto& o : c.sceneOverrides) vkey += "\n" + o.pointer + "=" + o.value.dump();
+      for (const auto& o : overrides) vkey += "\n" + o.pointer + "=" + o.value.dump();
       auto found = variantOf.find(vkey);
       size_t vi;
       if (found == variantOf.end()) {
         vi = plan.variants.size();
-        plan.variants.push_back(loadScene(plan.scenePaths[si], c.sceneOverrides));
+        plan.variants.push_back(loadScene(plan.scenePaths[si], overrides));
         variantOf.emplace(vkey, vi);
       } else {
         vi = found->second;

@@ -53,7 +53,15 @@ out = [
     ",\n".join("    " + c(o) for o in objs),
     "  ],",
     '  "lights": [' + c({"type": "directional", "name": "sun", "elevation_deg": 35, "azimuth_deg": 150}) + "],",
-    '  "failure": ' + c({"pointer": "/camera/far", "values": [25, 50, 100, 250], "description": "view distance"}),
+    '  "failure": ' + c({"pointer": "/camera/far", "values": [25, 50, 100, 250], "description": "view distance"}) + ",",
+    "  // Fit-camera paths for `shadowlab stability long_view --path NAME` (scenes/FORMAT.md, paths).",
+    '  "paths": {',
+    '    "walk": ' + c({"kind": "dolly", "distance": 4, "frames": 32}) + ",",
+    '    "turn": ' + c({"kind": "keyframes", "frames": 17, "cameras": [
+        {"position": [0, 1.7, 8], "look_at": [0, 1.2, -100]},
+        {"position": [0, 1.7, 4], "look_at": [-20, 1.2, -100]},
+        {"position": [0, 1.7, 0], "look_at": [0, 1.2, -100]}]}),
+    "  }",
     "}",
 ]
 with open(os.path.join(here, "long_view.json"), "w") as f:

@@ -18,6 +18,7 @@
 #include <tiny_obj_loader.h>
 
 #include "json_util.h"
+#include "shadowlab/scenes/camera_path.h"
 #include "shadowlab/scenes/error.h"
 #include "shadowlab/scenes/io.h"
 
@@ -812,6 +813,77 @@ void readFailure(const Reader& r, const Node& root, Scene& scene) {
   if (Node d = r.child(f, "description")) r.string(d);
 }
 
+// "paths": named camera paths for `shadowlab stability --path NAME` (scenes/FORMAT.md, "paths").
+// Each path is expanded here once, so a degenerate keyframe interpolation is an error at load time.
+void readPaths(const Reader& r, const Node& root, Scene& scene) {
+  Node ps = r.child(root, "paths");
+  if (!ps) return;
+  if (!ps.j->is_object() || ps.j->empty()) r.expected(ps, "a non-empty object of named camera paths");
+  const std::string frameRange = "an integer 2.." + std::to_string(kMaxPathFrames);
+  for (const auto& item : ps.j->items()) {
+    Node p{&item.value(), detail::childPointer(ps.ptr, item.key())};
+    CameraPath path;
+    path.name = item.key();
+    // The name is given on the command line (--path NAME): the same characters as light names.
+    for (char c : path.name)
+      if (!(std::isalnum(static_cast<unsigned char>(c)) || c == '_' || c == '-'))
+        r.fail(p.ptr, "path name \"" + path.name + "\" has a character other than letters, digits, '_' and '-'; "
+                      "expected a name usable as --path NAME");
+    // dolly and orbit are the generated paths' names: a scene path of that name would hide them.
+    if (path.name == "dolly" || path.name == "orbit")
+      r.fail(p.ptr, "path name \"" + path.name + "\" is reserved for the generated paths; expected another name");
+    if (!p.j->is_object()) r.expected(p, "a camera path object with \"kind\"");
+    Node kind = r.require(p, "kind", "one of dolly, orbit, keyframes");
+    const std::string k = kind.j->is_string() ? kind.j->get<std::string>() : "";
+    if (k == "dolly") {
+      r.keys(p, {"kind", "frames", "distance"});
+      path.kind = CameraPathKind::Dolly;
+      path.distanceWorld = float(r.number(r.require(p, "distance", "the total travel in world units")));
+    } else if (k == "orbit") {
+      r.keys(p, {"kind", "frames", "angle_deg"});
+      path.kind = CameraPathKind::Orbit;
+      path.angleDeg = float(r.range(r.require(p, "angle_deg", "the total rotation in degrees"), -360, false, 360,
+                                    false, "an angle in degrees -360..360"));
+    } else if (k == "keyframes") {
+      r.keys(p, {"kind", "frames", "cameras"});
+      path.kind = CameraPathKind::Keyframes;
+      Node cams = r.require(p, "cameras", "an array of at least 2 cameras {position, look_at, up?}");
+      if (!cams.j->is_array() || cams.j->size() < 2)
+        r.expected(cams, "an array of at least 2 cameras {position, look_at, up?}");
+      for (size_t i = 0; i < cams.j->size(); ++i) {
+        Node c = r.at(cams, i);
+        r.keys(c, {"position", "look_at", "up"}, "a camera object {position, look_at, up?}");
+        Camera cam = scene.camera;  // field of view, size and depth range stay the scene camera's
+        cam.position = r.vec3(r.require(c, "position", "3 numbers (x, y, z)"));
+        cam.lookAt = r.vec3(r.require(c, "look_at", "3 numbers (x, y, z)"));
+        cam.up = glm::vec3(0, 1, 0);
+        if (Node u = r.child(c, "up")) cam.up = direction(r, u);
+        const std::string problem = pathCameraProblem(cam);
+        if (!problem.empty()) r.fail(c.ptr, "keyframe " + std::to_string(i) + " is degenerate: " + problem +
+                                                "; expected a camera that looks somewhere");
+        path.keyframes.push_back(cam);
+      }
+      path.frames = int(path.keyframes.size());
+    } else {
+      r.expected(kind, "one of dolly, orbit, keyframes");
+    }
+    if (Node f = r.child(p, "frames")) path.frames = int(r.integer(f, 2, kMaxPathFrames));
+    else if (path.kind != CameraPathKind::Keyframes) r.fail(p.ptr, "missing key \"frames\"; expected " + frameRange);
+    if (path.frames > kMaxPathFrames) r.fail(p.ptr, "got " + std::to_string(path.frames) + " keyframes; expected at most " +
+                                                       std::to_string(kMaxPathFrames));
+    try {
+      (void)expandCameraPath(scene.camera, path);
+    } catch (const InputError& e) {
+      // The generators word their errors for the command line ("keyframes: error: ..."): keep the
+      // part after "error: " and put it at this path's pointer.
+      std::string what = e.what();
+      const auto at = what.find("error: ");
+      r.fail(p.ptr, at == std::string::npos ? what : what.substr(at + 7));
+    }
+    scene.paths.push_back(std::move(path));
+  }
+}
+
 // Every number as a double, so 50 in the file and 50.0 from an override hash alike.
 json canonicalNumbers(const json& j) {
   if (j.is_number()) return json(j.get<double>());
@@ -920,7 +992,7 @@ Scene loadScene(const std::string& path, const std::vector<SceneOverride>& overr
   Node root{&doc, ""};
   if (!doc.is_object()) r.expected(root, "a JSON object with camera, objects and lights");
   applyOverrides(r, doc, overrides);
-  r.keys(root, {"description", "camera", "materials", "objects", "lights", "projectors", "failure"});
+  r.keys(root, {"description", "camera", "materials", "objects", "lights", "projectors", "failure", "paths"});
   if (Node d = r.child(root, "description")) r.string(d);
 
   fs::path dir = fs::path(path).parent_path();
@@ -935,6 +1007,7 @@ Scene loadScene(const std::string& path, const std::vector<SceneOverride>& overr
   if (scene.lights.empty() && scene.projectors.empty())
     r.fail("/lights", "the scene has no light and no projector; expected at least one of them");
   readFailure(r, root, scene);
+  readPaths(r, root, scene);
   checkComputed(r, scene);
   scene.hash = sceneHash(doc, scene);
   return scene;

@@ -130,6 +130,12 @@ const Light* Scene::findLight(const std::string& lightName) const {
   return nullptr;
 }
 
+const CameraPath* Scene::findPath(const std::string& pathName) const {
+  for (const auto& p : paths)
+    if (p.name == pathName) return &p;
+  return nullptr;
+}
+
 size_t Scene::triangleCount() const {
   size_t n = 0;
   for (const auto& o : objects) n += o.triangles.size();

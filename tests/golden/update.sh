@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # Regenerates tests/golden/baseline.json with the real pipeline: one sweep per *.sweep.json here,
-# then `shadowlab gate --update-baseline`, which prints every metric that changed. Run it only on
+# then `shadowlab gate --update-baseline`, which prints every metric that changed; likewise
+# tests/golden/stability_baseline.json from the stability run in stability.args. Run it only on
 # purpose (a change that moves metrics intentionally), review the printed diff and `git diff`,
 # and commit the new baseline with the change that caused it.
 #
@@ -22,3 +23,7 @@ for sweep in "$here"/*.sweep.json; do
   currents+=("$work/$name/results.json")
 done
 "$bin" gate "${currents[@]}" --baseline "$here/baseline.json" --update-baseline
+# The golden stability run (its own baseline): the arguments in stability.args, comments dropped.
+read -r -a stability_args <<< "$(grep -v '^#' "$here/stability.args" | tr '\n' ' ')"
+"$bin" stability "${stability_args[@]}" -o "$work/stability" --cache "$work/cache" >/dev/null
+"$bin" gate "$work/stability/stability.json" --baseline "$here/stability_baseline.json" --update-baseline

@@ -1,11 +1,14 @@
 #pragma once
-// Temporal stability of a shadow-mapping method: shimmer measured exactly.
+// Temporal stability of a shadow-mapping method, two ways (compare/METRICS.md, "Temporal stability"):
 //
-// The evaluation camera (scene.camera) stays fixed while the camera the light's fit follows moves
-// along a path (Rasterizer::render's fitCamera), so every pixel shows the same surface point in
-// every frame and one reference frame serves them all: any change of the raster's decision
-// between frames is the fit's doing (crawling / shimmering shadow edges). Documented in
-// compare/METRICS.md ("Temporal stability").
+// - a moving fit camera (shimmer measured exactly): the evaluation camera (scene.camera) stays
+//   fixed while the camera the light's fit follows moves along a path (Rasterizer::render's
+//   fitCamera), so every pixel shows the same surface point in every frame and one reference frame
+//   serves them all: any change of the raster's decision between frames is the fit's doing
+//   (crawling / shimmering shadow edges);
+// - a moving light (a light path, e.g. the sun going down): the camera stays fixed, each frame is
+//   its own scene with its own reference, and the error rate is followed from frame to frame
+//   (error_jump_max: a method that breaks inside the path jumps).
 #include <cstdint>
 #include <string>
 #include <vector>
@@ -13,22 +16,15 @@
 #include <nlohmann/json.hpp>
 
 #include "shadowlab/compare/compare.h"
+#include "shadowlab/scenes/camera_path.h"
 #include "shadowlab/scenes/frame.h"
+#include "shadowlab/scenes/loader.h"
 #include "shadowlab/scenes/scene.h"
 
 namespace shadowlab {
 
-// ---- camera paths (pure functions) -------------------------------------------------------------
-// Both return `frames` cameras (frames >= 2); frame 0 is `start` exactly, frame frames-1 the end of
-// the path, the steps in between equal. Everything but position and lookAt is copied from start.
-//
-// dolly: position and lookAt both move by distanceWorld * k / (frames - 1) along the unit view
-// direction normalize(lookAt - position) (negative: backwards), so the view direction is constant.
-std::vector<Camera> dollyPath(const Camera& start, float distanceWorld, int frames);
-// orbit: position rotates about the axis through lookAt along start.up (normalized) by
-// angleDeg * k / (frames - 1) degrees (right-handed: positive is counter-clockwise seen from
-// above); lookAt stays, so the camera keeps looking at the same point.
-std::vector<Camera> orbitPath(const Camera& start, float angleDeg, int frames);
+// Camera paths (dollyPath, orbitPath, keyframePath, scene-file paths) are in
+// shadowlab/scenes/camera_path.h.
 
 // ---- metrics -----------------------------------------------------------------------------------
 struct StabilityMetrics {
@@ -39,12 +35,28 @@ struct StabilityMetrics {
   std::vector<double> flipRatePerPair;
   std::vector<uint64_t> pixelsComparedPerPair;
   double shimmerRate = 0;  // mean of flipRatePerPair
-  // Per frame: compareFrames(reference, frame).errorRate against the one fixed reference.
+  // Per frame: compareFrames(reference, frame).errorRate against the frame's reference (the one
+  // fixed reference of a camera path; each frame's own for a light path).
   std::vector<double> errorRatePerFrame;
   double errorRateMean = 0, errorRateMax = 0, errorRateStd = 0;  // std: population (divide by N)
+  // max over k of |errorRatePerFrame[k + 1] - errorRatePerFrame[k]|: the largest change of the error
+  // rate between consecutive frames (a fraction of compared pixels, like error_rate).
+  double errorJumpMax = 0;
 
-  nlohmann::json toJson() const;  // keys: frames, shimmer_rate, flip_rate_per_pair, error_rate_*
+  // Camera paths have shimmer (flipRatePerPair filled); light paths do not (the true shadow moves,
+  // so a flipped decision is not an error there): their JSON has no shimmer keys.
+  bool hasShimmer() const { return !flipRatePerPair.empty(); }
+  // Everything: frames, shimmer_rate, flip_rate_per_pair, pixels_compared_per_pair (camera paths),
+  // error_rate_per_frame, error_rate_mean/max/std, error_jump_max.
+  nlohmann::json toJson() const;
+  // The scalar metrics a gate checks (the `metrics` of stability.json's result row): frames,
+  // shimmer_rate (camera paths), error_rate_mean, error_rate_max, error_rate_std, error_jump_max.
+  nlohmann::json gateMetrics() const;
 };
+
+// Fills frames, errorRatePerFrame and its statistics (mean, max, population std, errorJumpMax) from
+// per-frame error rates (>= 1; InputError otherwise or on a non-finite rate).
+void setErrorStatistics(StabilityMetrics& s, const std::vector<double>& errorRatePerFrame);
 
 // The flip fraction of one pair of raster frames against the reference (see flipRatePerPair).
 // `light`: the light channel (light.LIGHT.vis). Throws InputError on size mismatch or missing
@@ -56,5 +68,28 @@ double decisionFlipRate(const Frame& reference, const Frame& rasterA, const Fram
 // throws InputError otherwise or on frames compareFrames rejects.
 StabilityMetrics measureStability(const Frame& reference, const std::vector<Frame>& rasters,
                                   const CompareOptions& options = {});
+
+// ---- light paths -------------------------------------------------------------------------------
+// One moving angle of a directional light: `--light-path elevation_deg=60:10:11` moves the sun's
+// elevation from 60 to 10 degrees in 11 frames (both ends included, equal steps).
+struct LightPathAxis {
+  std::string key;  // "elevation_deg" or "azimuth_deg" (scenes/FORMAT.md, lights)
+  double from = 0, to = 0;
+  int frames = 0;   // 2..kMaxPathFrames
+  double value(int k) const { return from + (to - from) * double(k) / double(frames - 1); }
+};
+// Parses "KEY=FROM:TO:FRAMES". InputError "--light-path TEXT: error: ..." on anything else: an
+// unknown key, a non-finite number, an elevation outside -90..90, frames outside 2..kMaxPathFrames.
+LightPathAxis parseLightPath(const std::string& text);
+
+// The scene overrides that put light `lightName` of `scene` at frame k of the axes (one or two
+// axes with distinct keys and the same frames; InputError otherwise, or when the light is not
+// directional). A light declared with elevation_deg in the file gets elevation_deg/azimuth_deg
+// overrides; one declared with a direction gets a direction override computed from its angles
+// (the angle not moved keeps its value). `sceneDocument`: the scene file as parsed (to see how
+// the light is declared).
+std::vector<SceneOverride> lightPathOverrides(const nlohmann::json& sceneDocument, const Scene& scene,
+                                              const std::string& lightName,
+                                              const std::vector<LightPathAxis>& axes, int k);
 
 }  // namespace shadowlab

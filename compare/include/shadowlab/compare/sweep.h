@@ -31,6 +31,9 @@ namespace shadowlab {
 // Swept keys are method keys (methodKeys(), e.g. "map.size") or scene values written
 // "scene:" + a JSON pointer into the scene file (e.g. "scene:/lights/0/elevation_deg").
 inline constexpr const char* kSceneKeyPrefix = "scene:";
+// "scene:failure": the value each scene's declared failure pointer names (scenes/FORMAT.md,
+// "failure"), resolved per scene by planSweep (a scene without "failure" is an InputError).
+inline constexpr const char* kSceneFailureKey = "scene:failure";
 
 struct SweepAxis {
   std::string key;
@@ -69,6 +72,10 @@ SweepSetting parseSetArgument(const std::string& text);
 // InputError naming the file and line:col (syntax) or JSON pointer (shape, keys, values).
 void loadSweepFile(const std::string& path, SweepSpec& spec);
 
+// A scene value from the command line (--set scene:/pointer=TEXT): a JSON literal when TEXT parses
+// as one (30 -> number, true -> bool), else TEXT as a string. Typed values pass unchanged.
+nlohmann::json sceneValueFromText(const nlohmann::json& value);
+
 // The canonical text of one value: strings as they are, integers plainly, other numbers with
 // %.6g (so "0.50" and 0.5 are the same configuration), booleans true/false, anything else as
 // compact JSON.
@@ -80,7 +87,9 @@ struct SweepConfig {
   std::string config;
   std::vector<std::pair<std::string, std::string>> values;  // swept key -> canonical value, sorted
   Method method;                                            // base + fixed + this point of the grid
-  std::vector<SceneOverride> sceneOverrides;                // the scene: keys of this point
+  // The scene: keys of this point; scene:failure has the pointer "failure" here, replaced by each
+  // scene's own failure pointer when the scene is loaded.
+  std::vector<SceneOverride> sceneOverrides;
 };
 
 struct SweepJob {

@@ -95,6 +95,20 @@ struct Camera {
   std::string hash() const;
 };
 
+// A named camera path declared in the scene file ("paths", scenes/FORMAT.md), expanded by
+// expandCameraPath (camera_path.h) for `shadowlab stability SCENE --path NAME`.
+enum class CameraPathKind { Dolly, Orbit, Keyframes };
+
+struct CameraPath {
+  std::string name;
+  CameraPathKind kind = CameraPathKind::Dolly;
+  int frames = 0;               // 2..kMaxPathFrames
+  float distanceWorld = 0.0f;   // dolly: total travel along the view direction, world units
+  float angleDeg = 0.0f;        // orbit: total rotation about look_at, degrees
+  std::vector<Camera> keyframes;  // keyframes: >= 2 cameras (the scene camera's other fields)
+};
+std::string toString(CameraPathKind kind);  // "dolly", "orbit", "keyframes"
+
 struct Scene {
   std::string path;       // the scene file as given
   std::string name;       // file stem, e.g. "sphere_on_plane"
@@ -108,11 +122,14 @@ struct Scene {
   // a JSON pointer into the scene file and the values to sweep.
   std::string failurePointer;
   std::vector<double> failureValues;
+  std::vector<CameraPath> paths;  // "paths" in the file, sorted by name
+
 
   // World-space axis-aligned bounds of all objects.
   glm::vec3 boundsMin() const;
   glm::vec3 boundsMax() const;
   const Light* findLight(const std::string& name) const;  // nullptr when absent
+  const CameraPath* findPath(const std::string& name) const;  // nullptr when absent
   size_t triangleCount() const;
 };
 
