@@ -409,8 +409,11 @@ TEST(ScenesObj, MtlMaterialsAndMapD) {
   EXPECT_EQ(tree.triangleMaterial, (std::vector<uint32_t>{1, 2}));
   ASSERT_EQ(tree.uvs.size(), tree.positions.size());
   // OBJ's v grows up; ours grows down from the top row: vt (0, 0) at the bottom-left -> uv (0, 1).
-  for (size_t i = 0; i < tree.positions.size(); ++i)
-    if (tree.positions[i] == glm::vec3(0, 0, 0)) EXPECT_EQ(tree.uvs[i], glm::vec2(0, 1));
+  for (size_t i = 0; i < tree.positions.size(); ++i) {
+    if (tree.positions[i] == glm::vec3(0, 0, 0)) {
+      EXPECT_EQ(tree.uvs[i], glm::vec2(0, 1));
+    }
+  }
   // A scene material on an OBJ replaces its MTL materials.
   writeFileAtomic((dir / "s2.json").string(),
                   mini(R"({"type": "obj", "path": "leaf.obj", "material": "stone"})", R"({"type": "directional", "elevation_deg": 45})",
