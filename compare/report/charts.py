@@ -14,6 +14,7 @@ A chart whose swept key is absent from the grid is skipped with a reason (not an
 """
 import json
 import math
+import multiprocessing
 import os
 import sys
 
@@ -349,6 +350,10 @@ def chart_frontiers(frontiers, out_dir):
     return save(fig, out_dir, "frontiers"), caption
 
 
+def draw_task(function, args):
+    return function(*args)
+
+
 def main(argv):
     if len(argv) != 3:
         sys.stderr.write("usage: charts.py RESULTS_JSON FIGURES_DIR\n")
@@ -366,34 +371,45 @@ def main(argv):
             scenes.append(r["scene"])
     rows_by_scene = {s: [r for r in rows if r["scene"] == s] for s in scenes}
 
-    charts, skipped = [], []
-
-    def add(chart_id, title, result):
-        files, text = result
-        if files is None:
-            skipped.append({"id": chart_id, "title": title, "reason": text})
-        else:
-            charts.append({"id": chart_id, "title": title, "caption": text, **files})
+    # tasks: (id, title, function, args), drawn below; function None: skipped, args the reason
+    charts, skipped, tasks = [], [], []
 
     if not rows:
         skipped.append({"id": "all", "title": "all charts", "reason": "results.json has no rows"})
     else:
-        add("error_by_size", "Error rate by class against map size",
-            chart_error_by_size(scenes, rows_by_scene, swept, out_dir))
+        tasks.append(("error_by_size", "Error rate by class against map size",
+                      chart_error_by_size, (scenes, rows_by_scene, swept, out_dir)))
         bias_swept = [(k, label) for k, label in BIAS_KEYS if k in swept]
         if not bias_swept:
-            skipped.append({"id": "bias_tradeoff", "title": "The bias trade-off",
-                            "reason": "no bias key (bias.slope, bias.constant, bias.compare, bias.normal) is in the grid"})
+            tasks.append(("bias_tradeoff", "The bias trade-off", None,
+                          "no bias key (bias.slope, bias.constant, bias.compare, bias.normal) is in the grid"))
         for key, label in bias_swept:
-            add("bias_tradeoff_" + key.replace(".", "_"), f"The bias trade-off: {key}",
-                chart_bias_tradeoff(scenes, rows_by_scene, swept, out_dir, key, label))
-        add("accuracy_vs_time", "Accuracy against time (Pareto front)",
-            chart_accuracy_vs_time(scenes, rows_by_scene, out_dir))
-        add("m_footprint", "Texel footprint m per configuration", chart_m_footprint(scenes, rows_by_scene, swept, out_dir))
+            tasks.append(("bias_tradeoff_" + key.replace(".", "_"), f"The bias trade-off: {key}",
+                          chart_bias_tradeoff, (scenes, rows_by_scene, swept, out_dir, key, label)))
+        tasks.append(("accuracy_vs_time", "Accuracy against time (Pareto front)",
+                      chart_accuracy_vs_time, (scenes, rows_by_scene, out_dir)))
+        tasks.append(("m_footprint", "Texel footprint m per configuration",
+                      chart_m_footprint, (scenes, rows_by_scene, swept, out_dir)))
         # Only a sweep of a scene: parameter has frontiers; other sweeps get no chart and no note.
         frontiers = [f for f in results.get("frontiers", []) if f.get("points")]
         if frontiers:
-            add("frontiers", "Failure frontiers", chart_frontiers(frontiers, out_dir))
+            tasks.append(("frontiers", "Failure frontiers", chart_frontiers, (frontiers, out_dir)))
+
+    # The charts are independent and each writes only its own files: drawn in two forked workers
+    # (the sweep's report waits on this script; matplotlib is single-threaded). The manifest keeps
+    # the task order, so the output does not depend on which worker finished first.
+    jobs = [(t[2], t[3]) for t in tasks if t[2] is not None]
+    if len(jobs) > 1 and (os.cpu_count() or 1) > 1:
+        with multiprocessing.get_context("fork").Pool(2) as pool:
+            drawn = iter(pool.starmap(draw_task, jobs))
+    else:
+        drawn = iter([draw_task(f, a) for f, a in jobs])
+    results_list = [(None, t[3]) if t[2] is None else next(drawn) for t in tasks]
+    for (chart_id, title, _, _), (files, text) in zip(tasks, results_list):
+        if files is None:
+            skipped.append({"id": chart_id, "title": title, "reason": text})
+        else:
+            charts.append({"id": chart_id, "title": title, "caption": text, **files})
 
     manifest = {"charts": charts, "skipped": skipped}
     tmp = os.path.join(out_dir, ".charts.json.tmp")
