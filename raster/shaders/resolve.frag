@@ -21,6 +21,8 @@ layout(constant_id = 1) const int kProjectorCount = 0;
 layout(constant_id = 2) const bool kCascaded = false;
 layout(constant_id = 3) const bool kBlend = false;
 layout(constant_id = 4) const bool kFloatDepth = false;
+// The light's type (0 directional, 1 spot, 2 point, 3 none): the other types' code compiled out.
+layout(constant_id = 5) const int kLightType = 0;
 
 const int kMaxLayers = 16;  // 8 light layers (cascades; a cube: 6) + 8 projectors
 const int kMaxProjectors = 8;
@@ -199,7 +201,7 @@ void main() {
   vec3 e1 = vec3(1.0 + sgn * normal.x * normal.x * ta, sgn * normal.x * normal.y * ta, -sgn * normal.x);
 
   // ---- the light ----
-  int lightType = int(P.lightPosType.w);
+  const int lightType = kLightType;
   vec3 lightPos = P.lightPosType.xyz;
   gSize = float(P.sizes.x);
   // Cascades (directional only): the pixel's view depth picks the first cascade whose far split

@@ -152,8 +152,9 @@ struct Rasterizer::Impl {
   vk::QueryPool queries;
   // Keyed by what needs a new pipeline: (depth format, depth clamp, material tests, depth bias).
   std::map<std::tuple<VkFormat, bool, bool, bool>, vk::PipelineHandle> idPipelines;
-  // resolve.frag's specialization constants: filter, projector count, cascaded, blend, float depth.
-  using ResolveKey = std::array<uint32_t, 5>;
+  // resolve.frag's specialization constants: filter, projector count, cascaded, blend, float depth,
+  // light type (0 directional, 1 spot, 2 point, 3 none).
+  using ResolveKey = std::array<uint32_t, 6>;
   std::map<ResolveKey, vk::PipelineHandle> resolvePipelines;
   std::set<std::string> warmed;
   std::vector<glm::vec2> poisson = poissonDisc();
@@ -748,7 +749,11 @@ Frame Rasterizer::render(const Scene& scene, const Method& method, const std::st
   bool cascaded = !lightSpace.cascadeSplitsView.empty();
   Impl::ResolveKey resolveKey{uint32_t(method.filter), uint32_t(projectorCount), cascaded ? 1u : 0u,
                               cascaded && method.cascadeBlend > 0.0f ? 1u : 0u,
-                              depthResolution(method.mapFormat) > 0.0f ? 0u : 1u};
+                              depthResolution(method.mapFormat) > 0.0f ? 0u : 1u,
+                              !light                                    ? 3u
+                              : light->type == LightType::Directional ? 0u
+                              : light->type == LightType::Spot        ? 1u
+                                                                      : 2u};
   VkPipeline resolve = im.resolvePipeline(resolveKey);
   std::string warmKey = std::to_string(int(mapFormat)) + "/" + std::to_string(depthClamp);
   for (uint32_t k : resolveKey) warmKey += "/" + std::to_string(k);
