@@ -2,6 +2,7 @@
 // Every test runs with the Khronos validation layer (when installed) and requires zero messages.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <cstring>
@@ -172,6 +173,29 @@ TEST_F(RasterTest, KeptVisibilityBufferNeverOutlivesItsCamera) {
   other.objects[1].positions[0].y += 0.25f;
   other.hash.clear();
   expectSame(R->render(other, m), fresh(other, m), "other scene");
+}
+
+// Recycled planes are overwritten entirely: a frame rendered into another scene's planes (other
+// values, other sizes) equals one rendered into fresh memory.
+TEST_F(RasterTest, RecycledPlanesAreOverwrittenEverywhere) {
+  REQUIRE_DEVICE();
+  Scene s = roofScene(0.5f);
+  Method m;
+  Frame expected = R->render(s, m);
+  for (int size : {0, 1, 2}) {  // smaller, equal, larger frames handed back
+    Scene other = roofScene(0.25f);
+    other.camera.position = {2, 3, 7};
+    other.camera.width = 160 + (size - 1) * 8;
+    other.camera.height = 120 + (size - 1) * 6;
+    Frame old = R->render(other, m);
+    for (auto& plane : old.data) std::fill(plane.begin(), plane.end(), 12345.0f);
+    R->recycle(std::move(old));
+    Frame again = R->render(s, m);
+    ASSERT_EQ(again.names, expected.names);
+    for (size_t c = 0; c < again.names.size(); ++c)
+      EXPECT_EQ(0, std::memcmp(again.data[c].data(), expected.data[c].data(), expected.data[c].size() * sizeof(float)))
+          << "size step " << size << ": " << again.names[c];
+  }
 }
 
 TEST_F(RasterTest, MapSizeLimits) {

@@ -46,6 +46,7 @@ class PipelineRunner final : public SweepRunner {
       writeFrameExr(raster, imagesDir + "/raster.exr");
       writeErrorsPng(imagesDir + "/errors.png", classification);
     }
+    rasterizer().recycle(std::move(raster));  // the next row's planes, without fresh memory
     SweepRunOutput out;
     out.metrics = m.toJson();
     out.timings = {{"shadow_ms", t.shadowMs},

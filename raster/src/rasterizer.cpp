@@ -180,6 +180,7 @@ struct Rasterizer::Impl {
   // camera) it is kept and not drawn again. Its GPU time, measured when it was drawn, stays part
   // of every frame's camera_ms.
   std::string visibilityKey;  // empty: cameraIds holds nothing reusable
+  std::vector<std::vector<float>> spare;  // recycled channel planes (Rasterizer::recycle)
   double visibilityMs = 0;
 };
 
@@ -538,6 +539,12 @@ Frame Rasterizer::Impl::readback(const Scene& sc, const Light* light, int width,
     for (const char* name : {"coverage", "R", "G", "B", "reverse"}) frame.names.push_back(p + name);
   }
   frame.data.resize(frame.names.size());
+  // Recycled planes of this size are taken as they are (every element is overwritten below).
+  for (size_t c = 0; c < frame.data.size() && !spare.empty(); ++c) {
+    frame.data[c] = std::move(spare.back());
+    spare.pop_back();
+  }
+  spare.clear();
   auto allocate = [&](size_t first, size_t step) {
     for (size_t c = first; c < frame.data.size(); c += step) frame.data[c].resize(n);
   };
@@ -608,6 +615,13 @@ int Rasterizer::maxMapSize() const {
 }
 
 int Rasterizer::validationMessages() const { return impl_->context->validationMessages(); }
+
+void Rasterizer::recycle(Frame&& frame) {
+  const size_t n = frame.pixelCount();
+  for (std::vector<float>& plane : frame.data)
+    if (plane.size() == n && n > 0) impl_->spare.push_back(std::move(plane));
+  frame = Frame();
+}
 
 Frame Rasterizer::render(const Scene& scene, const Method& method, const std::string& lightName,
                          RasterTimings* timings, const Camera* fitCamera) {

@@ -38,6 +38,9 @@ class Rasterizer {
   int maxMapSize() const;  // the device's largest 2D image size
   // Number of validation-layer messages (warnings and errors) seen so far (validation only).
   int validationMessages() const;
+  // Hands a finished frame's channel planes back for the next render() to fill: a frame of the
+  // same size then needs no fresh (zero-filled) memory. Optional; a sweep calls it per row.
+  void recycle(Frame&& frame);
 
   // Renders `scene` with `method` for the light named `light` (empty: the scene's first light)
   // and all projectors. The GPU copy of the scene is kept and reused while the scene hash is the
