@@ -14,23 +14,15 @@
 #include "shadowlab/compare/compare.h"
 #include "shadowlab/raster/raster.h"
 #include "shadowlab/scenes/io.h"
+#include "support/cli.h"
 
 namespace shadowlab {
 namespace {
 
 namespace fs = std::filesystem;
 
-struct Result {
-  int code = -1;
-  std::string out, err;
-};
-
-std::string slurp(const std::string& path) {
-  std::ifstream in(path);
-  std::stringstream ss;
-  ss << in.rdbuf();
-  return ss.str();
-}
+using Result = testing::CliRun;
+using testing::slurp;
 
 class CompareCli : public ::testing::Test {
  protected:
@@ -46,15 +38,7 @@ class CompareCli : public ::testing::Test {
   }
   std::string path(const std::string& rel) const { return (dir_ / rel).string(); }
   Result shadowlab(const std::string& args) const {
-    const std::string out = path("stdout.txt"), err = path("stderr.txt");
-    const std::string cmd = std::string("cd '") + dir_.string() + "' && SHADOWLAB_CACHE='" + path("cache") + "' '" +
-                            SHADOWLAB_BINARY + "' " + args + " >'" + out + "' 2>'" + err + "'";
-    const int status = std::system(cmd.c_str());
-    Result r;
-    r.code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-    r.out = slurp(out);
-    r.err = slurp(err);
-    return r;
+    return testing::runShadowlab(args, dir_, "cd '" + dir_.string() + "' && SHADOWLAB_CACHE='" + path("cache") + "' ");
   }
   fs::path dir_;
 };
