@@ -31,7 +31,7 @@ const int kMaxTaps = 64;
 layout(std140, set = 0, binding = 3) uniform Params {
   mat4 texFromWorld[kMaxLayers];  // world -> (u*w, v*w, depth*w, w), u,v in [0,1], v = 0 top
   vec4 layerInfo[kMaxLayers];     // x: world size of one texel per unit of w
-  vec4 lightPosType;              // xyz position, w: 0 directional, 1 spot, 2 point
+  vec4 lightPosType;              // xyz position (w: the type, which the shader takes from kLightType)
   vec4 lightDirCos;               // xyz direction of travel, w: cos(cone / 2)
   vec4 cameraOrigin;              // xyz
   vec4 rayX;                      // unnormalized ray direction through image point (x, y):

@@ -1,7 +1,8 @@
 // The rasterizer, pass by pass:
 //   Pass 1 (shadow): depth + (object, primitive) ids from the light into one layer per map
 //                    (cube faces for point lights), then one layer per projector.
-//   Pass 2 (camera): the camera's visibility buffer: depth + (object, primitive) per pixel.
+//   Pass 2 (camera): the camera's visibility buffer: depth + (object, global triangle) per pixel,
+//                    kept while the scene and the camera stay the same.
 //   Pass 3 (resolve, a full-screen fragment pass): per pixel, the visible point, the map lookup with the method's
 //                    bias and filter, the evidence channels into three color attachments
 //                    (kResolveFormats), the projectors into a storage buffer (one plane per channel).
@@ -454,17 +455,17 @@ void Rasterizer::Impl::record(VkCommandBuffer cmd, const std::vector<glm::mat4>&
 
   // ---- Pass 2: the camera's visibility buffer (skipped while the last one still holds) ----
   if (drawVisibility) {
-  vk::transition(cmd, cameraDepth, VK_IMAGE_LAYOUT_UNDEFINED, VK_IMAGE_LAYOUT_DEPTH_ATTACHMENT_OPTIMAL,
-                 VK_PIPELINE_STAGE_2_NONE, 0,
-                 VK_PIPELINE_STAGE_2_EARLY_FRAGMENT_TESTS_BIT | VK_PIPELINE_STAGE_2_LATE_FRAGMENT_TESTS_BIT,
-                 VK_ACCESS_2_DEPTH_STENCIL_ATTACHMENT_READ_BIT | VK_ACCESS_2_DEPTH_STENCIL_ATTACHMENT_WRITE_BIT);
-  // GENERAL throughout: the camera ids are an attachment, then sampled, then read by the host.
-  vk::transition(cmd, cameraIds, VK_IMAGE_LAYOUT_UNDEFINED, VK_IMAGE_LAYOUT_GENERAL,
-                 VK_PIPELINE_STAGE_2_FRAGMENT_SHADER_BIT | VK_PIPELINE_STAGE_2_HOST_BIT, 0,
-                 VK_PIPELINE_STAGE_2_COLOR_ATTACHMENT_OUTPUT_BIT, VK_ACCESS_2_COLOR_ATTACHMENT_WRITE_BIT);
-  beginRendering(cameraDepth.layerView(0), cameraIds.layerView(0), width, height, VK_IMAGE_LAYOUT_GENERAL);
-  drawAll(cameraClip, false);
-  vkCmdEndRendering(cmd);
+    vk::transition(cmd, cameraDepth, VK_IMAGE_LAYOUT_UNDEFINED, VK_IMAGE_LAYOUT_DEPTH_ATTACHMENT_OPTIMAL,
+                   VK_PIPELINE_STAGE_2_NONE, 0,
+                   VK_PIPELINE_STAGE_2_EARLY_FRAGMENT_TESTS_BIT | VK_PIPELINE_STAGE_2_LATE_FRAGMENT_TESTS_BIT,
+                   VK_ACCESS_2_DEPTH_STENCIL_ATTACHMENT_READ_BIT | VK_ACCESS_2_DEPTH_STENCIL_ATTACHMENT_WRITE_BIT);
+    // GENERAL throughout: the camera ids are an attachment, then sampled, then read by the host.
+    vk::transition(cmd, cameraIds, VK_IMAGE_LAYOUT_UNDEFINED, VK_IMAGE_LAYOUT_GENERAL,
+                   VK_PIPELINE_STAGE_2_FRAGMENT_SHADER_BIT | VK_PIPELINE_STAGE_2_HOST_BIT, 0,
+                   VK_PIPELINE_STAGE_2_COLOR_ATTACHMENT_OUTPUT_BIT, VK_ACCESS_2_COLOR_ATTACHMENT_WRITE_BIT);
+    beginRendering(cameraDepth.layerView(0), cameraIds.layerView(0), width, height, VK_IMAGE_LAYOUT_GENERAL);
+    drawAll(cameraClip, false);
+    vkCmdEndRendering(cmd);
   }
   vk::transition(cmd, cameraIds, VK_IMAGE_LAYOUT_GENERAL, VK_IMAGE_LAYOUT_GENERAL,
                  VK_PIPELINE_STAGE_2_COLOR_ATTACHMENT_OUTPUT_BIT, VK_ACCESS_2_COLOR_ATTACHMENT_WRITE_BIT,
@@ -539,7 +540,7 @@ Frame Rasterizer::Impl::readback(const Scene& sc, const Light* light, int width,
     for (const char* name : {"coverage", "R", "G", "B", "reverse"}) frame.names.push_back(p + name);
   }
   frame.data.resize(frame.names.size());
-  // Recycled planes of this size are taken as they are (every element is overwritten below).
+  // Recycled planes first (resized to this frame; every element is overwritten below).
   for (size_t c = 0; c < frame.data.size() && !spare.empty(); ++c) {
     frame.data[c] = std::move(spare.back());
     spare.pop_back();

@@ -92,7 +92,6 @@ SceneGpu uploadScene(const vk::Context& context, const Scene& scene, const std::
   }
   // The resolve pass reads triangle 0 even for pixels without a hit.
   if (g.triangleVertices.empty()) g.triangleVertices.resize(3, glm::vec3(0.0f));
-  while (indices.size() < 3) indices.push_back(0u);
   std::vector<MaterialGpu> materials;
   std::vector<float> alpha;
   for (const Material& m : scene.materials) {
@@ -131,7 +130,7 @@ SceneGpu uploadScene(const vk::Context& context, const Scene& scene, const std::
   }
   const VkBufferUsageFlags ssbo = VK_BUFFER_USAGE_STORAGE_BUFFER_BIT;
   g.vertices = makeBuffer(context, vertices, VK_BUFFER_USAGE_VERTEX_BUFFER_BIT);
-  g.indices = makeBuffer(context, indices, VK_BUFFER_USAGE_INDEX_BUFFER_BIT | ssbo);
+  g.indices = makeBuffer(context, indices, VK_BUFFER_USAGE_INDEX_BUFFER_BIT);
   // Triangle indices travel as floats through the resolve pass (occluder_prim), exact below 2^24;
   // the plane table is a texel buffer.
   size_t triangles = g.triangleVertices.size() / 3;

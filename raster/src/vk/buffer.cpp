@@ -29,9 +29,7 @@ Buffer::Buffer(const Context& context, VkDeviceSize size, VkBufferUsageFlags usa
   memory_ = Memory(device, memory);
   VK_CHECK(vkBindBufferMemory(device, buffer, memory, 0));
   VK_CHECK(vkMapMemory(device, memory, 0, VK_WHOLE_SIZE, 0, &mapped_));
-  VkPhysicalDeviceMemoryProperties props;
-  vkGetPhysicalDeviceMemoryProperties(context.physical(), &props);
-  coherent_ = props.memoryTypes[alloc.memoryTypeIndex].propertyFlags & VK_MEMORY_PROPERTY_HOST_COHERENT_BIT;
+  coherent_ = context.hostCoherent(alloc.memoryTypeIndex);
 }
 
 void Buffer::upload(const void* data, size_t bytes, size_t offset) {
@@ -39,11 +37,7 @@ void Buffer::upload(const void* data, size_t bytes, size_t offset) {
 }
 
 void Buffer::invalidate(const Context& context) const {
-  if (coherent_) return;
-  VkMappedMemoryRange range{VK_STRUCTURE_TYPE_MAPPED_MEMORY_RANGE};
-  range.memory = memory_.get();
-  range.size = VK_WHOLE_SIZE;
-  VK_CHECK(vkInvalidateMappedMemoryRanges(context.device(), 1, &range));
+  if (!coherent_) context.invalidate(memory_.get());
 }
 
 }  // namespace shadowlab::vk

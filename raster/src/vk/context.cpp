@@ -216,6 +216,13 @@ std::string Context::deviceName() const {
   return std::string(properties_.deviceName) + (driverName_.empty() ? "" : " (" + driverName_ + ")");
 }
 
+void Context::invalidate(VkDeviceMemory memory) const {
+  VkMappedMemoryRange range{VK_STRUCTURE_TYPE_MAPPED_MEMORY_RANGE};
+  range.memory = memory;
+  range.size = VK_WHOLE_SIZE;
+  VK_CHECK(vkInvalidateMappedMemoryRanges(device_, 1, &range));
+}
+
 uint32_t Context::memoryType(uint32_t typeBits, VkMemoryPropertyFlags required,
                              VkMemoryPropertyFlags preferred) const {
   for (int pass = 0; pass < 2; ++pass) {

@@ -39,6 +39,11 @@ class Context {
   // First memory type allowed by `typeBits` having all of `required` (and preferring `preferred`).
   uint32_t memoryType(uint32_t typeBits, VkMemoryPropertyFlags required,
                       VkMemoryPropertyFlags preferred = 0) const;
+  bool hostCoherent(uint32_t memoryType) const {
+    return memory_.memoryTypes[memoryType].propertyFlags & VK_MEMORY_PROPERTY_HOST_COHERENT_BIT;
+  }
+  // Makes device writes to mapped, non-coherent `memory` visible to the host (whole allocation).
+  void invalidate(VkDeviceMemory memory) const;
 
  private:
   void release();  // also used when the constructor fails half way

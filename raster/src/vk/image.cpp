@@ -53,9 +53,7 @@ Image::Image(const Context& context, int width, int height, int layers, VkFormat
     VK_CHECK(vkMapMemory(device, memory, 0, VK_WHOLE_SIZE, 0, &mapped_));
     mapped_ = static_cast<char*>(mapped_) + layout.offset;
     rowPitch_ = size_t(layout.rowPitch);
-    VkPhysicalDeviceMemoryProperties props;
-    vkGetPhysicalDeviceMemoryProperties(context.physical(), &props);
-    coherent_ = props.memoryTypes[alloc.memoryTypeIndex].propertyFlags & VK_MEMORY_PROPERTY_HOST_COHERENT_BIT;
+    coherent_ = context.hostCoherent(alloc.memoryTypeIndex);
   }
 
   auto makeView = [&](VkImageViewType type, int first, int count) {
@@ -73,11 +71,7 @@ Image::Image(const Context& context, int width, int height, int layers, VkFormat
 }
 
 void Image::invalidate(const Context& context) const {
-  if (coherent_ || !mapped_) return;
-  VkMappedMemoryRange range{VK_STRUCTURE_TYPE_MAPPED_MEMORY_RANGE};
-  range.memory = memory_.get();
-  range.size = VK_WHOLE_SIZE;
-  VK_CHECK(vkInvalidateMappedMemoryRanges(context.device(), 1, &range));
+  if (mapped_ && !coherent_) context.invalidate(memory_.get());
 }
 
 void transition(VkCommandBuffer cmd, const Image& image, VkImageLayout from, VkImageLayout to,
