@@ -1,4 +1,4 @@
-// `shadowlab run SCENE [--method M.json] [--set key=value ...] -o DIR`: reference (cached by
+// `shadowlab run SCENE [--method M.json] [--set key=value|scene:/pointer=value ...] -o DIR`: reference (cached by
 // content hash), raster and compare in one process; writes metrics.json, errors.png, triptych.png.
 #include <algorithm>
 #include <cstdio>
@@ -33,20 +33,9 @@ struct Options {
 
 int run(const Options& o) {
   // ---- inputs: every error surfaces before anything is traced or written -------------------
-  const Scene scene = loadScene(resolveScenePath(o.scene));
-  Method method;
-  if (!o.methodFile.empty()) method = loadMethodFile(o.methodFile);
-  std::map<std::string, std::string> given;  // key -> value text, last --set wins
-  for (const auto& s : o.sets) {
-    const auto eq = s.find('=');
-    if (eq == std::string::npos || eq == 0) {
-      throw InputError("--set " + s + ": error: got \"" + s + "\"; expected key=value (e.g. map.size=4096)");
-    }
-    const std::string key = s.substr(0, eq), value = s.substr(eq + 1);
-    applyMethodSetting(method, key, value, "--set " + s);
-    given[key] = value;
-  }
-  validateMethod(method, o.methodFile.empty() ? "--set" : o.methodFile);
+  const SetArguments set = applySetArguments(o.methodFile, o.sets);  // method keys and scene: values
+  const Method& method = set.method;
+  const Scene scene = loadScene(resolveScenePath(o.scene), set.sceneOverrides);
   if (!o.light.empty() && !scene.findLight(o.light)) {
     std::string names;
     for (const auto& l : scene.lights) names += (names.empty() ? "" : ", ") + l.name;
@@ -59,15 +48,9 @@ int run(const Options& o) {
   if (o.spp < 1) throw InputError("--spp: error: got " + std::to_string(o.spp) + "; expected an integer >= 1");
   const std::string light = o.light.empty() ? scene.lights.front().name : o.light;
 
-  // `config` names what was set, like a sweep row: the canonical "key=value" of the --set keys,
-  // sorted by key (so a run matches the sweep row of the same configuration); else the method name.
-  std::string config;
-  const nlohmann::json resolved = methodToJson(method);
-  for (const auto& [key, text] : given) {
-    (void)text;
-    config += (config.empty() ? "" : ",") + key + "=" + canonicalValueText(resolved.at(key));
-  }
-  if (config.empty()) config = method.name.empty() ? "default" : method.name;
+  // `config` names what was set, like a sweep row (so a run matches the sweep row of the same
+  // configuration); else the method name.
+  const std::string& config = set.config;
 
   // ---- work ----------------------------------------------------------------------------------
   RasterDeviceOptions deviceOptions;
@@ -90,7 +73,7 @@ int run(const Options& o) {
   row.scene = scene.name;
   row.config = config;
   row.light = light;
-  row.method = resolved;
+  row.method = methodToJson(method);
   row.metrics = r.metrics.toJson();
   row.timings = {{"shadow_ms", r.timings.shadowMs},     {"camera_ms", r.timings.cameraMs},
                  {"readback_ms", r.timings.readbackMs}, {"compare_ms", r.compareMs},
@@ -121,7 +104,7 @@ app::Registrar reg{"run", [](CLI::App& app) {
   auto* sub = app.add_subcommand("run", "Reference (cached), raster and compare in one process");
   sub->add_option("SCENE", opts->scene, "Bundled scene name or path to a scene file")->required();
   sub->add_option("--method", opts->methodFile, "Method file (JSON, see raster/METHODS.md)");
-  sub->add_option("--set", opts->sets, "Method setting key=value, repeatable (e.g. --set map.size=4096)");
+  sub->add_option("--set", opts->sets, "Method setting or scene value key=value, repeatable (e.g. --set map.size=4096, --set scene:/lights/0/elevation_deg=10)");
   sub->add_option("--light", opts->light, "Light to render and compare (default: the scene's first)");
   sub->add_option("--spp", opts->spp, "Reference samples per pixel")->capture_default_str();
   sub->add_option("-o,--out", opts->outDir, "Output folder")->required();

@@ -85,28 +85,9 @@ int run(const Options& o) {
   for (const auto& text : o.lightPaths) axes.push_back(parseLightPath(text));
 
   // --set: method keys, or scene values as in sweeps (scene:/json/pointer=value).
-  Method method;
-  if (!o.methodFile.empty()) method = loadMethodFile(o.methodFile);
-  std::map<std::string, std::string> given;  // key -> canonical value, sorted: the row's config
-  std::vector<SceneOverride> sceneOverrides;
-  for (const auto& s : o.sets) {
-    const auto eq = s.find('=');
-    if (eq == std::string::npos || eq == 0)
-      throw InputError("--set " + s + ": error: got \"" + s + "\"; expected key=value (e.g. cascades.stabilize=true)");
-    const std::string key = s.substr(0, eq), value = s.substr(eq + 1);
-    if (key.rfind(kSceneKeyPrefix, 0) == 0) {
-      const nlohmann::json v = sceneValueFromText(value);
-      sceneOverrides.push_back({key.substr(std::string(kSceneKeyPrefix).size()), v});
-      given[key] = canonicalValueText(v);
-    } else {
-      applyMethodSetting(method, key, value, "--set " + s);
-      given[key] = "";  // filled from the resolved method below
-    }
-  }
-  validateMethod(method, o.methodFile.empty() ? "--set" : o.methodFile);
-  const nlohmann::json resolvedMethod = methodToJson(method);
-  for (auto& [key, text] : given)
-    if (key.rfind(kSceneKeyPrefix, 0) != 0) text = canonicalValueText(resolvedMethod.at(key));
+  const SetArguments set = applySetArguments(o.methodFile, o.sets);
+  const Method& method = set.method;
+  const std::vector<SceneOverride>& sceneOverrides = set.sceneOverrides;
 
   const std::string scenePath = resolveScenePath(o.scene);
   const Scene scene = loadScene(scenePath, sceneOverrides);
@@ -177,10 +158,7 @@ int run(const Options& o) {
     (void)frameScene(frames - 1);
   }
 
-  std::string config;
-  for (const auto& [key, text] : given) config += (config.empty() ? "" : ",") + key + "=" + text;
-  if (config.empty()) config = method.name.empty() ? "default" : method.name;
-  config += " @ " + pathConfig;
+  const std::string config = set.config + " @ " + pathConfig;
 
   // ---- work ------------------------------------------------------------------------------------
   RasterDeviceOptions deviceOptions;
@@ -235,7 +213,7 @@ int run(const Options& o) {
   report["scene"] = scene.name;
   report["config"] = config;
   report["light"] = light;
-  report["method"] = resolvedMethod;
+  report["method"] = methodToJson(method);
   report["metrics"] = s.gateMetrics();
   report["timings"] = {{"total_ms", totalMs}};
   report["scene_hash"] = scene.hash;

@@ -220,6 +220,33 @@ TEST(SweepCli, SmallSweepRowsMatchShadowlabRunExactly) {
   fs::remove_all(dir);
 }
 
+// `run` takes scene: values like a sweep (the same --set parser, shadowlab::applySetArguments) and
+// names the row the same way: a run with a smaller image equals the sweep row that swept it.
+TEST(SweepCli, RunWithASceneValueMatchesTheSweepRowThatSweptIt) {
+  const std::string dir = tempDir("scenevalue");
+  const std::string scene = smallScene(dir);
+  Child sweep = spawn(sweepArgs({scene, "--grid", "scene:/camera/width=320", "--grid", "map.size=512", "-o",
+                                 dir + "/sweep", "--cache", dir + "/cache", "--no-report"}),
+                      dir + "/sweep");
+  int rc = waitFor(sweep);
+  if (rc == 3) GTEST_SKIP() << "no Vulkan device (shadowlab exit 3): " << slurp(sweep.err);
+  ASSERT_EQ(rc, 0) << slurp(sweep.err);
+  auto rows = loadResultRows(dir + "/sweep/results.json");
+  ASSERT_EQ(rows.size(), 1u);
+  Child run = spawn({kBinary, "run", scene, "--set", "map.size=512", "--set", "scene:/camera/width=320", "-o",
+                     dir + "/run", "--cache", dir + "/cache"},
+                    dir + "/run");
+  ASSERT_EQ(waitFor(run), 0) << slurp(run.err);
+  auto single = loadResultRows(dir + "/run/metrics.json");
+  ASSERT_EQ(single.size(), 1u);
+  EXPECT_EQ(single[0].config, "map.size=512,scene:/camera/width=320");
+  EXPECT_EQ(single[0].config, rows[0].config);
+  EXPECT_EQ(single[0].metrics, rows[0].metrics);
+  // The width was applied: 320x270 pixels compared at most, not 480x270.
+  EXPECT_LE(single[0].metrics.at("pixels_compared").get<double>(), 320.0 * 270.0);
+  fs::remove_all(dir);
+}
+
 TEST(SweepCli, InterruptedAndKilledSweepResumesWithNothingLostOrRepeated) {
   const std::string dir = tempDir("kill");
   const std::string out = dir + "/sweep";
