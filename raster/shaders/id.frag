@@ -1,7 +1,8 @@
 #version 460
-// Writes (object index + 1, global triangle index) beside the depth: the global index (the
-// object's triangle base + its primitive id) lets the resolve pass find the triangle's plane with
-// one fetch; the readback turns it back into the object's primitive id. Alpha-tested materials discard
+// Writes the global triangle index + 1 (0: nothing drawn) beside the depth, one uint: the global
+// index (the object's triangle base + its primitive id) lets the resolve pass find the triangle's
+// plane with one fetch; the readback turns it back into the object and its primitive id. One
+// 32-bit channel rather than (object, triangle): half the bytes to clear, write and fetch. Alpha-tested materials discard
 // below their cutoff, sampling the alpha texture exactly like scenes' sampleAlphaNearest
 // (nearest texel, repeat addressing, texel (0,0) top-left) so both renderers agree on holes.
 // One-sided materials discard back faces (as seen from the camera or the light).
@@ -10,7 +11,7 @@
 layout(constant_id = 0) const bool kMaterialTests = true;
 
 layout(location = 0) in vec2 uv;
-layout(location = 0) out uvec2 outId;
+layout(location = 0) out uint outId;
 
 layout(push_constant) uniform Draw {
   mat4 clipFromWorld;
@@ -37,7 +38,7 @@ layout(std430, set = 0, binding = 2) readonly buffer AlphaTexels { float alphaTe
 
 void main() {
   if (!kMaterialTests) {
-    outId = uvec2(draw.objectIndex + 1u, draw.triangleBase + uint(gl_PrimitiveID));
+    outId = draw.triangleBase + uint(gl_PrimitiveID) + 1u;
     return;
   }
   MaterialGpu m = materials[triangleMaterial[draw.triangleBase + uint(gl_PrimitiveID)]];
@@ -48,5 +49,5 @@ void main() {
     int y = clamp(int(floor(fract(uv.y) * float(h))), 0, h - 1);
     if (alphaTexels[m.alphaOffset + uint(y * w + x)] < m.cutoff) discard;
   }
-  outId = uvec2(draw.objectIndex + 1u, draw.triangleBase + uint(gl_PrimitiveID));
+  outId = draw.triangleBase + uint(gl_PrimitiveID) + 1u;
 }

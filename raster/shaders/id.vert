@@ -5,7 +5,7 @@ layout(location = 1) in vec2 inUv;
 
 layout(push_constant) uniform Draw {
   mat4 clipFromWorld;
-  uint objectIndex;   // index into the scene's objects; written as objectIndex + 1 (0 = nothing)
+  uint objectIndex;   // index into the scene's objects
   uint triangleBase;  // first triangle of this object in the global triangle tables
   uint pad0;
   uint pad1;

@@ -1,10 +1,10 @@
 #version 460
-// Camera pass, part 2: per pixel, from the visibility buffer (object, primitive) of part 1.
+// Camera pass, part 2: per pixel, from the visibility buffer (global triangle + 1) of part 1.
 // The visible point is the intersection of the pixel-center camera ray with the visible
 // triangle's plane (the reference's hit point up to float rounding), and every derivative
 // (texel footprint m, receiver plane) is taken analytically on that plane instead of from
 // 2x2-quad differences, so triangle edges do not smear neighbouring planes into each other.
-// Writes the light's channels into three color attachments (outA, outB, outC) and each
+// Writes the light's channels into two color attachments (outA, outB) and each
 // projector's channels as float planes into `outPlanes`.
 // A full-screen fragment shader rather than a compute shader: lavapipe's fragment path is its
 // fast one (tiled, multi-threaded), its compute dispatch costs ~0.2 us per invocation even empty.
@@ -54,7 +54,7 @@ layout(set = 0, binding = 5) uniform sampler2DArrayShadow mapShadow;  // LINEAR,
 layout(set = 0, binding = 6) uniform usampler2DArray mapIds;
 layout(set = 0, binding = 7) uniform usampler2D cameraIds;
 
-// Per triangle (global index), its plane relative to the camera origin o: (n, dot(n, v0 - o)), n
+// Per triangle (global index + 1, as in the id attachments; texel 0 a placeholder), its plane relative to the camera origin o: (n, dot(n, v0 - o)), n
 // the unit normal (v1 - v0) x (v2 - v0), computed in double on the CPU. A texel buffer: on
 // lavapipe a storage-buffer load at a per-pixel address is a bounds-checked loop over the SIMD
 // lanes, a texel fetch one gather; and one fetch per pixel, since each costs about as much as the
@@ -65,8 +65,7 @@ layout(std430, set = 0, binding = 10) writeonly buffer OutPlanes { float outPlan
 
 // The rasterizer splits these into the frame's channels (rasterizer.cpp, readback).
 layout(location = 0) out vec4 outA;  // vis, receiver_depth, map_depth, m
-layout(location = 1) out vec4 outB;  // bias_depth, bias_world, occluder_id, occluder_prim
-layout(location = 2) out vec2 outC;  // in_map, cascade
+layout(location = 1) out vec4 outB;  // bias_depth, bias_world, occluder (id), 2 * cascade + in_map
 const uint kProjectorChannels = 5u;
 
 uint gPixel;
@@ -185,9 +184,9 @@ void main() {
   gPixel = uint(px.y * width + px.x);
   gPlane = uint(width * P.sizes2.y);
 
-  uvec2 ids = texelFetch(cameraIds, px, 0).xy;  // (object index + 1, global triangle)
-  gHit = ids.x != 0u;
-  vec4 plane = texelFetch(trianglePlanes, int(ids.y));  // triangle 0 always exists (padded)
+  uint id = texelFetch(cameraIds, px, 0).x;  // global triangle + 1, 0: no hit
+  gHit = id != 0u;
+  vec4 plane = texelFetch(trianglePlanes, int(id));
   vec3 nTri = plane.xyz;
   vec3 origin = P.cameraOrigin.xyz;
   vec2 pixelCenter = vec2(px) + 0.5;
@@ -238,15 +237,13 @@ void main() {
   gRef = uvz.z - P.bias.x;
 
   float vis = 1.0;  // policy: points outside the map are lit
-  float mapDepthCenter = 0.0, occluderId = 0.0, occluderPrim = 0.0;
+  float mapDepthCenter = 0.0, occluder = 0.0;
   if (inMap) {
     ivec2 c = clamp(ivec2(floor(gSt)), ivec2(0), ivec2(int(gSize) - 1));
     mapDepthCenter = texelFetch(mapDepth, ivec3(c, gLayer), 0).r;
     // filter none is the center texel's comparison: no second fetch.
     vis = kFilter == 0u ? (mapDepthCenter >= refAt(c) ? 1.0 : 0.0) : filterVisibility();
-    uvec2 occ = texelFetch(mapIds, ivec3(c, gLayer), 0).xy;  // the readback maps these to ids
-    occluderId = float(occ.x);
-    occluderPrim = float(occ.y);
+    occluder = float(texelFetch(mapIds, ivec3(c, gLayer), 0).x);  // the readback maps it to ids
   }
   bool outsideCone = lightType == 1 && dot(normalize(p - lightPos), P.lightDirCos.xyz) < P.lightDirCos.w;
   // Facing rule (the reference's): the side the camera sees is unlit when the light is behind
@@ -282,8 +279,7 @@ void main() {
   if (outsideCone || facesAway) vis = 0.0;
 
   outA = gHit ? vec4(vis, uvz.z, mapDepthCenter, m) : vec4(0.0);
-  outB = gHit ? vec4(biasDepth, biasDepth * worldPerDepth, occluderId, occluderPrim) : vec4(0.0);
-  outC = gHit ? vec2(inMap ? 1.0 : 0.0, float(cascade)) : vec2(0.0);
+  outB = gHit ? vec4(biasDepth, biasDepth * worldPerDepth, occluder, float(2 * cascade + (inMap ? 1 : 0))) : vec4(0.0);
 
   // ---- projectors ----
   for (int j = 0; j < kProjectorCount; ++j) {

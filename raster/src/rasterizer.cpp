@@ -1,10 +1,10 @@
 // The rasterizer, pass by pass:
-//   Pass 1 (shadow): depth + (object, primitive) ids from the light into one layer per map
+//   Pass 1 (shadow): depth + ids (global triangle + 1) from the light into one layer per map
 //                    (cube faces for point lights), then one layer per projector.
-//   Pass 2 (camera): the camera's visibility buffer: depth + (object, global triangle) per pixel,
+//   Pass 2 (camera): the camera's visibility buffer: depth + id (global triangle + 1) per pixel,
 //                    kept while the scene and the camera stay the same.
 //   Pass 3 (resolve, a full-screen fragment pass): per pixel, the visible point, the map lookup with the method's
-//                    bias and filter, the evidence channels into three color attachments
+//                    bias and filter, the evidence channels into two color attachments
 //                    (kResolveFormats), the projectors into a storage buffer (one plane per channel).
 // The visibility buffer and the resolve attachments are linear images in host memory: the CPU
 // splits them into the Frame's channel planes in place, without a copy to a buffer first.
@@ -48,10 +48,11 @@ constexpr int kMaxLayers = 16;  // 8 cascades (or 6 cube faces) + 8 projectors
 constexpr int kMaxProjectors = 8;
 constexpr int kMaxTaps = 64;
 constexpr int kProjectorChannels = 5;
-// The resolve pass's color attachments (resolve.frag's outA, outB, outC).
-constexpr VkFormat kResolveFormats[3] = {VK_FORMAT_R32G32B32A32_SFLOAT, VK_FORMAT_R32G32B32A32_SFLOAT,
-                                         VK_FORMAT_R32G32_SFLOAT};
-constexpr VkFormat kIdFormat = VK_FORMAT_R32G32_UINT;
+// The resolve pass's color attachments (resolve.frag's outA, outB).
+constexpr int kResolveAttachments = 2;
+constexpr VkFormat kResolveFormats[kResolveAttachments] = {VK_FORMAT_R32G32B32A32_SFLOAT,
+                                                           VK_FORMAT_R32G32B32A32_SFLOAT};
+constexpr VkFormat kIdFormat = VK_FORMAT_R32_UINT;  // global triangle + 1, 0: nothing
 constexpr VkFormat kCameraDepthFormat = VK_FORMAT_D32_SFLOAT;
 
 // Mirrors `Params` in resolve.comp (std140: every member is 16-byte aligned already).
@@ -162,7 +163,7 @@ struct Rasterizer::Impl {
 
   std::unique_ptr<raster::SceneGpu> scene;
   vk::Image mapDepth, mapIds, cameraDepth, cameraIds;
-  vk::Image resolveOut[3];
+  vk::Image resolveOut[kResolveAttachments];
   vk::Buffer params, output;  // output: the projector channels
 
   explicit Impl(const RasterDeviceOptions& options);
@@ -325,7 +326,7 @@ void Rasterizer::Impl::ensureImages(int mapSize, VkFormat mapFormat, int layers,
     cameraIds = vk::Image(c, width, height, 1, kIdFormat,
                           VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT | VK_IMAGE_USAGE_SAMPLED_BIT,
                           VK_IMAGE_ASPECT_COLOR_BIT, true);
-    for (int i = 0; i < 3; ++i)
+    for (int i = 0; i < kResolveAttachments; ++i)
       resolveOut[i] = vk::Image(c, width, height, 1, kResolveFormats[i], VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT,
                                 VK_IMAGE_ASPECT_COLOR_BIT, true);
   }
@@ -474,8 +475,8 @@ void Rasterizer::Impl::record(VkCommandBuffer cmd, const std::vector<glm::mat4>&
 
   // ---- Pass 3: resolve, one fragment per pixel, into the resolve attachments ----
   {
-    VkRenderingAttachmentInfo colors[3];
-    for (int i = 0; i < 3; ++i) {
+    VkRenderingAttachmentInfo colors[kResolveAttachments];
+    for (int i = 0; i < kResolveAttachments; ++i) {
       vk::transition(cmd, resolveOut[i], VK_IMAGE_LAYOUT_UNDEFINED, VK_IMAGE_LAYOUT_GENERAL,
                      VK_PIPELINE_STAGE_2_HOST_BIT, 0, VK_PIPELINE_STAGE_2_COLOR_ATTACHMENT_OUTPUT_BIT,
                      VK_ACCESS_2_COLOR_ATTACHMENT_WRITE_BIT);
@@ -488,7 +489,7 @@ void Rasterizer::Impl::record(VkCommandBuffer cmd, const std::vector<glm::mat4>&
     VkRenderingInfo info{VK_STRUCTURE_TYPE_RENDERING_INFO};
     info.renderArea = {{0, 0}, {uint32_t(width), uint32_t(height)}};
     info.layerCount = 1;
-    info.colorAttachmentCount = 3;
+    info.colorAttachmentCount = kResolveAttachments;
     info.pColorAttachments = colors;
     vkCmdBeginRendering(cmd, &info);
     VkViewport viewport{0, 0, float(width), float(height), 0.0f, 1.0f};
@@ -513,11 +514,11 @@ void Rasterizer::Impl::record(VkCommandBuffer cmd, const std::vector<glm::mat4>&
 }
 
 // The frame's channels from the visibility buffer (hit, object_id, prim_id), the resolve
-// attachments (the light's channels, see resolve.frag's outA/outB/outC) and the projector planes.
+// attachments (the light's channels, see resolve.frag's outA/outB) and the projector planes.
 // Each attachment is read once, row by row, its components scattered to their planes; the rows
 // are split over two threads (the split is bound by memory bandwidth, which one core does not
-// saturate). Ids arrive as (object index + 1, global triangle index) and leave as the object's id
-// and its own primitive index.
+// saturate). Ids arrive as global triangle index + 1 (0: none) and leave as the object's id and
+// its own primitive index.
 Frame Rasterizer::Impl::readback(const Scene& sc, const Light* light, int width, int height) {
   output.invalidate(*context);
   cameraIds.invalidate(*context);
@@ -556,6 +557,17 @@ Frame Rasterizer::Impl::readback(const Scene& sc, const Light* light, int width,
   }
   const std::vector<uint32_t>& objectIds = scene->objectIds;
   const std::vector<uint32_t>& triangleBase = scene->objectTriangleBase;
+  const std::vector<uint32_t>& triangleObject = scene->triangleObject;
+  // id (global triangle + 1, 0: none) -> (object id, the object's primitive index), as floats.
+  auto idsOf = [&](uint32_t id, float& objectId, float& prim) {
+    if (id == 0) {
+      objectId = prim = 0.0f;
+      return;
+    }
+    uint32_t object = triangleObject[id - 1];
+    objectId = float(objectIds[object]);
+    prim = float(id - 1 - triangleBase[object]);
+  };
   const float* planes = static_cast<const float*>(output.mapped());
   auto rowOf = [](const vk::Image& img, int y) {
     return static_cast<const char*>(img.mapped()) + size_t(y) * img.rowPitch();
@@ -568,26 +580,22 @@ Frame Rasterizer::Impl::readback(const Scene& sc, const Light* light, int width,
       float* primId = frame.data[2].data() + o;
       const uint32_t* ids = reinterpret_cast<const uint32_t*>(rowOf(cameraIds, y));
       for (int x = 0; x < width; ++x) {
-        uint32_t object = ids[2 * x], tri = ids[2 * x + 1];
-        hit[x] = object ? 1.0f : 0.0f;
-        objectId[x] = object ? float(objectIds[object - 1]) : 0.0f;
-        primId[x] = object ? float(tri - triangleBase[object - 1]) : 0.0f;
+        hit[x] = ids[x] ? 1.0f : 0.0f;
+        idsOf(ids[x], objectId[x], primId[x]);
       }
       if (hasLight) {
         float* out[10];
         for (int c = 0; c < 10; ++c) out[c] = frame.data[size_t(3 + c)].data() + o;
         const float* a = reinterpret_cast<const float*>(rowOf(resolveOut[0], y));
         const float* b = reinterpret_cast<const float*>(rowOf(resolveOut[1], y));
-        const float* c = reinterpret_cast<const float*>(rowOf(resolveOut[2], y));
         for (int x = 0; x < width; ++x) {
           for (int k = 0; k < 4; ++k) out[k][x] = a[4 * x + k];
           out[4][x] = b[4 * x];
           out[5][x] = b[4 * x + 1];
-          uint32_t object = uint32_t(b[4 * x + 2]), tri = uint32_t(b[4 * x + 3]);  // exact below 2^24
-          out[6][x] = object ? float(objectIds[object - 1]) : 0.0f;
-          out[7][x] = object ? float(tri - triangleBase[object - 1]) : 0.0f;
-          out[8][x] = c[2 * x];
-          out[9][x] = c[2 * x + 1];
+          idsOf(uint32_t(b[4 * x + 2]), out[6][x], out[7][x]);  // exact up to 2^24
+          const int packed = int(b[4 * x + 3]);                   // 2 * cascade + in_map
+          out[8][x] = float(packed & 1);
+          out[9][x] = float(packed >> 1);
         }
       }
       const size_t first = hasLight ? 13 : 3;

@@ -80,6 +80,7 @@ SceneGpu uploadScene(const vk::Context& context, const Scene& scene, const std::
     for (size_t t = 0; t < o.triangles.size(); ++t) {
       indices.insert(indices.end(), {o.triangles[t].x, o.triangles[t].y, o.triangles[t].z});
       for (int k = 0; k < 3; ++k) g.triangleVertices.push_back(o.positions[o.triangles[t][k]]);
+      g.triangleObject.push_back(uint32_t(i));
       uint32_t mi = t < o.triangleMaterial.size() ? o.triangleMaterial[t] : 0u;
       triangleMaterials.push_back(mi);
       const Material* mat = mi < scene.materials.size() ? &scene.materials[mi] : nullptr;
@@ -90,8 +91,6 @@ SceneGpu uploadScene(const vk::Context& context, const Scene& scene, const std::
     }
     if (d.indexCount > 0) g.draws.push_back(d);
   }
-  // The resolve pass reads triangle 0 even for pixels without a hit.
-  if (g.triangleVertices.empty()) g.triangleVertices.resize(3, glm::vec3(0.0f));
   std::vector<MaterialGpu> materials;
   std::vector<float> alpha;
   for (const Material& m : scene.materials) {
@@ -131,15 +130,16 @@ SceneGpu uploadScene(const vk::Context& context, const Scene& scene, const std::
   const VkBufferUsageFlags ssbo = VK_BUFFER_USAGE_STORAGE_BUFFER_BIT;
   g.vertices = makeBuffer(context, vertices, VK_BUFFER_USAGE_VERTEX_BUFFER_BIT);
   g.indices = makeBuffer(context, indices, VK_BUFFER_USAGE_INDEX_BUFFER_BIT);
-  // Triangle indices travel as floats through the resolve pass (occluder_prim), exact below 2^24;
-  // the plane table is a texel buffer.
+  // Ids (global triangle + 1) travel as floats through the resolve pass (occluder), exact up to
+  // 2^24; the plane table is a texel buffer with one extra texel.
   size_t triangles = g.triangleVertices.size() / 3;
-  size_t limit = std::min<size_t>(size_t(1) << 24, context.properties().limits.maxTexelBufferElements);
+  size_t limit = std::min<size_t>((size_t(1) << 24) - 1, context.properties().limits.maxTexelBufferElements - 1);
   if (triangles > limit)
     throw InputError(formatError(scene.path.empty() ? scene.name : scene.path, "/objects",
                                  std::to_string(triangles) + " triangles; the rasterizer takes at most " +
                                      std::to_string(limit)));
-  g.trianglePlanes = vk::Buffer(context, triangles * sizeof(glm::vec4), VK_BUFFER_USAGE_UNIFORM_TEXEL_BUFFER_BIT);
+  // Texel 0 is a placeholder plane for pixels without a hit (id 0); triangle t is texel t + 1.
+  g.trianglePlanes = vk::Buffer(context, (triangles + 1) * sizeof(glm::vec4), VK_BUFFER_USAGE_UNIFORM_TEXEL_BUFFER_BIT);
   g.trianglePlanesView = makeView(context, g.trianglePlanes, VK_FORMAT_R32G32B32A32_SFLOAT);
   g.triangleMaterials = makeBuffer(context, triangleMaterials, ssbo);
   g.materials = makeBuffer(context, materials, ssbo);
@@ -151,7 +151,8 @@ SceneGpu uploadScene(const vk::Context& context, const Scene& scene, const std::
 void updatePlanes(SceneGpu& g, glm::dvec3 origin) {
   if (g.planesValid && g.planesOrigin == origin) return;
   size_t triangles = g.triangleVertices.size() / 3;
-  auto* out = static_cast<glm::vec4*>(g.trianglePlanes.mapped());
+  auto* out = static_cast<glm::vec4*>(g.trianglePlanes.mapped()) + 1;
+  out[-1] = glm::vec4(0.0f, 0.0f, 1.0f, 1.0f);
   for (size_t t = 0; t < triangles; ++t) {
     glm::dvec3 v0(g.triangleVertices[3 * t]), v1(g.triangleVertices[3 * t + 1]), v2(g.triangleVertices[3 * t + 2]);
     glm::dvec3 n = glm::cross(v1 - v0, v2 - v0);

@@ -40,9 +40,10 @@ struct SceneGpu {
   std::vector<ProjectorImage> projectors;
   std::vector<uint32_t> objectIds;            // Object::id by object index
   std::vector<uint32_t> objectTriangleBase;   // first global triangle index by object index
+  std::vector<uint32_t> triangleObject;       // object index by global triangle index
   vk::Buffer vertices;           // vec3 position + vec2 uv per vertex
   vk::Buffer indices;            // uint32 local indices
-  // resolve: one RGBA32F texel per triangle, its plane relative to the camera: (n, dot(n, v0 - o)),
+  // resolve: one RGBA32F texel per triangle (triangle t at texel t + 1, texel 0 a placeholder), its plane relative to the camera: (n, dot(n, v0 - o)),
   // n the unit normal (v1 - v0) x (v2 - v0), o = planesOrigin (updatePlanes).
   vk::Buffer trianglePlanes;
   vk::BufferView trianglePlanesView;
