@@ -23,6 +23,9 @@ layout(constant_id = 3) const bool kBlend = false;
 layout(constant_id = 4) const bool kFloatDepth = false;
 // The light's type (0 directional, 1 spot, 2 point, 3 none): the other types' code compiled out.
 layout(constant_id = 5) const int kLightType = 0;
+// Every light layer is affine (orthographic: texFromWorld's last row is (0, 0, 0, 1)), so w = 1
+// and the divisions by it fold away; the results are the same bits.
+layout(constant_id = 6) const bool kAffine = false;
 
 const int kMaxLayers = 16;  // 8 light layers (cascades; a cube: 6) + 8 projectors
 const int kMaxProjectors = 8;
@@ -85,10 +88,17 @@ vec3 planePoint(vec2 pixel, vec4 plane) {
 int gLayer;
 mat4 gTexFromWorld;  // P.texFromWorld[gLayer], fetched once: dynamic UBO indexing is a gather on CPUs
 float gSize;
-vec4 project(vec3 pWorld) { return gTexFromWorld * vec4(pWorld, 1.0); }
-vec3 mapCoords(vec3 pWorld) {  // (u, v in texels, depth)
-  vec4 t = project(pWorld);
-  return vec3(t.xy / t.w * gSize, t.z / t.w);
+// The light layer's homogeneous coordinates of a point; they move by dirMap(v) per unit of v:
+// project(p + v) = project(p) + dirMap(v).
+vec4 project(vec3 pWorld) {
+  vec4 t = gTexFromWorld * vec4(pWorld, 1.0);
+  if (kAffine) t.w = 1.0;
+  return t;
+}
+vec4 dirMap(vec3 v) {
+  vec4 t = gTexFromWorld[0] * v.x + gTexFromWorld[1] * v.y + gTexFromWorld[2] * v.z;
+  if (kAffine) t.w = 0.0;
+  return t;
 }
 
 // Lit (1) when the stored depth is not in front of the reference depth.
@@ -106,6 +116,7 @@ float filterVisibility() {
   ivec2 center = ivec2(floor(gSt));
   if (kFilter == 1u) {
     // The hardware blends four comparisons; the receiver plane cannot be applied per tap.
+    // (main() looks up its own layer with texture(), see hwVis; this is the blend band's lookup.)
     return textureGrad(mapShadow, vec4(gSt / gSize, float(gLayer), gRef), vec2(0.0), vec2(0.0));
   } else if (kFilter == 2u) {
     vec2 s = gSt - 0.5;
@@ -140,9 +151,12 @@ float filterVisibility() {
 
 // The receiver's plane in map space, from two tangent points one texel away: the same
 // (dz/du, dz/dv) the dFdx/dFdy solve yields, without its singularity at grazing views.
-vec2 planeSlope(vec3 q, vec3 normal, vec3 e1, float texelWorld) {
+// tQ = project(q); the tangent points' coordinates follow from it by linearity.
+vec2 planeSlope(vec4 tQ, vec3 normal, vec3 e1, float texelWorld) {
   vec3 e2 = cross(normal, e1);
-  vec3 m0 = mapCoords(q), m1 = mapCoords(q + e1 * texelWorld), m2 = mapCoords(q + e2 * texelWorld);
+  vec4 t1 = tQ + dirMap(e1 * texelWorld), t2 = tQ + dirMap(e2 * texelWorld);
+  vec3 m0 = vec3(tQ.xy / tQ.w * gSize, tQ.z / tQ.w), m1 = vec3(t1.xy / t1.w * gSize, t1.z / t1.w),
+       m2 = vec3(t2.xy / t2.w * gSize, t2.z / t2.w);
   vec2 a1 = m1.xy - m0.xy, a2 = m2.xy - m0.xy;
   float det = a1.x * a2.y - a1.y * a2.x;
   return abs(det) > 1e-12 ? vec2((m1.z - m0.z) * a2.y - (m2.z - m0.z) * a1.y,
@@ -165,7 +179,7 @@ float layerVisibility(int layer, vec3 p, vec3 normal, vec3 e1) {
   gSt = uvz.xy * gSize;
   bool inMap = tQ.w > 0.0 && all(greaterThanEqual(uvz.xy, vec2(0.0))) && all(lessThanEqual(uvz.xy, vec2(1.0)));
   if (!inMap) return 1.0;
-  gSlope = P.bias.z > 0.5 ? planeSlope(q, normal, e1, texelWorld) : vec2(0.0);
+  gSlope = P.bias.z > 0.5 ? planeSlope(tQ, normal, e1, texelWorld) : vec2(0.0);
   gRef = uvz.z - P.bias.x;
   ivec2 c = clamp(ivec2(floor(gSt)), ivec2(0), ivec2(int(gSize) - 1));
   return kFilter == 0u ? (texelFetch(mapDepth, ivec3(c, gLayer), 0).r >= refAt(c) ? 1.0 : 0.0) : filterVisibility();
@@ -232,9 +246,15 @@ void main() {
   bool inMap = inFront && all(greaterThanEqual(uvz.xy, vec2(0.0))) && all(lessThanEqual(uvz.xy, vec2(1.0)));
   float depthP = tP.z / tP.w;
 
-  vec2 slope = planeSlope(q, normal, e1, texelWorld);
+  vec2 slope = planeSlope(tQ, normal, e1, texelWorld);
   gSlope = P.bias.z > 0.5 ? slope : vec2(0.0);
   gRef = uvz.z - P.bias.x;
+
+  // hw2x2 with texture() in uniform control flow rather than textureGrad inside the branch below:
+  // lavapipe takes explicit gradients per pixel (about 6 ms more at 1080p). The implicit LOD
+  // selects nothing: the map has one level, the sampler clamps the LOD to 0 (maxLod) and its min
+  // and mag filters are the same.
+  float hwVis = kFilter == 1u ? texture(mapShadow, vec4(gSt / gSize, float(gLayer), gRef)) : 1.0;
 
   float vis = 1.0;  // policy: points outside the map are lit
   float mapDepthCenter = 0.0, occluder = 0.0;
@@ -242,7 +262,7 @@ void main() {
     ivec2 c = clamp(ivec2(floor(gSt)), ivec2(0), ivec2(int(gSize) - 1));
     mapDepthCenter = texelFetch(mapDepth, ivec3(c, gLayer), 0).r;
     // filter none is the center texel's comparison: no second fetch.
-    vis = kFilter == 0u ? (mapDepthCenter >= refAt(c) ? 1.0 : 0.0) : filterVisibility();
+    vis = kFilter == 0u ? (mapDepthCenter >= refAt(c) ? 1.0 : 0.0) : kFilter == 1u ? hwVis : filterVisibility();
     occluder = float(texelFetch(mapIds, ivec3(c, gLayer), 0).x);  // the readback maps it to ids
   }
   bool outsideCone = lightType == 1 && dot(normalize(p - lightPos), P.lightDirCos.xyz) < P.lightDirCos.w;
@@ -258,16 +278,22 @@ void main() {
   if (P.depthBias.z > 0.0) rasterBias = min(rasterBias, P.depthBias.z);
   if (P.depthBias.z < 0.0) rasterBias = max(rasterBias, P.depthBias.z);
   float biasDepth = P.bias.x + rasterBias + (depthP - uvz.z);
-  vec4 tL = project(p + toLight * texelWorld);
+  vec4 tL = tP + dirMap(toLight * texelWorld);
   float depthStep = abs(depthP - tL.z / tL.w);
   float worldPerDepth = depthStep > 0.0 ? texelWorld / depthStep : 0.0;
 
-  // Lloyd's m: the Jacobian d(texel)/d(pixel) by central differences of exact plane points.
-  vec2 tx1 = mapCoords(planePoint(pixelCenter + vec2(0.5, 0.0), plane)).xy;
-  vec2 tx0 = mapCoords(planePoint(pixelCenter - vec2(0.5, 0.0), plane)).xy;
-  vec2 ty1 = mapCoords(planePoint(pixelCenter + vec2(0.0, 0.5), plane)).xy;
-  vec2 ty0 = mapCoords(planePoint(pixelCenter - vec2(0.0, 0.5), plane)).xy;
-  vec2 jx = tx1 - tx0, jy = ty1 - ty0;
+  // Lloyd's m: the Jacobian d(texel)/d(pixel), exact on the plane. The point is
+  // p(x, y) = origin + d t with t = plane.w / dot(n, d) and d = rayX x + rayY y + rayC, so
+  // d(project(p))/dx = t (dirMap(rayX) - dot(n, rayX) / dot(n, d) dirMap(d)), and the texel
+  // coordinates (u, v) = gSize (X, Y) / W follow by the quotient rule.
+  float nd = dot(nTri, dir);
+  float tHit = plane.w / nd;
+  vec4 dMap = dirMap(dir);
+  vec4 gx = tHit * (dirMap(P.rayX.xyz) - (dot(nTri, P.rayX.xyz) / nd) * dMap);
+  vec4 gy = tHit * (dirMap(P.rayY.xyz) - (dot(nTri, P.rayY.xyz) / nd) * dMap);
+  vec2 uvP = tP.xy / tP.w;
+  float scale = gSize / tP.w;
+  vec2 jx = (gx.xy - uvP * gx.w) * scale, jy = (gy.xy - uvP * gy.w) * scale;
   float sumSq = dot(jx, jx) + dot(jy, jy);
   float detJ = jx.x * jy.y - jy.x * jx.y;
   float sMax = sqrt(0.5 * (sumSq + sqrt(max(sumSq * sumSq - 4.0 * detJ * detJ, 0.0))));
@@ -286,7 +312,7 @@ void main() {
     uint base = kProjectorChannels * uint(j);
     gLayer = P.sizes.y + j;
     gTexFromWorld = P.texFromWorld[gLayer];
-    vec4 t = project(p);
+    vec4 t = gTexFromWorld * vec4(p, 1.0);  // projectors are perspective
     vec3 puv = t.xyz / t.w;
     bool insideUv = all(greaterThanEqual(puv.xy, vec2(0.0))) && all(lessThanEqual(puv.xy, vec2(1.0)));
     bool reverse = t.w < 0.0 && insideUv;

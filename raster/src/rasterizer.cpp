@@ -38,6 +38,8 @@
 #include "id_frag.h"
 #include "id_vert.h"
 #include "fullscreen_vert.h"
+#include "id_plain_frag.h"
+#include "id_plain_vert.h"
 #include "resolve_frag.h"
 
 namespace shadowlab {
@@ -150,13 +152,13 @@ struct Rasterizer::Impl {
   vk::DescriptorPool descriptorPool;
   VkDescriptorSet descriptorSet = VK_NULL_HANDLE;
   vk::Sampler nearestSampler, compareSampler;
-  vk::ShaderModule idVert, idFrag, fullscreenVert, resolveFrag;
+  vk::ShaderModule idVert, idFrag, idPlainVert, idPlainFrag, fullscreenVert, resolveFrag;
   vk::QueryPool queries;
   // Keyed by what needs a new pipeline: (depth format, depth clamp, material tests, depth bias).
   std::map<std::tuple<VkFormat, bool, bool, bool>, vk::PipelineHandle> idPipelines;
   // resolve.frag's specialization constants: filter, projector count, cascaded, blend, float depth,
-  // light type (0 directional, 1 spot, 2 point, 3 none).
-  using ResolveKey = std::array<uint32_t, 6>;
+  // light type (0 directional, 1 spot, 2 point, 3 none), affine light layers.
+  using ResolveKey = std::array<uint32_t, 7>;
   std::map<ResolveKey, vk::PipelineHandle> resolvePipelines;
   std::set<std::string> warmed;
   std::vector<glm::vec2> poisson = poissonDisc();
@@ -200,6 +202,8 @@ Rasterizer::Impl::Impl(const RasterDeviceOptions& options) {
   createLayouts();
   idVert = vk::createShaderModule(*context, kSpv_id_vert, sizeof(kSpv_id_vert));
   idFrag = vk::createShaderModule(*context, kSpv_id_frag, sizeof(kSpv_id_frag));
+  idPlainVert = vk::createShaderModule(*context, kSpv_id_plain_vert, sizeof(kSpv_id_plain_vert));
+  idPlainFrag = vk::createShaderModule(*context, kSpv_id_plain_frag, sizeof(kSpv_id_plain_frag));
   fullscreenVert = vk::createShaderModule(*context, kSpv_fullscreen_vert, sizeof(kSpv_fullscreen_vert));
   resolveFrag = vk::createShaderModule(*context, kSpv_resolve_frag, sizeof(kSpv_resolve_frag));
 
@@ -283,16 +287,18 @@ VkPipeline Rasterizer::Impl::idPipeline(VkFormat format, bool depthClamp, bool m
   auto it = idPipelines.find(key);
   if (it != idPipelines.end()) return it->second.get();
   vk::GraphicsPipelineDesc d;
-  d.vertex = idVert.get();
-  d.fragment = idFrag.get();
+  // Without material tests, the plain shaders: no uv varying to set up per triangle.
+  d.vertex = materialTests ? idVert.get() : idPlainVert.get();
+  d.fragment = materialTests ? idFrag.get() : idPlainFrag.get();
   d.layout = pipelineLayout.get();
   d.bindings = {{0, 5 * sizeof(float), VK_VERTEX_INPUT_RATE_VERTEX}};
-  d.attributes = {{0, 0, VK_FORMAT_R32G32B32_SFLOAT, 0}, {1, 0, VK_FORMAT_R32G32_SFLOAT, 3 * sizeof(float)}};
+  d.attributes = {{0, 0, VK_FORMAT_R32G32B32_SFLOAT, 0}};
+  if (materialTests) d.attributes.push_back({1, 0, VK_FORMAT_R32G32_SFLOAT, 3 * sizeof(float)});
   d.colorFormats = {kIdFormat};
   d.depthFormat = format;
   d.depthClamp = depthClamp;
   d.depthBias = depthBias;
-  d.fragmentSpecialization = {materialTests ? 1u : 0u};
+  if (materialTests) d.fragmentSpecialization = {1u};
   return idPipelines.emplace(key, vk::createGraphicsPipeline(*context, d)).first->second.get();
 }
 
@@ -770,13 +776,19 @@ Frame Rasterizer::render(const Scene& scene, const Method& method, const std::st
                     im.idPipeline(kCameraDepthFormat, false, false, false),
                     im.idPipeline(kCameraDepthFormat, false, true, false)};
   bool cascaded = !lightSpace.cascadeSplitsView.empty();
+  bool affine = lightLayers > 0;
+  for (int i = 0; i < lightLayers; ++i) {
+    const glm::mat4& t = layers[size_t(i)].texFromWorld;
+    affine = affine && t[0][3] == 0.0f && t[1][3] == 0.0f && t[2][3] == 0.0f && t[3][3] == 1.0f;
+  }
   Impl::ResolveKey resolveKey{uint32_t(method.filter), uint32_t(projectorCount), cascaded ? 1u : 0u,
                               cascaded && method.cascadeBlend > 0.0f ? 1u : 0u,
                               depthResolution(method.mapFormat) > 0.0f ? 0u : 1u,
                               !light                                    ? 3u
                               : light->type == LightType::Directional ? 0u
                               : light->type == LightType::Spot        ? 1u
-                                                                      : 2u};
+                                                                      : 2u,
+                              affine ? 1u : 0u};
   VkPipeline resolve = im.resolvePipeline(resolveKey);
   std::string warmKey = std::to_string(int(mapFormat)) + "/" + std::to_string(depthClamp);
   for (uint32_t k : resolveKey) warmKey += "/" + std::to_string(k);
