@@ -29,6 +29,7 @@ Buffer::Buffer(const Context& context, VkDeviceSize size, VkBufferUsageFlags usa
   memory_ = Memory(device, memory);
   VK_CHECK(vkBindBufferMemory(device, buffer, memory, 0));
   VK_CHECK(vkMapMemory(device, memory, 0, VK_WHOLE_SIZE, 0, &mapped_));
+  context.adviseHugePages(mapped_, req.size);
   coherent_ = context.hostCoherent(alloc.memoryTypeIndex);
 }
 

@@ -1,5 +1,8 @@
 #include "vk/context.h"
 
+#include <sys/mman.h>
+
+#include <cstdint>
 #include <cstdio>
 #include <cstring>
 
@@ -221,6 +224,18 @@ void Context::invalidate(VkDeviceMemory memory) const {
   range.memory = memory;
   range.size = VK_WHOLE_SIZE;
   VK_CHECK(vkInvalidateMappedMemoryRanges(device_, 1, &range));
+}
+
+// The shadow maps and the per-pixel images are tens of MB, read in scattered 4x4-pixel blocks:
+// with 4 KiB pages the resolve pass spends about 3 ms of its ~35 at 1080p on TLB misses (measured
+// with glibc.malloc.hugetlb=1, which does this for every allocation). Best effort: the kernel
+// may refuse (THP off) or have no huge page free; nothing depends on it.
+void Context::adviseHugePages(void* mapped, VkDeviceSize size) const {
+  constexpr uintptr_t kHuge = uintptr_t(2) << 20;
+  if (properties_.deviceType != VK_PHYSICAL_DEVICE_TYPE_CPU || mapped == nullptr || size < 2 * kHuge) return;
+  uintptr_t begin = (reinterpret_cast<uintptr_t>(mapped) + kHuge - 1) & ~(kHuge - 1);
+  uintptr_t end = (reinterpret_cast<uintptr_t>(mapped) + uintptr_t(size)) & ~(kHuge - 1);
+  if (end > begin) madvise(reinterpret_cast<void*>(begin), end - begin, MADV_HUGEPAGE);
 }
 
 uint32_t Context::memoryType(uint32_t typeBits, VkMemoryPropertyFlags required,

@@ -39,11 +39,17 @@ class Context {
   // First memory type allowed by `typeBits` having all of `required` (and preferring `preferred`).
   uint32_t memoryType(uint32_t typeBits, VkMemoryPropertyFlags required,
                       VkMemoryPropertyFlags preferred = 0) const;
+  bool hostVisible(uint32_t memoryType) const {
+    return memory_.memoryTypes[memoryType].propertyFlags & VK_MEMORY_PROPERTY_HOST_VISIBLE_BIT;
+  }
   bool hostCoherent(uint32_t memoryType) const {
     return memory_.memoryTypes[memoryType].propertyFlags & VK_MEMORY_PROPERTY_HOST_COHERENT_BIT;
   }
   // Makes device writes to mapped, non-coherent `memory` visible to the host (whole allocation).
   void invalidate(VkDeviceMemory memory) const;
+  // On a CPU device (lavapipe), device memory is host RAM: asks for transparent huge pages for a
+  // large mapped allocation (`mapped`, `size` bytes) before its first use. Elsewhere a no-op.
+  void adviseHugePages(void* mapped, VkDeviceSize size) const;
 
  private:
   void release();  // also used when the constructor fails half way

@@ -46,11 +46,21 @@ Image::Image(const Context& context, int width, int height, int layers, VkFormat
   VK_CHECK(vkAllocateMemory(device, &alloc, nullptr, &memory));
   memory_ = Memory(device, memory);
   VK_CHECK(vkBindImageMemory(device, image, memory, 0));
+  if (!hostReadable && context.properties().deviceType == VK_PHYSICAL_DEVICE_TYPE_CPU &&
+      context.hostVisible(alloc.memoryTypeIndex)) {
+    // Mapped only to reach the pages (Context::adviseHugePages); a GPU's memory is left alone.
+    void* p = nullptr;
+    if (vkMapMemory(device, memory, 0, VK_WHOLE_SIZE, 0, &p) == VK_SUCCESS) {
+      context.adviseHugePages(p, req.size);
+      vkUnmapMemory(device, memory);
+    }
+  }
   if (hostReadable) {
     VkImageSubresource sub{aspect, 0, 0};
     VkSubresourceLayout layout;
     vkGetImageSubresourceLayout(device, image, &sub, &layout);
     VK_CHECK(vkMapMemory(device, memory, 0, VK_WHOLE_SIZE, 0, &mapped_));
+    context.adviseHugePages(mapped_, req.size);
     mapped_ = static_cast<char*>(mapped_) + layout.offset;
     rowPitch_ = size_t(layout.rowPitch);
     coherent_ = context.hostCoherent(alloc.memoryTypeIndex);
