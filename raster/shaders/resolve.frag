@@ -285,20 +285,20 @@ void main() {
   // Lloyd's m: the Jacobian d(texel)/d(pixel), exact on the plane. The point is
   // p(x, y) = origin + d t with t = plane.w / dot(n, d) and d = rayX x + rayY y + rayC, so
   // d(project(p))/dx = t (dirMap(rayX) - dot(n, rayX) / dot(n, d) dirMap(d)), and the texel
-  // coordinates (u, v) = gSize (X, Y) / W follow by the quotient rule.
-  float nd = dot(nTri, dir);
-  float tHit = plane.w / nd;
+  // coordinates (u, v) = gSize (X, Y) / W follow by the quotient rule. Few divisions: each
+  // costs as much as several multiplies.
+  float invNd = 1.0 / dot(nTri, dir);
   vec4 dMap = dirMap(dir);
-  vec4 gx = tHit * (dirMap(P.rayX.xyz) - (dot(nTri, P.rayX.xyz) / nd) * dMap);
-  vec4 gy = tHit * (dirMap(P.rayY.xyz) - (dot(nTri, P.rayY.xyz) / nd) * dMap);
+  vec4 gx = dirMap(P.rayX.xyz) - (dot(nTri, P.rayX.xyz) * invNd) * dMap;
+  vec4 gy = dirMap(P.rayY.xyz) - (dot(nTri, P.rayY.xyz) * invNd) * dMap;
+  float scale = gSize * plane.w * invNd / tP.w;  // gSize t / W
   vec2 uvP = tP.xy / tP.w;
-  float scale = gSize / tP.w;
-  vec2 jx = (gx.xy - uvP * gx.w) * scale, jy = (gy.xy - uvP * gy.w) * scale;
+  vec2 jx = (kAffine ? gx.xy : gx.xy - uvP * gx.w) * scale, jy = (kAffine ? gy.xy : gy.xy - uvP * gy.w) * scale;
   float sumSq = dot(jx, jx) + dot(jy, jy);
-  float detJ = jx.x * jy.y - jy.x * jx.y;
+  float detJ = abs(jx.x * jy.y - jy.x * jx.y);
+  // The singular values of J: sMax, and sMin = detJ / sMax; m = 1 / sMin.
   float sMax = sqrt(0.5 * (sumSq + sqrt(max(sumSq * sumSq - 4.0 * detJ * detJ, 0.0))));
-  float sMin = sMax > 0.0 ? abs(detJ) / sMax : 0.0;
-  float m = sMin > 1e-6 ? min(1.0 / sMin, 1e6) : 1e6;
+  float m = detJ > 1e-6 * sMax ? min(sMax / detJ, 1e6) : 1e6;
 
   // Last, because it moves the lookup globals to the next cascade's layer.
   if (kBlend && blendT > 0.0) vis = mix(vis, layerVisibility(cascade + 1, p, normal, e1), blendT);
