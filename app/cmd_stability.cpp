@@ -194,9 +194,10 @@ int run(const Options& o) {
     bool t = false;
     const Frame reference = cache.get(scene, ReferenceOptions{}, &t);
     traced += t;
-    std::vector<Frame> rasters;
-    for (const Camera& fit : fitCameras) rasters.push_back(rasterizer.render(scene, method, light, nullptr, &fit));
-    s = measureStability(reference, rasters, compareOptions);
+    // One frame at a time against the previous one: memory stays that of two frames.
+    StabilityStream stream(reference, compareOptions);
+    for (const Camera& fit : fitCameras) rasterizer.recycle(stream.add(rasterizer.render(scene, method, light, nullptr, &fit)));
+    s = stream.result();
     nlohmann::json cameras = nlohmann::json::array();
     for (const Camera& c : fitCameras)
       cameras.push_back({{"position", {c.position.x, c.position.y, c.position.z}},

@@ -126,6 +126,30 @@ TEST(ShimmerRate, SyntheticFramesGiveTheExactFlipFraction) {
   EXPECT_THROW(decisionFlipRate(ref, a, empty, "sun"), InputError);
 }
 
+// The stream keeps one frame: each add hands back the frame it replaces, and the result is the
+// whole-vector measurement's, pair by pair.
+TEST(ShimmerRate, StreamHoldsOneFrameAndAgreesWithTheWholeSequence) {
+  Frame ref = synthetic({1, 1, 1, 1}, {1, 1, 0, 0});
+  Frame a = synthetic({1, 1, 1, 1}, {1, 1, 0, 0});
+  Frame b = synthetic({1, 1, 1, 1}, {0, 1, 1, 0});
+  Frame c = synthetic({1, 1, 1, 1}, {0, 0, 1, 1});
+  StabilityStream stream(ref);
+  EXPECT_THROW(stream.result(), InputError);
+  EXPECT_EQ(stream.add(a).pixelCount(), 0u);  // nothing replaced yet
+  EXPECT_THROW(stream.result(), InputError);  // one frame: no pair
+  Frame back = stream.add(b);
+  EXPECT_EQ(back.get("light.sun.vis"), a.get("light.sun.vis"));
+  back = stream.add(c);
+  EXPECT_EQ(back.get("light.sun.vis"), b.get("light.sun.vis"));
+  const StabilityMetrics s = stream.result(), whole = measureStability(ref, {a, b, c});
+  EXPECT_EQ(s.frames, 3);
+  EXPECT_EQ(s.flipRatePerPair, whole.flipRatePerPair);
+  EXPECT_EQ(s.flipRatePerPair, (std::vector<double>{0.5, 0.5}));  // a->b flips 2 of 4, b->c 2 of 4
+  EXPECT_EQ(s.errorRatePerFrame, (std::vector<double>{0.0, 0.5, 1.0}));
+  EXPECT_EQ(s.shimmerRate, 0.5);
+  EXPECT_EQ(s.errorJumpMax, 0.5);
+}
+
 // Planted per-frame error rates, all dyadic so every step is exact:
 //   e = 0.25, 0.875, 0.125, 0.1875, 0.5
 //   jumps |e[k+1] - e[k]| = 0.625, 0.75, 0.0625, 0.3125 -> error_jump_max 0.75 (a fall counts too)

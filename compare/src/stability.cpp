@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <utility>
 
 #include "shadowlab/scenes/error.h"
 
@@ -49,26 +50,42 @@ double decisionFlipRate(const Frame& reference, const Frame& rasterA, const Fram
   return compared ? double(flips) / double(compared) : 0.0;  // no pixel: nothing flipped, no NaN
 }
 
+StabilityStream::StabilityStream(const Frame& reference, CompareOptions options)
+    : reference_(reference), options_(std::move(options)) {}
+
+Frame StabilityStream::add(Frame raster) {
+  if (frames_ == 0) light_ = resolveCompareLight(reference_, raster, options_);
+  if (frames_ > 0) {
+    uint64_t px = 0;
+    metrics_.flipRatePerPair.push_back(decisionFlipRate(reference_, previous_, raster, light_, &px));
+    metrics_.pixelsComparedPerPair.push_back(px);
+  }
+  errors_.push_back(compareFrames(reference_, raster, options_).errorRate);
+  ++frames_;
+  std::swap(previous_, raster);
+  return raster;
+}
+
+StabilityMetrics StabilityStream::result() const {
+  if (frames_ < 2)
+    throw InputError("stability: error: got " + std::to_string(frames_) +
+                     " raster frame(s); expected at least 2 to measure change between frames");
+  StabilityMetrics s = metrics_;
+  double sum = 0;
+  for (double r : s.flipRatePerPair) sum += r;
+  s.shimmerRate = sum / double(s.flipRatePerPair.size());
+  setErrorStatistics(s, errors_);
+  return s;
+}
+
 StabilityMetrics measureStability(const Frame& reference, const std::vector<Frame>& rasters,
                                   const CompareOptions& options) {
-  if (rasters.size() < 2)
+  if (rasters.size() < 2)  // before any copy
     throw InputError("stability: error: got " + std::to_string(rasters.size()) +
                      " raster frame(s); expected at least 2 to measure change between frames");
-  StabilityMetrics s;
-  const std::string light = resolveCompareLight(reference, rasters.front(), options);
-  double sum = 0;
-  for (size_t k = 0; k + 1 < rasters.size(); ++k) {
-    uint64_t px = 0;
-    double r = decisionFlipRate(reference, rasters[k], rasters[k + 1], light, &px);
-    s.flipRatePerPair.push_back(r);
-    s.pixelsComparedPerPair.push_back(px);
-    sum += r;
-  }
-  s.shimmerRate = sum / double(s.flipRatePerPair.size());
-  std::vector<double> errors;
-  for (const Frame& f : rasters) errors.push_back(compareFrames(reference, f, options).errorRate);
-  setErrorStatistics(s, errors);
-  return s;
+  StabilityStream stream(reference, options);
+  for (const Frame& f : rasters) stream.add(f);
+  return stream.result();
 }
 
 void setErrorStatistics(StabilityMetrics& s, const std::vector<double>& e) {

@@ -69,6 +69,27 @@ double decisionFlipRate(const Frame& reference, const Frame& rasterA, const Fram
 StabilityMetrics measureStability(const Frame& reference, const std::vector<Frame>& rasters,
                                   const CompareOptions& options = {});
 
+// The same metrics, one frame at a time: holds the previous frame only, so a long path needs the
+// memory of two frames, not of all of them. measureStability is this over a vector.
+class StabilityStream {
+ public:
+  StabilityStream(const Frame& reference, CompareOptions options = {});
+  // Measures `raster` against the previous frame (flip rate) and the reference (error rate),
+  // then keeps it as the previous frame and returns the one it replaces (empty at first), so
+  // the caller can recycle its planes. Throws as measureStability does.
+  Frame add(Frame raster);
+  StabilityMetrics result() const;  // throws InputError with fewer than 2 frames
+
+ private:
+  const Frame& reference_;
+  CompareOptions options_;
+  std::string light_;
+  Frame previous_;
+  int frames_ = 0;
+  StabilityMetrics metrics_;
+  std::vector<double> errors_;
+};
+
 // ---- light paths -------------------------------------------------------------------------------
 // One moving angle of a directional light: `--light-path elevation_deg=60:10:11` moves the sun's
 // elevation from 60 to 10 degrees in 11 frames (both ends included, equal steps).
