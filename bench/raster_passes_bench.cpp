@@ -10,10 +10,11 @@
 #include <map>
 #include <memory>
 
+#include "bench_scene.h"
 #include "shadowlab/raster/raster.h"
-#include "shadowlab/scenes/loader.h"
 
 using namespace shadowlab;
+using shadowlab::bench::benchScene;
 
 namespace {
 
@@ -22,38 +23,8 @@ Rasterizer& rasterizer() {
   return r;
 }
 
-const Scene& scene(int copies) {
-  static std::map<int, Scene> cache;
-  auto it = cache.find(copies);
-  if (it != cache.end()) return it->second;
-  Scene s = loadScene(resolveScenePath("bunny"));
-  s.camera.width = 1920;
-  s.camera.height = 1080;
-  if (copies > 1) {
-    // Extra bunnies beside the first one, in view: ~28k triangles each.
-    std::vector<Object> extra;
-    glm::vec3 lo = s.boundsMin(), hi = s.boundsMax();
-    float step = 0.35f * std::max(hi.x - lo.x, hi.z - lo.z);
-    uint32_t nextId = 1000;
-    for (const Object& o : s.objects) {
-      if (o.triangles.size() < 10000) continue;  // the bunny, not the floor
-      for (int c = 1; c < copies; ++c) {
-        Object copy = o;
-        copy.id = nextId++;
-        copy.name = o.name + "_" + std::to_string(c);
-        glm::vec3 offset((c % 2 ? 1.0f : -1.0f) * step * float((c + 1) / 2) * 0.5f, 0, -step * 0.3f * float(c));
-        for (auto& p : copy.positions) p += offset;
-        extra.push_back(copy);
-      }
-    }
-    for (auto& o : extra) s.objects.push_back(std::move(o));
-    s.hash = "bench-" + std::to_string(copies);
-  }
-  return cache.emplace(copies, std::move(s)).first->second;
-}
-
 void passes(benchmark::State& state, Filter filter, int copies) {
-  const Scene& s = scene(copies);
+  const Scene& s = benchScene(copies);
   Method m;
   m.mapSize = 2048;
   m.filter = filter;

@@ -1,0 +1,343 @@
+// The yardstick, measured here rather than quoted: a bare single-purpose shadow-mapping
+// program (depth-only shadow pass with a depth bias; a forward camera pass doing one comparison
+// lookup per pixel into an RGBA8 target), on the same device, scene, map and image size as the
+// rasterizer, in the same process, one after the other. Each benchmark reports both programs'
+// shadow and camera pass times (GPU timestamps, after warm-up) and their ratios: the goal
+// is shadowlab within 1.3x of the bare program for the filters none and hw2x2.
+//
+// The bare program draws the whole scene with one indexed draw from a position-only vertex buffer
+// and no per-pixel evidence: it is what the rasterizer's numbers are compared with, not a mode of it.
+#include <benchmark/benchmark.h>
+
+#include <glm/gtc/matrix_transform.hpp>
+
+#include <algorithm>
+#include <cmath>
+#include <vector>
+
+#include "bare_camera_frag.h"
+#include "bare_camera_vert.h"
+#include "bare_shadow_frag.h"
+#include "bare_shadow_ids_frag.h"
+#include "bare_shadow_vert.h"
+#include "bench_scene.h"
+#include "shadowlab/raster/raster.h"
+#include "vk/buffer.h"
+#include "vk/check.h"
+#include "vk/commands.h"
+#include "vk/context.h"
+#include "vk/image.h"
+#include "vk/pipeline.h"
+
+using namespace shadowlab;
+
+namespace {
+
+constexpr int kMapSize = 2048;
+
+struct Push {
+  glm::mat4 clip;      // shadow pass: the light's clip; camera pass: the camera's
+  glm::mat4 lightTex;  // camera pass: world -> (u w, v w, depth w, w) of the map
+};
+
+struct BareTimes {
+  double shadowMs = 0, cameraMs = 0;
+};
+
+class BareProgram {
+ public:
+  explicit BareProgram(const vk::Context& c) : c_(c), commands_(c) {
+    VkDevice d = c.device();
+    VkDescriptorSetLayoutBinding b{0, VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER, 1, VK_SHADER_STAGE_FRAGMENT_BIT,
+                                   nullptr};
+    VkDescriptorSetLayoutCreateInfo sl{VK_STRUCTURE_TYPE_DESCRIPTOR_SET_LAYOUT_CREATE_INFO};
+    sl.bindingCount = 1;
+    sl.pBindings = &b;
+    VkDescriptorSetLayout setLayout;
+    VK_CHECK(vkCreateDescriptorSetLayout(d, &sl, nullptr, &setLayout));
+    setLayout_ = vk::DescriptorSetLayout(d, setLayout);
+    VkPushConstantRange push{VK_SHADER_STAGE_VERTEX_BIT, 0, sizeof(Push)};
+    VkPipelineLayoutCreateInfo pl{VK_STRUCTURE_TYPE_PIPELINE_LAYOUT_CREATE_INFO};
+    pl.setLayoutCount = 1;
+    pl.pSetLayouts = &setLayout;
+    pl.pushConstantRangeCount = 1;
+    pl.pPushConstantRanges = &push;
+    VkPipelineLayout layout;
+    VK_CHECK(vkCreatePipelineLayout(d, &pl, nullptr, &layout));
+    layout_ = vk::PipelineLayout(d, layout);
+    VkDescriptorPoolSize size{VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER, 1};
+    VkDescriptorPoolCreateInfo dp{VK_STRUCTURE_TYPE_DESCRIPTOR_POOL_CREATE_INFO};
+    dp.maxSets = 1;
+    dp.poolSizeCount = 1;
+    dp.pPoolSizes = &size;
+    VkDescriptorPool pool;
+    VK_CHECK(vkCreateDescriptorPool(d, &dp, nullptr, &pool));
+    pool_ = vk::DescriptorPool(d, pool);
+    VkDescriptorSetAllocateInfo alloc{VK_STRUCTURE_TYPE_DESCRIPTOR_SET_ALLOCATE_INFO};
+    alloc.descriptorPool = pool;
+    alloc.descriptorSetCount = 1;
+    alloc.pSetLayouts = &setLayout;
+    VK_CHECK(vkAllocateDescriptorSets(d, &alloc, &set_));
+
+    shadowVert_ = vk::createShaderModule(c, kSpv_bare_shadow_vert, sizeof(kSpv_bare_shadow_vert));
+    shadowFrag_ = vk::createShaderModule(c, kSpv_bare_shadow_frag, sizeof(kSpv_bare_shadow_frag));
+    shadowIdsFrag_ = vk::createShaderModule(c, kSpv_bare_shadow_ids_frag, sizeof(kSpv_bare_shadow_ids_frag));
+    cameraVert_ = vk::createShaderModule(c, kSpv_bare_camera_vert, sizeof(kSpv_bare_camera_vert));
+    cameraFrag_ = vk::createShaderModule(c, kSpv_bare_camera_frag, sizeof(kSpv_bare_camera_frag));
+    auto pipeline = [&](VkShaderModule v, VkShaderModule f, std::vector<VkFormat> colors, VkFormat depth, bool bias) {
+      vk::GraphicsPipelineDesc p;
+      p.vertex = v;
+      p.fragment = f;
+      p.layout = layout;
+      p.bindings = {{0, 3 * sizeof(float), VK_VERTEX_INPUT_RATE_VERTEX}};
+      p.attributes = {{0, 0, VK_FORMAT_R32G32B32_SFLOAT, 0}};
+      p.colorFormats = std::move(colors);
+      p.depthFormat = depth;
+      p.depthBias = bias;
+      return vk::createGraphicsPipeline(c, p);
+    };
+    shadowPipe_ = pipeline(shadowVert_.get(), shadowFrag_.get(), {}, VK_FORMAT_X8_D24_UNORM_PACK32, true);
+    shadowIdsPipe_ = pipeline(shadowVert_.get(), shadowIdsFrag_.get(), {VK_FORMAT_R32_UINT},
+                              VK_FORMAT_X8_D24_UNORM_PACK32, true);
+    cameraPipe_ = pipeline(cameraVert_.get(), cameraFrag_.get(), {VK_FORMAT_R8G8B8A8_UNORM}, VK_FORMAT_D32_SFLOAT, false);
+    for (int linear = 0; linear < 2; ++linear) {
+      VkSamplerCreateInfo s{VK_STRUCTURE_TYPE_SAMPLER_CREATE_INFO};
+      s.magFilter = s.minFilter = linear ? VK_FILTER_LINEAR : VK_FILTER_NEAREST;
+      s.addressModeU = s.addressModeV = s.addressModeW = VK_SAMPLER_ADDRESS_MODE_CLAMP_TO_BORDER;
+      s.borderColor = VK_BORDER_COLOR_FLOAT_OPAQUE_WHITE;
+      s.compareEnable = VK_TRUE;
+      s.compareOp = VK_COMPARE_OP_LESS_OR_EQUAL;
+      VkSampler sampler;
+      VK_CHECK(vkCreateSampler(d, &s, nullptr, &sampler));
+      samplers_[linear] = vk::Sampler(d, sampler);
+    }
+    VkQueryPoolCreateInfo q{VK_STRUCTURE_TYPE_QUERY_POOL_CREATE_INFO};
+    q.queryType = VK_QUERY_TYPE_TIMESTAMP;
+    q.queryCount = 3;
+    VkQueryPool qp;
+    VK_CHECK(vkCreateQueryPool(d, &q, nullptr, &qp));
+    queries_ = vk::QueryPool(d, qp);
+  }
+
+  // The whole scene as one position-only mesh, and the light's and camera's matrices: an
+  // orthographic map fit to the scene's bounding sphere along the first light's direction.
+  void setScene(const Scene& s) {
+    std::vector<float> positions;
+    std::vector<uint32_t> indices;
+    for (const Object& o : s.objects) {
+      uint32_t base = uint32_t(positions.size() / 3);
+      for (const glm::vec3& p : o.positions) positions.insert(positions.end(), {p.x, p.y, p.z});
+      for (const glm::uvec3& t : o.triangles) indices.insert(indices.end(), {base + t.x, base + t.y, base + t.z});
+    }
+    vertices_ = vk::Buffer(c_, positions.size() * sizeof(float), VK_BUFFER_USAGE_VERTEX_BUFFER_BIT);
+    vertices_.upload(positions.data(), positions.size() * sizeof(float));
+    indices_ = vk::Buffer(c_, indices.size() * sizeof(uint32_t), VK_BUFFER_USAGE_INDEX_BUFFER_BIT);
+    indices_.upload(indices.data(), indices.size() * sizeof(uint32_t));
+    indexCount_ = uint32_t(indices.size());
+
+    glm::vec3 lo = s.boundsMin(), hi = s.boundsMax(), center = 0.5f * (lo + hi);
+    float r = 0.5f * glm::length(hi - lo);
+    glm::vec3 dir = glm::normalize(s.lights.front().direction);
+    glm::vec3 up = std::fabs(dir.y) > 0.99f ? glm::vec3(1, 0, 0) : glm::vec3(0, 1, 0);
+    glm::mat4 view = glm::lookAt(center - dir * (2.0f * r), center, up);
+    lightClip_ = glm::orthoRH_ZO(-r, r, -r, r, r, 3.0f * r) * view;
+    // clip (x, y in [-1, 1], depth in [0, 1]) -> (u, v in [0, 1], depth), v along the viewport's y
+    glm::mat4 texFromClip(1.0f);
+    texFromClip[0][0] = texFromClip[1][1] = 0.5f;
+    texFromClip[3][0] = texFromClip[3][1] = 0.5f;
+    lightTex_ = texFromClip * lightClip_;
+    cameraClip_ = s.camera.clipFromView() * s.camera.viewFromWorld();
+    width_ = s.camera.width;
+    height_ = s.camera.height;
+    map_ = vk::Image(c_, kMapSize, kMapSize, 1, VK_FORMAT_X8_D24_UNORM_PACK32,
+                     VK_IMAGE_USAGE_DEPTH_STENCIL_ATTACHMENT_BIT | VK_IMAGE_USAGE_SAMPLED_BIT, VK_IMAGE_ASPECT_DEPTH_BIT);
+    mapIds_ = vk::Image(c_, kMapSize, kMapSize, 1, VK_FORMAT_R32_UINT, VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT,
+                        VK_IMAGE_ASPECT_COLOR_BIT);
+    color_ = vk::Image(c_, width_, height_, 1, VK_FORMAT_R8G8B8A8_UNORM, VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT,
+                       VK_IMAGE_ASPECT_COLOR_BIT, true);  // host-readable: coverage() checks the picture
+    depth_ = vk::Image(c_, width_, height_, 1, VK_FORMAT_D32_SFLOAT, VK_IMAGE_USAGE_DEPTH_STENCIL_ATTACHMENT_BIT,
+                       VK_IMAGE_ASPECT_DEPTH_BIT);
+  }
+
+  // ids: the shadow pass also writes an R32_UINT id attachment (the contract).
+  BareTimes frame(bool linear, bool ids = false) {
+    VkDescriptorImageInfo image{samplers_[linear ? 1 : 0].get(), map_.arrayView(),
+                                VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL};
+    VkWriteDescriptorSet w{VK_STRUCTURE_TYPE_WRITE_DESCRIPTOR_SET};
+    w.dstSet = set_;
+    w.descriptorCount = 1;
+    w.descriptorType = VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER;
+    w.pImageInfo = &image;
+    vkUpdateDescriptorSets(c_.device(), 1, &w, 0, nullptr);
+
+    VkCommandBuffer cmd = commands_.begin();
+    VkQueryPool pool = queries_.get();
+    vkCmdResetQueryPool(cmd, pool, 0, 3);
+    vkCmdWriteTimestamp2(cmd, VK_PIPELINE_STAGE_2_TOP_OF_PIPE_BIT, pool, 0);
+    VkDeviceSize offset = 0;
+    VkBuffer vb = vertices_.get();
+    vkCmdBindVertexBuffers(cmd, 0, 1, &vb, &offset);
+    vkCmdBindIndexBuffer(cmd, indices_.get(), 0, VK_INDEX_TYPE_UINT32);
+
+    vk::transition(cmd, map_, VK_IMAGE_LAYOUT_UNDEFINED, VK_IMAGE_LAYOUT_DEPTH_ATTACHMENT_OPTIMAL,
+                   VK_PIPELINE_STAGE_2_FRAGMENT_SHADER_BIT, 0, VK_PIPELINE_STAGE_2_EARLY_FRAGMENT_TESTS_BIT,
+                   VK_ACCESS_2_DEPTH_STENCIL_ATTACHMENT_WRITE_BIT);
+    if (ids)
+      vk::transition(cmd, mapIds_, VK_IMAGE_LAYOUT_UNDEFINED, VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL,
+                     VK_PIPELINE_STAGE_2_COLOR_ATTACHMENT_OUTPUT_BIT, 0,
+                     VK_PIPELINE_STAGE_2_COLOR_ATTACHMENT_OUTPUT_BIT, VK_ACCESS_2_COLOR_ATTACHMENT_WRITE_BIT);
+    begin(cmd, ids ? &mapIds_ : nullptr, map_.layerView(0), kMapSize, kMapSize);
+    vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_GRAPHICS, (ids ? shadowIdsPipe_ : shadowPipe_).get());
+    vkCmdSetCullMode(cmd, VK_CULL_MODE_NONE);
+    vkCmdSetDepthBias(cmd, 1.0f, 0.0f, 1.0f);
+    Push p{lightClip_, lightTex_};
+    vkCmdPushConstants(cmd, layout_.get(), VK_SHADER_STAGE_VERTEX_BIT, 0, sizeof(p), &p);
+    vkCmdDrawIndexed(cmd, indexCount_, 1, 0, 0, 0);
+    vkCmdEndRendering(cmd);
+    vk::transition(cmd, map_, VK_IMAGE_LAYOUT_DEPTH_ATTACHMENT_OPTIMAL, VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL,
+                   VK_PIPELINE_STAGE_2_LATE_FRAGMENT_TESTS_BIT, VK_ACCESS_2_DEPTH_STENCIL_ATTACHMENT_WRITE_BIT,
+                   VK_PIPELINE_STAGE_2_FRAGMENT_SHADER_BIT, VK_ACCESS_2_SHADER_SAMPLED_READ_BIT);
+    vkCmdWriteTimestamp2(cmd, VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT, pool, 1);
+
+    vk::transition(cmd, color_, VK_IMAGE_LAYOUT_UNDEFINED, VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL,
+                   VK_PIPELINE_STAGE_2_COLOR_ATTACHMENT_OUTPUT_BIT, 0, VK_PIPELINE_STAGE_2_COLOR_ATTACHMENT_OUTPUT_BIT,
+                   VK_ACCESS_2_COLOR_ATTACHMENT_WRITE_BIT);
+    vk::transition(cmd, depth_, VK_IMAGE_LAYOUT_UNDEFINED, VK_IMAGE_LAYOUT_DEPTH_ATTACHMENT_OPTIMAL,
+                   VK_PIPELINE_STAGE_2_LATE_FRAGMENT_TESTS_BIT, 0, VK_PIPELINE_STAGE_2_EARLY_FRAGMENT_TESTS_BIT,
+                   VK_ACCESS_2_DEPTH_STENCIL_ATTACHMENT_WRITE_BIT);
+    begin(cmd, &color_, depth_.layerView(0), width_, height_);
+    vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_GRAPHICS, cameraPipe_.get());
+    vkCmdSetCullMode(cmd, VK_CULL_MODE_NONE);
+    vkCmdBindDescriptorSets(cmd, VK_PIPELINE_BIND_POINT_GRAPHICS, layout_.get(), 0, 1, &set_, 0, nullptr);
+    p = {cameraClip_, lightTex_};
+    vkCmdPushConstants(cmd, layout_.get(), VK_SHADER_STAGE_VERTEX_BIT, 0, sizeof(p), &p);
+    vkCmdDrawIndexed(cmd, indexCount_, 1, 0, 0, 0);
+    vkCmdEndRendering(cmd);
+    vkCmdWriteTimestamp2(cmd, VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT, pool, 2);
+    commands_.submitAndWait();
+
+    uint64_t t[3];
+    VK_CHECK(vkGetQueryPoolResults(c_.device(), pool, 0, 3, sizeof(t), t, sizeof(uint64_t),
+                                   VK_QUERY_RESULT_64_BIT | VK_QUERY_RESULT_WAIT_BIT));
+    double ms = c_.properties().limits.timestampPeriod * 1e-6;
+    return {double(t[1] - t[0]) * ms, double(t[2] - t[1]) * ms};
+  }
+
+  // Of the image's pixels, the fraction drawn (alpha 1) and, of those, the fraction in shadow:
+  // evidence that the bare program renders the scene and looks its map up, not an empty frame.
+  std::pair<double, double> coverage() const {
+    color_.invalidate(c_);
+    size_t drawn = 0, dark = 0;
+    for (int y = 0; y < height_; ++y) {
+      const uint8_t* row = static_cast<const uint8_t*>(color_.mapped()) + size_t(y) * color_.rowPitch();
+      for (int x = 0; x < width_; ++x)
+        if (row[4 * x + 3] == 255) drawn++, dark += row[4 * x] < 128;
+    }
+    return {double(drawn) / (double(width_) * height_), drawn ? double(dark) / double(drawn) : 0.0};
+  }
+
+ private:
+  void begin(VkCommandBuffer cmd, const vk::Image* color, VkImageView depthView, int w, int h) {
+    VkRenderingAttachmentInfo c{VK_STRUCTURE_TYPE_RENDERING_ATTACHMENT_INFO};
+    if (color) {
+      c.imageView = color->layerView(0);
+      c.imageLayout = VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL;
+      c.loadOp = VK_ATTACHMENT_LOAD_OP_CLEAR;
+      c.storeOp = VK_ATTACHMENT_STORE_OP_STORE;
+    }
+    VkRenderingAttachmentInfo d{VK_STRUCTURE_TYPE_RENDERING_ATTACHMENT_INFO};
+    d.imageView = depthView;
+    d.imageLayout = VK_IMAGE_LAYOUT_DEPTH_ATTACHMENT_OPTIMAL;
+    d.loadOp = VK_ATTACHMENT_LOAD_OP_CLEAR;
+    d.storeOp = VK_ATTACHMENT_STORE_OP_STORE;
+    d.clearValue.depthStencil = {1.0f, 0};
+    VkRenderingInfo info{VK_STRUCTURE_TYPE_RENDERING_INFO};
+    info.renderArea = {{0, 0}, {uint32_t(w), uint32_t(h)}};
+    info.layerCount = 1;
+    info.colorAttachmentCount = color ? 1 : 0;
+    info.pColorAttachments = color ? &c : nullptr;
+    info.pDepthAttachment = &d;
+    vkCmdBeginRendering(cmd, &info);
+    VkViewport viewport{0, 0, float(w), float(h), 0.0f, 1.0f};
+    VkRect2D scissor{{0, 0}, {uint32_t(w), uint32_t(h)}};
+    vkCmdSetViewport(cmd, 0, 1, &viewport);
+    vkCmdSetScissor(cmd, 0, 1, &scissor);
+  }
+
+  const vk::Context& c_;
+  vk::Commands commands_;
+  vk::DescriptorSetLayout setLayout_;
+  vk::PipelineLayout layout_;
+  vk::DescriptorPool pool_;
+  VkDescriptorSet set_ = VK_NULL_HANDLE;
+  vk::ShaderModule shadowVert_, shadowFrag_, shadowIdsFrag_, cameraVert_, cameraFrag_;
+  vk::PipelineHandle shadowPipe_, shadowIdsPipe_, cameraPipe_;
+  vk::Sampler samplers_[2];
+  vk::QueryPool queries_;
+  vk::Buffer vertices_, indices_;
+  uint32_t indexCount_ = 0;
+  glm::mat4 lightClip_{1.0f}, lightTex_{1.0f}, cameraClip_{1.0f};
+  int width_ = 0, height_ = 0;
+  vk::Image map_, mapIds_, color_, depth_;
+};
+
+vk::Context& bareContext() {
+  static vk::Context c(vk::ContextOptions{});  // lavapipe, no validation
+  return c;
+}
+
+Rasterizer& rasterizer() {
+  static Rasterizer r;
+  return r;
+}
+
+// One iteration: a bare frame, then a shadowlab frame (visibility buffer kept, as in a sweep, and
+// its time included in camera_ms as in raster.json). Iteration time: shadowlab's two passes.
+void versusBare(benchmark::State& state, Filter filter, int copies) {
+  const Scene& s = bench::benchScene(copies);
+  BareProgram bare(bareContext());
+  bare.setScene(s);
+  const bool linear = filter == Filter::Hw2x2;
+  Method m;
+  m.mapSize = kMapSize;
+  m.filter = filter;
+  RasterTimings t;
+  for (int i = 0; i < 2; ++i)  // warm-up: lavapipe compiles shaders at the first draw
+    bare.frame(linear), bare.frame(linear, true), rasterizer().render(s, m, "", &t);
+  std::vector<double> bs, bc, ss, sc;
+  for (auto _ : state) {
+    BareTimes b = bare.frame(linear);
+    rasterizer().render(s, m, "", &t);
+    state.SetIterationTime((t.shadowMs + t.cameraMs) * 1e-3);
+    bs.push_back(b.shadowMs), bc.push_back(b.cameraMs), ss.push_back(t.shadowMs), sc.push_back(t.cameraMs);
+  }
+  auto median = [](std::vector<double> v) {
+    std::sort(v.begin(), v.end());
+    return v.empty() ? 0.0 : v[v.size() / 2];
+  };
+  // Medians per iteration: one slow frame (the VM's neighbours) does not move them.
+  state.counters["bare_shadow_ms"] = median(bs);
+  state.counters["bare_camera_ms"] = median(bc);
+  state.counters["shadow_ms"] = median(ss);
+  state.counters["camera_ms"] = median(sc);
+  state.counters["shadow_ratio"] = median(ss) / median(bs);
+  state.counters["camera_ratio"] = median(sc) / median(bc);
+  state.counters["triangles"] = double(s.triangleCount());
+  std::vector<double> withIds;
+  for (int i = 0; i < 9; ++i) withIds.push_back(bare.frame(linear, true).shadowMs);
+  state.counters["bare_ids_shadow_ms"] = median(withIds);
+  state.counters["shadow_ratio_ids"] = median(ss) / median(withIds);
+  auto [drawn, shadowed] = bare.coverage();
+  state.counters["bare_drawn"] = drawn;
+  state.counters["bare_shadowed"] = shadowed;
+  state.SetLabel(rasterizer().deviceName());
+}
+
+}  // namespace
+
+BENCHMARK_CAPTURE(versusBare, none_bunny, Filter::None, 1)->UseManualTime()->Unit(benchmark::kMillisecond);
+BENCHMARK_CAPTURE(versusBare, none_bunny_x4, Filter::None, 4)->UseManualTime()->Unit(benchmark::kMillisecond);
+BENCHMARK_CAPTURE(versusBare, hw2x2_bunny, Filter::Hw2x2, 1)->UseManualTime()->Unit(benchmark::kMillisecond);
+BENCHMARK_CAPTURE(versusBare, hw2x2_bunny_x4, Filter::Hw2x2, 4)->UseManualTime()->Unit(benchmark::kMillisecond);
+
+BENCHMARK_MAIN();
