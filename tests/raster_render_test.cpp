@@ -86,6 +86,56 @@ TEST_F(RasterTest, CoverageAndIdsMatchAnalyticRayCast) {
   EXPECT_EQ(f.meta["light"], "sun");
 }
 
+// Lloyd's m in closed form on the floor (y = 0) under a directional light fit to the scene's
+// bounding sphere: one texel is T = 2 r / N world units across the light (r = 1.001 x half the
+// box diagonal), and the map's axes are any orthonormal pair (a, b) normal to the light, so
+// m = T / s_min(J) with J = d(a.p, b.p) / d(pixel), the camera ray's floor point p differentiated
+// exactly (in double). s_min does not depend on which pair: the test needs no light matrix. The
+// floor's foreshortening makes m vary ~3x across the image, so a wrong Jacobian cannot pass.
+TEST_F(RasterTest, FootprintMIsLloydsClosedFormOnTheFloor) {
+  REQUIRE_DEVICE();
+  for (glm::dvec3 light : {glm::dvec3(0, -1, 0), glm::normalize(glm::dvec3(0.4, -1, 0.25))}) {
+    Scene s = roofScene();
+    s.lights[0].direction = glm::vec3(light);
+    Method method;
+    method.mapSize = 1024;
+    Frame f = R->render(s, method);
+    const auto& m = f.get("light.sun.m");
+    const auto& id = f.get("object_id");
+    const double texel = 2.0 * (0.5 * std::sqrt(201.0) * 1.001) / method.mapSize;  // box (-5,0,-5)..(5,1,5)
+    const Camera& c = s.camera;
+    // The unnormalized ray through image point (x, y): forward + x' right - y' up (Camera::rayDirection).
+    glm::dvec3 o(c.position), forward = glm::normalize(glm::dvec3(c.lookAt) - o);
+    glm::dvec3 right = glm::normalize(glm::cross(forward, glm::dvec3(c.up))), up = glm::cross(right, forward);
+    double t = std::tan(glm::radians(double(c.vfovDeg)) * 0.5), aspect = double(float(c.width) / float(c.height));
+    glm::dvec3 dx = (2.0 / c.width * aspect * t) * right, dy = (-2.0 / c.height * t) * up;
+    glm::dvec3 a = glm::normalize(glm::cross(light, std::abs(light.x) < 0.9 ? glm::dvec3(1, 0, 0) : glm::dvec3(0, 1, 0)));
+    glm::dvec3 b = glm::cross(light, a);
+    double lo = 1e30, hi = 0;
+    int checked = 0, wrong = 0;
+    for (int j = 0; j < f.height; ++j)
+      for (int i = 0; i < f.width; ++i) {
+        size_t k = size_t(j) * f.width + i;
+        if (id[k] != 1.0f) continue;
+        double x = i + 0.5, y = j + 0.5;
+        glm::dvec3 d = forward + (2.0 * x / c.width - 1.0) * aspect * t * right - (2.0 * y / c.height - 1.0) * t * up;
+        // p = o + s d with s = -o.y / d.y; dp/dx = s (dx - d dx.y / d.y), likewise for y.
+        double sHit = -o.y / d.y;
+        glm::dvec3 px = sHit * (dx - d * (dx.y / d.y)), py = sHit * (dy - d * (dy.y / d.y));
+        double j00 = glm::dot(a, px), j01 = glm::dot(a, py), j10 = glm::dot(b, px), j11 = glm::dot(b, py);
+        double sumSq = j00 * j00 + j01 * j01 + j10 * j10 + j11 * j11, det = std::abs(j00 * j11 - j01 * j10);
+        double sMax = std::sqrt(0.5 * (sumSq + std::sqrt(std::max(sumSq * sumSq - 4.0 * det * det, 0.0))));
+        double expect = texel * sMax / det;  // T / s_min, s_min = det / s_max
+        ++checked;
+        wrong += std::abs(double(m[k]) - expect) > 1e-3 * expect;
+        lo = std::min(lo, expect), hi = std::max(hi, expect);
+      }
+    EXPECT_GT(checked, 5000);
+    EXPECT_EQ(wrong, 0) << "light (" << light.x << ", " << light.y << ", " << light.z << ")";
+    EXPECT_GT(hi / lo, 2.0) << "the floor should foreshorten: m from " << lo << " to " << hi;
+  }
+}
+
 TEST_F(RasterTest, RoofShadowIsTheSquareUnderIt) {
   REQUIRE_DEVICE();
   Scene s = roofScene();
