@@ -112,6 +112,12 @@ vec2 gSt;      // lookup position in texels
 float gRef;    // reference depth at gSt (receiver depth - compare bias)
 float refAt(ivec2 texel) { return gRef + dot(gSlope, vec2(texel) + 0.5 - gSt); }
 
+// The 2x2 texels t, t + (1, 0), t + (0, 1), t + (1, 1) in one fetch: textureGather at their shared
+// corner returns them as (w, z, x, y) (Vulkan's order), clamped at the map's edge like tap()'s.
+// On lavapipe every texel fetch is a call; one gather costs about what one texelFetch does.
+vec4 gather4(ivec2 t) { return textureGather(mapDepth, vec3((vec2(t) + 1.0) / gSize, float(gLayer))); }
+float lit(float stored, ivec2 texel) { return stored >= refAt(texel) ? 1.0 : 0.0; }
+
 float filterVisibility() {
   ivec2 center = ivec2(floor(gSt));
   if (kFilter == 1u) {
@@ -122,18 +128,24 @@ float filterVisibility() {
     vec2 s = gSt - 0.5;
     ivec2 i0 = ivec2(floor(s));
     vec2 f = s - floor(s);
-    float v00 = tap(i0, refAt(i0));
-    float v10 = tap(i0 + ivec2(1, 0), refAt(i0 + ivec2(1, 0)));
-    float v01 = tap(i0 + ivec2(0, 1), refAt(i0 + ivec2(0, 1)));
-    float v11 = tap(i0 + ivec2(1, 1), refAt(i0 + ivec2(1, 1)));
+    vec4 g = gather4(i0);
+    float v00 = lit(g.w, i0), v10 = lit(g.z, i0 + ivec2(1, 0));
+    float v01 = lit(g.x, i0 + ivec2(0, 1)), v11 = lit(g.y, i0 + ivec2(1, 1));
     return mix(mix(v00, v10, f.x), mix(v01, v11, f.x), f.y);
   } else if (kFilter == 3u) {
+    // The (2h + 1)^2 taps as 2x2 gathers; the last row and column of gathers use half their
+    // texels. The sum counts whole taps, so its order does not change it.
     int h = P.sizes.w / 2;
     float sum = 0.0;
-    for (int dy = -h; dy <= h; ++dy)
-      for (int dx = -h; dx <= h; ++dx) {
-        ivec2 t = center + ivec2(dx, dy);
-        sum += tap(t, refAt(t));
+    for (int by = -h; by <= h; by += 2)
+      for (int bx = -h; bx <= h; bx += 2) {
+        ivec2 t = center + ivec2(bx, by);
+        vec4 g = gather4(t);
+        bool right = bx < h, down = by < h;
+        sum += lit(g.w, t);
+        sum += right ? lit(g.z, t + ivec2(1, 0)) : 0.0;
+        sum += down ? lit(g.x, t + ivec2(0, 1)) : 0.0;
+        sum += right && down ? lit(g.y, t + ivec2(1, 1)) : 0.0;
       }
     float n = float(2 * h + 1);
     return sum / (n * n);
