@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <set>
 
 #include "shadowlab/scenes/error.h"
 #include "shadowlab/scenes/io.h"
@@ -24,10 +25,69 @@ namespace {
 
 // nlohmann's DOM builder, but recording where parsing stopped instead of throwing: a number
 // overflow (1e999) is reported through the same hook as syntax errors, with its position,
-// which the thrown out_of_range exception would lose.
+// which the thrown out_of_range exception would lose. It also refuses a key an object already
+// has (nlohmann keeps the last one silently), naming the object by its JSON pointer.
 struct PositionedDomParser : nlohmann::detail::json_sax_dom_parser<nlohmann::json> {
-  explicit PositionedDomParser(nlohmann::json& result)
-      : nlohmann::detail::json_sax_dom_parser<nlohmann::json>(result, /*allow_exceptions=*/false) {}
+  using Base = nlohmann::detail::json_sax_dom_parser<nlohmann::json>;
+  explicit PositionedDomParser(nlohmann::json& result) : Base(result, /*allow_exceptions=*/false) {}
+
+  // Where the parser is: one entry per open object or array, with the child being read.
+  struct Open {
+    bool array = false;
+    size_t count = 0;          // arrays: values begun so far
+    std::string key;           // objects: the current key
+    std::set<std::string> keys;
+  };
+  std::vector<Open> open;
+  bool duplicate = false;
+  std::string duplicatePointer, duplicateKey;
+
+  void beginValue() {
+    if (!open.empty() && open.back().array) ++open.back().count;
+  }
+  std::string pointer() const {
+    std::string p;
+    for (size_t i = 0; i + 1 < open.size(); ++i)
+      p = open[i].array ? childPointer(p, open[i].count - 1) : childPointer(p, open[i].key);
+    return p;
+  }
+  bool null() { return beginValue(), Base::null(); }
+  bool boolean(bool v) { return beginValue(), Base::boolean(v); }
+  bool number_integer(number_integer_t v) { return beginValue(), Base::number_integer(v); }
+  bool number_unsigned(number_unsigned_t v) { return beginValue(), Base::number_unsigned(v); }
+  bool number_float(number_float_t v, const string_t& s) { return beginValue(), Base::number_float(v, s); }
+  bool string(string_t& v) { return beginValue(), Base::string(v); }
+  bool start_object(std::size_t n) {
+    beginValue();
+    open.push_back(Open{});
+    return Base::start_object(n);
+  }
+  bool end_object() {
+    open.pop_back();
+    return Base::end_object();
+  }
+  bool start_array(std::size_t n) {
+    beginValue();
+    Open a;
+    a.array = true;
+    open.push_back(a);
+    return Base::start_array(n);
+  }
+  bool end_array() {
+    open.pop_back();
+    return Base::end_array();
+  }
+  bool key(string_t& k) {
+    if (!open.back().keys.insert(k).second) {
+      duplicate = true;
+      duplicatePointer = pointer();
+      duplicateKey = k;
+      return false;
+    }
+    open.back().key = k;
+    return Base::key(k);
+  }
+
   template <class Exception>
   bool parse_error(std::size_t position, const std::string& lastToken, const Exception& ex) {
     errorByte = position;
@@ -50,6 +110,11 @@ nlohmann::json parseJsonText(const std::string& text, const std::string& file) {
   bool ok = nlohmann::json::sax_parse(text, &sax, nlohmann::json::input_format_t::json, /*strict=*/true,
                                       /*ignore_comments=*/true);
   if (ok) return result;
+  if (sax.duplicate) {
+    throw InputError(file + ": " + childPointer(sax.duplicatePointer, sax.duplicateKey) + ": error: key " +
+                     nlohmann::json(sax.duplicateKey).dump() +
+                     " appears twice in one object; expected each key once (JSON would keep only the last)");
+  }
   std::string what = sax.errorText;
   size_t byte = sax.errorByte;
   // nlohmann's text is "[json.exception.parse_error.101] parse error at line L, column C: WHAT";
