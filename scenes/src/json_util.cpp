@@ -127,11 +127,24 @@ nlohmann::json parseJsonText(const std::string& text, const std::string& file) {
     what = what.substr(what.find("] ") + 2);
   }
   // nlohmann's position is the last character it read (one past a number); GCC points at the
-  // start of the offending token, so find the token just before that position.
+  // start of the offending token, so find the token just before that position. nlohmann's "last
+  // read" text can run over the tokens before it ('"pcf", }', '"distance": N'): the offending
+  // token is its last string, or else its last run after whitespace.
   if (!sax.errorToken.empty() && byte > 0) {
     size_t limit = std::min(byte, text.size());
     size_t start = text.rfind(sax.errorToken, limit > 0 ? limit - 1 : 0);
-    if (start != std::string::npos && start + sax.errorToken.size() + 2 >= limit) byte = start + 1;
+    if (start != std::string::npos && start + sax.errorToken.size() + 2 >= limit) {
+      const std::string& t = sax.errorToken;
+      size_t offset = 0;
+      if (t.size() >= 2 && t.back() == '"') {
+        size_t open = t.rfind('"', t.size() - 2);
+        offset = open == std::string::npos ? 0 : open;
+      } else {
+        size_t space = t.find_last_of(" \t\r\n");
+        offset = space == std::string::npos ? 0 : space + 1;
+      }
+      byte = start + offset + 1;
+    }
   }
   if (sax.errorId == 406) what += "; expected a finite number (NaN and infinity are not allowed)";
   size_t line = 0, column = 0;
