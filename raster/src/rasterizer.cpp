@@ -57,7 +57,7 @@ constexpr VkFormat kResolveFormats[kResolveAttachments] = {VK_FORMAT_R32G32B32A3
 constexpr VkFormat kIdFormat = VK_FORMAT_R32_UINT;  // global triangle + 1, 0: nothing
 constexpr VkFormat kCameraDepthFormat = VK_FORMAT_D32_SFLOAT;
 
-// Mirrors `Params` in resolve.comp (std140: every member is 16-byte aligned already).
+// Mirrors `Params` in resolve.frag (std140: every member is 16-byte aligned already).
 struct Params {
   glm::mat4 texFromWorld[kMaxLayers];
   glm::vec4 layerInfo[kMaxLayers];
