@@ -57,11 +57,12 @@ layout(set = 0, binding = 5) uniform sampler2DArrayShadow mapShadow;  // LINEAR,
 layout(set = 0, binding = 6) uniform usampler2DArray mapIds;
 layout(set = 0, binding = 7) uniform usampler2D cameraIds;
 
-// Per triangle (global index + 1, as in the id attachments; texel 0 a placeholder), its plane relative to the camera origin o: (n, dot(n, v0 - o)), n
-// the unit normal (v1 - v0) x (v2 - v0), computed in double on the CPU. A texel buffer: on
-// lavapipe a storage-buffer load at a per-pixel address is a bounds-checked loop over the SIMD
-// lanes, a texel fetch one gather; and one fetch per pixel, since each costs about as much as the
-// rest of the arithmetic.
+// Per triangle (at its global index + 1, as in the id attachments; texel 0 a placeholder), its
+// plane relative to the camera origin o: (n, dot(n, v0 - o)), n the unit normal
+// (v1 - v0) x (v2 - v0), computed in double on the CPU. A texel buffer: on lavapipe a
+// storage-buffer load at a per-pixel address is a bounds-checked loop over the SIMD lanes, a
+// texel fetch one gather; and one fetch per pixel, since each costs about as much as the rest of
+// the arithmetic.
 layout(set = 0, binding = 8) uniform samplerBuffer trianglePlanes;
 layout(std430, set = 0, binding = 9) readonly buffer ProjectorTexels { float projectorTexels[]; };
 layout(std430, set = 0, binding = 10) writeonly buffer OutPlanes { float outPlanes[]; };
