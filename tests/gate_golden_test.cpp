@@ -47,8 +47,6 @@ struct Cmd {
 class Golden : public ::testing::Test {
  protected:
   void SetUp() override {
-    // The bunny scene reads the shared assets; point the binary at them the way CMake does.
-    ::setenv("SHADOWLAB_SHARED_DIR", SHADOWLAB_SHARED_DIR, 0);
     dir_ = fs::temp_directory_path() / ("shadowlab_golden_" + std::to_string(::getpid()) + "_" +
                                         ::testing::UnitTest::GetInstance()->current_test_info()->name());
     fs::remove_all(dir_);
