@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "command.h"
+#include "shadowlab/compare/timings.h"
 #include "shadowlab/raster/raster.h"
 #include "shadowlab/scenes/error.h"
 #include "shadowlab/scenes/io.h"
@@ -61,15 +62,15 @@ int run(const Options& o) {
                            {"light", frame.meta["light"]},
                            {"method", methodToJson(method)},
                            {"device", rasterizer.deviceName()},
-                           {"shadow_ms", t.shadowMs},
-                           {"camera_ms", t.cameraMs},
-                           {"camera_visibility_ms", t.visibilityMs},
-                           {"readback_ms", t.readbackMs},
-                           {"total_ms", t.totalMs}};
+                           {timing::kShadowGpuMs, t.shadowGpuMs},
+                           {timing::kCameraGpuMs, t.cameraGpuMs},
+                           {timing::kVisibilityGpuMs, t.visibilityGpuMs},
+                           {timing::kReadbackMs, t.readbackMs},
+                           {timing::kRenderWallMs, t.renderWallMs}};
   writeJsonAtomic(o.outDir + "/raster.json", report);
   std::printf("raster: %s %dx%d light=%s device=%s shadow %.2f ms, camera %.2f ms, readback %.2f ms -> %s\n",
               scene.name.c_str(), frame.width, frame.height, frame.meta["light"].get<std::string>().c_str(),
-              rasterizer.deviceName().c_str(), t.shadowMs, t.cameraMs, t.readbackMs, o.outDir.c_str());
+              rasterizer.deviceName().c_str(), t.shadowGpuMs, t.cameraGpuMs, t.readbackMs, o.outDir.c_str());
   return 0;
 }
 

@@ -96,19 +96,19 @@ int run(const Options& options) {
       {"rays", stats.primaryRays + stats.shadowRays},
       {"primary_rays", stats.primaryRays},
       {"shadow_rays", stats.shadowRays},
-      {"seconds", stats.seconds},
+      {"trace_seconds", stats.traceSeconds},
       {"mrays_per_s", stats.mraysPerS()},
       {"build_seconds", stats.buildSeconds},
       {"load_seconds", seconds(start, loaded)},
       {"render_seconds", seconds(loaded, traced)},
       {"write_seconds", seconds(traced, written)},
-      {"total_seconds", seconds(start, written)},
+      {"command_wall_seconds", seconds(start, written)},
       {"outputs", {"reference.exr", "reference.png", "reference.json"}},
   };
   shadowlab::writeJsonAtomic(jsonPath, report);
   std::printf("reference: %s %dx%d spp %d: %.3f Mrays in %.3f s (%.1f Mrays/s), build %.3f s, total %.3f s -> %s\n",
               scene.name.c_str(), frame.width, frame.height, options.spp,
-              double(stats.primaryRays + stats.shadowRays) * 1e-6, stats.seconds, stats.mraysPerS(),
+              double(stats.primaryRays + stats.shadowRays) * 1e-6, stats.traceSeconds, stats.mraysPerS(),
               stats.buildSeconds, seconds(start, Clock::now()), options.outDir.c_str());
   return 0;
 }

@@ -1,6 +1,7 @@
 // `shadowlab run SCENE [--method M.json] [--set key=value|scene:/pointer=value ...] -o DIR`: reference (cached by
 // content hash), raster and compare in one process; writes metrics.json, errors.png, triptych.png.
 #include <algorithm>
+#include <chrono>
 #include <cstdio>
 #include <filesystem>
 #include <map>
@@ -10,6 +11,7 @@
 #include "shadowlab/compare/pipeline.h"
 #include "shadowlab/compare/results.h"
 #include "shadowlab/compare/sweep.h"
+#include "shadowlab/compare/timings.h"
 #include "shadowlab/scenes/error.h"
 #include "shadowlab/scenes/io.h"
 #include "shadowlab/scenes/loader.h"
@@ -59,15 +61,20 @@ int run(const Options& o) {
   ReferenceCache cache(o.cacheDir);
   ReferenceOptions referenceOptions;
   referenceOptions.spp = o.spp;
+  // config_wall_ms: this configuration end to end (reference traced or loaded, render, compare),
+  // as a sweep row measures it; the device start above is the command's, not the configuration's.
+  const auto configStart = std::chrono::steady_clock::now();
   const RunResult r = runPipeline(scene, method, rasterizer, cache, light, referenceOptions);
+  const double configWallMs =
+      std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - configStart).count();
   if (r.referenceTraced) {
-    std::printf("reference: traced (%.3f s, %.1f Mrays/s) -> %s\n", r.referenceStats.seconds,
+    std::printf("reference: traced (%.3f s, %.1f Mrays/s) -> %s\n", r.referenceStats.traceSeconds,
                 r.referenceStats.mraysPerS(), cache.dir().c_str());
   } else {
     std::printf("reference: cached (%s)\n", cache.dir().c_str());
   }
   std::printf("raster: %s, shadow %.2f ms, camera %.2f ms, readback %.2f ms\n", rasterizer.deviceName().c_str(),
-              r.timings.shadowMs, r.timings.cameraMs, r.timings.readbackMs);
+              r.timings.shadowGpuMs, r.timings.cameraGpuMs, r.timings.readbackMs);
 
   ResultRow row;
   row.scene = scene.name;
@@ -75,9 +82,10 @@ int run(const Options& o) {
   row.light = light;
   row.method = methodToJson(method);
   row.metrics = r.metrics.toJson();
-  row.timings = {{"shadow_ms", r.timings.shadowMs},     {"camera_ms", r.timings.cameraMs},
-                 {"readback_ms", r.timings.readbackMs}, {"compare_ms", r.compareMs},
-                 {"total_ms", r.timings.totalMs + r.compareMs}};
+  row.timings = {{timing::kShadowGpuMs, r.timings.shadowGpuMs},   {timing::kCameraGpuMs, r.timings.cameraGpuMs},
+                 {timing::kReadbackMs, r.timings.readbackMs},     {timing::kRenderWallMs, r.timings.renderWallMs},
+                 {timing::kCompareMs, r.compareMs},               {timing::kReferenceMs, r.referenceMs},
+                 {timing::kConfigWallMs, configWallMs}};
 
   makeDirs(o.outDir);
   const fs::path out(o.outDir);

@@ -128,7 +128,7 @@ int run(const Options& o) {
     return 130;
   }
   std::printf("sweep: %zu rows (%zu run, %zu resumed) in %.2f s\n", summary.configurations, summary.ran,
-              summary.resumed, summary.totalSeconds);
+              summary.resumed, summary.commandWallSeconds);
   std::printf("sweep: wrote %s and %s\n", summary.resultsJson.c_str(), summary.resultsCsv.c_str());
   if (!summary.reportHtml.empty()) std::printf("report: %s\n", fs::absolute(summary.reportHtml).c_str());
   return 0;

@@ -54,7 +54,7 @@ double processCpuSeconds() {
 }
 
 struct Timing {
-  double wall = 1e30;  // trace seconds (ReferenceStats::seconds), best of the runs
+  double wall = 1e30;  // trace seconds (ReferenceStats::traceSeconds), best of the runs
   double cpu = 1e30;   // process CPU seconds of the whole renderReference call, best of the runs
 };
 
@@ -73,7 +73,7 @@ Timing primaryBaseline(const std::string& name, int threads) {
     const double cpu0 = processCpuSeconds();
     renderReference(scene, options, &stats);
     best.cpu = std::min(best.cpu, processCpuSeconds() - cpu0);
-    best.wall = std::min(best.wall, stats.seconds);
+    best.wall = std::min(best.wall, stats.traceSeconds);
   }
   return cache[{name, threads}] = best;
 }
@@ -88,7 +88,7 @@ void BM_Primary(benchmark::State& state, const std::string& name) {
   options.threads = int(state.range(0));
   for (auto _ : state) {
     Frame frame = renderReference(scene, options, &stats);
-    state.SetIterationTime(stats.seconds);
+    state.SetIterationTime(stats.traceSeconds);
     benchmark::DoNotOptimize(frame.data.data());
   }
   state.counters["primary_mrays_per_s"] = stats.primaryRays / baseline.wall * 1e-6;
@@ -107,8 +107,8 @@ void BM_Full(benchmark::State& state, const std::string& name) {
     const double cpu0 = processCpuSeconds();
     Frame frame = renderReference(scene, options, &stats);
     best.cpu = std::min(best.cpu, processCpuSeconds() - cpu0);
-    state.SetIterationTime(stats.seconds);
-    best.wall = std::min(best.wall, stats.seconds);
+    state.SetIterationTime(stats.traceSeconds);
+    best.wall = std::min(best.wall, stats.traceSeconds);
     benchmark::DoNotOptimize(frame.data.data());
   }
   state.counters["mrays_per_s"] = (stats.primaryRays + stats.shadowRays) / best.wall * 1e-6;

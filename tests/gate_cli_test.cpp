@@ -37,13 +37,13 @@ nlohmann::json baselineDoc() {
       {"scene": "grazing", "config": "bias.slope=0", "light": "sun", "method": {"bias.slope": 0},
        "metrics": {"pixels_compared": 40000, "errors": 480, "acne": 480, "acne_rate": 0.012,
                    "leak_rate": 0.0, "shadow_iou": 0.95},
-       "timings": {"shadow_ms": 0.4, "camera_ms": 2.0, "total_ms": 20.0}},
+       "timings": {"shadow_gpu_ms": 0.4, "camera_gpu_ms": 2.0, "config_wall_ms": 20.0}},
       {"scene": "grazing", "config": "default", "light": "sun", "method": {},
        "metrics": {"pixels_compared": 40000, "errors": 40, "acne": 0, "acne_rate": 0.0,
                    "leak_rate": 0.001, "shadow_iou": 0.99},
-       "timings": {"shadow_ms": 0.4, "camera_ms": 2.0, "total_ms": 20.0}}
+       "timings": {"shadow_gpu_ms": 0.4, "camera_gpu_ms": 2.0, "config_wall_ms": 20.0}}
     ],
-    "total_seconds": 0.04, "configurations": 2
+    "command_wall_seconds": 0.04, "configurations": 2
   })");
 }
 
@@ -178,7 +178,7 @@ TEST_F(GateCli, EqualPassesWithAndWithoutTolerances) {
 }
 
 TEST_F(GateCli, SlowerTimingsAreReportedNotFailedByDefault) {
-  std::string cur = current("cur.json", [](nlohmann::json& d) { d["rows"][1]["timings"]["total_ms"] = 80.0; });
+  std::string cur = current("cur.json", [](nlohmann::json& d) { d["rows"][1]["timings"]["config_wall_ms"] = 80.0; });
   CliRun r = gate(cur + " --baseline " + path("base.json"));
   EXPECT_EQ(r.code, 0) << r.out << r.err;
   EXPECT_NE(r.out.find("80 (4.00x)"), std::string::npos) << r.out;
@@ -187,7 +187,7 @@ TEST_F(GateCli, SlowerTimingsAreReportedNotFailedByDefault) {
   CliRun s = gate(cur + " --baseline " + path("base.json") + " --tolerances " + path("strict.json"));
   EXPECT_EQ(s.code, 1) << s.out << s.err;
   EXPECT_EQ(s.err,
-            "shadowlab gate: error: grazing | default | sun: timing \"total_ms\" is 80 ms, 4.00x the baseline 20 ms, "
+            "shadowlab gate: error: grazing | default | sun: timing \"config_wall_ms\" is 80 ms, 4.00x the baseline 20 ms, "
             "above the limit 2.00x\n");
 }
 
@@ -281,10 +281,10 @@ TEST_F(GateCli, MalformedResultFileExits2) {
 }
 
 TEST_F(GateCli, RepeatedRunsAreGatedByTheirMedianTiming) {
-  // Three runs of the same sweep: total_ms of row 0 is 20, 80 and 22 ms. The median (22) passes a
+  // Three runs of the same sweep: config_wall_ms of row 0 is 20, 80 and 22 ms. The median (22) passes a
   // 1.5x timing gate that the one slow run alone would fail.
-  auto runWith = [&](const std::string& name, double totalMs) {
-    return current(name, [&](nlohmann::json& d) { d["rows"][0]["timings"]["total_ms"] = totalMs; });
+  auto runWith = [&](const std::string& name, double configWallMs) {
+    return current(name, [&](nlohmann::json& d) { d["rows"][0]["timings"]["config_wall_ms"] = configWallMs; });
   };
   std::string runs = runWith("r1.json", 20.0) + " " + runWith("r2.json", 80.0) + " " + runWith("r3.json", 22.0);
   spit(dir_ / "strict.json", R"({"timing": {"mode": "fail", "max_ratio": 1.5}})");

@@ -46,7 +46,7 @@ TEST_F(Results, MetricsJsonRoundTrips) {
   row.light = "sun";
   row.method = {{"bias.slope", 0.0}, {"map.size", 512}};
   row.metrics = {{"acne_rate", 0.0123456789012345}, {"pixels_compared", 40000u}, {"shadow_iou", 0.9}};
-  row.timings = {{"total_ms", 12.5}};
+  row.timings = {{"config_wall_ms", 12.5}};
   std::string path = (dir_ / "metrics.json").string();
   writeMetricsJson(path, row);
   ResultFile f = loadResultFile(path);
@@ -64,16 +64,16 @@ TEST_F(Results, MetricsJsonRoundTrips) {
 TEST_F(Results, ResultsJsonRowsKeepOrderAndPointers) {
   std::string path = write("results.json", R"({
     // sweeps may add summary keys; rows are what the gate reads
-    "schema": "shadowlab.results/1", "total_seconds": 1.5, "configurations": 2,
+    "schema": "shadowlab.results/1", "command_wall_seconds": 1.5, "configurations": 2,
     "rows": [
       {"scene": "a", "config": "default", "light": "sun", "metrics": {"acne_rate": 0.1}},
-      {"scene": "a", "config": "filter=pcf", "light": "sun", "metrics": {"acne_rate": 0.0}, "timings": {"total_ms": 3}}
+      {"scene": "a", "config": "filter=pcf", "light": "sun", "metrics": {"acne_rate": 0.0}, "timings": {"config_wall_ms": 3}}
     ]})");
   ResultFile f = loadResultFile(path);
   ASSERT_EQ(f.rows.size(), 2u);
   EXPECT_EQ(f.rows[1].config, "filter=pcf");
   EXPECT_EQ(f.pointers[1], "/rows/1");
-  EXPECT_DOUBLE_EQ(f.rows[1].timings["total_ms"].get<double>(), 3.0);
+  EXPECT_DOUBLE_EQ(f.rows[1].timings["config_wall_ms"].get<double>(), 3.0);
   EXPECT_EQ(f.document["configurations"], 2);
 }
 
@@ -90,8 +90,8 @@ TEST_F(Results, MalformedFilesNameFileAndPlace) {
       {"scene": "a", "config": "default", "light": "sun"}]})");
   EXPECT_EQ(errorOf(noMetrics), noMetrics + ": /rows/0: error: missing \"metrics\"; expected an object");
   std::string badTiming = write("d.json", R"({"schema": "shadowlab.metrics/1", "scene": "a", "config": "default",
-      "light": "sun", "metrics": {}, "timings": {"total_ms": "fast"}})");
-  EXPECT_EQ(errorOf(badTiming), badTiming + ": /timings/total_ms: error: got a string; expected a number (milliseconds)");
+      "light": "sun", "metrics": {}, "timings": {"config_wall_ms": "fast"}})");
+  EXPECT_EQ(errorOf(badTiming), badTiming + ": /timings/config_wall_ms: error: got a string; expected a number (milliseconds)");
   std::string syntax = write("e.json", "{\"schema\": \"shadowlab.results/1\",\n \"rows\": [ 1 2 ]}");
   EXPECT_EQ(errorOf(syntax).rfind(syntax + ":2:14: error: syntax error while parsing array", 0), 0u) << errorOf(syntax);
   std::string missing = (dir_ / "absent.json").string();

@@ -128,16 +128,16 @@ TEST(GateRules, DefaultToleranceFailsAnyRiseAndPassesEqual) {
 }
 
 TEST(GateRules, TimingsReportByDefaultAndFailOnlyWhenAsked) {
-  ResultFile base = fileOf("b", {row("a", {{"acne_rate", 0.0}}, {{"total_ms", 20.0}, {"compare_ms", 0.2}})});
-  ResultFile slow = fileOf("c", {row("a", {{"acne_rate", 0.0}}, {{"total_ms", 45.0}, {"compare_ms", 0.9}})});
+  ResultFile base = fileOf("b", {row("a", {{"acne_rate", 0.0}}, {{"config_wall_ms", 20.0}, {"compare_ms", 0.2}})});
+  ResultFile slow = fileOf("c", {row("a", {{"acne_rate", 0.0}}, {{"config_wall_ms", 45.0}, {"compare_ms", 0.9}})});
   GateResult reported = runGate(slow, base, defaultTolerances());
   EXPECT_TRUE(reported.passed());
-  EXPECT_EQ(find(reported, "total_ms").verdict, Verdict::Reported);
+  EXPECT_EQ(find(reported, "config_wall_ms").verdict, Verdict::Reported);
   Tolerances fail = tolerances(R"({"timing": {"mode": "fail", "max_ratio": 2.0}})");
   GateResult failed = runGate(slow, base, fail);
-  EXPECT_EQ(find(failed, "total_ms").verdict, Verdict::Regressed);  // 2.25x > 2.00x
-  EXPECT_EQ(find(failed, "total_ms").message,
-            "grazing | a | sun: timing \"total_ms\" is 45 ms, 2.25x the baseline 20 ms, above the limit 2.00x");
+  EXPECT_EQ(find(failed, "config_wall_ms").verdict, Verdict::Regressed);  // 2.25x > 2.00x
+  EXPECT_EQ(find(failed, "config_wall_ms").message,
+            "grazing | a | sun: timing \"config_wall_ms\" is 45 ms, 2.25x the baseline 20 ms, above the limit 2.00x");
   EXPECT_EQ(find(failed, "compare_ms").verdict, Verdict::Reported);  // 4.5x, but under min_ms 1
   EXPECT_EQ(failed.regressions, 1);
   Tolerances lenient = tolerances(R"({"timing": {"mode": "fail", "max_ratio": 2.5}})");
@@ -190,24 +190,24 @@ TEST(GateRules, MissingRowMissingMetricNanAndDuplicatesAreInputErrors) {
 TEST(GateRules, RepeatedRunsGateTheMedianTiming) {
   // Three runs of the same configuration (one per file): timings 30, 90, 33 ms -> median 33, so
   // one noisy run does not fail a 1.5x timing gate against a 30 ms baseline.
-  auto run = [](const std::string& path, double totalMs) {
-    return fileOf(path, {row("a", {{"acne_rate", 0.01}}, {{"total_ms", totalMs}})});
+  auto run = [](const std::string& path, double configWallMs) {
+    return fileOf(path, {row("a", {{"acne_rate", 0.01}}, {{"config_wall_ms", configWallMs}})});
   };
   ResultFile merged = mergeResultFiles({run("r1.json", 30.0), run("r2.json", 90.0), run("r3.json", 33.0)});
   ASSERT_EQ(merged.rows.size(), 1u);
   EXPECT_EQ(merged.repeatsOf(0), 3);
-  EXPECT_DOUBLE_EQ(merged.rows[0].timings["total_ms"].get<double>(), 33.0);
+  EXPECT_DOUBLE_EQ(merged.rows[0].timings["config_wall_ms"].get<double>(), 33.0);
   Tolerances fail = tolerances(R"({"timing": {"mode": "fail", "max_ratio": 1.5}})");
   GateResult r = runGate(merged, run("base.json", 30.0), fail);
   EXPECT_TRUE(r.passed());
-  EXPECT_EQ(find(r, "total_ms").samples, 3);
+  EXPECT_EQ(find(r, "config_wall_ms").samples, 3);
   // Even count: the mean of the middle two.
   ResultFile two = mergeResultFiles({run("r1.json", 30.0), run("r2.json", 90.0)});
-  EXPECT_DOUBLE_EQ(two.rows[0].timings["total_ms"].get<double>(), 60.0);
+  EXPECT_DOUBLE_EQ(two.rows[0].timings["config_wall_ms"].get<double>(), 60.0);
   GateResult slow = runGate(two, run("base.json", 30.0), fail);
-  EXPECT_EQ(find(slow, "total_ms").verdict, Verdict::Regressed);
-  EXPECT_EQ(find(slow, "total_ms").message,
-            "grazing | a | sun: timing \"total_ms\" is 60 ms (median of 2 runs), 2.00x the baseline 30 ms, above "
+  EXPECT_EQ(find(slow, "config_wall_ms").verdict, Verdict::Regressed);
+  EXPECT_EQ(find(slow, "config_wall_ms").message,
+            "grazing | a | sun: timing \"config_wall_ms\" is 60 ms (median of 2 runs), 2.00x the baseline 30 ms, above "
             "the limit 1.50x");
 }
 
@@ -288,9 +288,9 @@ TEST(GateRules, MessagesNeverPrintTwoDifferentValuesAlike) {
 
 TEST(GateRules, JunitCountsTestcasesAndFailures) {
   Tolerances t = tolerances(R"({"metrics": {"acne_rate": {"abs": 0.005}}})");
-  ResultFile base = fileOf("b", {row("a", {{"acne_rate", 0.01}, {"shadow_iou", 0.9}}, {{"total_ms", 3.0}}),
+  ResultFile base = fileOf("b", {row("a", {{"acne_rate", 0.01}, {"shadow_iou", 0.9}}, {{"config_wall_ms", 3.0}}),
                                  row("b", {{"acne_rate", 0.01}})});
-  ResultFile cur = fileOf("c", {row("a", {{"acne_rate", 0.02}, {"shadow_iou", 0.9}}, {{"total_ms", 3.1}}),
+  ResultFile cur = fileOf("c", {row("a", {{"acne_rate", 0.02}, {"shadow_iou", 0.9}}, {{"config_wall_ms", 3.1}}),
                                 row("b", {{"acne_rate", 0.01}})});
   GateResult r = runGate(cur, base, t);
   std::string xml = gateToJunitXml(r);

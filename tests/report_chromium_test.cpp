@@ -112,7 +112,7 @@ class FakeRunner : public SweepRunner {
     double e = (m.filter == Filter::None ? 0.02 : 0.01) + 0.001 * m.biasSlope + 1.0 / m.mapSize;
     out.metrics = {{"error_rate", e}, {"acne_rate", e / 2}, {"leak_rate", e / 4}, {"aliasing_rate", e / 4},
                    {"coverage_rate", 0.0}, {"m_median", 2.0}, {"m_p95", 5.0}, {"m_max", 40.0}};
-    out.timings = {{"shadow_ms", m.filter == Filter::None ? 5.0 : 6.0}, {"camera_ms", 10.0}, {"compare_ms", 1.0}};
+    out.timings = {{"shadow_gpu_ms", m.filter == Filter::None ? 5.0 : 6.0}, {"camera_gpu_ms", 10.0}, {"compare_ms", 1.0}};
     return out;
   }
   // A small picture stands in for reference | raster | errors when asked for one.

@@ -38,7 +38,7 @@ class FakeRunner : public SweepRunner {
     out.metrics = {{"error_rate", fakeErrorRate(m)}, {"acne_rate", 0.0}, {"leak_rate", 0.001 * m.biasSlope},
                    {"aliasing_rate", 1.0 / m.mapSize}, {"coverage_rate", 0.0}, {"m_median", 1.0},
                    {"m_p95", 2.0}, {"m_max", 3.0}};
-    out.timings = {{"shadow_ms", m.mapSize / 100.0}, {"camera_ms", 1.0}, {"readback_ms", 0.5}, {"compare_ms", 0.25}};
+    out.timings = {{"shadow_gpu_ms", m.mapSize / 100.0}, {"camera_gpu_ms", 1.0}, {"readback_ms", 0.5}, {"compare_ms", 0.25}};
     return out;
   }
   bool writeTriptych(const Scene&, const Method&, const std::string&, const std::string&) override { return false; }
@@ -96,15 +96,15 @@ TEST(SweepResume, WritesOneRowPerConfigurationWithItsNumbers) {
     const Method& m = plan.configs[i].method;
     EXPECT_DOUBLE_EQ(rows[i].metrics.at("error_rate").get<double>(), fakeErrorRate(m));
     EXPECT_EQ(rows[i].method.at("map.size").get<int>(), m.mapSize);
-    for (const char* t : {"shadow_ms", "camera_ms", "readback_ms", "compare_ms", "total_ms"})
+    for (const char* t : {"shadow_gpu_ms", "camera_gpu_ms", "readback_ms", "compare_ms", "config_wall_ms"})
       EXPECT_TRUE(rows[i].timings.contains(t)) << t;
   }
   // results.json records the total and the per-configuration times.
   auto results = nlohmann::json::parse(readFile(dir + "/results.json"));
   EXPECT_EQ(results.at("configurations").get<int>(), 4);
-  EXPECT_GE(results.at("total_seconds").get<double>(), 0.0);
-  ASSERT_EQ(results.at("config_seconds").size(), 4u);
-  EXPECT_EQ(results.at("config_seconds")[3].at("config"), "bias.slope=2,map.size=512");
+  EXPECT_GE(results.at("command_wall_seconds").get<double>(), 0.0);
+  ASSERT_EQ(results.at("config_wall_seconds").size(), 4u);
+  EXPECT_EQ(results.at("config_wall_seconds")[3].at("config"), "bias.slope=2,map.size=512");
   EXPECT_EQ(results.at("sweep").at("grid")[0].at("key"), "map.size");
   EXPECT_EQ(results.at("sweep").at("grid")[0].at("values"), nlohmann::json({"256", "512"}));
 
@@ -112,7 +112,7 @@ TEST(SweepResume, WritesOneRowPerConfigurationWithItsNumbers) {
   auto csv = lines(dir + "/results.csv");
   ASSERT_EQ(csv.size(), 5u);
   EXPECT_EQ(csv[0].rfind("scene,config,light,", 0), 0u) << csv[0];
-  for (const char* col : {",map.size,", ",bias.slope,", ",error_rate,", ",total_ms"})
+  for (const char* col : {",map.size,", ",bias.slope,", ",error_rate,", ",config_wall_ms"})
     EXPECT_NE(csv[0].find(col), std::string::npos) << col;
   EXPECT_EQ(csv[1].rfind("sphere_on_plane,\"bias.slope=0,map.size=256\",sun,", 0), 0u) << csv[1];
   fs::remove_all(dir);
@@ -222,7 +222,7 @@ TEST(SweepResume, ParetoFrontKeepsOnlyRowsThatBeatEveryFasterRow) {
   for (int i = 0; i < 5; ++i) {
     rows[i].scene = "s";
     rows[i].config = "c" + std::to_string(i);
-    rows[i].timings = {{"shadow_ms", ms[i] / 2}, {"camera_ms", ms[i] / 2}};
+    rows[i].timings = {{"shadow_gpu_ms", ms[i] / 2}, {"camera_gpu_ms", ms[i] / 2}};
     rows[i].metrics = {{"error_rate", err[i]}};
   }
   // By time: c0 (10, 0.5) front; c4 (15, 0.6) dominated; c1 (20, 0.2) front; c2 (30, 0.3) dominated;

@@ -49,7 +49,9 @@ RunResult runPipeline(const Scene& scene, const Method& method, Rasterizer& rast
                      (names.empty() ? "(the scene has no lights)" : names));
   }
   RunResult r;
+  const auto r0 = std::chrono::steady_clock::now();
   r.reference = cache.get(scene, referenceOptions, &r.referenceTraced, &r.referenceStats);
+  r.referenceMs = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - r0).count();
   r.raster = rasterizer.render(scene, method, light, &r.timings);
   CompareOptions options;
   options.light = light.empty() ? (scene.lights.empty() ? "" : scene.lights.front().name) : light;

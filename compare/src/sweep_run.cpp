@@ -22,6 +22,7 @@
 
 #include "shadowlab/compare/sweep.h"
 #include "shadowlab/compare/sweep_frontier.h"
+#include "shadowlab/compare/timings.h"
 #include "shadowlab/scenes/error.h"
 #include "shadowlab/scenes/io.h"
 
@@ -55,7 +56,7 @@ std::string slug(const std::string& text) {
 struct StoredRow {
   ResultRow row;
   std::string sceneHash;
-  double seconds = 0;
+  double configWallSeconds = 0;  // config_wall_ms / 1000, kept beside the row in the journal
 };
 
 // Reads rows.jsonl; drops (and truncates away) a torn last line. A damaged line before the last
@@ -85,7 +86,7 @@ std::map<std::string, StoredRow> readJournal(const std::string& path) {
       StoredRow s;
       s.row = ResultRow::fromJson(j.at("row"), path + ":" + std::to_string(lineNo));
       s.sceneHash = j.value("scene_hash", std::string());
-      s.seconds = j.value("seconds", 0.0);
+      s.configWallSeconds = j.value("config_wall_seconds", 0.0);
       rows[s.row.key()] = std::move(s);  // a later line for the same key wins (a stale row re-run)
       goodEnd = next;
     } catch (const std::exception& e) {
@@ -348,10 +349,10 @@ SweepSummary runSweep(const SweepPlan& plan, SweepRunner& runner, const SweepOpt
     s.row.method = methodJson[job.configIndex];
     s.row.metrics = out.metrics;
     s.row.timings = out.timings;
-    s.row.timings["total_ms"] = seconds * 1000.0;  // wall time of this configuration in the sweep
+    s.row.timings[timing::kConfigWallMs] = seconds * 1000.0;  // wall time of this configuration in the sweep
     s.sceneHash = scene.hash;
-    s.seconds = seconds;
-    nlohmann::json line = {{"scene_hash", s.sceneHash}, {"seconds", seconds}, {"pid", pid}, {"row", s.row.toJson()}};
+    s.configWallSeconds = seconds;
+    nlohmann::json line = {{"scene_hash", s.sceneHash}, {"config_wall_seconds", seconds}, {"pid", pid}, {"row", s.row.toJson()}};
     journal.append(line.dump(), /*sync=*/true);
     if (log) log << "pid " << pid << " done " << job.key() << " " << seconds << " s\n" << std::flush;
     double errorRate = out.metrics.value("error_rate", 0.0);
@@ -364,7 +365,7 @@ SweepSummary runSweep(const SweepPlan& plan, SweepRunner& runner, const SweepOpt
   const double loopSeconds = secondsSince(loop0);
   if (summary.interrupted) {
     if (log) log << "pid " << pid << " interrupted after " << summary.ran << " rows\n";
-    summary.totalSeconds = secondsSince(t0);
+    summary.commandWallSeconds = secondsSince(t0);
     return summary;
   }
 
@@ -376,8 +377,8 @@ SweepSummary runSweep(const SweepPlan& plan, SweepRunner& runner, const SweepOpt
     configSeconds.push_back({{"scene", have[i]->row.scene},
                              {"config", have[i]->row.config},
                              {"light", have[i]->row.light},
-                             {"seconds", have[i]->seconds}});
-    secondsSum += have[i]->seconds;
+                             {"config_wall_seconds", have[i]->configWallSeconds}});
+    secondsSum += have[i]->configWallSeconds;
   }
   nlohmann::json results = nlohmann::json::object();
   results["schema"] = "shadowlab.results/1";
@@ -386,15 +387,15 @@ SweepSummary runSweep(const SweepPlan& plan, SweepRunner& runner, const SweepOpt
   results["configurations"] = rows.size();
   results["rows_run"] = summary.ran;
   results["rows_resumed"] = summary.resumed;
-  results["sweep_seconds"] = loopSeconds;  // the configuration loop of this invocation
-  results["config_seconds"] = configSeconds;
-  results["config_seconds_sum"] = secondsSum;  // includes rows finished by earlier invocations
+  results["loop_wall_seconds"] = loopSeconds;  // the configuration loop of this invocation
+  results["config_wall_seconds"] = configSeconds;
+  results["config_wall_seconds_sum"] = secondsSum;  // includes rows finished by earlier invocations
   results["sweep"] = sweepDescription(plan);
   results["frontiers"] = computeFrontiers(plan, rows, plan.spec.frontierMetric, plan.spec.frontierThreshold);
   results["machine"] = machineInfo();
   results["runner"] = runner.info();
-  results["report_seconds"] = nullptr;
-  results["total_seconds"] = secondsSince(t0);
+  results["report_wall_seconds"] = nullptr;
+  results["command_wall_seconds"] = secondsSince(t0);
 
   summary.resultsJson = joinPath(options.outDir, "results.json");
   summary.resultsCsv = joinPath(options.outDir, "results.csv");
@@ -410,13 +411,13 @@ SweepSummary runSweep(const SweepPlan& plan, SweepRunner& runner, const SweepOpt
     const auto r0 = Clock::now();
     summary.notes = writeSweepReport(plan, rows, results, runner, options);
     summary.reportHtml = joinPath(options.outDir, "report.html");
-    // Written again so total_seconds covers the report too (charts and triptychs included).
-    results["report_seconds"] = secondsSince(r0);
-    results["total_seconds"] = secondsSince(t0);
+    // Written again so command_wall_seconds covers the report too (charts and triptychs included).
+    results["report_wall_seconds"] = secondsSince(r0);
+    results["command_wall_seconds"] = secondsSince(t0);
     writeJsonAtomic(summary.resultsJson, results);
   }
-  summary.totalSeconds = secondsSince(t0);
-  if (log) log << "pid " << pid << " end: " << summary.ran << " rows run, " << summary.totalSeconds << " s\n";
+  summary.commandWallSeconds = secondsSince(t0);
+  if (log) log << "pid " << pid << " end: " << summary.ran << " rows run, " << summary.commandWallSeconds << " s\n";
   return summary;
 }
 

@@ -10,6 +10,7 @@
 #include "shadowlab/compare/compare.h"
 #include "shadowlab/compare/pipeline.h"
 #include "shadowlab/compare/sweep.h"
+#include "shadowlab/compare/timings.h"
 #include "shadowlab/raster/raster.h"
 #include "shadowlab/reference/reference.h"
 #include "shadowlab/scenes/error.h"
@@ -49,11 +50,11 @@ class PipelineRunner final : public SweepRunner {
     rasterizer().recycle(std::move(raster));  // the next row's planes, without fresh memory
     SweepRunOutput out;
     out.metrics = m.toJson();
-    out.timings = {{"shadow_ms", t.shadowMs},
-                   {"camera_ms", t.cameraMs},
-                   {"readback_ms", t.readbackMs},
-                   {"raster_ms", t.totalMs},
-                   {"compare_ms", compareMs}};
+    out.timings = {{timing::kShadowGpuMs, t.shadowGpuMs},
+                   {timing::kCameraGpuMs, t.cameraGpuMs},
+                   {timing::kReadbackMs, t.readbackMs},
+                   {timing::kRenderWallMs, t.renderWallMs},
+                   {timing::kCompareMs, compareMs}};
     return out;
   }
 
@@ -83,7 +84,7 @@ class PipelineRunner final : public SweepRunner {
     j["reference_cache"] = cache_.dir();
     j["references_traced"] = traced_;
     j["references_loaded"] = loaded_;
-    j["reference_seconds"] = referenceSeconds_;
+    j["reference_wall_seconds"] = referenceWallSeconds_;  // references traced or loaded, summed
     j["reference_spp"] = referenceOptions_.spp;
     return j;
   }
@@ -110,7 +111,7 @@ class PipelineRunner final : public SweepRunner {
       const auto t0 = Clock::now();
       bool traced = false;
       current_ = cache_.get(scene, referenceOptions_, &traced);
-      referenceSeconds_ += msSince(t0) / 1000.0;
+      referenceWallSeconds_ += msSince(t0) / 1000.0;
       (traced ? traced_ : loaded_) += 1;
       currentHash_ = hash;
     }
@@ -124,7 +125,7 @@ class PipelineRunner final : public SweepRunner {
   std::string currentHash_;
   Frame current_;
   int traced_ = 0, loaded_ = 0;
-  double referenceSeconds_ = 0;
+  double referenceWallSeconds_ = 0;
 };
 
 }  // namespace

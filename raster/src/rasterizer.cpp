@@ -182,10 +182,10 @@ struct Rasterizer::Impl {
   // The camera's visibility buffer depends on the scene and the camera only, not on the method:
   // while both stay the same (a sweep over methods, a stability run with a fixed evaluation
   // camera) it is kept and not drawn again. Its GPU time, measured when it was drawn, stays part
-  // of every frame's camera_ms.
+  // of every frame's camera_gpu_ms.
   std::string visibilityKey;  // empty: cameraIds holds nothing reusable
   std::vector<std::vector<float>> spare;  // recycled channel planes (Rasterizer::recycle)
-  double visibilityMs = 0;
+  double visibilityGpuMs = 0;
 };
 
 Rasterizer::Impl::Impl(const RasterDeviceOptions& options) {
@@ -806,7 +806,7 @@ Frame Rasterizer::render(const Scene& scene, const Method& method, const std::st
   VK_CHECK(vkGetQueryPoolResults(im.context->device(), im.queries.get(), 0, 4, sizeof(stamps), stamps,
                                  sizeof(uint64_t), VK_QUERY_RESULT_64_BIT | VK_QUERY_RESULT_WAIT_BIT));
   double nsPerTick = im.context->properties().limits.timestampPeriod;
-  if (drawVisibility) im.visibilityMs = double(stamps[3] - stamps[1]) * nsPerTick * 1e-6;
+  if (drawVisibility) im.visibilityGpuMs = double(stamps[3] - stamps[1]) * nsPerTick * 1e-6;
   im.visibilityKey = visibilityKey;
 
   // ---- readback: the channel planes, split out of the attachments in place ----
@@ -830,11 +830,11 @@ Frame Rasterizer::render(const Scene& scene, const Method& method, const std::st
                 {"method", methodToJson(method)},
                 {"device", deviceName()}};
   if (timings) {
-    timings->shadowMs = double(stamps[1] - stamps[0]) * nsPerTick * 1e-6;
-    timings->visibilityMs = im.visibilityMs;
-    timings->cameraMs = im.visibilityMs + double(stamps[2] - stamps[3]) * nsPerTick * 1e-6;
+    timings->shadowGpuMs = double(stamps[1] - stamps[0]) * nsPerTick * 1e-6;
+    timings->visibilityGpuMs = im.visibilityGpuMs;
+    timings->cameraGpuMs = im.visibilityGpuMs + double(stamps[2] - stamps[3]) * nsPerTick * 1e-6;
     timings->readbackMs = readbackMs;
-    timings->totalMs = msSince(t0);
+    timings->renderWallMs = msSince(t0);
   }
   return frame;
 }

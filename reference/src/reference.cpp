@@ -546,7 +546,7 @@ Frame renderReference(const Scene& scene, const ReferenceOptions& options, Refer
     stats->primaryRays = primaryRays.load();
     stats->shadowRays = shadowRays.load();
     stats->buildSeconds = std::chrono::duration<double>(traceStart - buildStart).count();
-    stats->seconds = std::chrono::duration<double>(traceEnd - traceStart).count();
+    stats->traceSeconds = std::chrono::duration<double>(traceEnd - traceStart).count();
   }
   return frame;
 }

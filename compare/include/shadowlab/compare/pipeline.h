@@ -32,7 +32,8 @@ struct RunResult {
   Classification classification;
   Metrics metrics;
   RasterTimings timings;
-  double compareMs = 0;
+  double compareMs = 0;    // compare_ms: CPU wall time of compareFrames
+  double referenceMs = 0;  // reference_ms: CPU wall time to trace the reference or read it from the cache
   bool referenceTraced = false;  // false: the reference came from the cache
   ReferenceStats referenceStats;  // filled only when traced
 };

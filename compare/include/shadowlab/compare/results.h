@@ -5,11 +5,11 @@
 // metrics.json:  { "schema": "shadowlab.metrics/1", "scene": S, "config": C, "light": L,
 //                  "method": {...}, "metrics": {...}, "timings": {...} }
 // results.json:  { "schema": "shadowlab.results/1", "rows": [ {same keys as metrics.json minus schema} ],
-//                  "total_seconds": T, "configurations": N, ... }
+//                  "command_wall_seconds": T, "configurations": N, ... }
 // `config` is the canonical text of the swept method keys, sorted by key: "bias.slope=1,map.size=512"
 // ("default" when nothing was swept). Rows are matched by (scene, config, light).
-// `metrics` holds Metrics::toJson(); `timings` holds shadow_ms, camera_ms, readback_ms, compare_ms,
-// total_ms (milliseconds).
+// `metrics` holds Metrics::toJson(); `timings` holds the row timings of compare/TIMINGS.md
+// (shadow_gpu_ms, camera_gpu_ms, readback_ms, render_wall_ms, compare_ms, config_wall_ms, ...; ms).
 #include <string>
 #include <vector>
 

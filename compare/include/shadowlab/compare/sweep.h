@@ -131,7 +131,7 @@ SweepPlan planSweep(const SweepSpec& spec);
 // What one configuration produced (the renderer-independent part of a ResultRow).
 struct SweepRunOutput {
   nlohmann::json metrics = nlohmann::json::object();  // Metrics::toJson()
-  nlohmann::json timings = nlohmann::json::object();  // shadow_ms, camera_ms, readback_ms, compare_ms
+  nlohmann::json timings = nlohmann::json::object();  // shadow_gpu_ms, camera_gpu_ms, readback_ms, render_wall_ms, compare_ms
 };
 
 class SweepRunner {
@@ -181,7 +181,7 @@ struct SweepSummary {
   size_t resumed = 0;         // rows found in rows.jsonl and not run again
   size_t ran = 0;             // rows run by this call
   bool interrupted = false;   // stopped by options.stop; outputs not regenerated
-  double totalSeconds = 0;
+  double commandWallSeconds = 0;  // command_wall_seconds: this runSweep call, report included
   std::string resultsJson, resultsCsv, reportHtml;  // empty when not written
   std::vector<std::string> notes;                   // e.g. charts skipped or failed
 };
@@ -203,7 +203,7 @@ std::vector<std::string> writeSweepReport(const SweepPlan& plan, const std::vect
 
 // Pieces of the report, usable on their own.
 void writeResultsCsv(const std::string& path, const std::vector<ResultRow>& rows);
-// Per scene: configurations on the Pareto front of (raster time = shadow_ms + camera_ms,
+// Per scene: configurations on the Pareto front of (raster time = shadow_gpu_ms + camera_gpu_ms,
 // error_rate), by increasing time: each is the lowest error reachable within its time budget.
 std::vector<size_t> paretoFront(const std::vector<ResultRow>& rows, const std::string& scene);
 // The chart script: $SHADOWLAB_REPORT_SCRIPT when set, else <sourceDir>/compare/report/charts.py

@@ -17,14 +17,14 @@ struct RasterDeviceOptions {
 };
 
 struct RasterTimings {
-  double shadowMs = 0;    // GPU timestamps of the shadow pass (all maps)
+  double shadowGpuMs = 0;  // shadow_gpu_ms: GPU timestamps of the shadow pass (all maps)
   // GPU timestamps of the camera pass: the visibility buffer + the resolve. The visibility buffer
   // does not depend on the method: while the scene and the camera stay the same, the rasterizer
-  // keeps it and adds the time it took when it was drawn (visibilityMs).
-  double cameraMs = 0;
-  double visibilityMs = 0;  // the camera pass's first part: rasterizing the visibility buffer
-  double readbackMs = 0;  // CPU wall time to copy the outputs back into the Frame
-  double totalMs = 0;     // CPU wall time of render()
+  // keeps it and adds the time it took when it was drawn (visibilityGpuMs). camera_gpu_ms.
+  double cameraGpuMs = 0;
+  double visibilityGpuMs = 0;  // visibility_gpu_ms: the camera pass's first part, the visibility buffer
+  double readbackMs = 0;  // readback_ms: CPU wall time to copy the outputs back into the Frame
+  double renderWallMs = 0;  // render_wall_ms: CPU wall time of render() (names: compare/TIMINGS.md)
 };
 
 class Rasterizer {

@@ -16,9 +16,9 @@ struct ReferenceOptions {
 struct ReferenceStats {
   uint64_t primaryRays = 0;
   uint64_t shadowRays = 0;  // occlusion rays to lights and projectors
-  double seconds = 0.0;     // wall time of the trace (scene build excluded)
-  double buildSeconds = 0.0;
-  double mraysPerS() const { return seconds > 0 ? (primaryRays + shadowRays) / seconds * 1e-6 : 0.0; }
+  double traceSeconds = 0.0;  // trace_seconds: wall time of the trace (scene build excluded)
+  double buildSeconds = 0.0;  // build_seconds: Embree device + BVH
+  double mraysPerS() const { return traceSeconds > 0 ? (primaryRays + shadowRays) / traceSeconds * 1e-6 : 0.0; }
 };
 
 // Traces every light and projector of the scene. Channels: see scenes/frame.h.

@@ -1,0 +1,57 @@
+// The timing glossary in code: the one name of each timing quantity a result row (metrics.json,
+// results.json/csv, stability.json), raster.json or a sweep's bookkeeping carries, and the names
+// older builds wrote for them. compare/TIMINGS.md says what each includes and where it is measured.
+#pragma once
+
+#include <string>
+
+namespace shadowlab {
+namespace timing {
+
+// Per frame / per configuration, milliseconds (the `timings` object of a result row).
+constexpr const char* kShadowGpuMs = "shadow_gpu_ms";          // GPU timestamps around the shadow pass
+constexpr const char* kCameraGpuMs = "camera_gpu_ms";          // GPU timestamps: visibility buffer + resolve
+constexpr const char* kVisibilityGpuMs = "visibility_gpu_ms";  // the visibility-buffer part of camera_gpu_ms
+constexpr const char* kReadbackMs = "readback_ms";             // CPU wall: outputs copied into the Frame
+constexpr const char* kRenderWallMs = "render_wall_ms";        // CPU wall of Rasterizer::render
+constexpr const char* kCompareMs = "compare_ms";               // CPU wall of compareFrames
+constexpr const char* kReferenceMs = "reference_ms";           // CPU wall: reference traced or read from the cache
+constexpr const char* kConfigWallMs = "config_wall_ms";        // one configuration end to end
+constexpr const char* kCommandWallMs = "command_wall_ms";      // the whole command (stability.json)
+
+// True for a current per-row timing name above.
+inline bool isTimingName(const std::string& key) {
+  for (const char* name : {kShadowGpuMs, kCameraGpuMs, kVisibilityGpuMs, kReadbackMs, kRenderWallMs, kCompareMs,
+                           kReferenceMs, kConfigWallMs, kCommandWallMs})
+    if (key == name) return true;
+  return false;
+}
+
+// Which file a retired name was read from: `total_ms` meant a different quantity in each.
+enum class TimingSource { ResultRow, StabilityRow, RasterJson };
+
+// The current name of a timing key that older builds wrote, or nullptr when `key` is not retired.
+// Retired names are refused, never mapped silently: a baseline written with `total_ms` holds a
+// different quantity than any one new name, so comparing it against a new run would mislead.
+inline const char* renamedTiming(const std::string& key, TimingSource source) {
+  if (key == "shadow_ms") return kShadowGpuMs;
+  if (key == "camera_ms") return kCameraGpuMs;
+  if (key == "camera_visibility_ms" || key == "visibility_ms") return kVisibilityGpuMs;
+  if (key == "raster_ms") return kRenderWallMs;
+  if (key == "total_ms") {
+    switch (source) {
+      case TimingSource::StabilityRow: return kCommandWallMs;
+      case TimingSource::RasterJson: return kRenderWallMs;
+      case TimingSource::ResultRow: return kConfigWallMs;
+    }
+  }
+  return nullptr;
+}
+
+// "error: "total_ms" was renamed; use "config_wall_ms" (...)": the text after `file: /pointer: error: `.
+inline std::string renamedTimingMessage(const std::string& key, const char* newName) {
+  return "\"" + key + "\" was renamed; use \"" + newName + "\" (timing names: compare/TIMINGS.md)";
+}
+
+}  // namespace timing
+}  // namespace shadowlab
