@@ -8,6 +8,7 @@
 #include "command.h"
 #include "shadowlab/compare/compare.h"
 #include "shadowlab/compare/results.h"
+#include "shadowlab/compare/timings.h"
 #include "shadowlab/scenes/error.h"
 #include "shadowlab/scenes/io.h"
 
@@ -36,7 +37,8 @@ std::string metaString(const Frame& f, const char* key, const std::string& fallb
   return it != f.meta.end() && it->is_string() && !it->get<std::string>().empty() ? it->get<std::string>() : fallback;
 }
 
-// raster.json holds the timings `shadowlab raster` measured; copy every *_ms number.
+// raster.json holds the timings `shadowlab raster` measured; copy every *_ms number. One written by
+// an older build (total_ms, shadow_ms, ...) is refused with the new name: rerun `shadowlab raster`.
 nlohmann::json rasterTimings(const std::string& rasterExr) {
   nlohmann::json timings = nlohmann::json::object();
   const std::string path = (fs::path(rasterExr).parent_path() / "raster.json").string();
@@ -48,15 +50,17 @@ nlohmann::json rasterTimings(const std::string& rasterExr) {
   } catch (const nlohmann::json::parse_error& e) {
     throw InputError(formatError(path, "", std::string("cannot parse JSON: ") + e.what()));
   }
-  auto collect = [&](const nlohmann::json& obj) {
+  auto collect = [&](const nlohmann::json& obj, const std::string& pointer) {
     if (!obj.is_object()) return;
     for (auto it = obj.begin(); it != obj.end(); ++it) {
       const std::string& k = it.key();
+      if (const char* renamed = timing::renamedTiming(k, timing::TimingSource::RasterJson))
+        throw InputError(formatError(path, pointer + "/" + k, timing::renamedTimingMessage(k, renamed)));
       if (k.size() > 3 && k.compare(k.size() - 3, 3, "_ms") == 0 && it->is_number()) timings[k] = *it;
     }
   };
-  collect(j);
-  if (j.is_object() && j.contains("timings")) collect(j["timings"]);
+  collect(j, "");
+  if (j.is_object() && j.contains("timings")) collect(j["timings"], "/timings");
   return timings;
 }
 

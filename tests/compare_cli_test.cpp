@@ -103,6 +103,22 @@ TEST_F(CompareCli, ComparesSyntheticFramesAndWritesAllOutputs) {
   }
 }
 
+// A raster.json from before the timing glossary (compare/TIMINGS.md): its total_ms was the render
+// call's wall time, so the message names render_wall_ms; nothing is written.
+TEST_F(CompareCli, RenamedRasterTimingExits2NamingTheNewName) {
+  fs::create_directories(path("ref"));
+  fs::create_directories(path("ras"));
+  writeFrameExr(syntheticFrame(16, 8, false, 0), path("ref/reference.exr"));
+  writeFrameExr(syntheticFrame(16, 8, true, 0), path("ras/raster.exr"));
+  writeFileAtomic(path("ras/raster.json"), R"({"shadow_gpu_ms": 1.5, "total_ms": 9.0, "device": "x"})");
+  const Result r = shadowlab("compare ref ras -o out");
+  EXPECT_EQ(r.code, 2) << r.err;
+  EXPECT_NE(r.err.find("ras/raster.json: /total_ms: error: \"total_ms\" was renamed; use \"render_wall_ms\""),
+            std::string::npos)
+      << r.err;
+  EXPECT_FALSE(fs::exists(path("out")));
+}
+
 TEST_F(CompareCli, MissingInputExits2AndWritesNothing) {
   fs::create_directories(path("ref"));
   writeFrameExr(syntheticFrame(16, 8, false, 0), path("ref/reference.exr"));

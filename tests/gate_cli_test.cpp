@@ -264,6 +264,39 @@ TEST_F(GateCli, MalformedToleranceFilesExit2) {
   EXPECT_NE(missing.err.find(path("absent.json")), std::string::npos) << missing.err;
 }
 
+// Timing names from before the glossary (compare/TIMINGS.md) are refused, naming the new one:
+// `total_ms` meant another quantity in each file, so gating it would compare unlike things.
+TEST_F(GateCli, RenamedTimingNamesExit2NamingTheNewName) {
+  const std::string bad = std::string(SHADOWLAB_SOURCE_DIR) + "/tests/bad_input/";
+  CliRun baseline = gate(path("base.json") + " --baseline " + bad + "timing_renamed_results.json");
+  EXPECT_EQ(baseline.code, 2) << baseline.out << baseline.err;
+  EXPECT_EQ(baseline.err, bad + "timing_renamed_results.json: /rows/1/timings/camera_ms: error: \"camera_ms\" was "
+                                "renamed; use \"camera_gpu_ms\" (timing names: compare/TIMINGS.md)\n");
+  EXPECT_EQ(baseline.out, "");
+
+  CliRun current = gate(bad + "timing_renamed_results.json --baseline " + path("base.json"));
+  EXPECT_EQ(current.code, 2) << current.out << current.err;
+  EXPECT_NE(current.err.find("/rows/1/timings/camera_ms: error:"), std::string::npos) << current.err;
+
+  // In a stability.json, total_ms was the whole command.
+  CliRun stability = gate(bad + "timing_renamed_stability.json --baseline " + bad + "timing_renamed_stability.json");
+  EXPECT_EQ(stability.code, 2) << stability.out << stability.err;
+  EXPECT_EQ(stability.err, bad + "timing_renamed_stability.json: /timings/total_ms: error: \"total_ms\" was renamed; "
+                                 "use \"command_wall_ms\" (timing names: compare/TIMINGS.md)\n");
+
+  CliRun tolerances = gate(path("base.json") + " --baseline " + path("base.json") + " --tolerances " + bad +
+                           "timing_renamed_tolerances.json");
+  EXPECT_EQ(tolerances.code, 2) << tolerances.out << tolerances.err;
+  EXPECT_EQ(tolerances.err, bad + "timing_renamed_tolerances.json: /metrics/total_ms: error: \"total_ms\" was "
+                                  "renamed; use \"config_wall_ms\" (timing names: compare/TIMINGS.md)\n");
+
+  CliRun asMetric = gate(path("base.json") + " --baseline " + path("base.json") + " --tolerances " + bad +
+                         "timing_as_metric_tolerances.json");
+  EXPECT_EQ(asMetric.code, 2) << asMetric.out << asMetric.err;
+  EXPECT_EQ(asMetric.err, bad + "timing_as_metric_tolerances.json: /metrics/config_wall_ms: error: \"config_wall_ms\" "
+                                "is a timing, not a metric; expected timings under \"timing\" (compare/GATE.md)\n");
+}
+
 TEST_F(GateCli, NanExits2) {
   // nlohmann writes NaN as null; the gate must not treat it as a pass.
   std::string cur = current("cur.json", [](nlohmann::json& d) { d["rows"][1]["metrics"]["acne_rate"] = nullptr; });

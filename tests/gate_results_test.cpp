@@ -99,5 +99,40 @@ TEST_F(Results, MalformedFilesNameFileAndPlace) {
   EXPECT_NE(errorOf(missing), "(no InputError)");
 }
 
+// Every retired timing name is refused with its successor; `total_ms` gets the one its file meant.
+TEST_F(Results, RenamedTimingNamesAreRefusedWithTheNewName) {
+  auto metricsWith = [&](const std::string& name, const std::string& key, const char* schema) {
+    return write(name, std::string(R"({"schema": ")") + schema +
+                           R"(", "scene": "a", "config": "default", "light": "sun", "metrics": {}, "timings": {")" +
+                           key + R"(": 1.0}})");
+  };
+  const std::pair<const char*, const char*> renames[] = {{"shadow_ms", "shadow_gpu_ms"},
+                                                         {"camera_ms", "camera_gpu_ms"},
+                                                         {"camera_visibility_ms", "visibility_gpu_ms"},
+                                                         {"raster_ms", "render_wall_ms"},
+                                                         {"total_ms", "config_wall_ms"}};
+  for (const auto& [from, to] : renames) {
+    std::string path = metricsWith(std::string(from) + ".json", from, "shadowlab.metrics/1");
+    EXPECT_EQ(errorOf(path), path + ": /timings/" + from + ": error: \"" + from + "\" was renamed; use \"" + to +
+                                 "\" (timing names: compare/TIMINGS.md)");
+  }
+  std::string stability = metricsWith("stability.json", "total_ms", "shadowlab.stability/1");
+  EXPECT_EQ(errorOf(stability), stability + ": /timings/total_ms: error: \"total_ms\" was renamed; use "
+                                            "\"command_wall_ms\" (timing names: compare/TIMINGS.md)");
+  // A sweep journal line goes through ResultRow::fromJson: an old journal is refused the same way.
+  nlohmann::json old = {{"scene", "a"}, {"config", "default"}, {"light", "sun"}, {"metrics", nlohmann::json::object()},
+                        {"timings", {{"total_ms", 3.0}}}};
+  try {
+    ResultRow::fromJson(old, "rows.jsonl:4");
+    ADD_FAILURE() << "no InputError";
+  } catch (const InputError& e) {
+    EXPECT_STREQ(e.what(), "rows.jsonl:4: /timings/total_ms: error: \"total_ms\" was renamed; use \"config_wall_ms\" "
+                           "(timing names: compare/TIMINGS.md)");
+  }
+  // The current names load.
+  std::string fine = metricsWith("fine.json", "config_wall_ms", "shadowlab.metrics/1");
+  EXPECT_EQ(errorOf(fine), "(no InputError)");
+}
+
 }  // namespace
 }  // namespace shadowlab

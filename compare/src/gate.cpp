@@ -10,6 +10,7 @@
 #include <set>
 #include <sstream>
 
+#include "shadowlab/compare/timings.h"
 #include "shadowlab/scenes/error.h"
 #include "shadowlab/scenes/io.h"
 
@@ -326,8 +327,17 @@ Tolerances parseTolerances(const nlohmann::json& j, const std::string& file) {
       if (!it.value().is_object())
         throw InputError(formatError(file, place, "got " + typeName(it.value()) +
                                                       "; expected an object of metric name -> tolerance"));
-      for (auto m = it.value().begin(); m != it.value().end(); ++m)
-        t.metrics[m.key()] = parseSpec(m.value(), file, place + "/" + pointerToken(m.key()));
+      for (auto m = it.value().begin(); m != it.value().end(); ++m) {
+        const std::string mplace = place + "/" + pointerToken(m.key());
+        // A timing listed as a metric would never be checked (timings follow "timing"): say so
+        // rather than let the file look as if it gated it; a retired timing name gets its new one.
+        if (const char* renamed = timing::renamedTiming(m.key(), timing::TimingSource::ResultRow))
+          throw InputError(formatError(file, mplace, timing::renamedTimingMessage(m.key(), renamed)));
+        if (timing::isTimingName(m.key()))
+          throw InputError(formatError(file, mplace, "\"" + m.key() + "\" is a timing, not a metric; expected "
+                                                     "timings under \"timing\" (compare/GATE.md)"));
+        t.metrics[m.key()] = parseSpec(m.value(), file, mplace);
+      }
     } else if (key == "timing") {
       t.timing = parseTiming(it.value(), file);
     } else {

@@ -8,6 +8,7 @@
 #include <set>
 
 #include "shadowlab/compare/gate.h"
+#include "shadowlab/compare/timings.h"
 #include "shadowlab/scenes/error.h"
 #include "shadowlab/scenes/io.h"
 
@@ -23,7 +24,8 @@ constexpr const char* kResultsSchema = "shadowlab.results/1";
 // its per-frame numbers (compare/METRICS.md, "Temporal stability").
 constexpr const char* kStabilitySchema = "shadowlab.stability/1";
 
-ResultRow rowFromJson(const nlohmann::json& j, const std::string& file, const std::string& pointer) {
+ResultRow rowFromJson(const nlohmann::json& j, const std::string& file, const std::string& pointer,
+                      timing::TimingSource source) {
   auto fail = [&](const std::string& place, const std::string& what) {
     throw InputError(formatError(file, place, what));  // "" = the whole document
   };
@@ -53,8 +55,12 @@ ResultRow rowFromJson(const nlohmann::json& j, const std::string& file, const st
   object("method", row.method, false);
   object("metrics", row.metrics, true);
   object("timings", row.timings, false);
-  // Timings are milliseconds; anything else there would make the ratio rule meaningless.
+  // Timings are milliseconds; anything else there would make the ratio rule meaningless. A name
+  // older builds wrote is refused: `total_ms` meant another quantity in each file, so gating it
+  // against a current run would compare two different things under one name.
   for (auto it = row.timings.begin(); it != row.timings.end(); ++it) {
+    if (const char* renamed = timing::renamedTiming(it.key(), source))
+      fail(pointer + "/timings/" + pointerToken(it.key()), timing::renamedTimingMessage(it.key(), renamed));
     if (!it.value().is_number() && !it.value().is_null())
       fail(pointer + "/timings/" + pointerToken(it.key()),
            "got " + typeName(it.value()) + "; expected a number (milliseconds)");
@@ -98,7 +104,7 @@ nlohmann::json ResultRow::toJson() const {
 }
 
 ResultRow ResultRow::fromJson(const nlohmann::json& j, const std::string& origin) {
-  return rowFromJson(j, origin, "");
+  return rowFromJson(j, origin, "", timing::TimingSource::ResultRow);
 }
 
 ResultFile loadResultFile(const std::string& path) {
@@ -118,7 +124,9 @@ ResultFile loadResultFile(const std::string& path) {
                                                       "\", \"" + kResultsSchema + "\" or \"" + kStabilitySchema + "\""));
   file.schema = schema->get<std::string>();
   if (file.schema == kMetricsSchema || file.schema == kStabilitySchema) {
-    file.rows.push_back(rowFromJson(doc, path, ""));
+    file.rows.push_back(rowFromJson(doc, path, "",
+                                    file.schema == kStabilitySchema ? timing::TimingSource::StabilityRow
+                                                                    : timing::TimingSource::ResultRow));
     file.pointers.push_back("");
     return file;
   }
@@ -128,7 +136,7 @@ ResultFile loadResultFile(const std::string& path) {
     throw InputError(formatError(path, "/rows", "got " + typeName(*rows) + "; expected an array of result rows"));
   for (size_t i = 0; i < rows->size(); ++i) {
     std::string pointer = "/rows/" + std::to_string(i);
-    file.rows.push_back(rowFromJson((*rows)[i], path, pointer));
+    file.rows.push_back(rowFromJson((*rows)[i], path, pointer, timing::TimingSource::ResultRow));
     file.pointers.push_back(pointer);
   }
   return file;
