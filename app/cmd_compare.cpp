@@ -11,6 +11,7 @@
 #include "shadowlab/compare/timings.h"
 #include "shadowlab/scenes/error.h"
 #include "shadowlab/scenes/io.h"
+#include "shadowlab/scenes/json_reader.h"
 
 namespace {
 
@@ -44,12 +45,7 @@ nlohmann::json rasterTimings(const std::string& rasterExr) {
   const std::string path = (fs::path(rasterExr).parent_path() / "raster.json").string();
   std::error_code ec;
   if (!fs::is_regular_file(path, ec)) return timings;
-  nlohmann::json j;
-  try {
-    j = nlohmann::json::parse(readFile(path), nullptr, true, true);
-  } catch (const nlohmann::json::parse_error& e) {
-    throw InputError(formatError(path, "", std::string("cannot parse JSON: ") + e.what()));
-  }
+  const nlohmann::json j = readJsonFile(path);
   auto collect = [&](const nlohmann::json& obj, const std::string& pointer) {
     if (!obj.is_object()) return;
     for (auto it = obj.begin(); it != obj.end(); ++it) {

@@ -8,9 +8,9 @@
 #include <memory>
 
 #include "command.h"
-#include "shadowlab/compare/pipeline.h"
+#include "shadowlab/compare/run_pipeline.h"
 #include "shadowlab/compare/results.h"
-#include "shadowlab/compare/sweep.h"
+#include "shadowlab/compare/set_arguments.h"
 #include "shadowlab/compare/timings.h"
 #include "shadowlab/scenes/error.h"
 #include "shadowlab/scenes/io.h"
@@ -48,7 +48,7 @@ int run(const Options& o) {
     throw InputError(formatError(scene.path, "/lights", "the scene has no light; expected at least one to compare"));
   }
   if (o.spp < 1) throw InputError("--spp: error: got " + std::to_string(o.spp) + "; expected an integer >= 1");
-  const std::string light = o.light.empty() ? scene.lights.front().name : o.light;
+  const std::string light = scene.lightOrDefault(o.light);
 
   // `config` names what was set, like a sweep row (so a run matches the sweep row of the same
   // configuration); else the method name.

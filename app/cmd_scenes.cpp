@@ -5,6 +5,7 @@
 #include "command.h"
 #include "shadowlab/scenes/error.h"
 #include "shadowlab/scenes/io.h"
+#include "shadowlab/scenes/json_reader.h"
 #include "shadowlab/scenes/loader.h"
 
 namespace {
@@ -18,7 +19,7 @@ struct Options {
 // the geometry, so listing stays instant even when an asset is missing.
 std::string describeScene(const std::string& path) {
   try {
-    auto doc = nlohmann::json::parse(shadowlab::readFile(path), nullptr, false, true);
+    const nlohmann::json doc = shadowlab::readJsonFile(path);
     if (doc.is_object() && doc.contains("description") && doc["description"].is_string())
       return doc["description"].get<std::string>();
   } catch (const std::exception&) {

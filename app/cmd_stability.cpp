@@ -18,12 +18,15 @@
 #include <memory>
 
 #include "command.h"
-#include "shadowlab/compare/pipeline.h"
+#include "shadowlab/compare/run_pipeline.h"
 #include "shadowlab/compare/stability.h"
+#include "shadowlab/scenes/light_path.h"
+#include "shadowlab/compare/set_arguments.h"
 #include "shadowlab/compare/sweep.h"
 #include "shadowlab/compare/timings.h"
 #include "shadowlab/scenes/error.h"
 #include "shadowlab/scenes/io.h"
+#include "shadowlab/scenes/json_reader.h"
 #include "shadowlab/scenes/loader.h"
 
 namespace {
@@ -96,13 +99,13 @@ int run(const Options& o) {
     throw InputError(formatError(scene.path, "/lights", "the scene has no light; expected at least one to compare"));
   if (!o.light.empty() && !scene.findLight(o.light))
     throw bad("--light", "scene " + scene.path + " has no light \"" + o.light + "\"");
-  const std::string light = o.light.empty() ? scene.lights.front().name : o.light;
+  const std::string light = scene.lightOrDefault(o.light);
 
   // The path: fit cameras (camera path) or per-frame scene overrides (light path).
   std::vector<Camera> fitCameras;
   nlohmann::json pathJson;
   std::string pathConfig;
-  const nlohmann::json sceneDocument = lightPath ? nlohmann::json::parse(readFile(scene.path), nullptr, false, true)
+  const nlohmann::json sceneDocument = lightPath ? readJsonFile(scene.path)
                                                  : nlohmann::json();
   int frames = 0;
   if (lightPath) {

@@ -9,7 +9,7 @@
 #include <gtest/gtest.h>
 #include <unistd.h>
 
-#include "shadowlab/compare/pipeline.h"
+#include "shadowlab/compare/run_pipeline.h"
 #include "shadowlab/scenes/error.h"
 #include "shadowlab/scenes/loader.h"
 

@@ -4,6 +4,7 @@
 
 #include "shadowlab/compare/gate.h"
 #include "shadowlab/scenes/error.h"
+#include "shadowlab/scenes/json_reader.h"
 
 namespace shadowlab {
 namespace {
@@ -43,7 +44,7 @@ std::string inputErrorOf(const std::function<void()>& f) {
 }
 
 Tolerances tolerances(const std::string& text) {
-  return parseTolerances(parseJsonDocument(text, "tol.json"), "tol.json");
+  return parseTolerances(parseJsonText(text, "tol.json"), "tol.json");
 }
 
 TEST(GateRules, LowerIsBetterFailsOnlyBeyondMaxOfAbsAndRel) {

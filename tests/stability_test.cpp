@@ -18,6 +18,7 @@
 #include <nlohmann/json.hpp>
 
 #include "shadowlab/compare/stability.h"
+#include "shadowlab/scenes/light_path.h"
 #include "shadowlab/raster/raster.h"
 #include "shadowlab/reference/reference.h"
 #include "shadowlab/scenes/error.h"

@@ -1,4 +1,5 @@
 #include "json_util.h"
+#include "shadowlab/scenes/json_reader.h"
 
 #include <algorithm>
 #include <cmath>
@@ -27,9 +28,14 @@ namespace {
 // overflow (1e999) is reported through the same hook as syntax errors, with its position,
 // which the thrown out_of_range exception would lose. It also refuses a key an object already
 // has (nlohmann keeps the last one silently), naming the object by its JSON pointer.
-struct PositionedDomParser : nlohmann::detail::json_sax_dom_parser<nlohmann::json> {
-  using Base = nlohmann::detail::json_sax_dom_parser<nlohmann::json>;
-  explicit PositionedDomParser(nlohmann::json& result) : Base(result, /*allow_exceptions=*/false) {}
+template <class Json>
+struct PositionedDomParser : nlohmann::detail::json_sax_dom_parser<Json> {
+  using Base = nlohmann::detail::json_sax_dom_parser<Json>;
+  using typename Base::number_integer_t;
+  using typename Base::number_unsigned_t;
+  using typename Base::number_float_t;
+  using typename Base::string_t;
+  explicit PositionedDomParser(Json& result) : Base(result, /*allow_exceptions=*/false) {}
 
   // Where the parser is: one entry per open object or array, with the child being read.
   struct Open {
@@ -102,12 +108,11 @@ struct PositionedDomParser : nlohmann::detail::json_sax_dom_parser<nlohmann::jso
   std::string errorText;
 };
 
-}  // namespace
-
-nlohmann::json parseJsonText(const std::string& text, const std::string& file) {
-  nlohmann::json result;
-  PositionedDomParser sax(result);
-  bool ok = nlohmann::json::sax_parse(text, &sax, nlohmann::json::input_format_t::json, /*strict=*/true,
+template <class Json>
+Json parseStrict(const std::string& text, const std::string& file) {
+  Json result;
+  PositionedDomParser<Json> sax(result);
+  bool ok = Json::sax_parse(text, &sax, nlohmann::json::input_format_t::json, /*strict=*/true,
                                       /*ignore_comments=*/true);
   if (ok) return result;
   if (sax.duplicate) {
@@ -146,13 +151,16 @@ nlohmann::json parseJsonText(const std::string& text, const std::string& file) {
       byte = start + offset + 1;
     }
   }
+  // nlohmann joins "while parsing X - detail" with a dash; the house style uses "; ".
+  size_t dash = what.find(" - ");
+  if (dash != std::string::npos) what.replace(dash, 3, "; ");
   if (sax.errorId == 406) what += "; expected a finite number (NaN and infinity are not allowed)";
   size_t line = 0, column = 0;
   lineColumn(text, byte, line, column);
   throw InputError(file + ":" + std::to_string(line) + ":" + std::to_string(column) + ": error: " + what);
 }
 
-nlohmann::json parseJsonFile(const std::string& path) { return parseJsonText(readFile(path), path); }
+}  // namespace
 
 std::string describe(const nlohmann::json& j) {
   using T = nlohmann::json::value_t;
@@ -216,3 +224,42 @@ std::string didYouMean(const std::string& got, const std::vector<std::string>& c
 }
 
 }  // namespace shadowlab::detail
+
+namespace shadowlab {
+
+nlohmann::json parseJsonText(const std::string& text, const std::string& file) {
+  return detail::parseStrict<nlohmann::json>(text, file);
+}
+
+nlohmann::ordered_json parseOrderedJsonText(const std::string& text, const std::string& file) {
+  return detail::parseStrict<nlohmann::ordered_json>(text, file);
+}
+
+nlohmann::json readJsonFile(const std::string& path) { return parseJsonText(readFile(path), path); }
+
+namespace {
+template <class Json>
+std::string typeNameOf(const Json& v) {
+  if (v.is_number()) return "a number";
+  if (v.is_string()) return "a string";
+  if (v.is_boolean()) return "a boolean";
+  if (v.is_null()) return "null";
+  if (v.is_array()) return "an array";
+  return "an object";
+}
+}  // namespace
+
+std::string jsonTypeName(const nlohmann::json& v) { return typeNameOf(v); }
+std::string jsonTypeName(const nlohmann::ordered_json& v) { return typeNameOf(v); }
+
+std::string jsonPointerToken(const std::string& key) {
+  std::string out;
+  for (char c : key) {
+    if (c == '~') out += "~0";
+    else if (c == '/') out += "~1";
+    else out += c;
+  }
+  return out;
+}
+
+}  // namespace shadowlab

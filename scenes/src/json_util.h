@@ -1,17 +1,13 @@
 #pragma once
-// Internal helpers for the scene and method parsers: JSON with comments, GCC-style errors with
-// line:col for syntax errors and JSON pointers for everything else, and "got ..." descriptions.
+// Internal helpers for the scene and method parsers: JSON pointers for semantic errors and
+// "got ..." descriptions of values. The reader itself (comments, duplicate keys, line:col) is
+// public: shadowlab/scenes/json_reader.h.
 #include <string>
 #include <vector>
 
 #include <nlohmann/json.hpp>
 
 namespace shadowlab::detail {
-
-// Parses `text` (comments allowed). A syntax error throws InputError "file:line:col: error: ...".
-nlohmann::json parseJsonText(const std::string& text, const std::string& file);
-// readFile + parseJsonText.
-nlohmann::json parseJsonFile(const std::string& path);
 
 // 1-based line and column of the byte at 1-based offset `byte` (as nlohmann's parse_error::byte).
 void lineColumn(const std::string& text, size_t byte, size_t& line, size_t& column);

@@ -18,6 +18,7 @@
 #include <tiny_obj_loader.h>
 
 #include "json_util.h"
+#include "shadowlab/scenes/json_reader.h"
 #include "shadowlab/scenes/camera_path.h"
 #include "shadowlab/scenes/error.h"
 #include "shadowlab/scenes/io.h"
@@ -987,7 +988,7 @@ Scene loadScene(const std::string& path, const std::vector<SceneOverride>& overr
     }
     throw InputError(formatError(path, "", "cannot open scene file: no such file" + hint));
   }
-  json doc = detail::parseJsonFile(path);
+  json doc = readJsonFile(path);
   Reader r(path);
   Node root{&doc, ""};
   if (!doc.is_object()) r.expected(root, "a JSON object with camera, objects and lights");

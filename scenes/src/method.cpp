@@ -8,6 +8,7 @@
 #include <functional>
 
 #include "json_util.h"
+#include "shadowlab/scenes/json_reader.h"
 #include "shadowlab/scenes/error.h"
 
 namespace shadowlab {
@@ -280,7 +281,7 @@ const std::vector<std::string>& methodKeys() {
 }
 
 Method loadMethodFile(const std::string& path) {
-  nlohmann::json doc = detail::parseJsonFile(path);
+  nlohmann::json doc = readJsonFile(path);
   if (!doc.is_object()) fail(path, "", detail::describe(doc), "a JSON object of method keys");
   Method m;
   m.name.clear();

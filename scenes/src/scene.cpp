@@ -130,6 +130,11 @@ const Light* Scene::findLight(const std::string& lightName) const {
   return nullptr;
 }
 
+std::string Scene::lightOrDefault(const std::string& lightName) const {
+  if (!lightName.empty()) return lightName;
+  return lights.empty() ? "" : lights.front().name;
+}
+
 const CameraPath* Scene::findPath(const std::string& pathName) const {
   for (const auto& p : paths)
     if (p.name == pathName) return &p;

@@ -1,5 +1,5 @@
 #pragma once
-// Camera paths: the fit camera's motion for temporal stability (compare/stability.h,
+// Camera paths: the fit camera's motion for temporal stability (shadowlab/compare/stability.h,
 // `shadowlab stability`). Generated (`--path dolly|orbit`) or declared in a scene file ("paths",
 // scenes/FORMAT.md). Pure functions; every one returns `frames` cameras (2 <= frames <=
 // kMaxPathFrames) and copies everything but position, look_at and up from its start camera.

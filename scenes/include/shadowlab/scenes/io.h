@@ -17,6 +17,11 @@ void writeJsonAtomic(const std::string& path, const nlohmann::json& j);  // pret
 // Reads a whole file; throws InputError "<path>: error: cannot open file ..." when missing.
 std::string readFile(const std::string& path);
 
+// Escapes text for XML and HTML, in content and in quoted attribute values (& < > " ' as entities;
+// control characters other than tab, CR and LF, which XML 1.0 does not allow, become '?'). Used by
+// the gate's JUnit XML and the sweep's report.html.
+std::string escapeMarkup(const std::string& text);
+
 // Creates `dir` and its parents; throws InputError naming it when that fails.
 void makeDirs(const std::string& dir);
 

@@ -129,6 +129,10 @@ struct Scene {
   glm::vec3 boundsMin() const;
   glm::vec3 boundsMax() const;
   const Light* findLight(const std::string& name) const;  // nullptr when absent
+  // The light a command renders and compares when none is named: `name` when given, else the
+  // first light's name ("" when the scene has no light). Every renderer and comparison uses this
+  // one choice, so the compared light is always the rendered one.
+  std::string lightOrDefault(const std::string& name) const;
   const CameraPath* findPath(const std::string& name) const;  // nullptr when absent
   size_t triangleCount() const;
 };

@@ -35,4 +35,18 @@ struct ResultRow {
 std::vector<ResultRow> loadResultRows(const std::string& path);
 void writeMetricsJson(const std::string& path, const ResultRow& row);  // atomic
 
+// A loaded metrics.json or results.json with what the gate needs to name places in it.
+struct ResultFile {
+  std::string path;
+  std::string schema;                 // "shadowlab.metrics/1" or "shadowlab.results/1"
+  std::vector<ResultRow> rows;
+  std::vector<std::string> pointers;  // JSON pointer of each row in the file ("" or "/rows/3")
+  std::vector<std::string> rowPaths;  // the file of each row when merged from several; else empty
+  std::vector<int> repeats;           // how many runs each row's timings are the median of; else empty
+  nlohmann::json document;            // the whole file as read
+  const std::string& pathOf(size_t row) const { return rowPaths.empty() ? path : rowPaths[row]; }
+  int repeatsOf(size_t row) const { return repeats.empty() ? 1 : repeats[row]; }
+};
+ResultFile loadResultFile(const std::string& path);  // InputError naming file and pointer
+
 }  // namespace shadowlab

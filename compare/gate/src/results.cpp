@@ -2,21 +2,16 @@
 // files from CI artifacts and user checkouts, so every shape error names the file and the JSON
 // pointer of the offending value.
 #include "shadowlab/compare/results.h"
-#include "json_text.h"
 
-#include <regex>
 #include <set>
 
-#include "shadowlab/compare/gate.h"
 #include "shadowlab/compare/timings.h"
 #include "shadowlab/scenes/error.h"
 #include "shadowlab/scenes/io.h"
+#include "shadowlab/scenes/json_reader.h"
 
 namespace shadowlab {
 namespace {
-
-using json_text::pointerToken;
-using json_text::typeName;
 
 constexpr const char* kMetricsSchema = "shadowlab.metrics/1";
 constexpr const char* kResultsSchema = "shadowlab.results/1";
@@ -29,13 +24,13 @@ ResultRow rowFromJson(const nlohmann::json& j, const std::string& file, const st
   auto fail = [&](const std::string& place, const std::string& what) {
     throw InputError(formatError(file, place, what));  // "" = the whole document
   };
-  if (!j.is_object()) fail(pointer, "got " + typeName(j) + "; expected a result row (an object)");
+  if (!j.is_object()) fail(pointer, "got " + jsonTypeName(j) + "; expected a result row (an object)");
   ResultRow row;
   auto text = [&](const char* key, std::string& out) {
     auto it = j.find(key);
     if (it == j.end()) fail(pointer, std::string("missing \"") + key + "\"; expected a string");
     if (!it->is_string())
-      fail(pointer + "/" + key, "got " + typeName(*it) + "; expected a string");
+      fail(pointer + "/" + key, "got " + jsonTypeName(*it) + "; expected a string");
     out = it->get<std::string>();
   };
   text("scene", row.scene);
@@ -49,7 +44,7 @@ ResultRow rowFromJson(const nlohmann::json& j, const std::string& file, const st
       if (required) fail(pointer, std::string("missing \"") + key + "\"; expected an object");
       return;
     }
-    if (!it->is_object()) fail(pointer + "/" + key, "got " + typeName(*it) + "; expected an object");
+    if (!it->is_object()) fail(pointer + "/" + key, "got " + jsonTypeName(*it) + "; expected an object");
     out = *it;
   };
   object("method", row.method, false);
@@ -60,37 +55,15 @@ ResultRow rowFromJson(const nlohmann::json& j, const std::string& file, const st
   // against a current run would compare two different things under one name.
   for (auto it = row.timings.begin(); it != row.timings.end(); ++it) {
     if (const char* renamed = timing::renamedTiming(it.key(), source))
-      fail(pointer + "/timings/" + pointerToken(it.key()), timing::renamedTimingMessage(it.key(), renamed));
+      fail(pointer + "/timings/" + jsonPointerToken(it.key()), timing::renamedTimingMessage(it.key(), renamed));
     if (!it.value().is_number() && !it.value().is_null())
-      fail(pointer + "/timings/" + pointerToken(it.key()),
-           "got " + typeName(it.value()) + "; expected a number (milliseconds)");
+      fail(pointer + "/timings/" + jsonPointerToken(it.key()),
+           "got " + jsonTypeName(it.value()) + "; expected a number (milliseconds)");
   }
   return row;
 }
 
 }  // namespace
-
-nlohmann::json parseJsonDocument(const std::string& text, const std::string& file) {
-  try {
-    return nlohmann::json::parse(text, nullptr, /*allow_exceptions=*/true, /*ignore_comments=*/true);
-  } catch (const nlohmann::json::parse_error& e) {
-    // nlohmann says "[json.exception.parse_error.101] parse error at line L, column C: what";
-    // reshape it into "file:L:C: error: what" so editors and CI jump to the spot.
-    std::string message = e.what();
-    static const std::regex kWhere(R"(at line (\d+), column (\d+): (.*))");
-    std::smatch m;
-    if (std::regex_search(message, m, kWhere)) {
-      std::string what = m[3].str();
-      // nlohmann joins "while parsing X - detail" with a dash; the house style uses "; ".
-      auto dash = what.find(" - ");
-      if (dash != std::string::npos) what.replace(dash, 3, "; ");
-      throw InputError(file + ":" + m[1].str() + ":" + m[2].str() + ": error: " + what);
-    }
-    // No line information (e.g. empty input): say where by byte, never invent a line.
-    throw InputError(formatError(file, "", "cannot parse JSON at byte " + std::to_string(e.byte) + ": " +
-                                               message));
-  }
-}
 
 nlohmann::json ResultRow::toJson() const {
   nlohmann::json j = nlohmann::json::object();
@@ -110,10 +83,10 @@ ResultRow ResultRow::fromJson(const nlohmann::json& j, const std::string& origin
 ResultFile loadResultFile(const std::string& path) {
   ResultFile file;
   file.path = path;
-  file.document = parseJsonDocument(readFile(path), path);
+  file.document = readJsonFile(path);
   const nlohmann::json& doc = file.document;
   if (!doc.is_object())
-    throw InputError(formatError(path, "", "got " + typeName(doc) + "; expected an object with \"schema\""));
+    throw InputError(formatError(path, "", "got " + jsonTypeName(doc) + "; expected an object with \"schema\""));
   auto schema = doc.find("schema");
   if (schema == doc.end())
     throw InputError(formatError(path, "", std::string("missing \"schema\"; expected \"") + kMetricsSchema +
@@ -133,7 +106,7 @@ ResultFile loadResultFile(const std::string& path) {
   auto rows = doc.find("rows");
   if (rows == doc.end()) throw InputError(formatError(path, "", "missing \"rows\"; expected an array of result rows"));
   if (!rows->is_array())
-    throw InputError(formatError(path, "/rows", "got " + typeName(*rows) + "; expected an array of result rows"));
+    throw InputError(formatError(path, "/rows", "got " + jsonTypeName(*rows) + "; expected an array of result rows"));
   for (size_t i = 0; i < rows->size(); ++i) {
     std::string pointer = "/rows/" + std::to_string(i);
     file.rows.push_back(rowFromJson((*rows)[i], path, pointer, timing::TimingSource::ResultRow));

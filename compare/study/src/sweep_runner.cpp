@@ -8,7 +8,7 @@
 #include <memory>
 
 #include "shadowlab/compare/compare.h"
-#include "shadowlab/compare/pipeline.h"
+#include "shadowlab/compare/run_pipeline.h"
 #include "shadowlab/compare/sweep.h"
 #include "shadowlab/compare/timings.h"
 #include "shadowlab/raster/raster.h"
@@ -37,7 +37,7 @@ class PipelineRunner final : public SweepRunner {
     RasterTimings t;
     Frame raster = rasterizer().render(scene, method, light, &t);
     CompareOptions options;
-    options.light = resolvedLight(scene, light);
+    options.light = scene.lightOrDefault(light);
     Classification classification;
     const bool keep = !imagesDir.empty();
     const auto c0 = Clock::now();
@@ -63,7 +63,7 @@ class PipelineRunner final : public SweepRunner {
     const Frame& reference = referenceFor(scene);
     Frame raster = rasterizer().render(scene, method, light, nullptr);
     CompareOptions options;
-    options.light = resolvedLight(scene, light);
+    options.light = scene.lightOrDefault(light);
     Classification classification;
     compareFrames(reference, raster, options, &classification);
     writeTriptychPng(pngPath, reference, raster, classification);
@@ -90,12 +90,6 @@ class PipelineRunner final : public SweepRunner {
   }
 
  private:
-  static std::string resolvedLight(const Scene& scene, const std::string& light) {
-    // The same choice runPipeline makes, so the compared light is the rendered one.
-    if (!light.empty()) return light;
-    return scene.lights.empty() ? "" : scene.lights.front().name;
-  }
-
   Rasterizer& rasterizer() {
     if (!rasterizer_) rasterizer_ = std::make_unique<Rasterizer>(deviceOptions_);
     return *rasterizer_;

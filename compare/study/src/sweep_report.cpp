@@ -24,6 +24,7 @@
 #include "shadowlab/compare/timings.h"
 #include "shadowlab/scenes/error.h"
 #include "shadowlab/scenes/io.h"
+#include "shadowlab/scenes/json_reader.h"
 
 namespace shadowlab {
 namespace {
@@ -63,22 +64,6 @@ void flatten(const nlohmann::json& j, const std::string& prefix, std::vector<std
     if (it.value().is_object()) flatten(it.value(), name, out);
     else out.emplace_back(name, it.value());
   }
-}
-
-std::string html(const std::string& s) {
-  std::string out;
-  out.reserve(s.size());
-  for (char c : s) {
-    switch (c) {
-      case '&': out += "&amp;"; break;
-      case '<': out += "&lt;"; break;
-      case '>': out += "&gt;"; break;
-      case '"': out += "&quot;"; break;
-      case '\'': out += "&#39;"; break;
-      default: out += c;
-    }
-  }
-  return out;
 }
 
 double num(const nlohmann::json& obj, const char* key, double fallback = NAN) {
@@ -354,9 +339,9 @@ std::vector<std::string> writeSweepReport(const SweepPlan& plan, const std::vect
   }
   if (fs::is_regular_file(manifestPath, ec)) {
     try {
-      manifest = nlohmann::json::parse(readFile(manifestPath));
-    } catch (const std::exception& e) {
-      notes.push_back(std::string("charts unusable: figures/charts.json: ") + e.what());
+      manifest = readJsonFile(manifestPath);
+    } catch (const InputError& e) {
+      notes.push_back(std::string("charts unusable: ") + e.what());
       manifest = nlohmann::json();
     }
   }
@@ -368,7 +353,7 @@ std::vector<std::string> writeSweepReport(const SweepPlan& plan, const std::vect
   std::strftime(stamp, sizeof stamp, "%Y-%m-%d %H:%M:%S UTC", std::gmtime(&now));
   h << "<!DOCTYPE html>\n<html lang=\"en\">\n<head>\n<meta charset=\"utf-8\">\n"
     << "<meta name=\"viewport\" content=\"width=device-width, initial-scale=1\">\n"
-    << "<title>shadowlab sweep: " << html(std::to_string(plan.sceneNames.size())) << " scene(s) x "
+    << "<title>shadowlab sweep: " << escapeMarkup(std::to_string(plan.sceneNames.size())) << " scene(s) x "
     << plan.configs.size() << " configuration(s)</title>\n<style>" << kStyle << "</style>\n</head>\n<body>\n";
   h << "<h1>shadowlab sweep report</h1>\n<p class=\"muted\">" << rows.size() << " rows: "
     << plan.sceneNames.size() << " scene(s) &times; " << plan.configs.size() << " configuration(s). Generated "
@@ -379,14 +364,14 @@ std::vector<std::string> writeSweepReport(const SweepPlan& plan, const std::vect
   const nlohmann::json runInfo = results.value("runner", nlohmann::json::object());
   h << "<table>\n";
   auto fact = [&](const std::string& k, const std::string& v) {
-    h << "<tr><th class=\"t\">" << html(k) << "</th><td class=\"t\">" << v << "</td></tr>\n";
+    h << "<tr><th class=\"t\">" << escapeMarkup(k) << "</th><td class=\"t\">" << v << "</td></tr>\n";
   };
-  fact("machine", html(machine.value("cpu", std::string("?")) + ", " +
+  fact("machine", escapeMarkup(machine.value("cpu", std::string("?")) + ", " +
                        std::to_string(machine.value("hardware_threads", 0)) + " threads, " +
                        machine.value("os", std::string("?"))));
-  if (runInfo.contains("device") && runInfo["device"].is_string()) fact("raster device", html(runInfo["device"].get<std::string>()));
+  if (runInfo.contains("device") && runInfo["device"].is_string()) fact("raster device", escapeMarkup(runInfo["device"].get<std::string>()));
   if (runInfo.contains("reference_cache") && runInfo["reference_cache"].is_string())
-    fact("reference cache", html(runInfo["reference_cache"].get<std::string>()) + " (" +
+    fact("reference cache", escapeMarkup(runInfo["reference_cache"].get<std::string>()) + " (" +
                                 std::to_string(runInfo.value("references_traced", 0)) + " traced, " +
                                 std::to_string(runInfo.value("references_loaded", 0)) + " loaded)");
   fact("rows run / resumed", std::to_string(results.value("rows_run", 0)) + " / " +
@@ -412,9 +397,9 @@ std::vector<std::string> writeSweepReport(const SweepPlan& plan, const std::vect
         break;
       }
     if (!scene) continue;
-    h << "<tr><td class=\"t\">" << html(plan.sceneNames[s]) << "</td><td class=\"t\">" << html(plan.scenePaths[s])
+    h << "<tr><td class=\"t\">" << escapeMarkup(plan.sceneNames[s]) << "</td><td class=\"t\">" << escapeMarkup(plan.scenePaths[s])
       << "</td><td>" << scene->triangleCount() << "</td><td>" << scene->camera.width << "&times;" << scene->camera.height
-      << "</td><td class=\"t\">" << html(light) << "</td><td class=\"t\">" << html(scene->hash) << "</td></tr>\n";
+      << "</td><td class=\"t\">" << escapeMarkup(light) << "</td><td class=\"t\">" << escapeMarkup(scene->hash) << "</td></tr>\n";
   }
   h << "</table>\n";
 
@@ -428,15 +413,15 @@ std::vector<std::string> writeSweepReport(const SweepPlan& plan, const std::vect
     for (const auto& axis : grid) {
       std::string values;
       for (const auto& v : axis.value("values", nlohmann::json::array())) values += (values.empty() ? "" : ", ") + valueText(v);
-      h << "<tr><td class=\"t\">" << html(axis.value("key", std::string())) << "</td><td class=\"t\">" << html(values)
+      h << "<tr><td class=\"t\">" << escapeMarkup(axis.value("key", std::string())) << "</td><td class=\"t\">" << escapeMarkup(values)
         << "</td></tr>\n";
     }
     h << "</table>\n";
   }
   if (!plan.spec.fixed.empty() || !plan.spec.methodFile.empty()) {
     h << "<p>Fixed for every configuration:";
-    if (!plan.spec.methodFile.empty()) h << " method file <code>" << html(plan.spec.methodFile) << "</code>";
-    for (const auto& s : plan.spec.fixed) h << " <code>" << html(s.key + "=" + canonicalValueText(s.value)) << "</code>";
+    if (!plan.spec.methodFile.empty()) h << " method file <code>" << escapeMarkup(plan.spec.methodFile) << "</code>";
+    for (const auto& s : plan.spec.fixed) h << " <code>" << escapeMarkup(s.key + "=" + canonicalValueText(s.value)) << "</code>";
     h << "</p>\n";
   }
   h << "<p class=\"muted\">Every other method key keeps its default (raster/METHODS.md). Each row's full method is in "
@@ -448,7 +433,7 @@ std::vector<std::string> writeSweepReport(const SweepPlan& plan, const std::vect
        "reachable within its time budget; every configuration not listed is slower, less accurate, or both.</p>\n";
   for (const auto& name : plan.sceneNames) {
     auto front = paretoFront(rows, name);
-    h << "<h3>" << html(name) << "</h3>\n";
+    h << "<h3>" << escapeMarkup(name) << "</h3>\n";
     if (front.empty()) {
       h << "<p class=\"note\">No row with an error rate.</p>\n";
       continue;
@@ -457,7 +442,7 @@ std::vector<std::string> writeSweepReport(const SweepPlan& plan, const std::vect
          "<th>leak_rate</th><th>aliasing_rate</th><th>coverage_rate</th><th>m_p95 (px)</th><th>compare_ms</th></tr>\n";
     for (size_t i : front) {
       const ResultRow& r = rows[i];
-      h << "<tr><td>&le; " << fmt(rasterMs(r), "%.2f") << "</td><td class=\"t\">" << html(r.config) << "</td><td>"
+      h << "<tr><td>&le; " << fmt(rasterMs(r), "%.2f") << "</td><td class=\"t\">" << escapeMarkup(r.config) << "</td><td>"
         << pct(num(r.metrics, "error_rate")) << "</td><td>" << pct(num(r.metrics, "acne_rate")) << "</td><td>"
         << pct(num(r.metrics, "leak_rate")) << "</td><td>" << pct(num(r.metrics, "aliasing_rate")) << "</td><td>"
         << pct(num(r.metrics, "coverage_rate")) << "</td><td>" << fmt(num(r.metrics, "m_p95")) << "</td><td>"
@@ -473,15 +458,15 @@ std::vector<std::string> writeSweepReport(const SweepPlan& plan, const std::vect
     h << "<h2>Failure frontiers</h2>\n<p>For each scene parameter swept with <code>scene:</code> and each method "
          "configuration, the values walked from easy to hard (the direction of the scene's declared "
          "<code>failure</code> values; the grid's order for other parameters) and the first value where <code>"
-      << html(fr.value("metric", std::string("error_rate"))) << "</code> exceeds "
+      << escapeMarkup(fr.value("metric", std::string("error_rate"))) << "</code> exceeds "
       << pct(fr.value("threshold", 0.01)) << ".</p>\n<table>\n<tr><th class=\"t\">scene</th><th class=\"t\">parameter</th>"
          "<th class=\"t\">method</th><th>holds to</th><th>breaks at</th><th class=\"t\">frontier</th></tr>\n";
     for (const auto& f : frontiers) {
-      auto val = [](const nlohmann::json& v) { return v.is_null() ? std::string("&ndash;") : html(canonicalValueText(v)); };
-      h << "<tr><td class=\"t\">" << html(f.value("scene", std::string())) << "</td><td class=\"t\">"
-        << html(f.value("parameter", std::string())) << "</td><td class=\"t\">" << html(f.value("method", std::string()))
+      auto val = [](const nlohmann::json& v) { return v.is_null() ? std::string("&ndash;") : escapeMarkup(canonicalValueText(v)); };
+      h << "<tr><td class=\"t\">" << escapeMarkup(f.value("scene", std::string())) << "</td><td class=\"t\">"
+        << escapeMarkup(f.value("parameter", std::string())) << "</td><td class=\"t\">" << escapeMarkup(f.value("method", std::string()))
         << "</td><td>" << val(f.value("holds_to", nlohmann::json())) << "</td><td>"
-        << val(f.value("breaks_at", nlohmann::json())) << "</td><td class=\"t\">" << html(f.value("sentence", std::string()))
+        << val(f.value("breaks_at", nlohmann::json())) << "</td><td class=\"t\">" << escapeMarkup(f.value("sentence", std::string()))
         << "</td></tr>\n";
     }
     h << "</table>\n";
@@ -490,17 +475,17 @@ std::vector<std::string> writeSweepReport(const SweepPlan& plan, const std::vect
   // Charts.
   h << "<h2>Charts</h2>\n";
   for (const auto& n : notes)
-    if (n.rfind("charts", 0) == 0) h << "<p class=\"note\">" << html(n) << "</p>\n";
+    if (n.rfind("charts", 0) == 0) h << "<p class=\"note\">" << escapeMarkup(n) << "</p>\n";
   if (manifest.is_object()) {
     for (const auto& c : manifest.value("charts", nlohmann::json::array())) {
       const std::string png = c.value("png", std::string());
-      h << "<figure id=\"" << html(c.value("id", std::string())) << "\">\n<h3>" << html(c.value("title", std::string()))
-        << "</h3>\n<img src=\"" << html(png) << "\" alt=\"" << html(c.value("title", std::string())) << "\">\n<figcaption>"
-        << html(c.value("caption", std::string()));
+      h << "<figure id=\"" << escapeMarkup(c.value("id", std::string())) << "\">\n<h3>" << escapeMarkup(c.value("title", std::string()))
+        << "</h3>\n<img src=\"" << escapeMarkup(png) << "\" alt=\"" << escapeMarkup(c.value("title", std::string())) << "\">\n<figcaption>"
+        << escapeMarkup(c.value("caption", std::string()));
       std::string links;
       for (const char* kind : {"pdf", "svg"}) {
         std::string f = c.value(kind, std::string());
-        if (!f.empty()) links += std::string(links.empty() ? "" : ", ") + "<a href=\"" + html(f) + "\">" + kind + "</a>";
+        if (!f.empty()) links += std::string(links.empty() ? "" : ", ") + "<a href=\"" + escapeMarkup(f) + "\">" + kind + "</a>";
       }
       if (!links.empty()) h << " For papers: " << links << ".";
       h << "</figcaption>\n</figure>\n";
@@ -508,7 +493,7 @@ std::vector<std::string> writeSweepReport(const SweepPlan& plan, const std::vect
     for (const auto& s : manifest.value("skipped", nlohmann::json::array())) {
       std::string text = "Chart \"" + s.value("title", std::string()) + "\" skipped: " + s.value("reason", std::string());
       notes.push_back(text);
-      h << "<p class=\"note\">" << html(text) << "</p>\n";
+      h << "<p class=\"note\">" << escapeMarkup(text) << "</p>\n";
     }
   }
 
@@ -521,12 +506,12 @@ std::vector<std::string> writeSweepReport(const SweepPlan& plan, const std::vect
     if (it == picks.end()) continue;
     for (const auto& p : it->second) {
       const ResultRow& r = rows[p.row];
-      h << "<figure>\n<h3>" << html(name) << ": " << p.label << " (" << html(r.config) << ")</h3>\n";
+      h << "<figure>\n<h3>" << escapeMarkup(name) << ": " << p.label << " (" << escapeMarkup(r.config) << ")</h3>\n";
       if (p.file.empty()) {
         h << "<p class=\"note\">No triptych: this sweep's runner makes no pictures, or rendering it failed (see the "
              "notes).</p>\n";
       } else {
-        h << "<img src=\"" << html(p.file) << "\" alt=\"" << html(name + " " + p.label + " triptych") << "\">\n";
+        h << "<img src=\"" << escapeMarkup(p.file) << "\" alt=\"" << escapeMarkup(name + " " + p.label + " triptych") << "\">\n";
       }
       h << "<figcaption>error_rate " << pct(num(r.metrics, "error_rate")) << " (acne " << pct(num(r.metrics, "acne_rate"))
         << ", leak " << pct(num(r.metrics, "leak_rate")) << ", aliasing " << pct(num(r.metrics, "aliasing_rate"))
@@ -541,8 +526,8 @@ std::vector<std::string> writeSweepReport(const SweepPlan& plan, const std::vect
        "<th>acne_rate</th><th>leak_rate</th><th>aliasing_rate</th><th>coverage_rate</th><th>m_median</th><th>m_p95</th>"
        "<th>m_max</th><th>shadow_gpu_ms</th><th>camera_gpu_ms</th><th>compare_ms</th><th>config_wall_ms</th></tr>\n";
   for (const auto& r : rows) {
-    h << "<tr><td class=\"t\">" << html(r.scene) << "</td><td class=\"t\">" << html(r.config) << "</td><td class=\"t\">"
-      << html(r.light) << "</td>";
+    h << "<tr><td class=\"t\">" << escapeMarkup(r.scene) << "</td><td class=\"t\">" << escapeMarkup(r.config) << "</td><td class=\"t\">"
+      << escapeMarkup(r.light) << "</td>";
     for (const char* k : {"error_rate", "acne_rate", "leak_rate", "aliasing_rate", "coverage_rate"})
       h << "<td>" << pct(num(r.metrics, k)) << "</td>";
     for (const char* k : {"m_median", "m_p95", "m_max"}) h << "<td>" << fmt(num(r.metrics, k)) << "</td>";
@@ -557,7 +542,7 @@ std::vector<std::string> writeSweepReport(const SweepPlan& plan, const std::vect
     if (n.rfind("charts", 0) != 0 && n.rfind("Chart ", 0) != 0) otherNotes.push_back(n);
   if (!otherNotes.empty()) {
     h << "<h2>Notes</h2>\n";
-    for (const auto& n : otherNotes) h << "<p class=\"note\">" << html(n) << "</p>\n";
+    for (const auto& n : otherNotes) h << "<p class=\"note\">" << escapeMarkup(n) << "</p>\n";
   }
   h << "<script>" << kImageCheck << "</script>\n</body>\n</html>\n";
   writeFileAtomic(joinPath(options.outDir, "report.html"), h.str());

@@ -18,22 +18,6 @@
 
 namespace shadowlab {
 
-// Parses JSON text (comments allowed). Syntax errors throw InputError "file:line:col: error: ...".
-nlohmann::json parseJsonDocument(const std::string& text, const std::string& file);
-
-// A loaded metrics.json or results.json with what the gate needs to name places in it.
-struct ResultFile {
-  std::string path;
-  std::string schema;                 // "shadowlab.metrics/1" or "shadowlab.results/1"
-  std::vector<ResultRow> rows;
-  std::vector<std::string> pointers;  // JSON pointer of each row in the file ("" or "/rows/3")
-  std::vector<std::string> rowPaths;  // the file of each row when merged from several; else empty
-  std::vector<int> repeats;           // how many runs each row's timings are the median of; else empty
-  nlohmann::json document;            // the whole file as read
-  const std::string& pathOf(size_t row) const { return rowPaths.empty() ? path : rowPaths[row]; }
-  int repeatsOf(size_t row) const { return repeats.empty() ? 1 : repeats[row]; }
-};
-ResultFile loadResultFile(const std::string& path);  // InputError naming file and pointer
 // Several current files gated as one (e.g. one sweep per method): rows concatenated, each still
 // named by its own file in messages. A row found in several files is a repeated run of one
 // configuration: its metrics must be identical in every file (the pipeline is deterministic;

@@ -8,16 +8,12 @@
 
 #include "shadowlab/compare/sweep.h"
 #include "shadowlab/compare/compare.h"
-#include "shadowlab/compare/gate.h"
 #include "shadowlab/scenes/error.h"
 #include "shadowlab/scenes/io.h"
-#include "json_text.h"
+#include "shadowlab/scenes/json_reader.h"
 
 namespace shadowlab {
 namespace {
-
-using json_text::pointerToken;
-
 
 using ojson = nlohmann::ordered_json;
 
@@ -84,8 +80,6 @@ std::string dirOf(const std::string& path) {
   size_t slash = path.find_last_of('/');
   return slash == std::string::npos ? "" : path.substr(0, slash + 1);
 }
-
-std::string typeName(const ojson& j) { return j.type_name(); }
 
 }  // namespace
 
@@ -166,59 +160,28 @@ SweepSetting parseSetArgument(const std::string& text) {
   return s;
 }
 
-SetArguments applySetArguments(const std::string& methodFile, const std::vector<std::string>& sets) {
-  SetArguments a;
-  if (!methodFile.empty()) a.method = loadMethodFile(methodFile);
-  std::map<std::string, std::string> given;  // key -> canonical value, sorted
-  for (const auto& s : sets) {
-    const auto eq = s.find('=');
-    if (eq == std::string::npos || eq == 0)
-      throw InputError("--set " + s + ": error: got \"" + s + "\"; expected key=value (e.g. map.size=4096)");
-    const std::string key = s.substr(0, eq), value = s.substr(eq + 1);
-    if (key.rfind(kSceneKeyPrefix, 0) == 0) {
-      const nlohmann::json v = sceneValueFromText(value);
-      a.sceneOverrides.push_back({key.substr(std::string(kSceneKeyPrefix).size()), v});  // in order: the last wins
-      given[key] = canonicalValueText(v);
-    } else {
-      applyMethodSetting(a.method, key, value, "--set " + s);
-      given[key] = "";  // the resolved method's value, below
-    }
-  }
-  validateMethod(a.method, methodFile.empty() ? "--set" : methodFile);
-  const nlohmann::json resolved = methodToJson(a.method);
-  for (auto& [key, text] : given) {
-    if (key.rfind(kSceneKeyPrefix, 0) != 0) text = canonicalValueText(resolved.at(key));
-    a.config += (a.config.empty() ? "" : ",") + key + "=" + text;
-  }
-  if (a.config.empty()) a.config = a.method.name.empty() ? "default" : a.method.name;
-  return a;
-}
-
 void loadSweepFile(const std::string& path, SweepSpec& spec) {
-  const std::string text = readFile(path);
-  // The gate's parser words syntax errors the house way ("file:line:col: error: ..."); the
-  // document is then read again keeping the user's key order (the grid's axis order).
-  (void)parseJsonDocument(text, path);
-  ojson doc = ojson::parse(text, nullptr, true, /*ignore_comments=*/true);
+  // Ordered: the grid's axes keep the order the user wrote them in.
+  ojson doc = parseOrderedJsonText(readFile(path), path);
   auto fail = [&](const std::string& pointer, const std::string& what) {
     throw InputError(formatError(path, pointer, what));
   };
-  if (!doc.is_object()) fail("", "got " + typeName(doc) + "; expected an object { \"scenes\", \"grid\", \"set\", ... }");
+  if (!doc.is_object()) fail("", "got " + jsonTypeName(doc) + "; expected an object { \"scenes\", \"grid\", \"set\", ... }");
   const std::string baseDir = dirOf(path);
   for (auto it = doc.begin(); it != doc.end(); ++it) {
     const std::string& k = it.key();
     const ojson& v = it.value();
-    const std::string ptr = "/" + pointerToken(k);
+    const std::string ptr = "/" + jsonPointerToken(k);
     if (k == "scenes") {
       if (v.is_string()) {
         spec.scenes.push_back(v.get<std::string>());
         continue;
       }
-      if (!v.is_array()) fail(ptr, "got " + typeName(v) + "; expected an array of scene names or paths");
+      if (!v.is_array()) fail(ptr, "got " + jsonTypeName(v) + "; expected an array of scene names or paths");
       if (v.empty()) fail(ptr, "empty list; expected at least one scene (leave \"scenes\" out for all bundled scenes)");
       for (size_t i = 0; i < v.size(); ++i) {
         if (!v[i].is_string() || v[i].get<std::string>().empty())
-          fail(ptr + "/" + std::to_string(i), "got " + typeName(v[i]) + "; expected a scene name or path");
+          fail(ptr + "/" + std::to_string(i), "got " + jsonTypeName(v[i]) + "; expected a scene name or path");
         std::string s = v[i].get<std::string>();
         // Paths are relative to the sweep file; bare names are bundled scenes.
         bool isPath = s.find('/') != std::string::npos || (s.size() > 5 && s.substr(s.size() - 5) == ".json");
@@ -226,22 +189,22 @@ void loadSweepFile(const std::string& path, SweepSpec& spec) {
         spec.scenes.push_back(s);
       }
     } else if (k == "grid") {
-      if (!v.is_object()) fail(ptr, "got " + typeName(v) + "; expected an object {\"key\": [v1, v2, ...]}");
+      if (!v.is_object()) fail(ptr, "got " + jsonTypeName(v) + "; expected an object {\"key\": [v1, v2, ...]}");
       for (auto g = v.begin(); g != v.end(); ++g) {
-        const std::string gptr = ptr + "/" + pointerToken(g.key());
+        const std::string gptr = ptr + "/" + jsonPointerToken(g.key());
         SweepAxis axis;
         axis.key = g.key();
         axis.origin = path + ": " + gptr;
         checkKey(axis.key, axis.origin);
         const ojson& list = g.value();
-        if (!list.is_array()) fail(gptr, "got " + typeName(list) + "; expected an array of values");
+        if (!list.is_array()) fail(gptr, "got " + jsonTypeName(list) + "; expected an array of values");
         if (list.empty()) fail(gptr, "empty list of values; expected at least one");
         for (size_t i = 0; i < list.size(); ++i) {
           const ojson& item = list[i];
           const std::string iptr = gptr + "/" + std::to_string(i);
           if (!item.is_primitive() || item.is_null()) {
             if (!isSceneKey(axis.key) || item.is_null())
-              fail(iptr, "got " + typeName(item) + "; expected a number, string or boolean");
+              fail(iptr, "got " + jsonTypeName(item) + "; expected a number, string or boolean");
           }
           axis.values.push_back(nlohmann::json::parse(item.dump()));
           axis.valueOrigins.push_back(path + ": " + iptr);
@@ -250,29 +213,29 @@ void loadSweepFile(const std::string& path, SweepSpec& spec) {
         spec.grid.push_back(std::move(axis));
       }
     } else if (k == "set") {
-      if (!v.is_object()) fail(ptr, "got " + typeName(v) + "; expected an object {\"key\": value}");
+      if (!v.is_object()) fail(ptr, "got " + jsonTypeName(v) + "; expected an object {\"key\": value}");
       for (auto s = v.begin(); s != v.end(); ++s) {
-        const std::string sptr = ptr + "/" + pointerToken(s.key());
+        const std::string sptr = ptr + "/" + jsonPointerToken(s.key());
         if (!s.value().is_primitive() || s.value().is_null())
-          fail(sptr, "got " + typeName(s.value()) + "; expected a number, string or boolean");
+          fail(sptr, "got " + jsonTypeName(s.value()) + "; expected a number, string or boolean");
         spec.fixed.push_back({s.key(), nlohmann::json::parse(s.value().dump()), path + ": " + sptr});
       }
     } else if (k == "method") {
-      if (!v.is_string() || v.get<std::string>().empty()) fail(ptr, "got " + typeName(v) + "; expected a method file path");
+      if (!v.is_string() || v.get<std::string>().empty()) fail(ptr, "got " + jsonTypeName(v) + "; expected a method file path");
       std::string m = v.get<std::string>();
       spec.methodFile = m[0] == '/' ? m : baseDir + m;
     } else if (k == "light") {
-      if (!v.is_string()) fail(ptr, "got " + typeName(v) + "; expected a light name");
+      if (!v.is_string()) fail(ptr, "got " + jsonTypeName(v) + "; expected a light name");
       spec.light = v.get<std::string>();
     } else if (k == "spp") {
       if (!v.is_number_integer() || v.get<int64_t>() < 1 || v.get<int64_t>() > 4096)
         fail(ptr, "got " + v.dump() + "; expected an integer from 1 to 4096");
       spec.spp = v.get<int>();
     } else if (k == "keep_images") {
-      if (!v.is_boolean()) fail(ptr, "got " + typeName(v) + "; expected true or false");
+      if (!v.is_boolean()) fail(ptr, "got " + jsonTypeName(v) + "; expected true or false");
       spec.keepImages = v.get<bool>();
     } else if (k == "description" || k == "$schema") {
-      if (!v.is_string()) fail(ptr, "got " + typeName(v) + "; expected a string");
+      if (!v.is_string()) fail(ptr, "got " + jsonTypeName(v) + "; expected a string");
     } else {
       fail(ptr, "unknown key \"" + k + "\"; expected one of scenes, grid, set, method, light, spp, keep_images, description");
     }
@@ -446,17 +409,13 @@ SweepPlan planSweep(const SweepSpec& spec) {
             throw InputError(formatError(plan.scenePaths[si], "", "two scenes are named \"" + sceneName +
                                                                      "\"; expected distinct file names (rows are matched by name)"));
       }
-      if (!spec.light.empty()) {
-        if (!scene.findLight(spec.light)) {
-          std::vector<std::string> names;
-          for (const auto& l : scene.lights) names.push_back(l.name);
-          throw InputError(formatError(plan.scenePaths[si], "", "no light named \"" + spec.light + "\"; expected one of " +
-                                                                   (names.empty() ? std::string("(none)") : joinKeys(names))));
-        }
-        light = spec.light;
-      } else {
-        light = scene.lights.empty() ? "" : scene.lights.front().name;
+      if (!spec.light.empty() && !scene.findLight(spec.light)) {
+        std::vector<std::string> names;
+        for (const auto& l : scene.lights) names.push_back(l.name);
+        throw InputError(formatError(plan.scenePaths[si], "", "no light named \"" + spec.light + "\"; expected one of " +
+                                                                 (names.empty() ? std::string("(none)") : joinKeys(names))));
       }
+      light = scene.lightOrDefault(spec.light);
       SweepJob job;
       job.sceneIndex = si;
       job.configIndex = ci;

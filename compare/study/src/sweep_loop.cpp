@@ -80,22 +80,35 @@ std::map<std::string, StoredRow> readJournal(const std::string& path) {
       pos = next;
       continue;
     }
-    try {
-      if (!complete) throw std::runtime_error("no newline");
-      auto j = nlohmann::json::parse(line);
-      StoredRow s;
-      s.row = ResultRow::fromJson(j.at("row"), path + ":" + std::to_string(lineNo));
-      s.sceneHash = j.value("scene_hash", std::string());
-      s.configWallSeconds = j.value("config_wall_seconds", 0.0);
-      rows[s.row.key()] = std::move(s);  // a later line for the same key wins (a stale row re-run)
-      goodEnd = next;
-    } catch (const std::exception& e) {
-      if (!last)
-        throw InputError(formatError(path + ":" + std::to_string(lineNo), "",
-                                     std::string("damaged row (") + e.what() +
-                                         "); expected one JSON row per line. Delete the line or the file to run it again"));
-      // Torn last line: the process died while appending it.
+    // The journal is this program's own output, so a damaged line is named, not dissected:
+    // nlohmann's exception text never reaches the user.
+    std::string problem;
+    const nlohmann::json j = complete ? nlohmann::json::parse(line, nullptr, /*allow_exceptions=*/false)
+                                      : nlohmann::json();
+    if (!complete) {
+      problem = "no newline";
+    } else if (j.is_discarded()) {
+      problem = "not valid JSON";
+    } else if (!j.is_object() || !j.contains("row") || !j.value("scene_hash", nlohmann::json("")).is_string() ||
+               !j.value("config_wall_seconds", nlohmann::json(0.0)).is_number()) {
+      problem = "expected {\"row\": {...}, \"scene_hash\": \"...\", \"config_wall_seconds\": N}";
+    } else {
+      try {
+        StoredRow s;
+        s.row = ResultRow::fromJson(j.at("row"), path + ":" + std::to_string(lineNo));
+        s.sceneHash = j.value("scene_hash", std::string());
+        s.configWallSeconds = j.value("config_wall_seconds", 0.0);
+        rows[s.row.key()] = std::move(s);  // a later line for the same key wins (a stale row re-run)
+        goodEnd = next;
+      } catch (const InputError& e) {
+        problem = e.what();
+      }
     }
+    // A torn last line (the process died while appending it) is dropped below.
+    if (!problem.empty() && !last)
+      throw InputError(formatError(path + ":" + std::to_string(lineNo), "",
+                                   "damaged row (" + problem +
+                                       "); expected one JSON row per line. Delete the line or the file to run it again"));
     pos = next;
   }
   if (goodEnd < text.size()) {

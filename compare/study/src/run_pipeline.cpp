@@ -3,7 +3,7 @@
 #include <cstdlib>
 #include <filesystem>
 
-#include "shadowlab/compare/pipeline.h"
+#include "shadowlab/compare/run_pipeline.h"
 #include "shadowlab/scenes/error.h"
 #include "shadowlab/scenes/io.h"
 
@@ -54,7 +54,7 @@ RunResult runPipeline(const Scene& scene, const Method& method, Rasterizer& rast
   r.referenceMs = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - r0).count();
   r.raster = rasterizer.render(scene, method, light, &r.timings);
   CompareOptions options;
-  options.light = light.empty() ? (scene.lights.empty() ? "" : scene.lights.front().name) : light;
+  options.light = scene.lightOrDefault(light);
   const auto t0 = std::chrono::steady_clock::now();
   r.metrics = compareFrames(r.reference, r.raster, options, &r.classification);
   r.compareMs = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();

@@ -1,7 +1,6 @@
 // The regression gate: tolerances as data, row matching, verdicts, and the three outputs (table,
 // JSON, JUnit XML). compare/GATE.md is the user-facing description; keep the two in step.
 #include "shadowlab/compare/gate.h"
-#include "json_text.h"
 
 #include <algorithm>
 #include <array>
@@ -13,12 +12,10 @@
 #include "shadowlab/compare/timings.h"
 #include "shadowlab/scenes/error.h"
 #include "shadowlab/scenes/io.h"
+#include "shadowlab/scenes/json_reader.h"
 
 namespace shadowlab {
 namespace {
-
-using json_text::pointerToken;
-using json_text::typeName;
 
 constexpr const char* kTolerancesSchema = "shadowlab.tolerances/1";
 constexpr const char* kGateSchema = "shadowlab.gate/1";
@@ -54,7 +51,7 @@ void flatten(const nlohmann::json& j, const std::string& prefix, std::map<std::s
 std::string metricPointer(const std::string& rowPointer, const std::string& group, const std::string& name) {
   // Dotted names came from nesting or contain a dot themselves; for the pointer use the top key
   // only when the name is nested, which is enough to find it in the file.
-  return rowPointer + "/" + group + "/" + pointerToken(name);
+  return rowPointer + "/" + group + "/" + jsonPointerToken(name);
 }
 
 std::optional<Direction> parseDirection(const std::string& s) {
@@ -67,11 +64,11 @@ std::optional<Direction> parseDirection(const std::string& s) {
 
 ToleranceSpec parseSpec(const nlohmann::json& j, const std::string& file, const std::string& pointer) {
   if (!j.is_object())
-    throw InputError(formatError(file, pointer, "got " + typeName(j) +
+    throw InputError(formatError(file, pointer, "got " + jsonTypeName(j) +
                                                     "; expected an object with \"direction\", \"abs\", \"rel\""));
   ToleranceSpec spec;
   for (auto it = j.begin(); it != j.end(); ++it) {
-    std::string place = pointer + "/" + pointerToken(it.key());
+    std::string place = pointer + "/" + jsonPointerToken(it.key());
     const nlohmann::json& v = it.value();
     if (it.key() == "direction") {
       auto d = v.is_string() ? parseDirection(v.get<std::string>()) : std::nullopt;
@@ -82,7 +79,7 @@ ToleranceSpec parseSpec(const nlohmann::json& j, const std::string& file, const 
       spec.direction = d;
     } else if (it.key() == "abs" || it.key() == "rel") {
       if (!v.is_number())
-        throw InputError(formatError(file, place, "got " + typeName(v) + "; expected a number >= 0"));
+        throw InputError(formatError(file, place, "got " + jsonTypeName(v) + "; expected a number >= 0"));
       double x = v.get<double>();
       if (!(x >= 0) || !std::isfinite(x))
         throw InputError(formatError(file, place, "got " + v.dump() + "; expected a number >= 0 (a tolerance)"));
@@ -107,11 +104,11 @@ TimingTolerance parseTiming(const nlohmann::json& j, const std::string& file) {
     return t;
   }
   if (!j.is_object())
-    throw InputError(formatError(file, "/timing", "got " + typeName(j) +
+    throw InputError(formatError(file, "/timing", "got " + jsonTypeName(j) +
                                                       "; expected \"report\", \"fail\" or an object "
                                                       "{\"mode\", \"max_ratio\", \"min_ms\"}"));
   for (auto it = j.begin(); it != j.end(); ++it) {
-    std::string place = "/timing/" + pointerToken(it.key());
+    std::string place = "/timing/" + jsonPointerToken(it.key());
     const nlohmann::json& v = it.value();
     if (it.key() == "mode") {
       t.mode = mode(v, place);
@@ -141,24 +138,6 @@ int verdictRank(Verdict v) {
     case Verdict::Reported: return 5;
   }
   return 6;
-}
-
-std::string xmlEscape(const std::string& s) {
-  std::string out;
-  for (char c : s) {
-    switch (c) {
-      case '&': out += "&amp;"; break;
-      case '<': out += "&lt;"; break;
-      case '>': out += "&gt;"; break;
-      case '"': out += "&quot;"; break;
-      case '\'': out += "&apos;"; break;
-      default:
-        // Control characters other than tab/newline are not allowed in XML 1.0.
-        if (static_cast<unsigned char>(c) < 0x20 && c != '\t' && c != '\n' && c != '\r') out += '?';
-        else out += c;
-    }
-  }
-  return out;
 }
 
 // Throws one InputError listing every problem (at most 20 lines): a CI log should show them all
@@ -310,10 +289,10 @@ Tolerances parseTolerances(const nlohmann::json& j, const std::string& file) {
   Tolerances t = defaultTolerances();
   t.origin = file;
   if (!j.is_object())
-    throw InputError(formatError(file, "", "got " + typeName(j) + "; expected an object (a tolerance file)"));
+    throw InputError(formatError(file, "", "got " + jsonTypeName(j) + "; expected an object (a tolerance file)"));
   for (auto it = j.begin(); it != j.end(); ++it) {
     const std::string& key = it.key();
-    std::string place = "/" + pointerToken(key);
+    std::string place = "/" + jsonPointerToken(key);
     if (key == "schema") {
       if (it.value() != kTolerancesSchema)
         throw InputError(formatError(file, place, "got " + it.value().dump() + "; expected \"" +
@@ -325,10 +304,10 @@ Tolerances parseTolerances(const nlohmann::json& j, const std::string& file) {
       if (spec.relTolerance) t.fallback.relTolerance = spec.relTolerance;
     } else if (key == "metrics") {
       if (!it.value().is_object())
-        throw InputError(formatError(file, place, "got " + typeName(it.value()) +
+        throw InputError(formatError(file, place, "got " + jsonTypeName(it.value()) +
                                                       "; expected an object of metric name -> tolerance"));
       for (auto m = it.value().begin(); m != it.value().end(); ++m) {
-        const std::string mplace = place + "/" + pointerToken(m.key());
+        const std::string mplace = place + "/" + jsonPointerToken(m.key());
         // A timing listed as a metric would never be checked (timings follow "timing"): say so
         // rather than let the file look as if it gated it; a retired timing name gets its new one.
         if (const char* renamed = timing::renamedTiming(m.key(), timing::TimingSource::ResultRow))
@@ -349,7 +328,7 @@ Tolerances parseTolerances(const nlohmann::json& j, const std::string& file) {
 }
 
 Tolerances loadTolerances(const std::string& path) {
-  return parseTolerances(parseJsonDocument(readFile(path), path), path);
+  return parseTolerances(readJsonFile(path), path);
 }
 
 std::string GateResult::summary() const {
@@ -384,7 +363,7 @@ GateResult runGate(const ResultFile& current, const ResultFile& baseline, const 
       if (!known && !present.count(name)) {
         std::string names;
         for (auto& p : present) names += (names.empty() ? "" : ", ") + p;
-        throw InputError(formatError(tolerances.origin, "/metrics/" + pointerToken(name),
+        throw InputError(formatError(tolerances.origin, "/metrics/" + jsonPointerToken(name),
                                      "no row has a metric \"" + name + "\"; expected one of: " + names));
       }
     }
@@ -617,17 +596,10 @@ nlohmann::json gateToJson(const GateResult& result, const ResultFile& current, c
                  {"rows_compared", result.rowsCompared}, {"rows_new", result.rowsNew}};
   nlohmann::json checks = nlohmann::json::array();
   for (const GateCheck& c : result.checks) {
-    nlohmann::json k;
-    k["row"] = c.rowKey;
-    k["scene"] = c.scene;
-    k["config"] = c.config;
-    k["light"] = c.light;
-    k["kind"] = c.kind;
-    k["metric"] = c.metric;
-    k["baseline"] = c.baseline;
-    k["current"] = c.current;
-    k["tolerance"] = c.tolerance;
-    k["verdict"] = toString(c.verdict);
+    nlohmann::json k = {{"row", c.rowKey},       {"scene", c.scene},         {"config", c.config},
+                        {"light", c.light},      {"kind", c.kind},           {"metric", c.metric},
+                        {"baseline", c.baseline}, {"current", c.current},    {"tolerance", c.tolerance},
+                        {"verdict", toString(c.verdict)}};
     if (c.kind == "timing") k["samples"] = c.samples;
     if (!c.message.empty()) k["message"] = c.message;
     checks.push_back(std::move(k));
@@ -655,21 +627,21 @@ std::string gateToJunitXml(const GateResult& result) {
     const auto& checks = byRow[row];
     size_t failures = 0;
     for (auto* c : checks) failures += c->verdict == Verdict::Regressed;
-    x << "  <testsuite name=\"" << xmlEscape(row) << "\" tests=\"" << checks.size() << "\" failures=\"" << failures
+    x << "  <testsuite name=\"" << escapeMarkup(row) << "\" tests=\"" << checks.size() << "\" failures=\"" << failures
       << "\" errors=\"0\" skipped=\"0\">\n";
     for (auto* c : checks) {
       std::string name = c->kind == "timing" ? "timing." + c->metric : c->metric;
-      x << "    <testcase classname=\"" << xmlEscape(row) << "\" name=\"" << xmlEscape(name) << "\">";
+      x << "    <testcase classname=\"" << escapeMarkup(row) << "\" name=\"" << escapeMarkup(name) << "\">";
       if (c->verdict == Verdict::Regressed) {
-        x << "\n      <failure message=\"" << xmlEscape(c->message) << "\" type=\"regression\">"
-          << xmlEscape("baseline " + formatValue(c->baseline) + ", current " + formatValue(c->current) +
+        x << "\n      <failure message=\"" << escapeMarkup(c->message) << "\" type=\"regression\">"
+          << escapeMarkup("baseline " + formatValue(c->baseline) + ", current " + formatValue(c->current) +
                        ", tolerance " + c->tolerance)
           << "</failure>\n    ";
       } else if (c->verdict != Verdict::Pass) {
         std::string note = toString(c->verdict) + ": baseline " +
                            (c->baseline.is_null() ? std::string("-") : formatValue(c->baseline)) + ", current " +
                            (c->current.is_null() ? std::string("-") : formatValue(c->current));
-        x << "<system-out>" << xmlEscape(note) << "</system-out>";
+        x << "<system-out>" << escapeMarkup(note) << "</system-out>";
       }
       x << "</testcase>\n";
     }

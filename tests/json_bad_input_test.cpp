@@ -1,0 +1,83 @@
+// A key given twice in any JSON file the binary reads is bad input: one reader (json_reader.h)
+// refuses it in every file, not only in scenes and methods. Each tests/bad_input file below goes
+// through the real binary: exit 2, nothing on stdout, one line on stderr that starts with the file
+// path and contains the file's "// expect: " line (the key's JSON pointer), never nlohmann's own
+// exception text, and no output written.
+#include <gtest/gtest.h>
+
+#include <unistd.h>
+
+#include <algorithm>
+#include <filesystem>
+#include <regex>
+#include <string>
+
+#include "support/cli.h"
+
+namespace fs = std::filesystem;
+using shadowlab::testing::CliRun;
+using shadowlab::testing::runShadowlab;
+using shadowlab::testing::slurp;
+
+namespace {
+
+const std::string kBadInput = std::string(SHADOWLAB_SOURCE_DIR) + "/tests/bad_input/";
+const std::string kGoodMetrics = kBadInput + "assets/metrics_ok.json";
+
+class JsonBadInput : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    dir_ = fs::temp_directory_path() / ("shadowlab_json_bad_input_test_" + std::to_string(::getpid()) + "_" +
+                                        ::testing::UnitTest::GetInstance()->current_test_info()->name());
+    fs::remove_all(dir_);
+    fs::create_directories(dir_);
+  }
+  void TearDown() override { fs::remove_all(dir_); }
+
+  // Runs `args` and checks the rejection of `file` (a name in tests/bad_input).
+  void expectRejected(const std::string& file, const std::string& args) {
+    const std::string path = kBadInput + file;
+    std::smatch match;
+    const std::string text = slurp(path);
+    ASSERT_TRUE(std::regex_search(text, match, std::regex("// expect: ([^\n]*)"))) << file << " has no // expect: line";
+    const CliRun r = runShadowlab(args, dir_);
+    EXPECT_EQ(r.code, 2) << r.err;
+    EXPECT_EQ(r.err.rfind(path + ": ", 0), 0u) << "message must start with the file path:\n" << r.err;
+    EXPECT_NE(r.err.find(match[1].str()), std::string::npos) << "got:      " << r.err << "expected: " << match[1].str();
+    EXPECT_EQ(r.err.find("json.exception"), std::string::npos) << "nlohmann's raw text reached the user:\n" << r.err;
+    EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << "one line per error:\n" << r.err;
+    EXPECT_EQ(r.out, "");
+  }
+
+  fs::path dir_;
+};
+
+}  // namespace
+
+TEST_F(JsonBadInput, ToleranceFileWithAKeyTwice) {
+  const std::string out = (dir_ / "gate.json").string();
+  expectRejected("tolerances_duplicate_key.json", "gate '" + kGoodMetrics + "' --baseline '" + kGoodMetrics +
+                                                      "' --tolerances '" + kBadInput + "tolerances_duplicate_key.json' --json '" +
+                                                      out + "'");
+  EXPECT_FALSE(fs::exists(out)) << "nothing written on bad input";
+}
+
+TEST_F(JsonBadInput, ResultsFileWithAKeyTwice) {
+  expectRejected("results_duplicate_key.json",
+                 "gate '" + kBadInput + "results_duplicate_key.json' --baseline '" + kGoodMetrics + "'");
+}
+
+TEST_F(JsonBadInput, MetricsBaselineWithAKeyTwice) {
+  // The baseline side: --update-baseline must not rewrite it either.
+  const std::string before = slurp(kBadInput + "metrics_duplicate_key.json");
+  expectRejected("metrics_duplicate_key.json",
+                 "gate '" + kGoodMetrics + "' --baseline '" + kBadInput + "metrics_duplicate_key.json' --update-baseline");
+  EXPECT_EQ(slurp(kBadInput + "metrics_duplicate_key.json"), before);
+}
+
+TEST_F(JsonBadInput, SweepFileWithAKeyTwice) {
+  const fs::path out = dir_ / "sweep";
+  expectRejected("sweep_duplicate_key.json",
+                 "sweep --sweep '" + kBadInput + "sweep_duplicate_key.json' --no-report -o '" + out.string() + "'");
+  EXPECT_FALSE(fs::exists(out)) << "nothing written on bad input";
+}
