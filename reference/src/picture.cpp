@@ -35,7 +35,7 @@ std::vector<uint8_t> referencePicture(const Scene& scene, const Frame& frame) {
 
   std::unordered_map<uint32_t, const Object*> objectsById;
   for (const Object& object : scene.objects) objectsById[object.id] = &object;
-  const Light* light = scene.lights.empty() ? nullptr : &scene.lights.front();
+  const Light* light = scene.findLight(scene.lightOrDefault(""));
   const std::vector<float>* vis = nullptr;
   if (light && frame.has("light." + light->name + ".vis")) vis = &frame.get("light." + light->name + ".vis");
   struct ProjectorPlanes {

@@ -18,19 +18,14 @@ Buffer::Buffer(const Context& context, VkDeviceSize size, VkBufferUsageFlags usa
 
   VkMemoryRequirements req;
   vkGetBufferMemoryRequirements(device, buffer, &req);
-  VkMemoryAllocateInfo alloc{VK_STRUCTURE_TYPE_MEMORY_ALLOCATE_INFO};
-  alloc.allocationSize = req.size;
   // Cached memory makes the CPU readback of the output planes a plain memcpy speed read.
-  alloc.memoryTypeIndex = context.memoryType(req.memoryTypeBits, VK_MEMORY_PROPERTY_HOST_VISIBLE_BIT,
-                                             VK_MEMORY_PROPERTY_HOST_COHERENT_BIT |
-                                                 VK_MEMORY_PROPERTY_HOST_CACHED_BIT);
-  VkDeviceMemory memory;
-  VK_CHECK(vkAllocateMemory(device, &alloc, nullptr, &memory));
-  memory_ = Memory(device, memory);
-  VK_CHECK(vkBindBufferMemory(device, buffer, memory, 0));
-  VK_CHECK(vkMapMemory(device, memory, 0, VK_WHOLE_SIZE, 0, &mapped_));
+  uint32_t memoryType = 0;
+  memory_ = context.allocate(req, VK_MEMORY_PROPERTY_HOST_VISIBLE_BIT,
+                             VK_MEMORY_PROPERTY_HOST_COHERENT_BIT | VK_MEMORY_PROPERTY_HOST_CACHED_BIT, &memoryType);
+  VK_CHECK(vkBindBufferMemory(device, buffer, memory_.get(), 0));
+  VK_CHECK(vkMapMemory(device, memory_.get(), 0, VK_WHOLE_SIZE, 0, &mapped_));
   context.adviseHugePages(mapped_, req.size);
-  coherent_ = context.hostCoherent(alloc.memoryTypeIndex);
+  coherent_ = context.hostCoherent(memoryType);
 }
 
 void Buffer::upload(const void* data, size_t bytes, size_t offset) {

@@ -248,4 +248,15 @@ uint32_t Context::memoryType(uint32_t typeBits, VkMemoryPropertyFlags required,
   throw DriverError("no Vulkan memory type with the required properties");
 }
 
+Memory Context::allocate(const VkMemoryRequirements& requirements, VkMemoryPropertyFlags required,
+                         VkMemoryPropertyFlags preferred, uint32_t* typeIndex) const {
+  VkMemoryAllocateInfo alloc{VK_STRUCTURE_TYPE_MEMORY_ALLOCATE_INFO};
+  alloc.allocationSize = requirements.size;
+  alloc.memoryTypeIndex = memoryType(requirements.memoryTypeBits, required, preferred);
+  VkDeviceMemory memory;
+  VK_CHECK(vkAllocateMemory(device_, &alloc, nullptr, &memory));
+  if (typeIndex) *typeIndex = alloc.memoryTypeIndex;
+  return Memory(device_, memory);
+}
+
 }  // namespace shadowlab::vk

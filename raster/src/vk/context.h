@@ -39,6 +39,10 @@ class Context {
   // First memory type allowed by `typeBits` having all of `required` (and preferring `preferred`).
   uint32_t memoryType(uint32_t typeBits, VkMemoryPropertyFlags required,
                       VkMemoryPropertyFlags preferred = 0) const;
+  // The one place memory is allocated: `requirements.size` bytes of memoryType(...)'s type;
+  // `typeIndex` (optional) receives the type chosen.
+  Memory allocate(const VkMemoryRequirements& requirements, VkMemoryPropertyFlags required,
+                  VkMemoryPropertyFlags preferred = 0, uint32_t* typeIndex = nullptr) const;
   bool hostVisible(uint32_t memoryType) const {
     return memory_.memoryTypes[memoryType].propertyFlags & VK_MEMORY_PROPERTY_HOST_VISIBLE_BIT;
   }

@@ -36,18 +36,15 @@ Image::Image(const Context& context, int width, int height, int layers, VkFormat
 
   VkMemoryRequirements req;
   vkGetImageMemoryRequirements(device, image, &req);
-  VkMemoryAllocateInfo alloc{VK_STRUCTURE_TYPE_MEMORY_ALLOCATE_INFO};
-  alloc.allocationSize = req.size;
-  alloc.memoryTypeIndex =
-      hostReadable ? context.memoryType(req.memoryTypeBits, VK_MEMORY_PROPERTY_HOST_VISIBLE_BIT,
-                                        VK_MEMORY_PROPERTY_HOST_CACHED_BIT | VK_MEMORY_PROPERTY_HOST_COHERENT_BIT)
-                   : context.memoryType(req.memoryTypeBits, 0, VK_MEMORY_PROPERTY_DEVICE_LOCAL_BIT);
-  VkDeviceMemory memory;
-  VK_CHECK(vkAllocateMemory(device, &alloc, nullptr, &memory));
-  memory_ = Memory(device, memory);
+  uint32_t memoryType = 0;
+  memory_ = hostReadable ? context.allocate(req, VK_MEMORY_PROPERTY_HOST_VISIBLE_BIT,
+                                            VK_MEMORY_PROPERTY_HOST_CACHED_BIT | VK_MEMORY_PROPERTY_HOST_COHERENT_BIT,
+                                            &memoryType)
+                         : context.allocate(req, 0, VK_MEMORY_PROPERTY_DEVICE_LOCAL_BIT, &memoryType);
+  VkDeviceMemory memory = memory_.get();
   VK_CHECK(vkBindImageMemory(device, image, memory, 0));
   if (!hostReadable && context.properties().deviceType == VK_PHYSICAL_DEVICE_TYPE_CPU &&
-      context.hostVisible(alloc.memoryTypeIndex)) {
+      context.hostVisible(memoryType)) {
     // Mapped only to reach the pages (Context::adviseHugePages); a GPU's memory is left alone.
     void* p = nullptr;
     if (vkMapMemory(device, memory, 0, VK_WHOLE_SIZE, 0, &p) == VK_SUCCESS) {
@@ -63,7 +60,7 @@ Image::Image(const Context& context, int width, int height, int layers, VkFormat
     context.adviseHugePages(mapped_, req.size);
     mapped_ = static_cast<char*>(mapped_) + layout.offset;
     rowPitch_ = size_t(layout.rowPitch);
-    coherent_ = context.hostCoherent(alloc.memoryTypeIndex);
+    coherent_ = context.hostCoherent(memoryType);
   }
 
   auto makeView = [&](VkImageViewType type, int first, int count) {
