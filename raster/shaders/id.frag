@@ -1,4 +1,7 @@
 #version 460
+#extension GL_GOOGLE_include_directive : require
+#define SHADOWLAB_ABI_NO_PARAMS
+#include "shadowlab/raster/resolve_abi.h"
 // Writes the global triangle index + 1 (0: nothing drawn) beside the depth, one uint: the global
 // index (the object's triangle base + its primitive id) lets the resolve pass find the triangle's
 // plane with one fetch; the readback turns it back into the object and its primitive id. One
@@ -32,9 +35,9 @@ struct MaterialGpu {
   float pad2;
 };
 
-layout(std430, set = 0, binding = 0) readonly buffer TriangleMaterials { uint triangleMaterial[]; };
-layout(std430, set = 0, binding = 1) readonly buffer Materials { MaterialGpu materials[]; };
-layout(std430, set = 0, binding = 2) readonly buffer AlphaTexels { float alphaTexels[]; };
+layout(std430, set = 0, binding = kBindingTriangleMaterials) readonly buffer TriangleMaterials { uint triangleMaterial[]; };
+layout(std430, set = 0, binding = kBindingMaterials) readonly buffer Materials { MaterialGpu materials[]; };
+layout(std430, set = 0, binding = kBindingAlphaTexels) readonly buffer AlphaTexels { float alphaTexels[]; };
 
 void main() {
   if (!kMaterialTests) {

@@ -9,17 +9,13 @@
 
 #include <glm/glm.hpp>
 
+#include "shadowlab/raster/resolve_params.h"
 #include "shadowlab/scenes/method.h"
 #include "shadowlab/scenes/scene.h"
 
 namespace shadowlab::raster {
 
-struct MapLayer {
-  glm::mat4 texFromWorld{1.0f};
-  // World size of one texel at w = 1 (orthographic: everywhere; fit=lispsm: an upper bound of the
-  // texel's larger side per unit of w, see lispsm.h).
-  float texelWorldPerW = 0;
-};
+// MapLayer: resolve_params.h.
 
 struct LightSpace {
   // directional: 1, or one per cascade (fit=cascades); spot: 1; point: 6 cube faces (+X -X +Y -Y +Z -Z)

@@ -15,16 +15,18 @@
 #include <chrono>
 #include <cmath>
 #include <cstring>
+#include <iterator>
 #include <map>
 #include <set>
+#include <stdexcept>
 #include <thread>
 #include <tuple>
-
-#include <malloc.h>
 
 #include <glm/gtc/matrix_inverse.hpp>
 
 #include "light_space.h"
+#include "shadowlab/raster/resolve_abi.h"
+#include "shadowlab/raster/resolve_params.h"
 #include "scene_gpu.h"
 #include "shadowlab/scenes/error.h"
 #include "shadowlab/scenes/io.h"
@@ -46,30 +48,14 @@ namespace shadowlab {
 
 namespace {
 
-constexpr int kMaxLayers = 16;  // 8 cascades (or 6 cube faces) + 8 projectors
-constexpr int kMaxProjectors = 8;
-constexpr int kMaxTaps = 64;
-constexpr int kProjectorChannels = 5;
+namespace abi = raster::abi;
+constexpr int kProjectorChannels = abi::kProjectorChannels;
 // The resolve pass's color attachments (resolve.frag's outA, outB).
 constexpr int kResolveAttachments = 2;
 constexpr VkFormat kResolveFormats[kResolveAttachments] = {VK_FORMAT_R32G32B32A32_SFLOAT,
                                                            VK_FORMAT_R32G32B32A32_SFLOAT};
 constexpr VkFormat kIdFormat = VK_FORMAT_R32_UINT;  // global triangle + 1, 0: nothing
 constexpr VkFormat kCameraDepthFormat = VK_FORMAT_D32_SFLOAT;
-
-// Mirrors `Params` in resolve.frag (std140: every member is 16-byte aligned already).
-struct Params {
-  glm::mat4 texFromWorld[kMaxLayers];
-  glm::vec4 layerInfo[kMaxLayers];
-  glm::vec4 lightPosType, lightDirCos, cameraOrigin, rayX, rayY, rayC, bias, depthBias;
-  glm::ivec4 sizes, sizes2;
-  glm::ivec4 projector[kMaxProjectors];
-  glm::vec4 poisson[kMaxTaps];
-  glm::vec4 projectorPos[kMaxProjectors];
-  glm::vec4 cascadeView;      // xyz fit camera forward (unit, world), w cascade count (0: not cascaded)
-  glm::vec4 cascadeFar[2];    // C_1..C_8: far view depth of each cascade, world units
-  glm::vec4 cascadeInfo;      // x blend band (fraction of a cascade's depth range), y C_0, z fit-camera view depth of the eval camera origin
-};
 
 struct DrawPush {
   glm::mat4 clipFromWorld;
@@ -85,17 +71,6 @@ VkFormat vkDepthFormat(DepthFormat f) {
   return VK_FORMAT_D32_SFLOAT;
 }
 
-// Smallest resolvable depth difference r of a UNORM format (Vulkan: 2^-n); 0 marks the float
-// format, whose r depends on the depth's exponent and is computed per pixel in the shader.
-float depthResolution(DepthFormat f) {
-  switch (f) {
-    case DepthFormat::D16: return std::ldexp(1.0f, -16);
-    case DepthFormat::D24: return std::ldexp(1.0f, -24);
-    case DepthFormat::D32F: return 0.0f;
-  }
-  return 0.0f;
-}
-
 VkCullModeFlags vkCull(CullMode c) {
   switch (c) {
     case CullMode::Back: return VK_CULL_MODE_BACK_BIT;
@@ -105,35 +80,33 @@ VkCullModeFlags vkCull(CullMode c) {
   return VK_CULL_MODE_NONE;
 }
 
-// A fixed Poisson disc, progressive (Mitchell's best candidate, fixed seed): any prefix of
-// `taps` points is itself well spread, so filter.taps can be swept without a new table.
-std::vector<glm::vec2> poissonDisc() {
-  std::vector<glm::vec2> points;
-  uint32_t state = 12345u;
-  auto next = [&state] {
-    state = state * 1664525u + 1013904223u;
-    return float(state >> 8) / float(1u << 24);
-  };
-  while (points.size() < size_t(kMaxTaps)) {
-    glm::vec2 best(0);
-    float bestDistance = -1;
-    int candidates = int(points.size()) * 4 + 1;
-    for (int c = 0; c < candidates; ++c) {
-      glm::vec2 p;
-      do p = glm::vec2(next(), next()) * 2.0f - 1.0f;
-      while (glm::dot(p, p) > 1.0f);
-      float d = 1e9f;
-      for (auto& q : points) d = std::min(d, glm::dot(p - q, p - q));
-      if (d > bestDistance) bestDistance = d, best = p;
-    }
-    points.push_back(best);
-  }
-  return points;
-}
-
 double msSince(std::chrono::steady_clock::time_point t0) {
   return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
 }
+
+// The descriptor set's bindings, from resolve_abi.h's table.
+enum class DescriptorKind { StorageBuffer, UniformBuffer, CombinedImageSampler, UniformTexelBuffer };
+
+VkDescriptorType vkDescriptorType(DescriptorKind kind) {
+  switch (kind) {
+    case DescriptorKind::StorageBuffer: return VK_DESCRIPTOR_TYPE_STORAGE_BUFFER;
+    case DescriptorKind::UniformBuffer: return VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER;
+    case DescriptorKind::CombinedImageSampler: return VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER;
+    case DescriptorKind::UniformTexelBuffer: return VK_DESCRIPTOR_TYPE_UNIFORM_TEXEL_BUFFER;
+  }
+  return VK_DESCRIPTOR_TYPE_STORAGE_BUFFER;
+}
+
+struct BindingRow {
+  uint32_t binding;
+  VkDescriptorType type;
+};
+#define SHADOWLAB_BINDING_ROW(name, binding, kind) {binding, vkDescriptorType(DescriptorKind::kind)},
+const BindingRow kBindings[] = {SHADOWLAB_RESOLVE_BINDINGS(SHADOWLAB_BINDING_ROW)};
+#undef SHADOWLAB_BINDING_ROW
+constexpr uint32_t kBindingCount = uint32_t(std::size(kBindings));
+// Every binding is read by the fragment shaders (id.frag: 0..2, resolve.frag: all).
+constexpr VkShaderStageFlags kBindingStages = VK_SHADER_STAGE_FRAGMENT_BIT;
 
 
 }  // namespace
@@ -156,12 +129,10 @@ struct Rasterizer::Impl {
   vk::QueryPool queries;
   // Keyed by what needs a new pipeline: (depth format, depth clamp, material tests, depth bias).
   std::map<std::tuple<VkFormat, bool, bool, bool>, vk::PipelineHandle> idPipelines;
-  // resolve.frag's specialization constants: filter, projector count, cascaded, blend, float depth,
-  // light type (0 directional, 1 spot, 2 point, 3 none), affine light layers.
-  using ResolveKey = std::array<uint32_t, 7>;
+  // Keyed by resolve.frag's specialization constants (resolve_abi.h's kSpec*).
+  using ResolveKey = raster::ResolveSpecialization;
   std::map<ResolveKey, vk::PipelineHandle> resolvePipelines;
   std::set<std::string> warmed;
-  std::vector<glm::vec2> poisson = poissonDisc();
 
   std::unique_ptr<raster::SceneGpu> scene;
   vk::Image mapDepth, mapIds, cameraDepth, cameraIds;
@@ -169,6 +140,28 @@ struct Rasterizer::Impl {
   vk::Buffer params, output;  // output: the projector channels
 
   explicit Impl(const RasterDeviceOptions& options);
+
+  // render()'s steps (defined beside render(), in its order).
+  struct FramePipelines {
+    IdPipelines ids;
+    VkPipeline resolve = VK_NULL_HANDLE;
+    bool firstUse = false;  // lavapipe compiles at first use: run once untimed
+  };
+  struct PassTimes {
+    double shadowGpuMs = 0;   // pass 1
+    double resolveGpuMs = 0;  // pass 3 (pass 2's time is visibilityGpuMs)
+  };
+  const Light* validate(const Scene& scene, const Method& method, const std::string& lightName) const;
+  int maxMapSize() const;
+  void upload(const Scene& scene);
+  void prepareTargets(const Scene& scene, const Method& method, const raster::FrameLayers& layers);
+  std::vector<raster::ProjectorTexels> projectorTexels() const;
+  FramePipelines pipelinesFor(const Method& method, const raster::FrameLayers& layers,
+                              const raster::ResolveSpecialization& spec);
+  bool submit(const Scene& scene, const Method& method, const raster::FrameLayers& layers,
+              const FramePipelines& pipes);  // returns whether it drew the visibility buffer
+  PassTimes readTimestamps(bool drewVisibility);
+
   void createLayouts();
   VkPipeline idPipeline(VkFormat format, bool depthClamp, bool materialTests, bool depthBias);
   VkPipeline resolvePipeline(const ResolveKey& key);
@@ -189,11 +182,6 @@ struct Rasterizer::Impl {
 };
 
 Rasterizer::Impl::Impl(const RasterDeviceOptions& options) {
-  // Every render hands out ~100 MB of fresh channel planes (1080p) that the caller frees soon
-  // after: keep freed memory in the heap for the next frame instead of returning it to the OS,
-  // where each reuse would page-fault every 4 KiB back in (26k faults, ~40 ms at 1080p).
-  mallopt(M_MMAP_THRESHOLD, 32 << 20);
-  mallopt(M_TRIM_THRESHOLD, 1 << 30);
   vk::ContextOptions co;
   co.device = options.device;
   co.validation = options.validation;
@@ -230,23 +218,17 @@ Rasterizer::Impl::Impl(const RasterDeviceOptions& options) {
   VkQueryPool pool;
   VK_CHECK(vkCreateQueryPool(device, &q, nullptr, &pool));
   queries = vk::QueryPool(device, pool);
-  params = vk::Buffer(*context, sizeof(Params), VK_BUFFER_USAGE_UNIFORM_BUFFER_BIT);
+  params = vk::Buffer(*context, sizeof(abi::Params), VK_BUFFER_USAGE_UNIFORM_BUFFER_BIT);
 }
 
 void Rasterizer::Impl::createLayouts() {
   VkDevice device = context->device();
   std::vector<VkDescriptorSetLayoutBinding> bindings;
-  auto add = [&](uint32_t binding, VkDescriptorType type, VkShaderStageFlags stages) {
-    bindings.push_back({binding, type, 1, stages, nullptr});
-  };
-  const VkShaderStageFlags fragCompute = VK_SHADER_STAGE_FRAGMENT_BIT | VK_SHADER_STAGE_COMPUTE_BIT;
-  add(0, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, fragCompute);
-  add(1, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, fragCompute);
-  add(2, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, fragCompute);
-  add(3, VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER, fragCompute);
-  for (uint32_t b = 4; b <= 7; ++b) add(b, VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER, fragCompute);
-  add(8, VK_DESCRIPTOR_TYPE_UNIFORM_TEXEL_BUFFER, fragCompute);  // triangle planes
-  for (uint32_t b = 9; b <= 10; ++b) add(b, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, fragCompute);
+  std::map<VkDescriptorType, uint32_t> typeCounts;  // the pool holds exactly the set's descriptors
+  for (const BindingRow& row : kBindings) {
+    bindings.push_back({row.binding, row.type, 1, kBindingStages, nullptr});
+    ++typeCounts[row.type];
+  }
   VkDescriptorSetLayoutCreateInfo info{VK_STRUCTURE_TYPE_DESCRIPTOR_SET_LAYOUT_CREATE_INFO};
   info.bindingCount = uint32_t(bindings.size());
   info.pBindings = bindings.data();
@@ -264,14 +246,12 @@ void Rasterizer::Impl::createLayouts() {
   VK_CHECK(vkCreatePipelineLayout(device, &pl, nullptr, &pipeLayout));
   pipelineLayout = vk::PipelineLayout(device, pipeLayout);
 
-  VkDescriptorPoolSize sizes[] = {{VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, 5},
-                                  {VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER, 1},
-                                  {VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER, 4},
-                                  {VK_DESCRIPTOR_TYPE_UNIFORM_TEXEL_BUFFER, 1}};
+  std::vector<VkDescriptorPoolSize> sizes;
+  for (const auto& [type, count] : typeCounts) sizes.push_back({type, count});
   VkDescriptorPoolCreateInfo dp{VK_STRUCTURE_TYPE_DESCRIPTOR_POOL_CREATE_INFO};
   dp.maxSets = 1;
-  dp.poolSizeCount = 4;
-  dp.pPoolSizes = sizes;
+  dp.poolSizeCount = uint32_t(sizes.size());
+  dp.pPoolSizes = sizes.data();
   VkDescriptorPool pool;
   VK_CHECK(vkCreateDescriptorPool(device, &dp, nullptr, &pool));
   descriptorPool = vk::DescriptorPool(device, pool);
@@ -340,32 +320,47 @@ void Rasterizer::Impl::ensureImages(int mapSize, VkFormat mapFormat, int layers,
 
 void Rasterizer::Impl::writeDescriptors() {
   const raster::SceneGpu& s = *scene;
-  const vk::Buffer* buffers[11] = {&s.triangleMaterials, &s.materials, &s.alphaTexels, &params,
-                                   nullptr, nullptr, nullptr, nullptr,
-                                   nullptr, &s.projectorTexels, &output};
-  VkBufferView planes = s.trianglePlanesView.get();
-  VkDescriptorBufferInfo bufferInfos[11]{};
-  VkDescriptorImageInfo imageInfos[4] = {
-      {nearestSampler.get(), mapDepth.arrayView(), VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL},
-      {compareSampler.get(), mapDepth.arrayView(), VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL},
-      {nearestSampler.get(), mapIds.arrayView(), VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL},
-      {nearestSampler.get(), cameraIds.layerView(0), VK_IMAGE_LAYOUT_GENERAL}};
+  // What each binding of resolve_abi.h's table holds: a buffer, an image with its sampler, or a
+  // texel buffer view (exactly one per binding, checked below).
+  struct Resource {
+    const vk::Buffer* buffer = nullptr;
+    VkDescriptorImageInfo image{};
+    VkBufferView texelView = VK_NULL_HANDLE;
+  };
+  Resource resources[kBindingCount];
+  auto image = [](const vk::Sampler& sampler, VkImageView view, VkImageLayout layout) {
+    return VkDescriptorImageInfo{sampler.get(), view, layout};
+  };
+  resources[abi::kBindingTriangleMaterials].buffer = &s.triangleMaterials;
+  resources[abi::kBindingMaterials].buffer = &s.materials;
+  resources[abi::kBindingAlphaTexels].buffer = &s.alphaTexels;
+  resources[abi::kBindingParams].buffer = &params;
+  resources[abi::kBindingMapDepth].image =
+      image(nearestSampler, mapDepth.arrayView(), VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL);
+  resources[abi::kBindingMapShadow].image =
+      image(compareSampler, mapDepth.arrayView(), VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL);
+  resources[abi::kBindingMapIds].image = image(nearestSampler, mapIds.arrayView(), VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL);
+  resources[abi::kBindingCameraIds].image = image(nearestSampler, cameraIds.layerView(0), VK_IMAGE_LAYOUT_GENERAL);
+  resources[abi::kBindingTrianglePlanes].texelView = s.trianglePlanesView.get();
+  resources[abi::kBindingProjectorTexels].buffer = &s.projectorTexels;
+  resources[abi::kBindingOutPlanes].buffer = &output;
+
+  VkDescriptorBufferInfo bufferInfos[kBindingCount]{};
   std::vector<VkWriteDescriptorSet> writes;
-  for (uint32_t b = 0; b < 11; ++b) {
+  for (const BindingRow& row : kBindings) {
+    Resource& r = resources[row.binding];
     VkWriteDescriptorSet w{VK_STRUCTURE_TYPE_WRITE_DESCRIPTOR_SET};
     w.dstSet = descriptorSet;
-    w.dstBinding = b;
+    w.dstBinding = row.binding;
     w.descriptorCount = 1;
-    if (b >= 4 && b <= 7) {
-      w.descriptorType = VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER;
-      w.pImageInfo = &imageInfos[b - 4];
-    } else if (b == 8) {
-      w.descriptorType = VK_DESCRIPTOR_TYPE_UNIFORM_TEXEL_BUFFER;
-      w.pTexelBufferView = &planes;
-    } else {
-      bufferInfos[b] = {buffers[b]->get(), 0, VK_WHOLE_SIZE};
-      w.descriptorType = b == 3 ? VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER : VK_DESCRIPTOR_TYPE_STORAGE_BUFFER;
-      w.pBufferInfo = &bufferInfos[b];
+    w.descriptorType = row.type;
+    switch (row.type) {
+      case VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER: w.pImageInfo = &r.image; break;
+      case VK_DESCRIPTOR_TYPE_UNIFORM_TEXEL_BUFFER: w.pTexelBufferView = &r.texelView; break;
+      default:
+        if (!r.buffer) throw std::logic_error("resolve binding " + std::to_string(row.binding) + " has no buffer");
+        bufferInfos[row.binding] = {r.buffer->get(), 0, VK_WHOLE_SIZE};
+        w.pBufferInfo = &bufferInfos[row.binding];
     }
     writes.push_back(w);
   }
@@ -624,10 +619,7 @@ Rasterizer& Rasterizer::operator=(Rasterizer&&) noexcept = default;
 
 std::string Rasterizer::deviceName() const { return impl_->context->deviceName(); }
 
-int Rasterizer::maxMapSize() const {
-  const VkPhysicalDeviceLimits& l = impl_->context->properties().limits;
-  return int(std::min({l.maxImageDimension2D, l.maxFramebufferWidth, l.maxFramebufferHeight}));
-}
+int Rasterizer::maxMapSize() const { return impl_->maxMapSize(); }
 
 int Rasterizer::validationMessages() const { return impl_->context->validationMessages(); }
 
@@ -638,201 +630,186 @@ void Rasterizer::recycle(Frame&& frame) {
   frame = Frame();
 }
 
-Frame Rasterizer::render(const Scene& scene, const Method& method, const std::string& lightName,
-                         RasterTimings* timings, const Camera* fitCamera) {
-  auto t0 = std::chrono::steady_clock::now();
-  Impl& im = *impl_;
-  const std::string where = scene.path.empty() ? scene.name : scene.path;
+// ---- render()'s steps, in the order it calls them ----
 
-  // ---- everything that can be wrong with the request, before any GPU work ----
-  const Light* light = nullptr;
-  if (!lightName.empty()) {
-    light = scene.findLight(lightName);
+// Validation: everything that can be wrong with the request, before any GPU work. Returns the
+// light to render (nullptr: the scene's projectors only).
+const Light* Rasterizer::Impl::validate(const Scene& scene, const Method& method, const std::string& lightName) const {
+  const std::string where = scene.path.empty() ? scene.name : scene.path;
+  const int maxSize = maxMapSize();
+  const std::string chosen = scene.lightOrDefault(lightName);
+  const Light* light = chosen.empty() ? nullptr : scene.findLight(chosen);
+  if (!chosen.empty()) {
     if (!light) {
       std::string names;
       for (auto& l : scene.lights) names += (names.empty() ? "" : ", ") + l.name;
       throw InputError(formatError(where, "", "no light named \"" + lightName + "\"; expected one of: " +
                                                   (names.empty() ? "(the scene has no lights)" : names)));
     }
-  } else if (!scene.lights.empty()) {
-    light = &scene.lights.front();
   }
-  if (method.mapSize < 16 || method.mapSize > maxMapSize())
+  if (method.mapSize < 16 || method.mapSize > maxSize)
     throw InputError(formatError("method", "map.size", "got " + std::to_string(method.mapSize) +
-                                                           "; expected 16.." + std::to_string(maxMapSize()) +
+                                                           "; expected 16.." + std::to_string(maxSize) +
                                                            " (the device's largest image)"));
   if (method.filter == Filter::Pcf && (method.filterSize < 1 || method.filterSize % 2 == 0 || method.filterSize > 15))
     throw InputError(formatError("method", "filter.size", "got " + std::to_string(method.filterSize) +
                                                               "; expected an odd number 3..15"));
-  if (method.filter == Filter::Poisson && (method.filterTaps < 1 || method.filterTaps > kMaxTaps))
+  if (method.filter == Filter::Poisson && (method.filterTaps < 1 || method.filterTaps > abi::kMaxTaps))
     throw InputError(formatError("method", "filter.taps", "got " + std::to_string(method.filterTaps) +
-                                                              "; expected 1..64"));
+                                                              "; expected 1.." + std::to_string(abi::kMaxTaps)));
   if (method.filter == Filter::Poisson && !(method.filterRadius > 0.0f && method.filterRadius <= 32.0f))
     throw InputError(formatError("method", "filter.radius", "got " + std::to_string(method.filterRadius) +
                                                                 "; expected > 0 and <= 32 texels"));
-  if (scene.projectors.size() > size_t(kMaxProjectors))
+  if (scene.projectors.size() > size_t(abi::kMaxProjectors))
     throw InputError(formatError(where, "/projectors", "got " + std::to_string(scene.projectors.size()) +
-                                                           " projectors; the rasterizer renders at most 8"));
+                                                           " projectors; the rasterizer renders at most " +
+                                                           std::to_string(abi::kMaxProjectors)));
   const Camera& camera = scene.camera;
-  const Camera& fit = fitCamera ? *fitCamera : scene.camera;  // what the light frustum follows
-  if (camera.width < 1 || camera.height < 1 || camera.width > maxMapSize() || camera.height > maxMapSize())
+  if (camera.width < 1 || camera.height < 1 || camera.width > maxSize || camera.height > maxSize)
     throw InputError(formatError(where, "/camera", "image size " + std::to_string(camera.width) + "x" +
                                                        std::to_string(camera.height) + " is not renderable"));
+  VkFormatProperties fp;
+  vkGetPhysicalDeviceFormatProperties(context->physical(), vkDepthFormat(method.mapFormat), &fp);
+  VkFormatFeatureFlags need = VK_FORMAT_FEATURE_DEPTH_STENCIL_ATTACHMENT_BIT | VK_FORMAT_FEATURE_SAMPLED_IMAGE_BIT;
+  if ((fp.optimalTilingFeatures & need) != need)
+    throw InputError(formatError("method", "map.format", "got " + toString(method.mapFormat) + ", which device " +
+                                                             context->deviceName() +
+                                                             " cannot render and sample; expected another format"));
+  return light;
+}
+
+int Rasterizer::Impl::maxMapSize() const {
+  const VkPhysicalDeviceLimits& l = context->properties().limits;
+  return int(std::min({l.maxImageDimension2D, l.maxFramebufferWidth, l.maxFramebufferHeight}));
+}
+
+// Upload: the scene's geometry, materials and projector images (cached by content hash).
+void Rasterizer::Impl::upload(const Scene& sc) {
+  std::string key = raster::sceneKey(sc);
+  if (scene && scene->hash == key) return;
+  scene.reset();
+  visibilityKey.clear();
+  scene = std::make_unique<raster::SceneGpu>(raster::uploadScene(*context, sc, key));
+}
+
+// Targets: the map layers, the camera's images, the projector planes, the descriptor set.
+void Rasterizer::Impl::prepareTargets(const Scene& sc, const Method& method, const raster::FrameLayers& layers) {
+  const Camera& camera = sc.camera;
+  ensureImages(method.mapSize, vkDepthFormat(method.mapFormat), std::max(1, int(layers.layers.size())), camera.width,
+               camera.height);
+  const size_t channelCount = size_t(kProjectorChannels) * sc.projectors.size();
+  size_t outputBytes =
+      std::max<size_t>(1, channelCount * size_t(camera.width) * size_t(camera.height)) * sizeof(float);
+  if (output.size() != outputBytes) output = vk::Buffer(*context, outputBytes, VK_BUFFER_USAGE_STORAGE_BUFFER_BIT);
+  raster::updatePlanes(*scene, glm::dvec3(camera.position));
+  writeDescriptors();
+}
+
+// Where each uploaded projector image lies in the projector texel table.
+std::vector<raster::ProjectorTexels> Rasterizer::Impl::projectorTexels() const {
+  std::vector<raster::ProjectorTexels> out;
+  for (const raster::ProjectorImage& pi : scene->projectors) out.push_back({pi.firstTexel, pi.width, pi.height});
+  return out;
+}
+
+// Pipelines: the id writers for the map's format and clamp, the resolve for its specialization.
+Rasterizer::Impl::FramePipelines Rasterizer::Impl::pipelinesFor(const Method& method, const raster::FrameLayers& layers,
+                                                                 const raster::ResolveSpecialization& spec) {
   VkFormat mapFormat = vkDepthFormat(method.mapFormat);
-  {
-    VkFormatProperties fp;
-    vkGetPhysicalDeviceFormatProperties(im.context->physical(), mapFormat, &fp);
-    VkFormatFeatureFlags need = VK_FORMAT_FEATURE_DEPTH_STENCIL_ATTACHMENT_BIT | VK_FORMAT_FEATURE_SAMPLED_IMAGE_BIT;
-    if ((fp.optimalTilingFeatures & need) != need)
-      throw InputError(formatError("method", "map.format", "got " + toString(method.mapFormat) + ", which device " +
-                                                               deviceName() + " cannot render and sample; expected another format"));
-  }
-
-  // ---- scene upload (cached by content hash) ----
-  std::string key = raster::sceneKey(scene);
-  if (!im.scene || im.scene->hash != key) {
-    im.scene.reset();
-    im.visibilityKey.clear();
-    im.scene = std::make_unique<raster::SceneGpu>(raster::uploadScene(*im.context, scene, key));
-  }
-
-  // ---- map layers: the light's, then one per projector ----
-  raster::LightSpace lightSpace;
-  if (light) lightSpace = raster::fitLight(scene, *light, method, fit);
-  std::vector<raster::MapLayer> layers = lightSpace.layers;
-  int lightLayers = int(layers.size());
-  for (const Projector& p : scene.projectors) layers.push_back(raster::projectorLayer(p, method.mapSize));
-  std::vector<glm::mat4> layerClip;
-  for (auto& l : layers) layerClip.push_back(raster::clipFromTex() * l.texFromWorld);
-  int width = camera.width, height = camera.height;
-  int projectorCount = int(scene.projectors.size());
-  int channelCount = kProjectorChannels * projectorCount;
-
-  im.ensureImages(method.mapSize, mapFormat, std::max(1, int(layers.size())), width, height);
-  size_t outputBytes = std::max<size_t>(1, size_t(channelCount) * size_t(width) * size_t(height)) * sizeof(float);
-  if (im.output.size() != outputBytes)
-    im.output = vk::Buffer(*im.context, outputBytes, VK_BUFFER_USAGE_STORAGE_BUFFER_BIT);
-  raster::updatePlanes(*im.scene, glm::dvec3(camera.position));
-  im.writeDescriptors();
-
-  // ---- parameters ----
-  Params prm{};
-  for (size_t i = 0; i < layers.size(); ++i) {
-    prm.texFromWorld[i] = layers[i].texFromWorld;
-    prm.layerInfo[i] = glm::vec4(layers[i].texelWorldPerW, 0, 0, 0);
-  }
-  if (light) {
-    float type = light->type == LightType::Directional ? 0.0f : light->type == LightType::Spot ? 1.0f : 2.0f;
-    prm.lightPosType = glm::vec4(light->position, type);
-    prm.lightDirCos = glm::vec4(glm::normalize(light->direction), std::cos(glm::radians(0.5f * light->coneDeg)));
-  } else {
-    prm.lightPosType = glm::vec4(0, 0, 0, -1.0f);
-  }
-  glm::mat4 cameraClip = camera.clipFromView() * camera.viewFromWorld();
-  {
-    // Rays through image points, from the inverse of the very matrix that rasterized the
-    // visibility buffer: dir(x, y) = rayX x + rayY y + rayC (affine: w of an unprojected
-    // far-plane point does not depend on x, y).
-    glm::dmat4 inv = glm::inverse(glm::dmat4(cameraClip));
-    glm::dvec3 origin(camera.position);
-    auto dirAt = [&](double x, double y) {
-      glm::dvec4 f = inv * glm::dvec4(2.0 * x / width - 1.0, 2.0 * y / height - 1.0, 1.0, 1.0);
-      return glm::dvec3(f) / f.w - origin;
-    };
-    glm::dvec3 c = dirAt(0, 0);
-    prm.cameraOrigin = glm::vec4(camera.position, 1);
-    prm.rayC = glm::vec4(glm::vec3(c), 0);
-    prm.rayX = glm::vec4(glm::vec3(dirAt(1, 0) - c), 0);
-    prm.rayY = glm::vec4(glm::vec3(dirAt(0, 1) - c), 0);
-  }
-  prm.bias = glm::vec4(method.biasCompare, method.biasNormal, method.biasReceiverPlane ? 1.0f : 0.0f,
-                       method.filterRadius);
-  prm.depthBias = glm::vec4(method.biasConstant, method.biasSlope, method.biasClamp, depthResolution(method.mapFormat));
-  prm.sizes = glm::ivec4(method.mapSize, lightLayers, projectorCount, method.filterSize);
-  prm.sizes2 = glm::ivec4(width, height, method.filterTaps, method.projectorReverseGuard ? 1 : 0);
-  for (int j = 0; j < projectorCount; ++j) {
-    const raster::ProjectorImage& pi = im.scene->projectors[size_t(j)];
-    prm.projector[j] = glm::ivec4(pi.firstTexel, pi.width, pi.height, lightLayers + j);
-    prm.projectorPos[j] = glm::vec4(scene.projectors[size_t(j)].position, 1);
-  }
-  if (!lightSpace.cascadeSplitsView.empty()) {
-    const std::vector<float>& c = lightSpace.cascadeSplitsView;
-    int count = int(c.size()) - 1;
-    // The splits are view depths of the fit camera: the shader measures a pixel's depth from the
-    // evaluation camera's origin, so z carries the shift between the two origins along the fit
-    // camera's forward axis (0 when they are the same camera).
-    glm::vec3 forward = glm::normalize(fit.lookAt - fit.position);
-    prm.cascadeView = glm::vec4(forward, float(count));
-    for (int i = 0; i < count; ++i) prm.cascadeFar[i / 4][i % 4] = c[size_t(i) + 1];
-    float originShiftView = glm::dot(camera.position - fit.position, forward);
-    prm.cascadeInfo = glm::vec4(method.cascadeBlend, c[0], originShiftView, 0);
-  }
-  for (int i = 0; i < kMaxTaps; ++i) prm.poisson[i] = glm::vec4(im.poisson[size_t(i)], 0, 0);
-  im.params.upload(&prm, sizeof(prm));
-
-  // ---- pipelines (cached by what needs one), warm-up, the timed frame ----
-  bool depthClamp = lightSpace.depthClamp;
-  IdPipelines pipes{im.idPipeline(mapFormat, depthClamp, false, true), im.idPipeline(mapFormat, depthClamp, true, true),
-                    im.idPipeline(kCameraDepthFormat, false, false, false),
-                    im.idPipeline(kCameraDepthFormat, false, true, false)};
-  bool cascaded = !lightSpace.cascadeSplitsView.empty();
-  bool affine = lightLayers > 0;
-  for (int i = 0; i < lightLayers; ++i) {
-    const glm::mat4& t = layers[size_t(i)].texFromWorld;
-    affine = affine && t[0][3] == 0.0f && t[1][3] == 0.0f && t[2][3] == 0.0f && t[3][3] == 1.0f;
-  }
-  Impl::ResolveKey resolveKey{uint32_t(method.filter), uint32_t(projectorCount), cascaded ? 1u : 0u,
-                              cascaded && method.cascadeBlend > 0.0f ? 1u : 0u,
-                              depthResolution(method.mapFormat) > 0.0f ? 0u : 1u,
-                              !light                                    ? 3u
-                              : light->type == LightType::Directional ? 0u
-                              : light->type == LightType::Spot        ? 1u
-                                                                      : 2u,
-                              affine ? 1u : 0u};
-  VkPipeline resolve = im.resolvePipeline(resolveKey);
+  bool depthClamp = layers.depthClamp;
+  FramePipelines p;
+  p.ids = {idPipeline(mapFormat, depthClamp, false, true), idPipeline(mapFormat, depthClamp, true, true),
+           idPipeline(kCameraDepthFormat, false, false, false), idPipeline(kCameraDepthFormat, false, true, false)};
+  p.resolve = resolvePipeline(spec);
+  // lavapipe compiles shaders at first use: the first frame of a combination runs twice.
   std::string warmKey = std::to_string(int(mapFormat)) + "/" + std::to_string(depthClamp);
-  for (uint32_t k : resolveKey) warmKey += "/" + std::to_string(k);
-  int runs = im.warmed.insert(warmKey).second ? 2 : 1;  // lavapipe compiles shaders at first use
-  const std::string visibilityKey = key + "/" + hashHex(fnv1a64(&cameraClip, sizeof(cameraClip))) + "/" +
-                                    std::to_string(width) + "x" + std::to_string(height);
-  const bool drawVisibility = im.visibilityKey != visibilityKey;
-  im.visibilityKey.clear();  // until this frame is through
-  for (int run = 0; run < runs; ++run) {
-    VkCommandBuffer cmd = im.commands->begin();
-    im.record(cmd, layerClip, pipes, resolve, method, cameraClip, width, height, drawVisibility);
-    im.commands->submitAndWait();
+  for (uint32_t k : spec) warmKey += "/" + std::to_string(k);
+  p.firstUse = warmed.insert(warmKey).second;
+  return p;
+}
+
+// Submit: records and runs the frame (twice at a pipeline's first use, the second one timed).
+// Draws the visibility buffer unless the one of the same scene and camera is still there.
+bool Rasterizer::Impl::submit(const Scene& sc, const Method& method, const raster::FrameLayers& layers,
+                              const FramePipelines& pipes) {
+  const Camera& camera = sc.camera;
+  std::vector<glm::mat4> layerClip;
+  for (const raster::MapLayer& l : layers.layers) layerClip.push_back(raster::clipFromTex() * l.texFromWorld);
+  glm::mat4 cameraClip = camera.clipFromView() * camera.viewFromWorld();
+  const std::string key = scene->hash + "/" + hashHex(fnv1a64(&cameraClip, sizeof(cameraClip))) + "/" +
+                          std::to_string(camera.width) + "x" + std::to_string(camera.height);
+  const bool drawVisibility = visibilityKey != key;
+  visibilityKey.clear();  // until this frame is through
+  for (int run = 0; run < (pipes.firstUse ? 2 : 1); ++run) {
+    VkCommandBuffer cmd = commands->begin();
+    record(cmd, layerClip, pipes.ids, pipes.resolve, method, cameraClip, camera.width, camera.height, drawVisibility);
+    commands->submitAndWait();
   }
+  visibilityKey = key;
+  return drawVisibility;
+}
+
+// Timestamps: the passes' GPU times of the last submit (see record() for the four stamps).
+Rasterizer::Impl::PassTimes Rasterizer::Impl::readTimestamps(bool drewVisibility) {
   uint64_t stamps[4] = {0, 0, 0, 0};
-  VK_CHECK(vkGetQueryPoolResults(im.context->device(), im.queries.get(), 0, 4, sizeof(stamps), stamps,
-                                 sizeof(uint64_t), VK_QUERY_RESULT_64_BIT | VK_QUERY_RESULT_WAIT_BIT));
-  double nsPerTick = im.context->properties().limits.timestampPeriod;
-  if (drawVisibility) im.visibilityGpuMs = double(stamps[3] - stamps[1]) * nsPerTick * 1e-6;
-  im.visibilityKey = visibilityKey;
+  VK_CHECK(vkGetQueryPoolResults(context->device(), queries.get(), 0, 4, sizeof(stamps), stamps, sizeof(uint64_t),
+                                 VK_QUERY_RESULT_64_BIT | VK_QUERY_RESULT_WAIT_BIT));
+  const double msPerTick = context->properties().limits.timestampPeriod * 1e-6;
+  if (drewVisibility) visibilityGpuMs = double(stamps[3] - stamps[1]) * msPerTick;
+  PassTimes t;
+  t.shadowGpuMs = double(stamps[1] - stamps[0]) * msPerTick;
+  t.resolveGpuMs = double(stamps[2] - stamps[3]) * msPerTick;
+  return t;
+}
 
-  // ---- readback: the channel planes, split out of the attachments in place ----
-  auto tRead = std::chrono::steady_clock::now();
-  Frame frame = im.readback(scene, light, width, height);
-  double readbackMs = msSince(tRead);
+namespace {
 
+// Metadata: what the frame is of, for its EXR header and raster.json.
+nlohmann::json frameMeta(const Scene& scene, const Light* light, const Camera& fit, const Method& method,
+                         const std::string& device) {
   nlohmann::json lights = nlohmann::json::array(), projectors = nlohmann::json::array();
   for (auto& l : scene.lights) lights.push_back(l.name);
   for (auto& p : scene.projectors) projectors.push_back(p.name);
-  frame.meta = {{"kind", "raster"},
-                {"scene", scene.name},
-                {"scene_hash", scene.hash},
-                {"camera_hash", camera.hash()},
-                {"fit_camera_hash", fit.hash()},
-                {"width", width},
-                {"height", height},
-                {"light", light ? light->name : ""},
-                {"lights", lights},
-                {"projectors", projectors},
-                {"method", methodToJson(method)},
-                {"device", deviceName()}};
+  return {{"kind", "raster"},
+          {"scene", scene.name},
+          {"scene_hash", scene.hash},
+          {"camera_hash", scene.camera.hash()},
+          {"fit_camera_hash", fit.hash()},
+          {"width", scene.camera.width},
+          {"height", scene.camera.height},
+          {"light", light ? light->name : ""},
+          {"lights", lights},
+          {"projectors", projectors},
+          {"method", methodToJson(method)},
+          {"device", device}};
+}
+
+}  // namespace
+
+Frame Rasterizer::render(const Scene& scene, const Method& method, const std::string& lightName,
+                         RasterTimings* timings, const Camera* fitCamera) {
+  auto t0 = std::chrono::steady_clock::now();
+  Impl& im = *impl_;
+  const Light* light = im.validate(scene, method, lightName);
+  const Camera& fit = fitCamera ? *fitCamera : scene.camera;  // what the light frustum follows
+  im.upload(scene);
+  const raster::FrameLayers layers = raster::fitFrameLayers(scene, light, method, fit);
+  im.prepareTargets(scene, method, layers);
+  const abi::Params params = raster::packResolveParams(scene, light, method, fit, layers, im.projectorTexels());
+  im.params.upload(&params, sizeof(params));
+  const Impl::FramePipelines pipes =
+      im.pipelinesFor(method, layers, raster::resolveSpecialization(scene, light, method, layers));
+  const bool drewVisibility = im.submit(scene, method, layers, pipes);
+  const Impl::PassTimes passes = im.readTimestamps(drewVisibility);
+
+  auto tRead = std::chrono::steady_clock::now();
+  Frame frame = im.readback(scene, light, scene.camera.width, scene.camera.height);
+  double readbackMs = msSince(tRead);
+  frame.meta = frameMeta(scene, light, fit, method, deviceName());
   if (timings) {
-    timings->shadowGpuMs = double(stamps[1] - stamps[0]) * nsPerTick * 1e-6;
+    timings->shadowGpuMs = passes.shadowGpuMs;
     timings->visibilityGpuMs = im.visibilityGpuMs;
-    timings->cameraGpuMs = im.visibilityGpuMs + double(stamps[2] - stamps[3]) * nsPerTick * 1e-6;
+    timings->cameraGpuMs = im.visibilityGpuMs + passes.resolveGpuMs;
     timings->readbackMs = readbackMs;
     timings->renderWallMs = msSince(t0);
   }

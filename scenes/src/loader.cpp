@@ -686,20 +686,22 @@ void readLights(const Reader& r, const Node& root, Scene& scene) {
   for (size_t i = 0; i < ls.j->size(); ++i) {
     Node l = r.at(ls, i);
     if (!l.j->is_object()) r.expected(l, "a light object");
-    Node typeNode = r.require(l, "type", "one of directional, spot, point");
+    Node typeNode = r.require(l, "type", "one of " + kindKeys(lightTypeKinds()));
     std::string type = typeNode.j->is_string() ? typeNode.j->get<std::string>() : "";
+    const KindInfo<LightType>* kind = findKind(lightTypeKinds(), type);
+    if (!kind) r.expected(typeNode, "one of " + kindKeys(lightTypeKinds()));
     Light light;
-    if (type == "directional") {
-      r.keys(l, {"type", "name", "direction", "elevation_deg", "azimuth_deg"});
-      light.type = LightType::Directional;
-    } else if (type == "spot") {
-      r.keys(l, {"type", "name", "position", "direction", "look_at", "cone_deg", "near"});
-      light.type = LightType::Spot;
-    } else if (type == "point") {
-      r.keys(l, {"type", "name", "position", "near"});
-      light.type = LightType::Point;
-    } else {
-      r.expected(typeNode, "one of directional, spot, point");
+    light.type = kind->kind;
+    switch (light.type) {  // the keys each type takes
+      case LightType::Directional:
+        r.keys(l, {"type", "name", "direction", "elevation_deg", "azimuth_deg"});
+        break;
+      case LightType::Spot:
+        r.keys(l, {"type", "name", "position", "direction", "look_at", "cone_deg", "near"});
+        break;
+      case LightType::Point:
+        r.keys(l, {"type", "name", "position", "near"});
+        break;
     }
     light.name = type == "directional" ? "sun" : type;
     if (ls.j->size() > 1) light.name += std::to_string(i + 1);

@@ -13,6 +13,20 @@
 
 namespace shadowlab {
 
+const std::vector<KindInfo<Fit>>& fitKinds() {
+#define SHADOWLAB_ROW(name, code, key, help) {Fit::name, key, help},
+  static const std::vector<KindInfo<Fit>> kinds = {SHADOWLAB_FITS(SHADOWLAB_ROW)};
+#undef SHADOWLAB_ROW
+  return kinds;
+}
+
+const std::vector<KindInfo<Filter>>& filterKinds() {
+#define SHADOWLAB_ROW(name, code, key, help) {Filter::name, key, help},
+  static const std::vector<KindInfo<Filter>> kinds = {SHADOWLAB_FILTERS(SHADOWLAB_ROW)};
+#undef SHADOWLAB_ROW
+  return kinds;
+}
+
 namespace {
 
 // Every error from one key: "<file>: <place>: error: got X; expected Y".
@@ -145,12 +159,15 @@ const std::vector<std::pair<const char*, DepthFormat>> kFormats = {
     {"d16", DepthFormat::D16}, {"d24", DepthFormat::D24}, {"d32f", DepthFormat::D32F}};
 const std::vector<std::pair<const char*, CullMode>> kCulls = {
     {"back", CullMode::Back}, {"front", CullMode::Front}, {"none", CullMode::None}};
-const std::vector<std::pair<const char*, Fit>> kFits = {{"sphere", Fit::Sphere}, {"tight", Fit::Tight}, {"cascades", Fit::Cascades}, {"lispsm", Fit::Lispsm}};
-const std::vector<std::pair<const char*, Filter>> kFilters = {{"none", Filter::None},
-                                                              {"hw2x2", Filter::Hw2x2},
-                                                              {"bilinear4", Filter::Bilinear4},
-                                                              {"pcf", Filter::Pcf},
-                                                              {"poisson", Filter::Poisson}};
+// The choice tables of enumOf, from kinds.h's rows (fits, filters) or listed here (formats, culls).
+template <class E>
+std::vector<std::pair<const char*, E>> choicesOf(const std::vector<KindInfo<E>>& kinds) {
+  std::vector<std::pair<const char*, E>> out;
+  for (const KindInfo<E>& k : kinds) out.emplace_back(k.key, k.kind);
+  return out;
+}
+const std::vector<std::pair<const char*, Fit>> kFits = choicesOf(fitKinds());
+const std::vector<std::pair<const char*, Filter>> kFilters = choicesOf(filterKinds());
 
 // Depth-bias factors are free in Vulkan (negative ones are legal and a sweep may probe them);
 // the bound only keeps a typo like 1e30 from overflowing the shader's arithmetic.
@@ -347,15 +364,7 @@ std::string toString(CullMode c) {
     if (x.second == c) return x.first;
   return "?";
 }
-std::string toString(Fit f) {
-  for (const auto& x : kFits)
-    if (x.second == f) return x.first;
-  return "?";
-}
-std::string toString(Filter f) {
-  for (const auto& x : kFilters)
-    if (x.second == f) return x.first;
-  return "?";
-}
+std::string toString(Fit f) { return kindKey(fitKinds(), f); }
+std::string toString(Filter f) { return kindKey(filterKinds(), f); }
 
 }  // namespace shadowlab

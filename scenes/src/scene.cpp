@@ -36,6 +36,13 @@ glm::mat4 vulkanPerspective(float vfovDeg, float aspect, float nearPlane, float 
 
 }  // namespace
 
+const std::vector<KindInfo<LightType>>& lightTypeKinds() {
+#define SHADOWLAB_ROW(name, code, key, help) {LightType::name, key, help},
+  static const std::vector<KindInfo<LightType>> kinds = {SHADOWLAB_LIGHT_TYPES(SHADOWLAB_ROW)};
+#undef SHADOWLAB_ROW
+  return kinds;
+}
+
 // Alpha test lookup, both renderers: nearest texel with repeat addressing,
 //   x = floor(frac(u) * W), y = floor(frac(v) * H), frac(t) = t - floor(t),
 // clamped to W-1 / H-1 because frac of a value just below an integer can round to 1.0f.

@@ -9,19 +9,26 @@
 
 #include <nlohmann/json.hpp>
 
+#include "shadowlab/scenes/kinds.h"
+
 namespace shadowlab {
 
 enum class DepthFormat { D16, D24, D32F };
 enum class CullMode { Back, Front, None };
-enum class Fit { Sphere, Tight, Cascades, Lispsm };
-enum class Filter { None, Hw2x2, Bilinear4, Pcf, Poisson };
+// The codes are kinds.h's: the shader switches on the same numbers.
+enum class Fit { SHADOWLAB_FITS(SHADOWLAB_ENUMERATOR) };
+enum class Filter { SHADOWLAB_FILTERS(SHADOWLAB_ENUMERATOR) };
+
+// Every fit / filter, in code order (kinds.h's rows).
+const std::vector<KindInfo<Fit>>& fitKinds();
+const std::vector<KindInfo<Filter>>& filterKinds();
 
 struct Method {
   std::string name = "default";
   int mapSize = 2048;                    // map.size: texels per side, 16..16384 (and the device limit)
   DepthFormat mapFormat = DepthFormat::D24;  // map.format: d16 | d24 | d32f
   CullMode cull = CullMode::None;        // cull: back | front | none (shadow pass; none: open quads cast from both sides)
-  Fit fit = Fit::Sphere;                 // fit: sphere | tight | cascades | lispsm
+  Fit fit = Fit::Sphere;                 // fit: kinds.h's SHADOWLAB_FITS
   // Cascaded shadow maps (fit=cascades, directional lights): the view depth range is split by the
   // practical scheme into cascadeCount slices, one map layer (map.size squared) each.
   int cascadeCount = 4;                  // cascades.count: 1..8 slices
@@ -37,7 +44,7 @@ struct Method {
   float biasCompare = 0.0005f;           // bias.compare: added in the comparison, normalized depth
   float biasNormal = 0.0f;               // bias.normal: normal-offset of the lookup, in map texels
   bool biasReceiverPlane = false;        // bias.receiver_plane: receiver-plane depth bias per tap
-  Filter filter = Filter::None;          // filter: none | hw2x2 | bilinear4 | pcf | poisson
+  Filter filter = Filter::None;          // filter: kinds.h's SHADOWLAB_FILTERS
   int filterSize = 3;                    // filter.size: pcf grid N (odd, 3..15)
   int filterTaps = 16;                   // filter.taps: poisson taps (1..64)
   float filterRadius = 1.5f;             // filter.radius: poisson radius in texels (> 0, <= 32)

@@ -13,6 +13,8 @@
 
 #include <glm/glm.hpp>
 
+#include "shadowlab/scenes/kinds.h"
+
 namespace shadowlab {
 
 // A decoded single- or multi-channel float image, row 0 at the top.
@@ -47,7 +49,9 @@ struct Object {
   bool castsShadow = true;
 };
 
-enum class LightType { Directional, Spot, Point };
+enum class LightType { SHADOWLAB_LIGHT_TYPES(SHADOWLAB_ENUMERATOR) };
+// Every light type, in code order (kinds.h's rows).
+const std::vector<KindInfo<LightType>>& lightTypeKinds();
 
 struct Light {
   std::string name;

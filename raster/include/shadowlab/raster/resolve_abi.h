@@ -1,0 +1,136 @@
+#ifndef SHADOWLAB_RASTER_RESOLVE_ABI_H
+#define SHADOWLAB_RASTER_RESOLVE_ABI_H
+// The interface between the rasterizer (C++) and its shaders (GLSL), written once and read by
+// both: resolve.frag's parameter block, the descriptor bindings of the one descriptor set, the
+// specialization constant ids and the codes the shader switches on (kinds.h's filters and light
+// types). glslang reads it through GL_GOOGLE_include_directive (raster/CMakeLists.txt passes the
+// include directories), C++ as shadowlab/raster/resolve_abi.h. The C++ side checks the block's std140 layout with static_asserts below.
+#include "shadowlab/scenes/kinds.h"
+
+#ifdef __cplusplus
+#include <cstddef>
+#include <cstdint>
+
+#include <glm/glm.hpp>
+
+namespace shadowlab::raster::abi {
+using mat4 = glm::mat4;
+using vec4 = glm::vec4;
+using ivec4 = glm::ivec4;
+#define SHADOWLAB_CONST(type, name, value) constexpr type name = value;
+#else
+#define SHADOWLAB_CONST(type, name, value) const type name = value;
+#endif
+
+SHADOWLAB_CONST(int, kMaxLayers, 16)  // 8 light layers (cascades; a cube: 6) + 8 projectors
+SHADOWLAB_CONST(int, kMaxLightLayers, 8)
+SHADOWLAB_CONST(int, kMaxProjectors, 8)
+SHADOWLAB_CONST(int, kMaxTaps, 64)          // the Poisson disc's points
+SHADOWLAB_CONST(int, kProjectorChannels, 5)  // coverage, R, G, B, reverse
+
+// The codes kFilter and kLightType take: kFilter<Name>, kLight<Name> from kinds.h's rows, and
+// kLightNone for a scene rendered for its projectors only.
+#define SHADOWLAB_ABI_FILTER(name, code, key, help) SHADOWLAB_CONST(int, kFilter##name, code)
+SHADOWLAB_FILTERS(SHADOWLAB_ABI_FILTER)
+#undef SHADOWLAB_ABI_FILTER
+#define SHADOWLAB_ABI_LIGHT(name, code, key, help) SHADOWLAB_CONST(int, kLight##name, code)
+SHADOWLAB_LIGHT_TYPES(SHADOWLAB_ABI_LIGHT)
+#undef SHADOWLAB_ABI_LIGHT
+SHADOWLAB_CONST(int, kLightNone, 3)
+
+// Specialization constant ids of resolve.frag (each compiles a case's code out, see there).
+SHADOWLAB_CONST(int, kSpecFilter, 0)          // a kFilter* code
+SHADOWLAB_CONST(int, kSpecProjectorCount, 1)  // the scene's projectors
+SHADOWLAB_CONST(int, kSpecCascaded, 2)        // 0/1
+SHADOWLAB_CONST(int, kSpecBlend, 3)           // 0/1: a cascade blend band
+SHADOWLAB_CONST(int, kSpecFloatDepth, 4)      // 0/1: the map's depth format is float
+SHADOWLAB_CONST(int, kSpecLightType, 5)       // a kLight* code
+SHADOWLAB_CONST(int, kSpecAffine, 6)          // 0/1: every light layer is orthographic
+SHADOWLAB_CONST(int, kSpecCount, 7)
+
+// The descriptor set (set 0), one row per binding: X(Name, binding, kind). The kinds name
+// Vulkan descriptor types (rasterizer.cpp maps them); the set layout, the pool and the writes
+// are built from these rows. id.frag reads bindings 0..2 for its material tests.
+#define SHADOWLAB_RESOLVE_BINDINGS(X)                                                       \
+  X(TriangleMaterials, 0, StorageBuffer)  /* per triangle: its material index */           \
+  X(Materials, 1, StorageBuffer)          /* MaterialGpu per material */                   \
+  X(AlphaTexels, 2, StorageBuffer)        /* alpha textures, concatenated */               \
+  X(Params, 3, UniformBuffer)             /* Params below */                               \
+  X(MapDepth, 4, CombinedImageSampler)    /* map depths, NEAREST */                        \
+  X(MapShadow, 5, CombinedImageSampler)   /* map depths, LINEAR, compare LESS_OR_EQUAL */  \
+  X(MapIds, 6, CombinedImageSampler)      /* map ids (global triangle + 1) */              \
+  X(CameraIds, 7, CombinedImageSampler)   /* the camera's visibility buffer */             \
+  X(TrianglePlanes, 8, UniformTexelBuffer) /* per triangle: its plane */                   \
+  X(ProjectorTexels, 9, StorageBuffer)    /* projector images, RGB floats */               \
+  X(OutPlanes, 10, StorageBuffer)         /* the projector channels, one plane each */
+#define SHADOWLAB_ABI_BINDING(name, binding, kind) SHADOWLAB_CONST(int, kBinding##name, binding)
+SHADOWLAB_RESOLVE_BINDINGS(SHADOWLAB_ABI_BINDING)
+#undef SHADOWLAB_ABI_BINDING
+
+// resolve.frag's uniform block (std140; every member is a vec4, ivec4 or mat4, or an array of
+// them, so the C++ struct's natural layout is the std140 one: asserted below).
+// (id.frag defines SHADOWLAB_ABI_NO_PARAMS: it reads only the material bindings.)
+#if defined(__cplusplus) || !defined(SHADOWLAB_ABI_NO_PARAMS)
+#ifdef __cplusplus
+#define SHADOWLAB_BLOCK(name) struct name
+#define SHADOWLAB_BLOCK_END(instance)
+#else
+#define SHADOWLAB_BLOCK(name) layout(std140, set = 0, binding = kBindingParams) uniform name
+#define SHADOWLAB_BLOCK_END(instance) instance
+#endif
+SHADOWLAB_BLOCK(Params) {
+  mat4 texFromWorld[kMaxLayers];  // world -> (u*w, v*w, depth*w, w), u,v in [0,1], v = 0 top
+  vec4 layerInfo[kMaxLayers];     // x: world size of one texel per unit of w
+  vec4 lightPosType;              // xyz position (w: the type, which the shader takes from kLightType)
+  vec4 lightDirCos;               // xyz direction of travel, w: cos(cone / 2)
+  vec4 cameraOrigin;              // xyz
+  vec4 rayX;                      // unnormalized ray direction through image point (x, y):
+  vec4 rayY;                      //   rayX * x + rayY * y + rayC (x, y in pixels)
+  vec4 rayC;
+  vec4 bias;       // x compare (depth), y normal (texels), z receiver plane (0/1), w poisson radius (texels)
+  vec4 depthBias;  // x constant factor, y slope factor, z clamp, w r of the format (0: float format)
+  ivec4 sizes;     // x map size, y light layers, z projector count, w pcf size
+  ivec4 sizes2;    // x width, y height, z poisson taps, w reverse guard (0/1)
+  ivec4 projector[kMaxProjectors];    // x first texel in projectorTexels, y width, z height, w layer
+  vec4 poisson[kMaxTaps];             // xy: unit-disc offsets
+  vec4 projectorPos[kMaxProjectors];  // xyz: world position
+  vec4 cascadeView;    // xyz fit camera forward (unit, world), w cascade count (0: not cascaded)
+  vec4 cascadeFar[2];  // C_1..C_8: far view depth of cascade 0..7, world units
+  vec4 cascadeInfo;    // x blend band (fraction of a cascade's depth range), y C_0,
+                       // z fit-camera view depth of the evaluation camera's origin
+} SHADOWLAB_BLOCK_END(P);
+#endif
+
+#ifdef __cplusplus
+// std140 offsets: a vec4 / ivec4 takes 16 bytes, a mat4 64, arrays of them have that stride.
+static_assert(sizeof(vec4) == 16 && sizeof(ivec4) == 16 && sizeof(mat4) == 64);
+static_assert(offsetof(Params, texFromWorld) == 0);
+static_assert(offsetof(Params, layerInfo) == 64 * kMaxLayers);
+static_assert(offsetof(Params, lightPosType) == 80 * kMaxLayers);
+static_assert(offsetof(Params, lightDirCos) == offsetof(Params, lightPosType) + 16);
+static_assert(offsetof(Params, cameraOrigin) == offsetof(Params, lightPosType) + 32);
+static_assert(offsetof(Params, rayX) == offsetof(Params, lightPosType) + 48);
+static_assert(offsetof(Params, rayY) == offsetof(Params, lightPosType) + 64);
+static_assert(offsetof(Params, rayC) == offsetof(Params, lightPosType) + 80);
+static_assert(offsetof(Params, bias) == offsetof(Params, lightPosType) + 96);
+static_assert(offsetof(Params, depthBias) == offsetof(Params, lightPosType) + 112);
+static_assert(offsetof(Params, sizes) == offsetof(Params, lightPosType) + 128);
+static_assert(offsetof(Params, sizes2) == offsetof(Params, lightPosType) + 144);
+static_assert(offsetof(Params, projector) == offsetof(Params, lightPosType) + 160);
+static_assert(offsetof(Params, poisson) == offsetof(Params, projector) + 16 * kMaxProjectors);
+static_assert(offsetof(Params, projectorPos) == offsetof(Params, poisson) + 16 * kMaxTaps);
+static_assert(offsetof(Params, cascadeView) == offsetof(Params, projectorPos) + 16 * kMaxProjectors);
+static_assert(offsetof(Params, cascadeFar) == offsetof(Params, cascadeView) + 16);
+static_assert(offsetof(Params, cascadeInfo) == offsetof(Params, cascadeFar) + 32);
+static_assert(sizeof(Params) == 2784, "std140 size of resolve.frag's Params (glslangValidator -q reports it)");
+static_assert(2 * 4 >= kMaxLightLayers, "cascadeFar holds one far split per light layer");
+static_assert(kMaxLightLayers + kMaxProjectors == kMaxLayers);
+}  // namespace shadowlab::raster::abi
+#endif
+
+#ifdef SHADOWLAB_BLOCK
+#undef SHADOWLAB_BLOCK
+#undef SHADOWLAB_BLOCK_END
+#endif
+#undef SHADOWLAB_CONST
+#endif

@@ -1,0 +1,150 @@
+// The GPU-free steps of Rasterizer::render: fit, parameter packing, specialization.
+#include "shadowlab/raster/resolve_params.h"
+
+#include <algorithm>
+#include <cmath>
+
+#include "light_space.h"
+
+namespace shadowlab::raster {
+
+static_assert(abi::kLightDirectional == int(LightType::Directional) && abi::kLightSpot == int(LightType::Spot) &&
+                  abi::kLightPoint == int(LightType::Point),
+              "the shader's light codes are kinds.h's rows");
+static_assert(abi::kFilterNone == int(Filter::None) && abi::kFilterPoisson == int(Filter::Poisson),
+              "the shader's filter codes are kinds.h's rows");
+
+FrameLayers fitFrameLayers(const Scene& scene, const Light* light, const Method& method, const Camera& fitCamera) {
+  FrameLayers out;
+  if (light) {
+    LightSpace lightSpace = fitLight(scene, *light, method, fitCamera);
+    out.layers = std::move(lightSpace.layers);
+    out.depthClamp = lightSpace.depthClamp;
+    out.cascadeSplitsView = std::move(lightSpace.cascadeSplitsView);
+  }
+  out.lightLayers = int(out.layers.size());
+  for (const Projector& p : scene.projectors) out.layers.push_back(projectorLayer(p, method.mapSize));
+  return out;
+}
+
+// Mitchell's best candidate with a fixed seed: any prefix of `taps` points is itself well
+// spread, so filter.taps can be swept without a new table.
+const std::vector<glm::vec2>& poissonDisc() {
+  static const std::vector<glm::vec2> disc = [] {
+    std::vector<glm::vec2> points;
+    uint32_t state = 12345u;
+    auto next = [&state] {
+      state = state * 1664525u + 1013904223u;
+      return float(state >> 8) / float(1u << 24);
+    };
+    while (points.size() < size_t(abi::kMaxTaps)) {
+      glm::vec2 best(0);
+      float bestDistance = -1;
+      int candidates = int(points.size()) * 4 + 1;
+      for (int c = 0; c < candidates; ++c) {
+        glm::vec2 p;
+        do p = glm::vec2(next(), next()) * 2.0f - 1.0f;
+        while (glm::dot(p, p) > 1.0f);
+        float d = 1e9f;
+        for (auto& q : points) d = std::min(d, glm::dot(p - q, p - q));
+        if (d > bestDistance) bestDistance = d, best = p;
+      }
+      points.push_back(best);
+    }
+    return points;
+  }();
+  return disc;
+}
+
+float depthResolution(DepthFormat format) {
+  switch (format) {
+    case DepthFormat::D16: return std::ldexp(1.0f, -16);
+    case DepthFormat::D24: return std::ldexp(1.0f, -24);
+    case DepthFormat::D32F: return 0.0f;
+  }
+  return 0.0f;
+}
+
+uint32_t lightTypeCode(const Light* light) { return light ? uint32_t(light->type) : uint32_t(abi::kLightNone); }
+
+abi::Params packResolveParams(const Scene& scene, const Light* light, const Method& method, const Camera& fitCamera,
+                              const FrameLayers& frameLayers, const std::vector<ProjectorTexels>& projectorTexels) {
+  const Camera& camera = scene.camera;
+  const std::vector<MapLayer>& layers = frameLayers.layers;
+  const int width = camera.width, height = camera.height;
+  const int projectorCount = int(scene.projectors.size());
+  abi::Params prm{};
+  for (size_t i = 0; i < layers.size(); ++i) {
+    prm.texFromWorld[i] = layers[i].texFromWorld;
+    prm.layerInfo[i] = glm::vec4(layers[i].texelWorldPerW, 0, 0, 0);
+  }
+  if (light) {
+    prm.lightPosType = glm::vec4(light->position, float(lightTypeCode(light)));
+    prm.lightDirCos = glm::vec4(glm::normalize(light->direction), std::cos(glm::radians(0.5f * light->coneDeg)));
+  } else {
+    prm.lightPosType = glm::vec4(0, 0, 0, -1.0f);
+  }
+  {
+    // Rays through image points, from the inverse of the very matrix that rasterized the
+    // visibility buffer: dir(x, y) = rayX x + rayY y + rayC (affine: w of an unprojected
+    // far-plane point does not depend on x, y).
+    glm::mat4 cameraClip = camera.clipFromView() * camera.viewFromWorld();
+    glm::dmat4 inv = glm::inverse(glm::dmat4(cameraClip));
+    glm::dvec3 origin(camera.position);
+    auto dirAt = [&](double x, double y) {
+      glm::dvec4 f = inv * glm::dvec4(2.0 * x / width - 1.0, 2.0 * y / height - 1.0, 1.0, 1.0);
+      return glm::dvec3(f) / f.w - origin;
+    };
+    glm::dvec3 c = dirAt(0, 0);
+    prm.cameraOrigin = glm::vec4(camera.position, 1);
+    prm.rayC = glm::vec4(glm::vec3(c), 0);
+    prm.rayX = glm::vec4(glm::vec3(dirAt(1, 0) - c), 0);
+    prm.rayY = glm::vec4(glm::vec3(dirAt(0, 1) - c), 0);
+  }
+  prm.bias = glm::vec4(method.biasCompare, method.biasNormal, method.biasReceiverPlane ? 1.0f : 0.0f,
+                       method.filterRadius);
+  prm.depthBias = glm::vec4(method.biasConstant, method.biasSlope, method.biasClamp, depthResolution(method.mapFormat));
+  prm.sizes = glm::ivec4(method.mapSize, frameLayers.lightLayers, projectorCount, method.filterSize);
+  prm.sizes2 = glm::ivec4(width, height, method.filterTaps, method.projectorReverseGuard ? 1 : 0);
+  for (int j = 0; j < projectorCount && j < int(projectorTexels.size()); ++j) {
+    const ProjectorTexels& pt = projectorTexels[size_t(j)];
+    prm.projector[j] = glm::ivec4(pt.firstTexel, pt.width, pt.height, frameLayers.lightLayers + j);
+    prm.projectorPos[j] = glm::vec4(scene.projectors[size_t(j)].position, 1);
+  }
+  if (!frameLayers.cascadeSplitsView.empty()) {
+    const std::vector<float>& c = frameLayers.cascadeSplitsView;
+    int count = int(c.size()) - 1;
+    // The splits are view depths of the fit camera: the shader measures a pixel's depth from the
+    // evaluation camera's origin, so z carries the shift between the two origins along the fit
+    // camera's forward axis (0 when they are the same camera).
+    glm::vec3 forward = glm::normalize(fitCamera.lookAt - fitCamera.position);
+    prm.cascadeView = glm::vec4(forward, float(count));
+    for (int i = 0; i < count; ++i) prm.cascadeFar[i / 4][i % 4] = c[size_t(i) + 1];
+    float originShiftView = glm::dot(camera.position - fitCamera.position, forward);
+    prm.cascadeInfo = glm::vec4(method.cascadeBlend, c[0], originShiftView, 0);
+  }
+  const std::vector<glm::vec2>& poisson = poissonDisc();
+  for (int i = 0; i < abi::kMaxTaps; ++i) prm.poisson[i] = glm::vec4(poisson[size_t(i)], 0, 0);
+  return prm;
+}
+
+ResolveSpecialization resolveSpecialization(const Scene& scene, const Light* light, const Method& method,
+                                            const FrameLayers& frameLayers) {
+  const bool cascaded = !frameLayers.cascadeSplitsView.empty();
+  bool affine = frameLayers.lightLayers > 0;
+  for (int i = 0; i < frameLayers.lightLayers; ++i) {
+    const glm::mat4& t = frameLayers.layers[size_t(i)].texFromWorld;
+    affine = affine && t[0][3] == 0.0f && t[1][3] == 0.0f && t[2][3] == 0.0f && t[3][3] == 1.0f;
+  }
+  ResolveSpecialization spec{};
+  spec[abi::kSpecFilter] = uint32_t(method.filter);
+  spec[abi::kSpecProjectorCount] = uint32_t(scene.projectors.size());
+  spec[abi::kSpecCascaded] = cascaded ? 1u : 0u;
+  spec[abi::kSpecBlend] = cascaded && method.cascadeBlend > 0.0f ? 1u : 0u;
+  spec[abi::kSpecFloatDepth] = depthResolution(method.mapFormat) > 0.0f ? 0u : 1u;
+  spec[abi::kSpecLightType] = lightTypeCode(light);
+  spec[abi::kSpecAffine] = affine ? 1u : 0u;
+  return spec;
+}
+
+}  // namespace shadowlab::raster
