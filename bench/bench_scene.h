@@ -1,6 +1,6 @@
 #pragma once
 // The rasterizer benches' scene: the bundled bunny at 1920x1080, with `copies` - 1 more bunnies
-// beside it (~28k triangles each; 4 copies ~111k, the "~100k triangles").
+// beside it (~28k triangles each; 4 copies ~111k, the ~100k triangles of the brief's speed figures).
 #include <algorithm>
 #include <map>
 #include <string>

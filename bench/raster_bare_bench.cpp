@@ -2,7 +2,7 @@
 // program (depth-only shadow pass with a depth bias; a forward camera pass doing one comparison
 // lookup per pixel into an RGBA8 target), on the same device, scene, map and image size as the
 // rasterizer, in the same process, one after the other. Each benchmark reports both programs'
-// shadow and camera pass times (GPU timestamps, after warm-up) and their ratios: the goal
+// shadow and camera pass times (GPU timestamps, after warm-up) and their ratios: the speed goal
 // is shadowlab within 1.3x of the bare program for the filters none and hw2x2.
 //
 // The bare program draws the whole scene with one indexed draw from a position-only vertex buffer
@@ -159,7 +159,7 @@ class BareProgram {
                        VK_IMAGE_ASPECT_DEPTH_BIT);
   }
 
-  // ids: the shadow pass also writes an R32_UINT id attachment (the contract).
+  // ids: the shadow pass also writes an R32_UINT id attachment (shadowlab's evidence contract).
   BareTimes frame(bool linear, bool ids = false) {
     VkDescriptorImageInfo image{samplers_[linear ? 1 : 0].get(), map_.arrayView(),
                                 VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL};

@@ -1,7 +1,7 @@
 // Sweep speed. Two numbers:
 //  * BM_SweepMachineryPerRow: what the sweep itself adds per row (planning, the fsync'd journal
 //    append, bookkeeping, results.json/csv), with a runner that does no rendering;
-//  * BM_Sweep100At1080p: the goal, a 100-configuration sweep of sphere_on_plane at
+//  * BM_Sweep100At1080p: the speed goal of compare/SWEEPS.md, a 100-configuration sweep of sphere_on_plane at
 //    1920x1080 end to end (reference from the cache after the first iteration, raster, compare,
 //    charts, triptychs, report), on the default device (lavapipe). Goal: <= 15 s on 2 cores.
 // Run: build/bench/sweep_speed_bench [--benchmark_filter=Machinery]

@@ -1,4 +1,4 @@
-// The harness stays well-defined at the extremes (issue 7): a directional light exactly parallel to
+// The harness stays well-defined at the extremes: a directional light exactly parallel to
 // a receiver (elevation 0 over a plane), a point light inside a closed mesh, and fit-camera paths
 // that leave the scene. No NaN in any output channel of either renderer, none in any metric, no
 // crash. (near = far and a cascade with nothing in it: tests/raster_cascades_test.cpp.)

@@ -73,7 +73,7 @@ TEST(ScenesBadInput, EveryCaseExitsTwoWithFileAndPlace) {
   }
 }
 
-// The corpus must cover each case the issue lists; a renamed or deleted file fails here.
+// The corpus must cover each bad-input case listed below; a renamed or deleted file fails here.
 TEST(ScenesBadInput, CorpusCoversTheRequiredCases) {
   std::set<std::string> names;
   for (const auto& f : badScenes()) names.insert(f.stem().string());
