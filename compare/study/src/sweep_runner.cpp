@@ -3,7 +3,8 @@
 // every call, which reads a 1080p multi-channel EXR from disk each time (hundreds of ms); a sweep
 // of a hundred configurations cannot afford that. The metrics are the same: the same cached
 // reference frame, the same Rasterizer::render, the same compareFrames with the same light
-// (tests/sweep_pipeline_test.cpp checks the numbers against `shadowlab run`).
+// (SweepCli.SmallSweepRowsMatchShadowlabRunExactly in tests/sweep_cli_test.cpp checks the numbers
+// against `shadowlab run`).
 #include <chrono>
 #include <memory>
 
