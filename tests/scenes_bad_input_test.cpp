@@ -82,7 +82,7 @@ TEST(ScenesBadInput, CorpusCoversTheRequiredCases) {
         "scene_missing_texture", "scene_missing_map_d", "scene_infinite", "scene_huge_scale", "scene_zero_size",
         "scene_negative_radius", "scene_camera_look_at_position", "scene_camera_up_parallel",
         "scene_zero_light_direction", "scene_resolution_too_big", "scene_resolution_zero", "scene_fov_180",
-        "scene_near_ge_far", "scene_no_light"})
+        "scene_near_ge_far", "scene_no_light", "scene_obj_nan_vertex", "scene_obj_overflow_uv"})
     EXPECT_TRUE(names.count(required)) << required;
 }
 

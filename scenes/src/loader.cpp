@@ -405,19 +405,37 @@ Mesh loadObj(const Reader& r, const std::string& ptr, const std::string& objPath
   std::error_code ec;
   if (!fs::is_regular_file(objPath, ec)) r.fail(ptr, "OBJ file " + objPath + " not found; expected a Wavefront .obj file");
   fs::path objDir = fs::path(objPath).parent_path();
-  // tinyobjloader only warns about a missing MTL: check every mtllib line first.
+  // One pass over the lines before tinyobjloader reads them, for what it lets through silently:
+  // it only warns about a missing MTL, and its number parser reads a token it cannot parse
+  // ("nan", "inf", "1e999", "abc") as 0 or infinity without a word.
   {
     std::ifstream in(objPath);
     std::string line;
-    while (std::getline(in, line)) {
+    for (int lineNo = 1; std::getline(in, line); ++lineNo) {
       size_t p = line.find_first_not_of(" \t");
-      if (p == std::string::npos || line.compare(p, 7, "mtllib ") != 0) continue;
-      std::istringstream names(line.substr(p + 7));
-      std::string name;
-      while (names >> name) {
-        fs::path mtl = objDir / name;
-        if (!fs::is_regular_file(mtl, ec))
-          r.fail(ptr, "MTL file " + mtl.lexically_normal().string() + " (mtllib of " + objPath + ") not found");
+      if (p == std::string::npos) continue;
+      if (line.compare(p, 7, "mtllib ") == 0) {
+        std::istringstream names(line.substr(p + 7));
+        std::string name;
+        while (names >> name) {
+          fs::path mtl = objDir / name;
+          if (!fs::is_regular_file(mtl, ec))
+            r.fail(ptr, "MTL file " + mtl.lexically_normal().string() + " (mtllib of " + objPath + ") not found");
+        }
+        continue;
+      }
+      std::istringstream tokens(line.substr(p));
+      std::string keyword, token;
+      tokens >> keyword;
+      if (keyword != "v" && keyword != "vn" && keyword != "vt") continue;
+      while (tokens >> token) {
+        if (token[0] == '#') break;  // a trailing comment
+        char* end = nullptr;
+        // Overflow gives infinity (rejected); underflow gives a tiny or zero value, harmless here.
+        double value = std::strtod(token.c_str(), &end);
+        if (end != token.c_str() + token.size() || !std::isfinite(value))
+          r.fail(ptr, objPath + ":" + std::to_string(lineNo) + ": \"" + keyword + "\" line has \"" + token +
+                          "\"; expected finite numbers");
       }
     }
   }
