@@ -70,6 +70,7 @@ int run(const Options& o) {
                                                  "` (comparing " + refPath + " with " + rasPath + ")"));
     }
   }
+  OutputFolder out(o.outDir);  // an unusable -o fails before the frames are read and compared
   const Frame reference = readFrameExr(refPath);
   const Frame raster = readFrameExr(rasPath);
   CompareOptions options;
@@ -95,10 +96,10 @@ int run(const Options& o) {
   row.timings["compare_ms"] = compareMs;
 
   // Everything is validated and computed: only now does the output folder appear.
-  makeDirs(o.outDir);
   writeMetricsJson((fs::path(o.outDir) / "metrics.json").string(), row);
   writeErrorsPng((fs::path(o.outDir) / "errors.png").string(), classification, &reference);
   writeTriptychPng((fs::path(o.outDir) / "triptych.png").string(), reference, raster, classification);
+  out.keep();
   std::printf("compared %llu pixels (%llu geometry mismatch): error_rate %.4f (acne %llu, leak %llu, aliasing %llu, "
               "coverage %llu, other %llu) in %.1f ms\n",
               (unsigned long long)metrics.pixelsCompared, (unsigned long long)metrics.geometryMismatch,

@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "command.h"
+#include "shadowlab/compare/set_arguments.h"
 #include "shadowlab/compare/timings.h"
 #include "shadowlab/raster/raster.h"
 #include "shadowlab/scenes/error.h"
@@ -28,17 +29,11 @@ struct Options {
 
 int run(const Options& o) {
   using namespace shadowlab;
-  if (o.outDir.empty()) throw InputError("shadowlab raster: error: -o is empty; expected an output folder");
-  Method method;
-  if (!o.methodFile.empty()) method = loadMethodFile(o.methodFile);
-  for (const std::string& s : o.settings) {
-    size_t eq = s.find('=');
-    if (eq == std::string::npos || eq == 0)
-      throw InputError("shadowlab raster: --set: error: got \"" + s + "\"; expected key=value (e.g. filter=pcf)");
-    applyMethodSetting(method, s.substr(0, eq), s.substr(eq + 1), "--set");
-  }
-  validateMethod(method, o.settings.empty() ? (o.methodFile.empty() ? "method" : o.methodFile) : "--set");
-  const Scene scene = loadScene(resolveScenePath(o.scene));
+  // The same --set as run, sweep and stability: method keys and scene:/pointer values.
+  const SetArguments set = applySetArguments(o.methodFile, o.settings);
+  const Method& method = set.method;
+  const Scene scene = loadScene(resolveScenePath(o.scene), set.sceneOverrides);
+  OutputFolder out(o.outDir);  // an unusable -o fails here, before the device starts
 
   RasterDeviceOptions deviceOptions;
   deviceOptions.device = o.device;
@@ -50,7 +45,6 @@ int run(const Options& o) {
     throw DriverError("vulkan validation reported " + std::to_string(rasterizer.validationMessages()) +
                       " message(s) (printed above)");
 
-  makeDirs(o.outDir);
   writeFrameExr(frame, o.outDir + "/raster.exr");
   writeRgbPng(o.outDir + "/raster.png", frame.width, frame.height, rasterPicture(scene, frame));
   nlohmann::json report = {{"scene", scene.name},
@@ -68,6 +62,7 @@ int run(const Options& o) {
                            {timing::kReadbackMs, t.readbackMs},
                            {timing::kRenderWallMs, t.renderWallMs}};
   writeJsonAtomic(o.outDir + "/raster.json", report);
+  out.keep();
   std::printf("raster: %s %dx%d light=%s device=%s shadow %.2f ms, camera %.2f ms, readback %.2f ms -> %s\n",
               scene.name.c_str(), frame.width, frame.height, frame.meta["light"].get<std::string>().c_str(),
               rasterizer.deviceName().c_str(), t.shadowGpuMs, t.cameraGpuMs, t.readbackMs, o.outDir.c_str());
@@ -79,7 +74,7 @@ shadowlab::app::Registrar reg{"raster", [](CLI::App& app) {
   auto opts = std::make_shared<Options>();
   sub->add_option("scene", opts->scene, "Scene name (bundled) or path to a scene .json")->required();
   sub->add_option("--method", opts->methodFile, "Method file (JSON, keys in raster/METHODS.md)");
-  sub->add_option("--set", opts->settings, "Override one method key: key=value (repeatable)")
+  sub->add_option("--set", opts->settings, "key=value: a method key (raster/METHODS.md) or scene:/json/pointer=value (repeatable)")
       ->allow_extra_args(false);
   sub->add_option("--light", opts->light, "Light to render (default: the scene's first)");
   sub->add_option("--device", opts->device, "Vulkan device name substring (default: lavapipe/llvmpipe)");

@@ -1,4 +1,4 @@
-// `shadowlab reference SCENE -o DIR [--spp N] [--threads N]`: traces the Embree ground truth and
+// `shadowlab reference SCENE -o DIR [--spp N] [--threads N] [--set scene:/pointer=value ...]`: traces the Embree ground truth and
 // writes DIR/reference.exr (channels: scenes/frame.h), DIR/reference.png (a readable picture) and
 // DIR/reference.json (ray counts, timings, hashes).
 #include <chrono>
@@ -7,8 +7,10 @@
 #include <filesystem>
 #include <memory>
 #include <thread>
+#include <vector>
 
 #include "command.h"
+#include "shadowlab/compare/set_arguments.h"
 #include "shadowlab/reference/reference.h"
 #include "shadowlab/scenes/error.h"
 #include "shadowlab/scenes/io.h"
@@ -21,6 +23,7 @@ struct Options {
   std::string outDir;
   int spp = 1;
   int threads = 0;
+  std::vector<std::string> sets;
 };
 
 int run(const Options& options) {
@@ -35,17 +38,15 @@ int run(const Options& options) {
     throw shadowlab::InputError("shadowlab reference: error: --threads " + std::to_string(options.threads) +
                                 "; expected 0 (all hardware threads) or more");
   }
-  if (options.outDir.empty()) {
-    throw shadowlab::InputError("shadowlab reference: error: -o is empty; expected an output folder");
-  }
-  {
-    std::error_code error;
-    if (std::filesystem::exists(options.outDir, error) && !std::filesystem::is_directory(options.outDir, error)) {
-      throw shadowlab::InputError("shadowlab reference: error: -o " + options.outDir +
-                                  " is a file; expected a folder (created if missing)");
-    }
-  }
-  const shadowlab::Scene scene = shadowlab::loadScene(shadowlab::resolveScenePath(options.scene));
+  // The same --set syntax as raster, run, sweep and stability; method keys change the
+  // rasterizer, not the truth, so only scene: values apply.
+  for (const std::string& s : options.sets)
+    if (s.rfind("scene:", 0) != 0)
+      throw shadowlab::InputError("--set: error: got \"" + s +
+                                  "\"; expected scene:/json/pointer=value (the reference takes no method keys)");
+  const shadowlab::SetArguments set = shadowlab::applySetArguments("", options.sets);
+  const shadowlab::Scene scene = shadowlab::loadScene(shadowlab::resolveScenePath(options.scene), set.sceneOverrides);
+  shadowlab::OutputFolder out(options.outDir);  // an unusable -o fails here, before the trace
   const auto loaded = Clock::now();
 
   shadowlab::ReferenceOptions referenceOptions;
@@ -55,7 +56,6 @@ int run(const Options& options) {
   const shadowlab::Frame frame = shadowlab::renderReference(scene, referenceOptions, &stats);
   const auto traced = Clock::now();
 
-  shadowlab::makeDirs(options.outDir);
   const std::string exrPath = options.outDir + "/reference.exr";
   const std::string pngPath = options.outDir + "/reference.png";
   const std::string jsonPath = options.outDir + "/reference.json";
@@ -106,6 +106,7 @@ int run(const Options& options) {
       {"outputs", {"reference.exr", "reference.png", "reference.json"}},
   };
   shadowlab::writeJsonAtomic(jsonPath, report);
+  out.keep();
   std::printf("reference: %s %dx%d spp %d: %.3f Mrays in %.3f s (%.1f Mrays/s), build %.3f s, total %.3f s -> %s\n",
               scene.name.c_str(), frame.width, frame.height, options.spp,
               double(stats.primaryRays + stats.shadowRays) * 1e-6, stats.traceSeconds, stats.mraysPerS(),
@@ -120,6 +121,8 @@ shadowlab::app::Registrar reg{"reference", [](CLI::App& app) {
       ->required();
   sub->add_option("-o,--out", options->outDir, "output folder: reference.exr, reference.png, reference.json")
       ->required();
+  sub->add_option("--set", options->sets, "scene:/json/pointer=value: override one scene value (repeatable)")
+      ->allow_extra_args(false);
   sub->add_option("--spp", options->spp, "stratified samples per pixel, 1..1024 (fractional visibility)")
       ->capture_default_str();
   sub->add_option("--threads", options->threads, "worker threads, 0 = all; results are identical for any value")

@@ -54,11 +54,16 @@ int run(const Options& o) {
   // configuration); else the method name.
   const std::string& config = set.config;
 
+  // Every output location, before any work: a bad -o or --cache must not cost a trace first.
+  OutputFolder out(o.outDir);
+  ReferenceCache cache(o.cacheDir);
+  OutputFolder cacheFolder(cache.dir(), "--cache");
+  cacheFolder.keep();  // a cache outlives the command
+
   // ---- work ----------------------------------------------------------------------------------
   RasterDeviceOptions deviceOptions;
   deviceOptions.device = o.device;
   Rasterizer rasterizer(deviceOptions);
-  ReferenceCache cache(o.cacheDir);
   ReferenceOptions referenceOptions;
   referenceOptions.spp = o.spp;
   // config_wall_ms: this configuration end to end (reference traced or loaded, render, compare),
@@ -87,16 +92,16 @@ int run(const Options& o) {
                  {timing::kCompareMs, r.compareMs},               {timing::kReferenceMs, r.referenceMs},
                  {timing::kConfigWallMs, configWallMs}};
 
-  makeDirs(o.outDir);
-  const fs::path out(o.outDir);
+  const fs::path dir(o.outDir);
   if (o.keepImages) {
-    writeFrameExr(r.reference, (out / "reference.exr").string());
-    writeFrameExr(r.raster, (out / "raster.exr").string());
+    writeFrameExr(r.reference, (dir / "reference.exr").string());
+    writeFrameExr(r.raster, (dir / "raster.exr").string());
   }
-  writeErrorsPng((out / "errors.png").string(), r.classification, &r.reference);
-  writeTriptychPng((out / "triptych.png").string(), r.reference, r.raster, r.classification);
+  writeErrorsPng((dir / "errors.png").string(), r.classification, &r.reference);
+  writeTriptychPng((dir / "triptych.png").string(), r.reference, r.raster, r.classification);
   // metrics.json last: its presence means the run finished.
-  writeMetricsJson((out / "metrics.json").string(), row);
+  writeMetricsJson((dir / "metrics.json").string(), row);
+  out.keep();
   const Metrics& m = r.metrics;
   std::printf("compare: %.1f ms, %llu pixels: error_rate %.4f (acne %.4f, leak %.4f, aliasing %.4f, coverage %.4f, "
               "other %.4f), shadow_iou %.4f, m_median %.2f\n",

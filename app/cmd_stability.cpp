@@ -164,11 +164,16 @@ int run(const Options& o) {
 
   const std::string config = set.config + " @ " + pathConfig;
 
+  // Every output location, before any work: a bad -o or --cache must not cost a trace first.
+  OutputFolder out(o.outDir);
+  ReferenceCache cache(o.cacheDir);
+  OutputFolder cacheFolder(cache.dir(), "--cache");
+  cacheFolder.keep();  // a cache outlives the command
+
   // ---- work ------------------------------------------------------------------------------------
   RasterDeviceOptions deviceOptions;
   deviceOptions.device = o.device;
   Rasterizer rasterizer(deviceOptions);
-  ReferenceCache cache(o.cacheDir);
   CompareOptions compareOptions;
   compareOptions.light = light;
   StabilityMetrics s;
@@ -227,8 +232,8 @@ int run(const Options& o) {
   if (lightPath) report["per_frame"] = perFrame;
   report["references_traced"] = traced;
   report["device"] = rasterizer.deviceName();
-  makeDirs(o.outDir);
   writeJsonAtomic(o.outDir + "/stability.json", report);
+  out.keep();
   std::printf("stability: %s %s, %d frames, %d reference(s) traced: ", scene.name.c_str(), pathConfig.c_str(), frames,
               traced);
   if (s.hasShimmer()) std::printf("shimmer_rate %.6g, ", s.shimmerRate);

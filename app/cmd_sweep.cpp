@@ -14,6 +14,7 @@
 #include "command.h"
 #include "shadowlab/compare/sweep.h"
 #include "shadowlab/scenes/error.h"
+#include "shadowlab/scenes/io.h"
 
 namespace {
 
@@ -94,13 +95,14 @@ int run(const Options& o) {
                        "\"; expected a number >= 0 (a rate, e.g. 0.01)");
     spec.frontierThreshold = t;
   }
-  std::error_code ec;
-  if (fs::exists(o.outDir, ec) && !fs::is_directory(o.outDir, ec))
-    throw InputError(formatError(o.outDir, "", "exists and is not a folder; expected an output folder for -o"));
   const SweepPlan plan = planSweep(spec);
+  // Every output location, before any work.
+  OutputFolder out(o.outDir);
+  const std::string cacheDir = o.cacheDir.empty() ? defaultSweepCacheDir(o.outDir) : o.cacheDir;
+  OutputFolder cacheFolder(cacheDir, o.cacheDir.empty() ? "-o (its reference cache)" : "--cache");
+  cacheFolder.keep();  // a cache outlives the command
 
   // ---- work ------------------------------------------------------------------------------------
-  const std::string cacheDir = o.cacheDir.empty() ? defaultSweepCacheDir(o.outDir) : o.cacheDir;
   auto runner = makePipelineRunner(cacheDir, spec.spp, o.device);
   SweepOptions options;
   options.outDir = o.outDir;
@@ -113,6 +115,7 @@ int run(const Options& o) {
                plan.sceneNames.size(), plan.configs.size(), plan.jobs.size(), o.outDir.c_str(), cacheDir.c_str());
   installInterruptHandlers();
   const SweepSummary summary = runSweep(plan, *runner, options);
+  out.keep();  // rows, log and lock live there: a later run continues from them
   if (summary.interrupted) {
     std::fprintf(stderr,
                  "sweep: interrupted: %zu of %zu rows are saved in %s/rows.jsonl; run the same command again to "

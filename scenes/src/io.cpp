@@ -81,6 +81,45 @@ void makeDirs(const std::string& dir) {
     throw InputError(formatError(dir, "", "cannot create folder: " + (ec ? ec.message() : std::string("not a folder"))));
 }
 
+OutputFolder::OutputFolder(const std::string& dir, const std::string& flag) : dir_(dir) {
+  if (dir.empty()) throw InputError(flag + ": error: the output folder is empty; expected a folder");
+  std::error_code ec;
+  // The folders that do not exist yet, innermost first, to remove them again on failure.
+  for (fs::path p = fs::absolute(dir, ec).lexically_normal(); !p.empty() && !fs::exists(p, ec); p = p.parent_path()) {
+    created_.push_back(p.string());
+    if (p == p.parent_path()) break;
+  }
+  if (fs::exists(dir, ec) && !fs::is_directory(dir, ec))
+    throw InputError(formatError(dir, "", "exists and is not a folder; expected an output folder for " + flag));
+  fs::create_directories(dir, ec);
+  if (ec || !fs::is_directory(dir, ec)) {
+    created_.clear();  // nothing of ours to remove
+    throw InputError(formatError(dir, "", "cannot create the output folder for " + flag + ": " +
+                                              (ec ? ec.message() : std::string("not a folder"))));
+  }
+  const std::string probe = tempPathFor((fs::path(dir) / "probe").string());
+  std::FILE* f = std::fopen(probe.c_str(), "wb");
+  int err = errno;
+  bool ok = f && std::fputc('x', f) != EOF;
+  if (f) ok = (std::fclose(f) == 0) && ok, err = ok ? 0 : errno;
+  std::remove(probe.c_str());
+  if (!ok) {
+    removeCreated();
+    throw InputError(formatError(dir, "", "cannot write into the output folder for " + flag + ": " +
+                                              std::strerror(err ? err : EIO)));
+  }
+}
+
+void OutputFolder::removeCreated() {
+  std::error_code ec;
+  for (const std::string& p : created_) fs::remove(p, ec);  // only removes empty folders
+  created_.clear();
+}
+
+OutputFolder::~OutputFolder() {
+  if (!keep_) removeCreated();
+}
+
 uint64_t fnv1a64(const void* data, size_t size, uint64_t seed) {
   const auto* bytes = static_cast<const unsigned char*>(data);
   uint64_t h = seed;

@@ -25,6 +25,28 @@ std::string escapeMarkup(const std::string& text);
 // Creates `dir` and its parents; throws InputError naming it when that fails.
 void makeDirs(const std::string& dir);
 
+// A command's output folder, claimed before any work: the constructor creates it (and missing
+// parents) and writes and removes a probe file there, so an unusable -o (under a file, under /proc,
+// read-only, a full disk) is an input error naming `flag` and the folder before anything is traced
+// or rendered. access() cannot tell: root passes it everywhere. Unless keep() is called, the
+// destructor removes the folders the constructor created, if they are still empty, so a command
+// that fails later leaves nothing behind.
+class OutputFolder {
+ public:
+  OutputFolder(const std::string& dir, const std::string& flag = "-o");
+  ~OutputFolder();
+  OutputFolder(const OutputFolder&) = delete;
+  OutputFolder& operator=(const OutputFolder&) = delete;
+  void keep() { keep_ = true; }
+  const std::string& path() const { return dir_; }
+
+ private:
+  void removeCreated();
+  std::string dir_;
+  std::vector<std::string> created_;  // innermost first
+  bool keep_ = false;
+};
+
 // 64-bit FNV-1a (offset basis 0xcbf29ce484222325), printed as 16 lowercase hex digits. Used for
 // scene and camera hashes; pass a previous hash as `seed` to continue hashing more bytes.
 uint64_t fnv1a64(const void* data, size_t size, uint64_t seed = 14695981039346656037ull);

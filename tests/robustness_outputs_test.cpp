@@ -1,0 +1,119 @@
+// Output locations are checked before any work, by every subcommand that writes a folder, and a
+// command that fails after claiming its folder leaves nothing behind. One --set syntax (method keys
+// and scene:/pointer values) for every subcommand that takes a scene.
+#include <gtest/gtest.h>
+#include <unistd.h>
+
+#include <filesystem>
+#include <string>
+
+#include "support/cli.h"
+
+namespace fs = std::filesystem;
+using shadowlab::testing::CliRun;
+using shadowlab::testing::runShadowlab;
+using shadowlab::testing::slurp;
+
+namespace {
+
+fs::path tempDir(const std::string& name) {
+  fs::path dir = fs::temp_directory_path() / ("shadowlab_outputs_test_" + std::to_string(::getpid())) / name;
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  return dir;
+}
+
+// A small image keeps every trace and render in this file well under a second.
+const std::string kSmall = " --set scene:/camera/width=48 --set scene:/camera/height=32";
+
+}  // namespace
+
+// /proc refuses new folders even to root (access() would say yes): each command must find out
+// before it traces or renders, and must not leave a reference cache in the working folder.
+TEST(OutputFolders, UnusableOutputFolderExitsTwoBeforeAnyWork) {
+  const fs::path dir = tempDir("proc");
+  const std::string bad = "/proc/shadowlab_no_such_folder/out";
+  const std::string cd = "cd '" + dir.string() + "' && ";
+  for (const std::string& command :
+       {"reference grazing" + kSmall, "raster grazing" + kSmall, "run grazing" + kSmall,
+        "stability grazing --path dolly --frames 2 --distance 0.1" + kSmall,
+        "sweep grazing --grid map.size=64" + kSmall}) {
+    SCOPED_TRACE(command);
+    CliRun r = runShadowlab(command + " -o " + bad, dir, cd);
+    EXPECT_EQ(r.code, 2) << r.err;
+    EXPECT_NE(r.err.find(bad), std::string::npos) << "names the folder: " << r.err;
+    EXPECT_NE(r.err.find("output folder"), std::string::npos) << r.err;
+    EXPECT_EQ(r.out, "") << "nothing ran: " << r.out;
+    EXPECT_FALSE(fs::exists(dir / ".shadowlab-cache")) << "a reference was traced and cached first";
+  }
+}
+
+TEST(OutputFolders, FolderUnderAFileExitsTwo) {
+  const fs::path dir = tempDir("under_file");
+  std::ofstream(dir / "file.txt") << "x";
+  CliRun r = runShadowlab("reference grazing" + kSmall + " -o '" + (dir / "file.txt" / "out").string() + "'", dir);
+  EXPECT_EQ(r.code, 2) << r.err;
+  EXPECT_NE(r.err.find("file.txt/out"), std::string::npos) << r.err;
+  EXPECT_EQ(r.out, "");
+}
+
+// The folder is created early to prove it can be written; a failure after that removes it again.
+TEST(OutputFolders, CommandFailingAfterTheCheckLeavesNoFolder) {
+  const fs::path dir = tempDir("cleanup");
+  const fs::path out = dir / "new" / "deeper";
+  CliRun r = runShadowlab("raster grazing" + kSmall + " --device no_such_vulkan_device -o '" + out.string() + "'", dir);
+  EXPECT_EQ(r.code, 2) << r.err;
+  EXPECT_NE(r.err.find("no_such_vulkan_device"), std::string::npos) << r.err;
+  EXPECT_FALSE(fs::exists(dir / "new")) << "the folders the command created were left behind";
+}
+
+TEST(OutputFolders, CompareChecksItsOutputBeforeReadingFrames) {
+  const fs::path dir = tempDir("compare");
+  CliRun ref = runShadowlab("reference grazing" + kSmall + " -o '" + (dir / "ref").string() + "'", dir);
+  ASSERT_EQ(ref.code, 0) << ref.err;
+  CliRun ras = runShadowlab("raster grazing" + kSmall + " -o '" + (dir / "ras").string() + "'", dir);
+  if (ras.code == 3) GTEST_SKIP() << "no Vulkan device (shadowlab exit 3): " << ras.err;
+  ASSERT_EQ(ras.code, 0) << ras.err;
+  CliRun bad = runShadowlab("compare '" + (dir / "ref").string() + "' '" + (dir / "ras").string() +
+                                "' -o /proc/shadowlab_no_such_folder/cmp",
+                            dir);
+  EXPECT_EQ(bad.code, 2) << bad.err;
+  EXPECT_NE(bad.err.find("/proc/shadowlab_no_such_folder/cmp"), std::string::npos) << bad.err;
+  CliRun good = runShadowlab(
+      "compare '" + (dir / "ref").string() + "' '" + (dir / "ras").string() + "' -o '" + (dir / "cmp").string() + "'",
+      dir);
+  EXPECT_EQ(good.code, 0) << good.err;
+  EXPECT_TRUE(fs::is_regular_file(dir / "cmp" / "metrics.json"));
+}
+
+// raster takes the scene: overrides that run and sweep take (it used to refuse them), and the
+// reference takes the scene: ones while refusing method keys, which do not change the truth.
+TEST(SetSyntax, RasterAndReferenceTakeSceneOverrides) {
+  const fs::path dir = tempDir("set");
+  CliRun ras = runShadowlab("raster grazing --set scene:/camera/width=40 --set scene:/camera/height=30 "
+                            "--set filter=pcf -o '" + (dir / "ras").string() + "'",
+                            dir);
+  if (ras.code == 3) GTEST_SKIP() << "no Vulkan device (shadowlab exit 3): " << ras.err;
+  ASSERT_EQ(ras.code, 0) << ras.err;
+  const std::string rasterJson = slurp(dir / "ras" / "raster.json");
+  EXPECT_NE(rasterJson.find("\"width\": 40"), std::string::npos) << rasterJson;
+  EXPECT_NE(rasterJson.find("\"height\": 30"), std::string::npos) << rasterJson;
+  EXPECT_NE(rasterJson.find("\"filter\": \"pcf\""), std::string::npos) << rasterJson;
+
+  CliRun ref = runShadowlab("reference grazing --set scene:/camera/width=40 --set scene:/camera/height=30 -o '" +
+                                (dir / "ref").string() + "'",
+                            dir);
+  ASSERT_EQ(ref.code, 0) << ref.err;
+  const std::string referenceJson = slurp(dir / "ref" / "reference.json");
+  EXPECT_NE(referenceJson.find("\"width\": 40"), std::string::npos) << referenceJson;
+
+  CliRun method = runShadowlab("reference grazing --set filter=pcf -o '" + (dir / "ref2").string() + "'", dir);
+  EXPECT_EQ(method.code, 2) << method.err;
+  EXPECT_NE(method.err.find("filter=pcf"), std::string::npos) << method.err;
+  EXPECT_FALSE(fs::exists(dir / "ref2"));
+
+  CliRun badKey = runShadowlab("raster grazing --set scene:/camera/no_such_key=3 -o '" + (dir / "ras2").string() + "'",
+                               dir);
+  EXPECT_EQ(badKey.code, 2) << badKey.err;
+  EXPECT_FALSE(fs::exists(dir / "ras2"));
+}
