@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "command.h"
+#include "job_limits.h"
 #include "shadowlab/compare/set_arguments.h"
 #include "shadowlab/compare/timings.h"
 #include "shadowlab/raster/raster.h"
@@ -25,6 +26,7 @@ struct Options {
   std::string device;
   std::string outDir;
   bool validation = false;
+  double maxMemoryGiB = 0;
 };
 
 int run(const Options& o) {
@@ -33,6 +35,7 @@ int run(const Options& o) {
   const SetArguments set = applySetArguments(o.methodFile, o.settings);
   const Method& method = set.method;
   const Scene scene = loadScene(resolveScenePath(o.scene), set.sceneOverrides);
+  app::checkMemory("raster", app::rasterJobMemory(scene, method), o.maxMemoryGiB);
   OutputFolder out(o.outDir);  // an unusable -o fails here, before the device starts
 
   RasterDeviceOptions deviceOptions;
@@ -80,6 +83,7 @@ shadowlab::app::Registrar reg{"raster", [](CLI::App& app) {
   sub->add_option("--device", opts->device, "Vulkan device name substring (default: lavapipe/llvmpipe)");
   sub->add_flag("--validation", opts->validation, "Enable the Khronos validation layer; fail on any message");
   sub->add_option("-o,--out", opts->outDir, "Output folder")->required();
+  shadowlab::app::addMaxMemoryOption(sub, &opts->maxMemoryGiB);
   return std::function<int()>([opts] { return run(*opts); });
 }};
 

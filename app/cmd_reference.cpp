@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "command.h"
+#include "job_limits.h"
 #include "shadowlab/compare/set_arguments.h"
 #include "shadowlab/reference/reference.h"
 #include "shadowlab/scenes/error.h"
@@ -24,6 +25,7 @@ struct Options {
   int spp = 1;
   int threads = 0;
   std::vector<std::string> sets;
+  double maxMemoryGiB = 0;
 };
 
 int run(const Options& options) {
@@ -46,12 +48,14 @@ int run(const Options& options) {
                                   "\"; expected scene:/json/pointer=value (the reference takes no method keys)");
   const shadowlab::SetArguments set = shadowlab::applySetArguments("", options.sets);
   const shadowlab::Scene scene = shadowlab::loadScene(shadowlab::resolveScenePath(options.scene), set.sceneOverrides);
+  shadowlab::app::checkMemory("reference", shadowlab::app::referenceJobMemory(scene), options.maxMemoryGiB);
   shadowlab::OutputFolder out(options.outDir);  // an unusable -o fails here, before the trace
   const auto loaded = Clock::now();
 
   shadowlab::ReferenceOptions referenceOptions;
   referenceOptions.spp = options.spp;
   referenceOptions.threads = options.threads;
+  referenceOptions.progress = shadowlab::app::terminalProgress("reference: tracing");
   shadowlab::ReferenceStats stats;
   const shadowlab::Frame frame = shadowlab::renderReference(scene, referenceOptions, &stats);
   const auto traced = Clock::now();
@@ -121,6 +125,7 @@ shadowlab::app::Registrar reg{"reference", [](CLI::App& app) {
       ->required();
   sub->add_option("-o,--out", options->outDir, "output folder: reference.exr, reference.png, reference.json")
       ->required();
+  shadowlab::app::addMaxMemoryOption(sub, &options->maxMemoryGiB);
   sub->add_option("--set", options->sets, "scene:/json/pointer=value: override one scene value (repeatable)")
       ->allow_extra_args(false);
   sub->add_option("--spp", options->spp, "stratified samples per pixel, 1..1024 (fractional visibility)")

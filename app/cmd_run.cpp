@@ -8,6 +8,7 @@
 #include <memory>
 
 #include "command.h"
+#include "job_limits.h"
 #include "shadowlab/compare/run_pipeline.h"
 #include "shadowlab/compare/results.h"
 #include "shadowlab/compare/set_arguments.h"
@@ -31,6 +32,7 @@ struct Options {
   std::string cacheDir;
   std::string device;
   bool keepImages = false;
+  double maxMemoryGiB = 0;
 };
 
 int run(const Options& o) {
@@ -54,6 +56,7 @@ int run(const Options& o) {
   // configuration); else the method name.
   const std::string& config = set.config;
 
+  app::checkMemory("run", app::compareJobMemory(scene, method), o.maxMemoryGiB);
   // Every output location, before any work: a bad -o or --cache must not cost a trace first.
   OutputFolder out(o.outDir);
   ReferenceCache cache(o.cacheDir);
@@ -66,6 +69,7 @@ int run(const Options& o) {
   Rasterizer rasterizer(deviceOptions);
   ReferenceOptions referenceOptions;
   referenceOptions.spp = o.spp;
+  referenceOptions.progress = app::terminalProgress("run: tracing the reference");
   // config_wall_ms: this configuration end to end (reference traced or loaded, render, compare),
   // as a sweep row measures it; the device start above is the command's, not the configuration's.
   const auto configStart = std::chrono::steady_clock::now();
@@ -121,6 +125,7 @@ app::Registrar reg{"run", [](CLI::App& app) {
   sub->add_option("--light", opts->light, "Light to render and compare (default: the scene's first)");
   sub->add_option("--spp", opts->spp, "Reference samples per pixel")->capture_default_str();
   sub->add_option("-o,--out", opts->outDir, "Output folder")->required();
+  app::addMaxMemoryOption(sub, &opts->maxMemoryGiB);
   sub->add_option("--cache", opts->cacheDir, "Reference cache folder (default: $SHADOWLAB_CACHE, else .shadowlab-cache)");
   sub->add_option("--device", opts->device, "Vulkan device name substring (default: lavapipe)");
   sub->add_flag("--keep-images", opts->keepImages, "Also write reference.exr and raster.exr");

@@ -18,6 +18,7 @@
 #include <memory>
 
 #include "command.h"
+#include "job_limits.h"
 #include "shadowlab/compare/run_pipeline.h"
 #include "shadowlab/compare/stability.h"
 #include "shadowlab/scenes/light_path.h"
@@ -45,6 +46,7 @@ struct Options {
   std::vector<std::string> lightPaths;
   std::string outDir;
   std::string cacheDir;
+  double maxMemoryGiB = 0;
   std::string device;
   CLI::Option* distanceOpt = nullptr;
   CLI::Option* angleOpt = nullptr;
@@ -164,6 +166,7 @@ int run(const Options& o) {
 
   const std::string config = set.config + " @ " + pathConfig;
 
+  app::checkMemory("stability", app::compareJobMemory(scene, set.method), o.maxMemoryGiB);
   // Every output location, before any work: a bad -o or --cache must not cost a trace first.
   OutputFolder out(o.outDir);
   ReferenceCache cache(o.cacheDir);
@@ -266,6 +269,7 @@ app::Registrar reg{"stability", [](CLI::App& app) {
                   "(e.g. elevation_deg=60:10:11); the camera stays fixed")
       ->allow_extra_args(false);  // one value per --light-path: SCENE may follow it
   sub->add_option("-o,--out", opts->outDir, "Output folder")->required();
+  app::addMaxMemoryOption(sub, &opts->maxMemoryGiB);
   sub->add_option("--cache", opts->cacheDir, "Reference cache folder (default: $SHADOWLAB_CACHE, else .shadowlab-cache)");
   sub->add_option("--device", opts->device, "Vulkan device name substring (default: lavapipe)");
   return std::function<int()>([opts] { return run(*opts); });

@@ -4,7 +4,9 @@
 #include <gtest/gtest.h>
 #include <unistd.h>
 
+#include <cstdlib>
 #include <filesystem>
+#include <fstream>
 #include <string>
 
 #include "support/cli.h"
@@ -116,4 +118,43 @@ TEST(SetSyntax, RasterAndReferenceTakeSceneOverrides) {
                                dir);
   EXPECT_EQ(badKey.code, 2) << badKey.err;
   EXPECT_FALSE(fs::exists(dir / "ras2"));
+}
+
+// A job whose estimated memory exceeds --max-memory is refused before it starts, naming the
+// estimate and the limit; one under it runs.
+TEST(JobLimits, MaxMemoryRefusesJobsThatCannotFitBeforeAnyWork) {
+  const fs::path dir = tempDir("memory");
+  const std::string big = " --set scene:/camera/width=8000 --set scene:/camera/height=8000 --max-memory 1";
+  for (const char* command : {"reference grazing", "raster grazing", "run grazing"}) {
+    SCOPED_TRACE(command);
+    CliRun r = runShadowlab(std::string(command) + big + " -o '" + (dir / "out").string() + "'", dir);
+    EXPECT_EQ(r.code, 2) << r.err;
+    EXPECT_NE(r.err.find("this job needs about"), std::string::npos) << r.err;
+    EXPECT_NE(r.err.find("expected at most 1.00 GiB (--max-memory)"), std::string::npos) << r.err;
+    EXPECT_FALSE(fs::exists(dir / "out")) << "the refused job wrote its folder";
+  }
+  // the map alone: 16384^2 texels x 8 bytes = 2 GiB
+  CliRun map = runShadowlab("raster grazing" + kSmall + " --set map.size=16384 --max-memory 1 -o '" +
+                                (dir / "out").string() + "'",
+                            dir);
+  EXPECT_EQ(map.code, 2) << map.err;
+  EXPECT_NE(map.err.find("map 16384^2 x 1 layer(s) 2.00 GiB"), std::string::npos) << map.err;
+
+  CliRun small = runShadowlab("reference grazing" + kSmall + " --max-memory 1 -o '" + (dir / "ok").string() + "'", dir);
+  EXPECT_EQ(small.code, 0) << small.err;
+}
+
+// The trace's progress line shows on a terminal only: `script` gives the command a pseudo-terminal.
+TEST(JobLimits, ProgressOnATerminalOnly) {
+  const fs::path dir = tempDir("progress");
+  if (std::system("command -v script >/dev/null 2>&1") != 0) GTEST_SKIP() << "no `script` (util-linux) to make a terminal";
+  const std::string args = "reference grazing" + kSmall + " -o '" + (dir / "ref").string() + "'";
+  const fs::path log = dir / "tty.txt";
+  const std::string cmd = "script -qec \"" + std::string(SHADOWLAB_BINARY) + " " + args + "\" /dev/null >'" +
+                          log.string() + "' 2>&1";
+  ASSERT_EQ(std::system(cmd.c_str()), 0) << slurp(log);
+  EXPECT_NE(slurp(log).find("reference: tracing 100%"), std::string::npos) << slurp(log);
+  CliRun piped = runShadowlab(args, dir);
+  EXPECT_EQ(piped.code, 0) << piped.err;
+  EXPECT_EQ(piped.err.find('%'), std::string::npos) << "no progress line into a pipe: " << piped.err;
 }

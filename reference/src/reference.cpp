@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <atomic>
+#include <mutex>
 #include <chrono>
 #include <cmath>
 #include <limits>
@@ -335,6 +336,11 @@ struct Planes {
 
 }  // namespace
 
+double referenceFrameBytes(const Scene& scene) {
+  const double channels = 9.0 + 2.0 * double(scene.lights.size()) + 6.0 * double(scene.projectors.size());
+  return channels * 4.0 * double(scene.camera.width) * double(scene.camera.height);
+}
+
 Frame renderReference(const Scene& scene, const ReferenceOptions& options, ReferenceStats* stats) {
   if (options.spp < 1 || options.spp > 1024) {
     throw InputError("reference: error: spp " + std::to_string(options.spp) + "; expected 1..1024");
@@ -446,8 +452,26 @@ Frame renderReference(const Scene& scene, const ReferenceOptions& options, Refer
   arena.execute([&] { embree = std::make_unique<EmbreeScene>(scene); });
   const auto traceStart = Clock::now();
 
+  // Progress: tiles finish in any order; whichever thread crosses the next percent reports it
+  // (under a mutex, so the callback runs on one thread at a time and the fractions only grow).
+  const int tileCount = tilesX * tilesY;
+  std::atomic<int> tilesDone{0};
+  std::mutex progressMutex;
+  int lastPercent = 0;
+  auto tileFinished = [&] {
+    if (!options.progress) return;
+    const int done = ++tilesDone;
+    const int percent = int(int64_t(done) * 100 / tileCount);
+    if (percent <= lastPercent && done != tileCount) return;
+    std::lock_guard<std::mutex> lock(progressMutex);
+    if (percent > lastPercent) {
+      lastPercent = percent;
+      options.progress(double(done) / tileCount);
+    }
+  };
+
   arena.execute([&] {
-    tbb::parallel_for(tbb::blocked_range<int>(0, tilesX * tilesY), [&](const tbb::blocked_range<int>& range) {
+    tbb::parallel_for(tbb::blocked_range<int>(0, tileCount), [&](const tbb::blocked_range<int>& range) {
       Tracer tracer(scene, *embree);
       LaneHit center[kLanes], sample[kLanes];
       std::vector<float> centerVis(lightCount * kLanes), centerDist(lightCount * kLanes);
@@ -535,6 +559,7 @@ Frame renderReference(const Scene& scene, const ReferenceOptions& options, Refer
           }
         }
         embree->check("tracing a tile");
+        tileFinished();
       }
       primaryRays += tracer.primaryRays;
       shadowRays += tracer.shadowRays;

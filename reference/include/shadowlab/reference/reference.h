@@ -1,6 +1,7 @@
 #pragma once
 // Embree 3 ground truth. No Embree header leaks through this interface.
 #include <cstdint>
+#include <functional>
 #include <string>
 
 #include "shadowlab/scenes/frame.h"
@@ -11,7 +12,14 @@ namespace shadowlab {
 struct ReferenceOptions {
   int spp = 1;      // stratified samples per pixel (1 = the pixel center); visibility becomes fractional
   int threads = 0;  // 0 = all hardware threads; results are bit-identical for any value
+  // Called with the fraction of tiles traced (0..1], at most once per percent, from one thread
+  // at a time (the caller's terminal progress line). Not part of the result or its hash.
+  std::function<void(double)> progress;
 };
+
+// Bytes a reference frame of this scene takes in memory: one float per pixel per channel
+// (scenes/frame.h: 9 per frame, 2 per light, 6 per projector).
+double referenceFrameBytes(const Scene& scene);
 
 struct ReferenceStats {
   uint64_t primaryRays = 0;

@@ -1,0 +1,118 @@
+#include "job_limits.h"
+
+#include <unistd.h>
+
+#include <cmath>
+#include <cstdio>
+
+#include "shadowlab/reference/reference.h"
+#include "shadowlab/scenes/error.h"
+
+namespace shadowlab::app {
+
+namespace {
+
+constexpr double kGiB = 1024.0 * 1024.0 * 1024.0;
+
+std::string gib(double bytes) {
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%.2f GiB", bytes / kGiB);
+  return buf;
+}
+
+double pixels(const Scene& scene) { return double(scene.camera.width) * double(scene.camera.height); }
+
+// The raster frame's channels (scenes/frame.h): hit, object and primitive ids, 11 per rendered
+// light, 5 per projector.
+double rasterFrameBytes(const Scene& scene) {
+  return (3.0 + 11.0 + 5.0 * double(scene.projectors.size())) * 4.0 * pixels(scene);
+}
+
+// The device's images: the camera's visibility buffer (id + depth, 8 bytes a pixel) and the
+// resolve pass's two RGBA32F targets (32), and the map's layers (depth + id, 8 bytes a texel):
+// one per cascade, six for a point light, one otherwise, plus one per projector.
+void addDeviceImages(MemoryEstimate& e, const Scene& scene, const Method& method) {
+  e.add(40.0 * pixels(scene), "camera targets");
+  int layers = method.fit == Fit::Cascades ? method.cascadeCount : 1;
+  for (const Light& light : scene.lights)
+    if (light.type == LightType::Point) layers = std::max(layers, 6);
+  layers += int(scene.projectors.size());
+  e.add(8.0 * double(method.mapSize) * double(method.mapSize) * layers,
+        "map " + std::to_string(method.mapSize) + "^2 x " + std::to_string(layers) + " layer(s)");
+}
+
+double physicalMemoryBytes() {
+  const long pages = ::sysconf(_SC_PHYS_PAGES), pageSize = ::sysconf(_SC_PAGE_SIZE);
+  return pages > 0 && pageSize > 0 ? double(pages) * double(pageSize) : 0.0;
+}
+
+}  // namespace
+
+void MemoryEstimate::add(double termBytes, const std::string& what) {
+  bytes += termBytes;
+  breakdown += (breakdown.empty() ? "" : " + ") + what + " " + gib(termBytes);
+}
+
+// The program, its libraries, the scene and its BVH at the bundled scenes' sizes (a 48x32 run's
+// peak resident set is about 130 MB).
+constexpr double kProgramBytes = 0.15 * kGiB;
+
+MemoryEstimate referenceJobMemory(const Scene& scene) {
+  MemoryEstimate e;
+  e.add(kProgramBytes, "program");
+  e.add(2.0 * referenceFrameBytes(scene), "reference frame x 2 (the EXR writer's interleaved copy)");
+  e.add(6.0 * pixels(scene), "picture");
+  return e;
+}
+
+MemoryEstimate rasterJobMemory(const Scene& scene, const Method& method) {
+  MemoryEstimate e;
+  e.add(kProgramBytes, "program");
+  e.add(2.0 * rasterFrameBytes(scene), "raster frame x 2 (the EXR writer's interleaved copy)");
+  addDeviceImages(e, scene, method);
+  return e;
+}
+
+MemoryEstimate compareJobMemory(const Scene& scene, const Method& method) {
+  MemoryEstimate e;
+  e.add(kProgramBytes, "program");
+  e.add(referenceFrameBytes(scene), "reference frame");
+  e.add(rasterFrameBytes(scene), "raster frame");
+  addDeviceImages(e, scene, method);
+  // classes and reference-lit flags (2 bytes), errors.png (3), the triptych (9), their PNG
+  // encoders' rows and the picture the triptych is drawn from (~16)
+  e.add(30.0 * pixels(scene), "classes and pictures");
+  return e;
+}
+
+void addMaxMemoryOption(CLI::App* sub, double* maxMemoryGiB) {
+  sub->add_option("--max-memory", *maxMemoryGiB,
+                  "Refuse a job whose estimated memory exceeds this many GiB (default: 80% of physical memory)")
+      ->check(CLI::NonNegativeNumber);
+}
+
+void checkMemory(const std::string& command, const MemoryEstimate& estimate, double maxMemoryGiB) {
+  const double physical = physicalMemoryBytes();
+  const double limit = maxMemoryGiB > 0 ? maxMemoryGiB * kGiB : 0.8 * physical;
+  const std::string limitText = maxMemoryGiB > 0 ? gib(limit) + " (--max-memory)"
+                                                 : gib(limit) + " (80% of this machine's " + gib(physical) +
+                                                       "; --max-memory sets another)";
+  if (limit > 0 && estimate.bytes > limit)
+    throw InputError("shadowlab " + command + ": error: this job needs about " + gib(estimate.bytes) + " (" +
+                     estimate.breakdown + "); expected at most " + limitText +
+                     ": lower the camera's width and height or map.size");
+  if (estimate.bytes >= kGiB)
+    std::fprintf(stderr, "%s: about %s of memory (%s); the limit is %s\n", command.c_str(), gib(estimate.bytes).c_str(),
+                 estimate.breakdown.c_str(), limitText.c_str());
+}
+
+std::function<void(double)> terminalProgress(const std::string& label) {
+  if (::isatty(STDERR_FILENO) != 1) return {};
+  return [label](double fraction) {
+    std::fprintf(stderr, "\r%s %3d%%", label.c_str(), int(std::floor(fraction * 100.0)));
+    if (fraction >= 1.0) std::fprintf(stderr, "\r%*s\r", int(label.size()) + 5, "");
+    std::fflush(stderr);
+  };
+}
+
+}  // namespace shadowlab::app
