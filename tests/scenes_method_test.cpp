@@ -144,6 +144,14 @@ TEST(ScenesMethod, TextErrorsAreExact) {
     EXPECT_NE(setError("bias.slope", v).find("--set: bias.slope: error: got \""), std::string::npos) << v;
 }
 
+// Bytes that are not UTF-8 (a --set argument may hold any): an input error quoting them as U+FFFD,
+// not nlohmann's type_error 316 escaping from the message builder (found by fuzz_method).
+TEST(ScenesMethod, ValueThatIsNotUtf8IsAnInputError) {
+  EXPECT_EQ(setError("fit", "cascad\xffhes"),
+            "--set: fit: error: got \"cascad\xef\xbf\xbdhes\"; expected one of sphere, tight, cascades, lispsm");
+  EXPECT_NE(setError("map.size", "\xff\xfe").find("--set: map.size: error: got \""), std::string::npos);
+}
+
 TEST(ScenesMethod, JsonErrors) {
   Method m;
   EXPECT_EQ(errorOf([&] { applyMethodJson(m, "map.size", "2048", "grid.json: /grid/map.size/1"); }),

@@ -46,7 +46,8 @@ struct Value {
   const nlohmann::json* json = nullptr;
   const std::string* text = nullptr;
 
-  std::string got() const { return json ? detail::describe(*json) : nlohmann::json(*text).dump(); }
+  // Text comes from the command line: describe() quotes it safely whatever its bytes.
+  std::string got() const { return detail::describe(json ? *json : nlohmann::json(*text)); }
 
   bool asInt(long long& out) const {
     if (json) {

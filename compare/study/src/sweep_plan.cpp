@@ -106,7 +106,7 @@ std::string canonicalValueText(const nlohmann::json& value) {
     std::snprintf(buf, sizeof buf, "%.6g", d);
     return buf;
   }
-  return value.dump();
+  return dumpJson(value);  // text from --grid / --set may hold any bytes
 }
 
 std::string SweepJob::key() const {
@@ -389,7 +389,7 @@ SweepPlan planSweep(const SweepSpec& spec) {
                                                                        " also sets; expected one of them"));
         }
       std::string vkey = std::to_string(si);
-      for (const auto& o : overrides) vkey += "\n" + o.pointer + "=" + o.value.dump();
+      for (const auto& o : overrides) vkey += "\n" + o.pointer + "=" + dumpJson(o.value);
       auto found = variantOf.find(vkey);
       size_t vi;
       if (found == variantOf.end()) {

@@ -27,6 +27,10 @@ nlohmann::json readJsonFile(const std::string& path);
 std::string jsonTypeName(const nlohmann::json& v);
 std::string jsonTypeName(const nlohmann::ordered_json& v);
 
+// v.dump() that never throws: bytes that are not UTF-8 (which a command-line argument may hold,
+// though no parsed file can) become U+FFFD instead of nlohmann's type_error 316.
+std::string dumpJson(const nlohmann::json& v);
+
 // One reference token of a JSON pointer (RFC 6901: "~" -> "~0", "/" -> "~1"), for keys such as
 // "scene:/a/b" that hold slashes.
 std::string jsonPointerToken(const std::string& key);
