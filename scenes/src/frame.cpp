@@ -1,6 +1,6 @@
-// Frame <-> EXR through image_io.h (OpenImageIO, or OpenEXR + libpng). EXR stores channels sorted by name, so reading goes by
-// name, never by position; the insertion order is kept in a second attribute so a round trip
-// returns the very same Frame.
+// Frame <-> EXR through image_io.h (OpenImageIO, or OpenEXR + libpng). EXR stores channels sorted
+// by name, so reading goes by name, never by position; the insertion order is kept in a second
+// attribute so a round trip returns the very same Frame.
 #include "shadowlab/scenes/frame.h"
 
 #include <atomic>
