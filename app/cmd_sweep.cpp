@@ -110,7 +110,9 @@ int run(const Options& o) {
   options.progressBar = ::isatty(STDERR_FILENO) == 1;
   options.stop = &gStop;
   options.writeReport = !o.noReport;
-  options.reportScript = defaultReportScript(SHADOWLAB_SOURCE_DIR);
+  // $SHADOWLAB_HOME (an unpacked bundle, like scenes/data) holds compare/report/charts.py too.
+  const char* home = std::getenv("SHADOWLAB_HOME");
+  options.reportScript = defaultReportScript(home && *home ? home : SHADOWLAB_SOURCE_DIR);
   std::fprintf(stderr, "sweep: %zu scene(s) x %zu configuration(s) = %zu rows into %s (reference cache %s)\n",
                plan.sceneNames.size(), plan.configs.size(), plan.jobs.size(), o.outDir.c_str(), cacheDir.c_str());
   installInterruptHandlers();

@@ -2,7 +2,7 @@
 # Installs the Debian 12 packages shadowlab builds and tests with, only those missing.
 # Usage: scripts/install-deps.sh [--with-report]   (--with-report adds matplotlib and chromium)
 set -euo pipefail
-pkgs=(build-essential cmake pkg-config libembree-dev libglm-dev libopenimageio-dev libtinyobjloader-dev
+pkgs=(build-essential cmake pkg-config libembree-dev libglm-dev libopenimageio-dev libopenexr-dev libpng-dev libtinyobjloader-dev
       mesa-vulkan-drivers libvulkan-dev glslang-dev glslang-tools spirv-tools vulkan-validationlayers
       nlohmann-json3-dev libcli11-dev libtbb-dev libgtest-dev libbenchmark-dev
       python3-matplotlib chromium)

@@ -42,7 +42,9 @@ class FakeRunner : public SweepRunner {
     return out;
   }
   bool writeTriptych(const Scene&, const Method&, const std::string&, const std::string&) override { return false; }
+  std::string deviceName() override { return device; }
   int total = 0;
+  std::string device;  // what deviceName() reports
 };
 
 std::string tempDir(const std::string& name) {
@@ -256,5 +258,64 @@ TEST(SweepResume, ASecondSweepIntoTheSameFolderIsRefusedWhileOneRuns) {
   runSweep(plan, runner, quietOptions(dir));
   EXPECT_NE(runner.error.find("another sweep is writing into this folder"), std::string::npos) << runner.error;
   EXPECT_EQ(lines(dir + "/rows.jsonl").size(), 2u);
+  fs::remove_all(dir);
+}
+
+// Every row names the device of its timings; resuming rows another device measured is refused
+// (exit 2 from the CLI), naming both devices, and leaves the journal as it was.
+TEST(SweepResume, RowsOfAnotherDeviceAreRefusedNotMixed) {
+  const std::string dir = tempDir("device");
+  SweepPlan plan = smallPlan({"map.size=256,512"});
+  FakeRunner gpu;
+  gpu.device = "NVIDIA H100 (NVIDIA)";
+  runSweep(plan, gpu, quietOptions(dir));
+  for (const auto& line : lines(dir + "/rows.jsonl"))
+    EXPECT_EQ(nlohmann::json::parse(line).at("device"), "NVIDIA H100 (NVIDIA)") << line;
+  auto results = nlohmann::json::parse(readFile(dir + "/results.json"));
+  for (const auto& row : results.at("rows")) EXPECT_EQ(row.at("device"), "NVIDIA H100 (NVIDIA)") << row.dump();
+
+  const std::string journalBefore = readFile(dir + "/rows.jsonl");
+  FakeRunner cpu;
+  cpu.device = "llvmpipe (llvmpipe)";
+  try {
+    runSweep(plan, cpu, quietOptions(dir));
+    FAIL() << "resuming rows of another device must throw";
+  } catch (const InputError& e) {
+    const std::string what = e.what();
+    EXPECT_NE(what.find("rows.jsonl"), std::string::npos) << what;
+    EXPECT_NE(what.find("\"NVIDIA H100 (NVIDIA)\""), std::string::npos) << what;
+    EXPECT_NE(what.find("\"llvmpipe (llvmpipe)\""), std::string::npos) << what;
+  }
+  EXPECT_EQ(cpu.total, 0) << "nothing may run on the second device";
+  EXPECT_EQ(readFile(dir + "/rows.jsonl"), journalBefore);
+
+  // The same device resumes as before.
+  FakeRunner again;
+  again.device = "NVIDIA H100 (NVIDIA)";
+  SweepSummary s = runSweep(plan, again, quietOptions(dir));
+  EXPECT_EQ(s.resumed, 2u);
+  EXPECT_EQ(again.total, 0);
+  fs::remove_all(dir);
+}
+
+// A journal an older build wrote has no "device": its timings cannot be placed on a device's
+// axis, so a runner that has a device refuses it too.
+TEST(SweepResume, RowsWithoutARecordedDeviceAreRefusedByADevice) {
+  const std::string dir = tempDir("nodevice");
+  SweepPlan plan = smallPlan({"map.size=256"});
+  FakeRunner old;  // device "": writes "device": ""
+  runSweep(plan, old, quietOptions(dir));
+  std::string journal = readFile(dir + "/rows.jsonl");
+  nlohmann::json line = nlohmann::json::parse(journal.substr(0, journal.find('\n')));
+  line.erase("device");
+  writeFileAtomic(dir + "/rows.jsonl", line.dump() + "\n");
+  FakeRunner now;
+  now.device = "llvmpipe (llvmpipe)";
+  try {
+    runSweep(plan, now, quietOptions(dir));
+    FAIL() << "rows without a device must be refused";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("not recorded"), std::string::npos) << e.what();
+  }
   fs::remove_all(dir);
 }

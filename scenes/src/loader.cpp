@@ -13,10 +13,10 @@
 #include <set>
 #include <sstream>
 
-#include <OpenImageIO/imageio.h>
 #include <glm/gtc/matrix_transform.hpp>
 #include <tiny_obj_loader.h>
 
+#include "image_io.h"
 #include "json_util.h"
 #include "shadowlab/scenes/json_reader.h"
 #include "shadowlab/scenes/camera_path.h"
@@ -202,20 +202,17 @@ std::string resolvePath(const std::string& p, const fs::path& baseDir) {
 Image readImage(const Reader& r, const std::string& ptr, const std::string& path, const std::string& role) {
   std::error_code ec;
   if (!fs::is_regular_file(path, ec)) r.fail(ptr, role + " " + path + " not found; expected an image file");
-  auto in = OIIO::ImageInput::open(path);
-  if (!in) r.fail(ptr, "cannot read " + role + " " + path + ": " + OIIO::geterror() + "; expected an image file");
-  const OIIO::ImageSpec& spec = in->spec();
-  if (spec.width <= 0 || spec.height <= 0 || spec.nchannels <= 0 || spec.width > kMaxResolution ||
-      spec.height > kMaxResolution)
-    r.fail(ptr, role + " " + path + " is " + std::to_string(spec.width) + "x" + std::to_string(spec.height) +
+  image_io::FloatImage read;
+  const std::string err = image_io::readTexture(path, read, kMaxResolution);
+  if (!err.empty()) r.fail(ptr, "cannot read " + role + " " + path + ": " + err + "; expected an image file");
+  if (read.width <= 0 || read.height <= 0 || read.width > kMaxResolution || read.height > kMaxResolution)
+    r.fail(ptr, role + " " + path + " is " + std::to_string(read.width) + "x" + std::to_string(read.height) +
                     "; expected 1..16384 texels per side");
   Image img;
-  img.width = spec.width;
-  img.height = spec.height;
-  img.channels = spec.nchannels;
-  img.pixels.resize(size_t(img.width) * img.height * img.channels);
-  if (!in->read_image(0, 0, 0, img.channels, OIIO::TypeDesc::FLOAT, img.pixels.data()))
-    r.fail(ptr, "cannot read " + role + " " + path + ": " + in->geterror());
+  img.width = read.width;
+  img.height = read.height;
+  img.channels = int(read.channels.size());
+  img.pixels = std::move(read.pixels);
   for (float v : img.pixels)
     if (!std::isfinite(v)) r.fail(ptr, role + " " + path + " holds a non-finite value; expected finite texels");
   return img;
@@ -1034,7 +1031,9 @@ Scene loadScene(const std::string& path, const std::vector<SceneOverride>& overr
   return scene;
 }
 
-std::string bundledScenesDir() { return std::string(SHADOWLAB_SOURCE_DIR) + "/scenes/data"; }
+// $SHADOWLAB_HOME: the folder that holds scenes/data when the binary runs away from its source
+// tree (scripts/device-bundle.sh's launcher sets it to the unpacked bundle).
+std::string bundledScenesDir() { return envOr("SHADOWLAB_HOME", SHADOWLAB_SOURCE_DIR) + "/scenes/data"; }
 
 std::string sharedAssetsDir() {
   std::string shared = envOr("SHADOWLAB_SHARED_DIR", SHADOWLAB_SHARED_DIR);

@@ -57,6 +57,7 @@ struct StoredRow {
   ResultRow row;
   std::string sceneHash;
   double configWallSeconds = 0;  // config_wall_ms / 1000, kept beside the row in the journal
+  std::string device;  // SweepRunner::deviceName() that measured the timings; "" in journals of older builds
 };
 
 // Reads rows.jsonl; drops (and truncates away) a torn last line. A damaged line before the last
@@ -90,14 +91,16 @@ std::map<std::string, StoredRow> readJournal(const std::string& path) {
     } else if (j.is_discarded()) {
       problem = "not valid JSON";
     } else if (!j.is_object() || !j.contains("row") || !j.value("scene_hash", nlohmann::json("")).is_string() ||
-               !j.value("config_wall_seconds", nlohmann::json(0.0)).is_number()) {
-      problem = "expected {\"row\": {...}, \"scene_hash\": \"...\", \"config_wall_seconds\": N}";
+               !j.value("config_wall_seconds", nlohmann::json(0.0)).is_number() ||
+               !j.value("device", nlohmann::json("")).is_string()) {
+      problem = "expected {\"row\": {...}, \"scene_hash\": \"...\", \"config_wall_seconds\": N, \"device\": \"...\"}";
     } else {
       try {
         StoredRow s;
         s.row = ResultRow::fromJson(j.at("row"), path + ":" + std::to_string(lineNo));
         s.sceneHash = j.value("scene_hash", std::string());
         s.configWallSeconds = j.value("config_wall_seconds", 0.0);
+        s.device = j.value("device", std::string());
         rows[s.row.key()] = std::move(s);  // a later line for the same key wins (a stale row re-run)
         goodEnd = next;
       } catch (const InputError& e) {
@@ -312,6 +315,7 @@ SweepSummary runSweep(const SweepPlan& plan, SweepRunner& runner, const SweepOpt
   Journal journal(journalPath);
   std::ofstream log(joinPath(options.outDir, "sweep.log"), std::ios::app);
   const long pid = long(::getpid());
+  const std::string device = runner.deviceName();
 
   // A stored row counts only for the same scene content and the same resolved method: editing a
   // scene file or a --set between runs must not mix old rows into new results.
@@ -324,6 +328,15 @@ SweepSummary runSweep(const SweepPlan& plan, SweepRunner& runner, const SweepOpt
     if (it == stored.end()) continue;
     if (it->second.sceneHash != plan.variants[job.variantIndex].hash) continue;
     if (it->second.row.method != methodJson[job.configIndex]) continue;
+    // Timings of two devices on one axis would compare a GPU with a CPU rasterizer: refuse rather
+    // than mix (another -o folder, or the same --device, is what the user wants).
+    if (it->second.device != device)
+      throw InputError(formatError(
+          journalPath, "",
+          "row \"" + job.key() + "\" was measured on device \"" +
+              (it->second.device.empty() ? std::string("(not recorded: an older shadowlab)") : it->second.device) +
+              "\" but this sweep runs on \"" + device +
+              "\"; expected one device per output folder (use another -o folder, or --device naming the first device)"));
     have[i] = &it->second;
     ++summary.resumed;
   }
@@ -365,7 +378,9 @@ SweepSummary runSweep(const SweepPlan& plan, SweepRunner& runner, const SweepOpt
     s.row.timings[timing::kConfigWallMs] = seconds * 1000.0;  // wall time of this configuration in the sweep
     s.sceneHash = scene.hash;
     s.configWallSeconds = seconds;
-    nlohmann::json line = {{"scene_hash", s.sceneHash}, {"config_wall_seconds", seconds}, {"pid", pid}, {"row", s.row.toJson()}};
+    s.device = device;
+    nlohmann::json line = {{"scene_hash", s.sceneHash}, {"config_wall_seconds", seconds}, {"pid", pid},
+                           {"device", device}, {"row", s.row.toJson()}};
     journal.append(line.dump(), /*sync=*/true);
     if (log) log << "pid " << pid << " done " << job.key() << " " << seconds << " s\n" << std::flush;
     double errorRate = out.metrics.value("error_rate", 0.0);
@@ -396,7 +411,12 @@ SweepSummary runSweep(const SweepPlan& plan, SweepRunner& runner, const SweepOpt
   nlohmann::json results = nlohmann::json::object();
   results["schema"] = "shadowlab.results/1";
   results["rows"] = nlohmann::json::array();
-  for (const auto& r : rows) results["rows"].push_back(r.toJson());
+  // Each row names the device of its timings (all the same: resuming rows of another device is refused).
+  for (size_t i = 0; i < rows.size(); ++i) {
+    nlohmann::json r = rows[i].toJson();
+    r["device"] = have[i]->device;
+    results["rows"].push_back(std::move(r));
+  }
   results["configurations"] = rows.size();
   results["rows_run"] = summary.ran;
   results["rows_resumed"] = summary.resumed;

@@ -79,6 +79,8 @@ class PipelineRunner final : public SweepRunner {
                                                            rasterizer().deviceName() + " allows)"));
   }
 
+  std::string deviceName() override { return rasterizer().deviceName(); }
+
   nlohmann::json info() const override {
     nlohmann::json j = nlohmann::json::object();
     j["device"] = rasterizer_ ? rasterizer_->deviceName() : std::string("(not started: every row was resumed)");

@@ -24,7 +24,9 @@ struct SceneOverride {
 // errors, JSON pointer otherwise).
 Scene loadScene(const std::string& path, const std::vector<SceneOverride>& overrides = {});
 
-// Where the bundled scenes live (<source>/scenes/data) and the shared assets folder.
+// Where the bundled scenes live (<home>/scenes/data: <home> is $SHADOWLAB_HOME when set, e.g. by an
+// unpacked bundle's launcher, else the source tree this binary was built from) and the shared
+// assets folder.
 std::string bundledScenesDir();
 std::string sharedAssetsDir();
 // The bundled scene names in a stable order.

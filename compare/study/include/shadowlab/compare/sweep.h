@@ -139,6 +139,10 @@ class SweepRunner {
   }
   // Device and cache facts for results.json ("device", "reference_cache", ...).
   virtual nlohmann::json info() const { return nlohmann::json::object(); }
+  // The device whose clock the timings come from ("" when there is none, e.g. a fake runner).
+  // Every row records it (rows.jsonl and results.json "device"), and runSweep refuses to resume
+  // rows measured on another device: one time axis never holds two devices.
+  virtual std::string deviceName() { return ""; }
 };
 
 // Production runner: references from a ReferenceCache in `cacheDir` (traced once per scene and
@@ -176,7 +180,8 @@ struct SweepSummary {
 // Checks every configuration with runner.checkMethod, then runs the plan into options.outDir
 // (created), appending each finished row durably to outDir/rows.jsonl (one write + fdatasync per
 // row); rows already there for the same scene content and method are not
-// run again; a torn last line is dropped. At the end writes results.json, results.csv, figures/
+// run again; a torn last line is dropped. A row to resume that was measured on another device
+// than runner.deviceName() is an InputError naming both devices (nothing is run or rewritten). At the end writes results.json, results.csv, figures/
 // and report.html. Log of starts/finishes: outDir/sweep.log.
 SweepSummary runSweep(const SweepPlan& plan, SweepRunner& runner, const SweepOptions& options);
 

@@ -1,0 +1,49 @@
+#pragma once
+// The few image operations shadowlab needs, behind one interface with two implementations; the
+// build compiles exactly one (CMake option SHADOWLAB_IMAGE_IO, scenes/CMakeLists.txt):
+//   image_io_oiio.cpp     OpenImageIO (the default; reads every format OIIO knows)
+//   image_io_exr_png.cpp  OpenEXR + libpng only: a few MB of libraries instead of OIIO's ~390 MB of
+//                         dependencies, so the binary and its libraries fit a small bundle
+//                         (scripts/device-bundle.sh). Reads .exr and .png only.
+// Both give the same results (tests/scenes_image_io_test.cpp writes with one and reads with the
+// other, both ways):
+//   * EXR: channels are 32-bit float, ZIP compression at level 1, string attributes by name. On
+//     reading, channels come in OpenImageIO's order (R, G, B, A, Z ... first, then the file's
+//     order, which EXR sorts by name): callers go by name, never by position.
+//   * PNG writes: 8 bits per channel, 3 (RGB) or 4 (RGBA) channels, alpha stored as given
+//     (un-associated, as PNG defines it).
+//   * Textures: read as floats, 8/16-bit values times 1/255 or 1/65535, no colour transform; a PNG
+//     with alpha has its colour multiplied by alpha (associated), as OpenImageIO does by default.
+// Internal to shadowlab_scenes (frame.cpp, loader.cpp); no public header names either library.
+#include <cstdint>
+#include <map>
+#include <string>
+#include <vector>
+
+namespace shadowlab::image_io {
+
+struct FloatImage {
+  int width = 0;
+  int height = 0;
+  std::vector<std::string> channels;  // names, in the order of `pixels`
+  std::vector<float> pixels;          // interleaved: (y * width + x) * channels.size() + c, top row first
+  std::map<std::string, std::string> text;  // string attributes (EXR header); empty for other formats
+};
+
+// Every function returns "" on success, else what went wrong (without the path: callers add it).
+
+// Writes an EXR of float channels (pixels as given, channel names as given), ZIP level 1, with
+// `image.text` as string attributes.
+std::string writeExr(const std::string& path, const FloatImage& image);
+// Reads an image file's first part with every channel as float (any EXR pixel type).
+std::string readExr(const std::string& path, FloatImage& image);
+// Writes an 8-bit PNG of `channels` (3 or 4) interleaved values per pixel.
+std::string writePng(const std::string& path, int width, int height, int channels, const uint8_t* pixels);
+// Reads a texture (PNG, EXR; OpenImageIO: any format it knows): gray, gray+alpha, RGB or RGBA
+// channels as stored (a palette PNG expands to RGB(A)). When a side is outside 1..maxSide only width and height are set (pixels stay
+// empty) so the caller can refuse the size before anything large is allocated.
+std::string readTexture(const std::string& path, FloatImage& image, int maxSide);
+// "oiio" or "exr-png".
+const char* backendName();
+
+}  // namespace shadowlab::image_io
