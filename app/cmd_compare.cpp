@@ -100,12 +100,10 @@ int run(const Options& o) {
   writeErrorsPng((fs::path(o.outDir) / "errors.png").string(), classification, &reference);
   writeTriptychPng((fs::path(o.outDir) / "triptych.png").string(), reference, raster, classification);
   out.keep();
-  std::printf("compared %llu pixels (%llu geometry mismatch): error_rate %.4f (acne %llu, leak %llu, aliasing %llu, "
-              "coverage %llu, other %llu) in %.1f ms\n",
-              (unsigned long long)metrics.pixelsCompared, (unsigned long long)metrics.geometryMismatch,
-              metrics.errorRate, (unsigned long long)metrics.acne, (unsigned long long)metrics.leak,
-              (unsigned long long)metrics.aliasing, (unsigned long long)metrics.coverage,
-              (unsigned long long)metrics.other, compareMs);
+  std::printf("compared %llu pixels (%llu geometry mismatch): error_rate %.4f (%s) in %.1f ms\n",
+              (unsigned long long)metrics.pixelsCompared,
+              (unsigned long long)metrics.count(PixelClass::GeometryMismatch), metrics.errorRate,
+              errorClassSummary(metrics, false).c_str(), compareMs);
   std::printf("wrote %s/metrics.json, errors.png, triptych.png\n", o.outDir.c_str());
   return 0;
 }

@@ -107,10 +107,9 @@ int run(const Options& o) {
   writeMetricsJson((dir / "metrics.json").string(), row);
   out.keep();
   const Metrics& m = r.metrics;
-  std::printf("compare: %.1f ms, %llu pixels: error_rate %.4f (acne %.4f, leak %.4f, aliasing %.4f, coverage %.4f, "
-              "other %.4f), shadow_iou %.4f, m_median %.2f\n",
-              r.compareMs, (unsigned long long)m.pixelsCompared, m.errorRate, m.acneRate, m.leakRate, m.aliasingRate,
-              m.coverageRate, m.otherRate, m.shadowIou, m.mMedian);
+  std::printf("compare: %.1f ms, %llu pixels: error_rate %.4f (%s), shadow_iou %.4f, m_median %.2f\n", r.compareMs,
+              (unsigned long long)m.pixelsCompared, m.errorRate, errorClassSummary(m, true).c_str(), m.shadowIou,
+              m.mMedian);
   std::printf("wrote %s/metrics.json, errors.png, triptych.png%s\n", o.outDir.c_str(),
               o.keepImages ? ", reference.exr, raster.exr" : "");
   return 0;

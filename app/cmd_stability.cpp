@@ -195,11 +195,10 @@ int run(const Options& o) {
       errors.push_back(m.errorRate);
       nlohmann::json values = nlohmann::json::object();
       for (const auto& a : axes) values[a.key] = a.value(k);
-      perFrame.push_back({{"light", values},
-                          {"error_rate", m.errorRate},
-                          {"acne_rate", m.acneRate},
-                          {"leak_rate", m.leakRate},
-                          {"pixels_compared", m.pixelsCompared}});
+      nlohmann::json frameRow = {{"light", values}, {"error_rate", m.errorRate}, {"pixels_compared", m.pixelsCompared}};
+      for (const PixelClassInfo& c : kPixelClasses)
+        if (c.error && c.rateMetric) frameRow[c.rateMetric] = m.rate(c.cls);
+      perFrame.push_back(frameRow);
     }
     setErrorStatistics(s, errors);
   } else {

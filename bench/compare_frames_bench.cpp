@@ -80,8 +80,8 @@ void BM_CompareFrames(benchmark::State& state) {
   }
   state.counters["pixels"] = double(m.pixelsCompared);
   state.counters["error_rate"] = m.errorRate;
-  state.counters["aliasing"] = double(m.aliasing);
-  state.counters["acne"] = double(m.acne);
+  state.counters["aliasing"] = double(m.count(shadowlab::PixelClass::Aliasing));
+  state.counters["acne"] = double(m.count(shadowlab::PixelClass::Acne));
   state.counters["Mpix/s"] = benchmark::Counter(double(width) * height * state.iterations() * 1e-6,
                                                 benchmark::Counter::kIsRate);
 }

@@ -158,7 +158,7 @@ TEST_F(Extremes, DirectionalLightExactlyParallelToTheReceiver) {
   ASSERT_EQ(metrics.size(), extremeMethods().size());
   for (const auto& [name, m] : metrics) {
     std::printf("  elevation 0, %-58s pixels %6llu error_rate %.5f acne %.5f leak %.5f\n", name.c_str(),
-                (unsigned long long)m.pixelsCompared, m.errorRate, m.acneRate, m.leakRate);
+                (unsigned long long)m.pixelsCompared, m.errorRate, m.rate(PixelClass::Acne), m.rate(PixelClass::Leak));
     EXPECT_GT(m.pixelsCompared, 30000u) << name;  // the ground and the block are compared
     EXPECT_LT(m.errorRate, 0.01) << name << ": the rasterizer should agree that the ground is unlit";
   }

@@ -1,6 +1,9 @@
 #!/usr/bin/python3
 """Charts of a shadowlab sweep: reads results.json, writes PNG (for report.html), PDF and SVG (for
 papers) into a figures folder, plus figures/charts.json listing the charts made and the ones skipped.
+The error classes (rate metric, label, colour) come from classes.json next to RESULTS_JSON, which
+the sweep writes from the C++ class table (`shadowlab classes --json` prints the same), so a class
+added there gets its panel here without an edit.
 
 Usage: /usr/bin/python3 charts.py RESULTS_JSON FIGURES_DIR
 
@@ -23,8 +26,6 @@ import matplotlib
 matplotlib.use("Agg")  # no display; also keeps the script from touching any GUI toolkit
 import matplotlib.pyplot as plt  # noqa: E402
 
-CLASSES = [("error_rate", "all errors"), ("acne_rate", "acne"), ("leak_rate", "leak"),
-           ("aliasing_rate", "aliasing"), ("coverage_rate", "coverage")]
 BIAS_KEYS = [("bias.slope", "bias.slope (x max depth slope)"),
              ("bias.constant", "bias.constant (units of r)"),
              ("bias.compare", "bias.compare (normalized depth)"),
@@ -33,6 +34,19 @@ PNG_DPI = 100
 # Reproducible files: no timestamps in PDF/SVG, fixed SVG ids.
 matplotlib.rcParams["svg.hashsalt"] = "shadowlab"
 matplotlib.rcParams["font.size"] = 9
+
+
+def load_classes(results_path):
+    """[(metric, label, colour)]: all errors first, then each error class of classes.json."""
+    path = os.path.join(os.path.dirname(os.path.abspath(results_path)), "classes.json")
+    try:
+        with open(path, encoding="utf-8") as f:
+            table = json.load(f)
+    except FileNotFoundError:
+        sys.exit(f"charts.py: {path}: error: no class table; expected the classes.json a sweep writes "
+                 "next to results.json (or `shadowlab classes --json > classes.json`)")
+    return [("error_rate", "all errors", None)] + [(c["rate_metric"], c["label"], c["color"]) for c in table
+                                                    if c["error"] and c["rate_metric"]]
 
 
 def num(d, key):
@@ -101,11 +115,11 @@ def positive_floor(values):
     return (min(pos) / 2.0) if pos else 1e-6
 
 
-def chart_error_by_size(scenes, rows_by_scene, swept, out_dir):
+def chart_error_by_size(scenes, rows_by_scene, swept, classes, out_dir):
     if "map.size" not in swept:
         return None, "map.size is not in the grid (sweep it, e.g. --grid map.size=256,512,1024,2048)"
     others = [k for k in swept if k not in ("map.size", "filter")]
-    fig, axes = panel_grid(len(scenes) * len(CLASSES), width_per=3.3, height_per=2.8, max_cols=len(CLASSES))
+    fig, axes = panel_grid(len(scenes) * len(classes), width_per=3.3, height_per=2.8, max_cols=len(classes))
     drew_zero = False
     for si, scene in enumerate(scenes):
         rows = rows_by_scene[scene]
@@ -114,8 +128,12 @@ def chart_error_by_size(scenes, rows_by_scene, swept, out_dir):
             f = str(method_value(r, "filter"))
             if f not in filters:
                 filters.append(f)
-        for ci, (metric, label) in enumerate(CLASSES):
-            ax = axes[si * len(CLASSES) + ci]
+        for ci, (metric, label, colour) in enumerate(classes):
+            ax = axes[si * len(classes) + ci]
+            if colour:  # the class's colour in errors.png, as the panel's frame
+                for spine in ax.spines.values():
+                    spine.set_edgecolor(colour)
+                    spine.set_linewidth(1.5)
             best = best_by(rows, lambda r: (str(method_value(r, "filter")), method_value(r, "map.size")),
                            lambda r: num(r["metrics"], "error_rate"))
             floor = positive_floor([num(r["metrics"], metric) for r in best.values()])
@@ -139,7 +157,7 @@ def chart_error_by_size(scenes, rows_by_scene, swept, out_dir):
             if ci == 0:
                 ax.legend(fontsize=7)
     caption = ("Error rate by class against shadow-map resolution (log-log), one line per filter, one row of panels "
-               "per scene.")
+               "per scene; each class's panel is framed in its errors.png colour.")
     if others:
         caption += (" At each size and filter the configuration with the lowest error_rate over "
                     + ", ".join(others) + " is shown.")
@@ -379,7 +397,7 @@ def main(argv):
         skipped.append({"id": "all", "title": "all charts", "reason": "results.json has no rows"})
     else:
         tasks.append(("error_by_size", "Error rate by class against map size",
-                      chart_error_by_size, (scenes, rows_by_scene, swept, out_dir)))
+                      chart_error_by_size, (scenes, rows_by_scene, swept, load_classes(results_path), out_dir)))
         bias_swept = [(k, label) for k, label in BIAS_KEYS if k in swept]
         if not bias_swept:
             tasks.append(("bias_tradeoff", "The bias trade-off", None,

@@ -6,50 +6,35 @@
 // touches the evidence channels at disagreeing pixels, so it is memory-bound. Work is split into
 // fixed blocks of rows whose partial sums are reduced in block order: the result is bit-identical
 // for any number of threads.
+//
+// The steps (classify.h): evidence (readChannels, PixelEvidence) -> the class of one pixel
+// (classifyPixel and its parts, pure) -> tallies (counts, rates, m statistics, cascades, projector).
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <cstdio>
 #include <cstring>
 #include <limits>
 
 #include <tbb/enumerable_thread_specific.h>
 #include <tbb/parallel_for.h>
 
-#include "shadowlab/compare/compare.h"
+#include "shadowlab/compare/classify.h"
 #include "shadowlab/scenes/error.h"
 
 namespace shadowlab {
 
-const char* toString(PixelClass c) {
-  switch (c) {
-    case PixelClass::NotCompared: return "not_compared";
-    case PixelClass::GeometryMismatch: return "geometry_mismatch";
-    case PixelClass::Correct: return "correct";
-    case PixelClass::Acne: return "acne";
-    case PixelClass::Leak: return "leak";
-    case PixelClass::Aliasing: return "aliasing";
-    case PixelClass::Coverage: return "coverage";
-    case PixelClass::Other: return "other";
-  }
-  return "unknown";
-}
+const char* toString(PixelClass c) { return size_t(c) < kPixelClassCount ? classInfo(c).key : "unknown"; }
 
 nlohmann::json Metrics::toJson() const {
   nlohmann::json j;
   j["pixels_compared"] = pixelsCompared;
-  j["geometry_mismatch"] = geometryMismatch;
   j["errors"] = errors;
-  j["acne"] = acne;
-  j["leak"] = leak;
-  j["aliasing"] = aliasing;
-  j["coverage"] = coverage;
-  j["other"] = other;
   j["error_rate"] = errorRate;
-  j["acne_rate"] = acneRate;
-  j["leak_rate"] = leakRate;
-  j["aliasing_rate"] = aliasingRate;
-  j["coverage_rate"] = coverageRate;
-  j["other_rate"] = otherRate;
+  for (const PixelClassInfo& c : kPixelClasses) {
+    if (c.countMetric) j[c.countMetric] = count(c.cls);
+    if (c.rateMetric) j[c.rateMetric] = rate(c.cls);
+  }
   j["shadow_iou"] = shadowIou;
   j["mae"] = mae;
   j["rmse"] = rmse;
@@ -68,6 +53,36 @@ nlohmann::json Metrics::toJson() const {
     j["cascades"] = list;
   }
   return j;
+}
+
+std::string errorClassSummary(const Metrics& m, bool rates) {
+  std::string out;
+  for (const PixelClassInfo& c : kPixelClasses) {
+    if (!c.error) continue;
+    char value[32];
+    if (rates) std::snprintf(value, sizeof value, "%.4f", m.rate(c.cls));
+    else std::snprintf(value, sizeof value, "%llu", (unsigned long long)m.count(c.cls));
+    out += (out.empty() ? "" : ", ") + std::string(c.key) + " " + value;
+  }
+  return out;
+}
+
+nlohmann::json pixelClassesJson() {
+  nlohmann::json list = nlohmann::json::array();
+  for (const PixelClassInfo& c : kPixelClasses) {
+    char color[8];
+    std::snprintf(color, sizeof color, "#%06x", unsigned(c.rgbLit));
+    auto nameOrNull = [](const char* s) { return s ? nlohmann::json(s) : nlohmann::json(nullptr); };
+    list.push_back({{"code", int(c.cls)},
+                    {"key", c.key},
+                    {"label", c.label},
+                    {"error", c.error},
+                    {"count_metric", nameOrNull(c.countMetric)},
+                    {"rate_metric", nameOrNull(c.rateMetric)},
+                    {"color", color},
+                    {"help", c.help}});
+  }
+  return list;
 }
 
 namespace {
@@ -176,9 +191,10 @@ class Scratch {
   T* data_ = nullptr;
 };
 
+// compareFrames' pass-1 sums over one block of rows.
 struct BlockSums {
-  uint64_t compared = 0, mismatch = 0;
-  uint64_t counts[8] = {};
+  uint64_t compared = 0;
+  PerPixelClass<uint64_t> counts{};  // final classes only: candidates are counted by pass 2
   uint64_t refShadow = 0, rasShadow = 0, bothShadow = 0;
   double sumAbs = 0, sumSq = 0;
   float mMax = 0, mMin = std::numeric_limits<float>::max();
@@ -187,6 +203,405 @@ struct BlockSums {
   uint64_t projRef = 0, projRas = 0, projBoth = 0, reverse = 0;
   double projColorAbs = 0;
 };
+
+// ---- step 1: evidence ----------------------------------------------------------------------
+// The channels compareFrames reads, as planes of width x height values; nullptr where an optional
+// channel is missing. Plain pointers, so the pass-1 loop can hold a copy in registers.
+struct Channels {
+  const float *refHit = nullptr, *refObj = nullptr, *refVis = nullptr;
+  const float *rasHit = nullptr, *rasObj = nullptr, *rasVis = nullptr;
+  // Evidence (optional: a reference compared with itself has none; see METRICS.md).
+  const float *refOccDist = nullptr, *inMap = nullptr, *occId = nullptr, *recvDepth = nullptr, *mapDepth = nullptr,
+              *biasDepth = nullptr, *biasWorld = nullptr;
+  const float* m = nullptr;        // texel footprint, pixels per map texel
+  const float* cascade = nullptr;  // only for cascaded frames (readChannels says why)
+  int cascadeCount = 0;            // from the method, so that an empty cascade is still listed
+  // The first projector, when both frames have its coverage.
+  const float *refCov = nullptr, *rasCov = nullptr, *rasReverse = nullptr;
+  const float* refRgb[3] = {nullptr, nullptr, nullptr};
+  const float* rasRgb[3] = {nullptr, nullptr, nullptr};
+  bool hasProjector = false, hasColor = false;
+
+  // Pixel i's channels; compareFrames reads them only where the decisions disagree.
+  PixelEvidence evidence(size_t i) const {
+    PixelEvidence e;
+    e.referenceHit = refHit[i] >= 0.5f;
+    e.rasterHit = rasHit[i] >= 0.5f;
+    e.referenceObject = refObj[i];
+    e.rasterObject = rasObj[i];
+    e.referenceVis = refVis[i];
+    e.rasterVis = rasVis[i];
+    e.hasInMap = inMap != nullptr;
+    if (inMap) e.inMap = inMap[i];
+    e.hasOccluderId = occId != nullptr;
+    if (occId) e.occluderId = occId[i];
+    e.hasDepths = recvDepth && mapDepth && biasDepth;
+    if (e.hasDepths) {
+      e.receiverDepth = recvDepth[i];
+      e.mapDepth = mapDepth[i];
+      e.biasDepth = biasDepth[i];
+    }
+    e.hasOccluderDistance = refOccDist && biasWorld;
+    if (e.hasOccluderDistance) {
+      e.referenceOccluderDist = refOccDist[i];
+      e.biasWorld = biasWorld[i];
+    }
+    return e;
+  }
+};
+
+// Validates everything before any work (throws InputError) and finds the channels.
+Channels readChannels(const Frame& reference, const Frame& raster, const CompareOptions& options) {
+  if (reference.width != raster.width || reference.height != raster.height) {
+    throw InputError(both(options) + ": error: frame sizes differ: " + std::to_string(reference.width) + "x" +
+                     std::to_string(reference.height) + " vs " + std::to_string(raster.width) + "x" +
+                     std::to_string(raster.height) + "; expected the same camera resolution");
+  }
+  if (reference.width < 0 || reference.height < 0) {
+    throw InputError(both(options) + ": error: negative frame size");
+  }
+  for (const char* key : {"scene_hash", "camera_hash"}) {
+    std::string a = metaString(reference, key), b = metaString(raster, key);
+    if (!a.empty() && !b.empty() && a != b) {
+      throw InputError(both(options) + ": error: " + key + " differs: " + a + " vs " + b +
+                       "; expected frames of the same scene and camera");
+    }
+  }
+  if (!(options.boundaryTexels >= 0.0f && std::isfinite(options.boundaryTexels))) {
+    throw InputError("compare: error: boundaryTexels is " + std::to_string(options.boundaryTexels) +
+                     "; expected a finite number >= 0");
+  }
+  const std::string light = resolveCompareLight(reference, raster, options);
+  const std::string lp = "light." + light + ".";
+  const std::string expectLight = "a light named \"" + light + "\" (lights in this frame: ";
+  Channels ch;
+  ch.refHit = requiredPlane(reference, "hit", options.referenceName, "a renderer's output frame");
+  ch.refObj = requiredPlane(reference, "object_id", options.referenceName, "a renderer's output frame");
+  ch.refVis = requiredPlane(reference, lp + "vis", options.referenceName,
+                            expectLight + channelList(reference, "light.", ".vis") + ")");
+  ch.rasHit = requiredPlane(raster, "hit", options.rasterName, "a renderer's output frame");
+  ch.rasObj = requiredPlane(raster, "object_id", options.rasterName, "a renderer's output frame");
+  ch.rasVis = requiredPlane(raster, lp + "vis", options.rasterName,
+                            expectLight + channelList(raster, "light.", ".vis") + ")");
+  // Evidence: optional, so that any two frames can be compared (a reference with itself has none).
+  // Without it the corresponding classes cannot be proven; see METRICS.md.
+  auto optional = [&](const Frame& f, const std::string& name) -> const float* {
+    const float* p = optionalPlane(f, name);
+    if (p && f.get(name).size() != f.pixelCount()) requiredPlane(f, name, "", "");  // throws
+    return p;
+  };
+  ch.refOccDist = optional(reference, lp + "occluder_dist");
+  ch.inMap = optional(raster, lp + "in_map");
+  ch.occId = optional(raster, lp + "occluder_id");
+  ch.recvDepth = optional(raster, lp + "receiver_depth");
+  ch.mapDepth = optional(raster, lp + "map_depth");
+  ch.biasDepth = optional(raster, lp + "bias_depth");
+  ch.biasWorld = optional(raster, lp + "bias_world");
+  ch.m = optional(raster, lp + "m");
+  // Per-cascade metrics: only for cascaded frames, so every other row keeps its keys (the channel
+  // is 0 everywhere for the other fits). Frames built in code without metadata count as cascaded.
+  ch.cascade = optional(raster, lp + "cascade");
+  if (ch.cascade) {
+    auto method = raster.meta.find("method");
+    if (method != raster.meta.end() && method->is_object()) {
+      auto fit = method->find("fit");
+      if (fit != method->end() && fit->is_string() && fit->get<std::string>() != "cascades") ch.cascade = nullptr;
+      auto count = method->find("cascades.count");
+      if (count != method->end() && count->is_number_integer()) ch.cascadeCount = std::clamp(count->get<int>(), 0, 8);
+    }
+  }
+
+  std::string projector = firstName(reference, "projectors");
+  if (projector.empty()) projector = firstName(raster, "projectors");
+  if (projector.empty()) {
+    // Frames without metadata: the first projector channel of the reference.
+    for (const auto& n : reference.names) {
+      if (n.size() > 14 && n.compare(0, 5, "proj.") == 0 && n.compare(n.size() - 9, 9, ".coverage") == 0) {
+        projector = n.substr(5, n.size() - 14);
+        break;
+      }
+    }
+  }
+  const std::string pp = "proj." + projector + ".";
+  ch.refCov = projector.empty() ? nullptr : optional(reference, pp + "coverage");
+  ch.rasCov = projector.empty() ? nullptr : optional(raster, pp + "coverage");
+  ch.hasProjector = ch.refCov && ch.rasCov;
+  ch.rasReverse = ch.hasProjector ? optional(raster, pp + "reverse") : nullptr;
+  ch.hasColor = ch.hasProjector;
+  for (int c = 0; c < 3 && ch.hasProjector; ++c) {
+    const std::string name = pp + "RGB"[c];
+    ch.refRgb[c] = optional(reference, name);
+    ch.rasRgb[c] = optional(raster, name);
+    ch.hasColor = ch.hasColor && ch.refRgb[c] && ch.rasRgb[c];
+  }
+  return ch;
+}
+
+}  // namespace
+
+// ---- step 2: the class of one pixel: in classify.h (inline: pass 1 calls it for every pixel) --
+
+// ---- step 3: tallies ---------------------------------------------------------------------------
+
+PerPixelClass<uint64_t> countClasses(const std::vector<PixelClass>& classes) {
+  PerPixelClass<uint64_t> counts{};
+  for (PixelClass k : classes) {
+    if (size_t(k) >= kPixelClassCount) {
+      throw InputError("classification: error: pixel class code " + std::to_string(int(k)) +
+                       " is not in the class table; expected 0.." + std::to_string(kPixelClassCount - 1));
+    }
+    ++counts[classIndex(k)];
+  }
+  return counts;
+}
+
+void setClassMetrics(Metrics& m, const PerPixelClass<uint64_t>& counts) {
+  m.classCounts = counts;
+  uint64_t compared = counts[classIndex(PixelClass::Correct)], errors = 0;
+  for (const PixelClassInfo& c : kPixelClasses) {
+    if (!c.error) continue;
+    errors += counts[classIndex(c.cls)];
+    compared += counts[classIndex(c.cls)];
+  }
+  m.pixelsCompared = compared;
+  m.errors = errors;
+  const double denom = double(compared);
+  auto rate = [&](uint64_t count) { return compared ? double(count) / denom : 0.0; };
+  m.errorRate = rate(errors);
+  for (size_t k = 0; k < kPixelClassCount; ++k) m.classRates[k] = rate(counts[k]);
+}
+
+namespace {
+
+// Pass 2: aliasing = remaining disagreements near a reference shadow boundary; resolves every
+// candidate of `klass` and adds its class to `counts`.
+// Boundary pixels: compared pixels with a 4-neighbour compared pixel of the other reference
+// decision. Their exact Euclidean distance transform (Meijster et al. 2000: column scans, then
+// per row the lower envelope of parabolas of Felzenszwalb & Huttenlocher 2012), in pixels.
+// Only distances up to the largest candidate limit (boundaryTexels * m) matter, which bounds the
+// rows and columns the transform has to visit; larger distances may come out overestimated, but
+// only beyond every limit, so no class changes.
+void resolveCandidates(uint8_t* klass, const uint8_t* decision, const float* mPlane, int width, int height,
+                       float boundaryTexels, PerPixelClass<uint64_t>& total) {
+  const size_t n = size_t(width) * size_t(height);
+  // Per row: the reach (largest limit in pixels, rounded up) of its candidates whose limit is
+  // shorter than the image diagonal; a candidate with a longer limit (m is huge near the
+  // horizon) is within it of any boundary pixel, so it needs no distance at all, only whether
+  // a boundary exists anywhere.
+  const double diagonalPx = std::sqrt(double(width) * width + double(height) * height);
+  auto limitPx = [&](size_t i) { return double(boundaryTexels) * (mPlane ? double(sanitizeM(mPlane[i])) : 1.0); };
+  std::vector<int> rowReach(size_t(height), -1);  // -1: no candidate that needs a distance
+  std::vector<uint8_t> rowHasCandidate(size_t(height), 0), rowHasBoundary(size_t(height), 0);
+  tbb::parallel_for(0, height, [&](int y) {
+    const uint8_t* krow = klass + size_t(y) * width;
+    const uint8_t* d = decision + size_t(y) * width;
+    const uint8_t* dd = y + 1 < height ? d + width : d;
+    uint8_t any = 0, boundary = 0;
+    int reachRow = -1;
+    for (int x = 0; x < width; ++x) {
+      boundary |= ((d[x] ^ dd[x]) == 3) | (x + 1 < width && (d[x] ^ d[x + 1]) == 3);
+      if (krow[x] < kCandidateLeak) continue;
+      any = 1;
+      const double limit = limitPx(size_t(y) * width + x);
+      if (limit < diagonalPx) reachRow = std::max(reachRow, int(std::ceil(limit)));
+    }
+    rowHasCandidate[size_t(y)] = any;
+    rowHasBoundary[size_t(y)] = boundary;
+    rowReach[size_t(y)] = reachRow;
+  });
+  const bool anyBoundary = std::find(rowHasBoundary.begin(), rowHasBoundary.end(), 1) != rowHasBoundary.end();
+  int reach = 0;  // the largest row reach: caps g
+  std::vector<std::pair<int, int>> bands;  // [y0, y1) row intervals to scan
+  for (int y = 0; y < height; ++y) {
+    const int r = rowReach[size_t(y)];
+    if (r < 0) continue;
+    reach = std::max(reach, r + 1);
+    const int y0 = std::max(0, y - r - 1), y1 = std::min(height, y + r + 2);
+    if (!bands.empty() && y0 <= bands.back().second) bands.back().second = std::max(bands.back().second, y1);
+    else bands.emplace_back(y0, y1);
+  }
+  // g = vertical distance to the nearest boundary pixel within the band, capped at `far`.
+  const uint16_t far = uint16_t(std::min(reach + 1, 65535));
+  Scratch<uint16_t> gScratch(n);
+  uint16_t* g = gScratch.data();
+  constexpr int kStrip = 512;
+  const int strips = (width + kStrip - 1) / kStrip;
+  tbb::parallel_for(0, int(bands.size()) * strips, [&](int job) {
+    const auto [y0, y1] = bands[size_t(job / strips)];
+    const int x0 = (job % strips) * kStrip, x1 = std::min(width, x0 + kStrip);
+    for (int y = y0; y < y1; ++y) {
+      const uint8_t* d = decision + size_t(y) * width;
+      const uint8_t* du = y > 0 ? d - width : d;  // out of the image: itself, never "different"
+      const uint8_t* dd = y + 1 < height ? d + width : d;
+      uint16_t* row = g + size_t(y) * width;
+      const uint16_t* above = y > y0 ? row - width : nullptr;
+      for (int x = x0; x < x1; ++x) {
+        // Decisions are 1 (lit) and 2 (shadowed), 0 for not compared: two pixels hold
+        // different decisions, both compared, exactly when their xor is 3.
+        const uint8_t c = d[x];
+        const bool boundary = (c ^ du[x]) == 3 || (c ^ dd[x]) == 3 || (x > 0 && (c ^ d[x - 1]) == 3) ||
+                              (x + 1 < width && (c ^ d[x + 1]) == 3);
+        const uint16_t up = above ? uint16_t(std::min<int>(far, above[x] + 1)) : far;
+        row[x] = boundary ? uint16_t(0) : up;
+      }
+    }
+    for (int y = y1 - 2; y >= y0; --y) {
+      uint16_t* row = g + size_t(y) * width;
+      const uint16_t* below = row + width;
+      for (int x = x0; x < x1; ++x) row[x] = uint16_t(std::min<int>(row[x], below[x] + 1));  // <= far
+    }
+  });
+  std::vector<PerPixelClass<uint64_t>> rowCounts(size_t(height), PerPixelClass<uint64_t>{});
+  struct RowScratch {
+    std::vector<int> v;
+    std::vector<double> z;
+  };
+  tbb::enumerable_thread_specific<RowScratch> scratch;
+  tbb::parallel_for(0, height, [&](int y) {
+    if (!rowHasCandidate[size_t(y)]) return;
+    uint8_t* krow = klass + size_t(y) * width;
+    PerPixelClass<uint64_t>& counts = rowCounts[size_t(y)];
+    auto resolve = [&](int x, bool withinLimit) {
+      const PixelClass c = resolveCandidate(krow[x] == kCandidateLeak, withinLimit);
+      krow[x] = uint8_t(c);
+      ++counts[classIndex(c)];
+    };
+    const int r = rowReach[size_t(y)];
+    int xFirst = width, xLast = -1;
+    for (int x = 0; x < width; ++x) {
+      if (krow[x] < kCandidateLeak) continue;
+      if (limitPx(size_t(y) * width + x) >= diagonalPx) {
+        resolve(x, anyBoundary);
+      } else {
+        xFirst = std::min(xFirst, x);
+        xLast = x;
+      }
+    }
+    if (r < 0 || xLast < 0) return;
+    // Columns farther than the reach from every candidate cannot bring a distance under a limit.
+    const int q0 = std::max(0, xFirst - r - 1), q1 = std::min(width, xLast + r + 2);
+    const uint16_t* grow = g + size_t(y) * width;
+    RowScratch& rs = scratch.local();
+    rs.v.resize(size_t(q1 - q0));
+    rs.z.resize(size_t(q1 - q0) + 1);
+    int* v = rs.v.data();
+    double* z = rs.z.data();
+    auto f = [&](int q) { return double(grow[q]) * double(grow[q]); };
+    auto intersect = [&](int q, int p) { return ((f(q) + double(q) * q) - (f(p) + double(p) * p)) / (2.0 * (q - p)); };
+    int k = 0;
+    v[0] = q0;
+    z[0] = -std::numeric_limits<double>::infinity();
+    z[1] = std::numeric_limits<double>::infinity();
+    for (int q = q0 + 1; q < q1; ++q) {
+      double sq = intersect(q, v[k]);
+      while (sq <= z[k]) {  // z[0] = -inf stops this at k = 0
+        --k;
+        sq = intersect(q, v[k]);
+      }
+      ++k;
+      v[k] = q;
+      z[k] = sq;
+      z[k + 1] = std::numeric_limits<double>::infinity();
+    }
+    k = 0;
+    for (int x = xFirst; x <= xLast; ++x) {
+      while (z[k + 1] < x) ++k;
+      if (krow[x] < kCandidateLeak) continue;  // not a candidate, or resolved above
+      const int p = v[k];
+      const double dist2 = double(x - p) * double(x - p) + f(p);
+      const double limit = limitPx(size_t(y) * width + x);
+      resolve(x, dist2 <= limit * limit);
+    }
+  });
+  for (const auto& rc : rowCounts)
+    for (size_t k = 0; k < kPixelClassCount; ++k) total[k] += rc[k];
+}
+
+// Per-cascade metrics; after pass 2, so `klass` holds every pixel's final class. Cascade indices
+// come from a float channel: anything not an integer 0..7 (NaN included) is read as the nearest
+// valid index.
+std::vector<CascadeMetrics> cascadeMetrics(const uint8_t* klass, const uint8_t* decision, const Channels& ch, size_t n) {
+  constexpr int kMaxCascades = 8;
+  int cascadeCount = ch.cascadeCount;
+  std::vector<uint64_t> pixels(kMaxCascades, 0), errors(kMaxCascades, 0);
+  std::vector<std::vector<float>> mValues(kMaxCascades);
+  for (size_t i = 0; i < n; ++i) {
+    if (decision[i] == kDecisionNone) continue;  // not compared
+    const float v = ch.cascade[i];
+    const int k = v >= 0.0f ? (v < float(kMaxCascades - 1) ? int(v + 0.5f) : kMaxCascades - 1) : 0;
+    ++pixels[size_t(k)];
+    errors[size_t(k)] += isErrorClass(PixelClass(klass[i]));
+    if (ch.m) mValues[size_t(k)].push_back(sanitizeM(ch.m[i]));
+    cascadeCount = std::max(cascadeCount, k + 1);
+  }
+  std::vector<CascadeMetrics> out;
+  for (int k = 0; k < cascadeCount; ++k) {
+    CascadeMetrics c;
+    c.index = k;
+    c.pixels = pixels[size_t(k)];
+    c.errors = errors[size_t(k)];
+    c.errorRate = c.pixels ? double(c.errors) / double(c.pixels) : 0.0;
+    std::vector<float>& m = mValues[size_t(k)];
+    if (!m.empty()) {  // nearest rank, as m_p95: sorted index ceil(0.95 N) - 1
+      const size_t rank = size_t(std::ceil(0.95 * double(m.size()))) - 1;
+      std::nth_element(m.begin(), m.begin() + std::ptrdiff_t(rank), m.end());
+      c.mP95 = double(m[rank]);
+    }
+    out.push_back(c);
+  }
+  return out;
+}
+
+// m quantiles, exact, in linear time: a histogram of the 16 high bits of the float (non-negative
+// floats order like their bit patterns), made in pass 1, finds the bins that hold the ranks, then
+// a selection among the values of those bins. Nearest rank: the value at sorted index
+// ceil(p * N) - 1. Sets out.mMedian and out.mP95.
+void setFootprintQuantiles(Metrics& out, const std::vector<uint64_t>& high, uint64_t compared,
+                           const std::vector<BlockSums>& sums, const uint8_t* decision, const float* mPlane,
+                           int width, size_t n) {
+  const double ps[2] = {0.5, 0.95};
+  uint64_t rank[2];
+  uint32_t bin[2];
+  for (int q = 0; q < 2; ++q) {
+    rank[q] = uint64_t(std::ceil(ps[q] * double(compared)));
+    rank[q] = rank[q] > 0 ? rank[q] - 1 : 0;
+    uint32_t b = 0;
+    for (; b < 65535; ++b) {
+      if (high[b] > rank[q]) break;
+      rank[q] -= high[b];
+    }
+    bin[q] = b;  // rank[q] is now the rank within that bin
+  }
+  // Second level: the values of those two bins (a small share of the pixels), then the k-th
+  // smallest of each. The k-th smallest of a multiset does not depend on the order the threads
+  // appended the values in: deterministic.
+  tbb::enumerable_thread_specific<std::array<std::vector<float>, 2>> inBins;
+  tbb::parallel_for(0, int(sums.size()), [&](int b) {
+    // m is smooth over the image: many blocks hold no value of either bin.
+    const uint32_t lo = floatBits(sums[size_t(b)].mMin) >> 16, hi = floatBits(sums[size_t(b)].mMax) >> 16;
+    if (sums[size_t(b)].compared == 0 || ((bin[0] < lo || bin[0] > hi) && (bin[1] < lo || bin[1] > hi))) return;
+    auto& values = inBins.local();
+    const size_t begin = size_t(b) * kBlockRows * width;
+    const size_t end = std::min(n, size_t(b + 1) * kBlockRows * width);
+    for (size_t i = begin; i < end; ++i) {
+      if (decision[i] == kDecisionNone) continue;
+      const float m = sanitizeM(mPlane[i]);
+      const uint32_t key = floatBits(m) >> 16;
+      if (key == bin[0]) values[0].push_back(m);
+      if (key == bin[1]) values[1].push_back(m);
+    }
+  });
+  double value[2];
+  for (int q = 0; q < 2; ++q) {
+    std::vector<float> all;
+    for (auto& v : inBins) all.insert(all.end(), v[size_t(q)].begin(), v[size_t(q)].end());
+    if (rank[q] >= all.size()) throw DriverError("compare: m quantile bin holds fewer values than counted");
+    std::nth_element(all.begin(), all.begin() + std::ptrdiff_t(rank[q]), all.end());
+    value[q] = double(all[size_t(rank[q])]);
+  }
+  out.mMedian = value[0];
+  out.mP95 = value[1];
+}
 
 }  // namespace
 
@@ -210,94 +625,10 @@ std::string resolveCompareLight(const Frame& reference, const Frame& raster, con
 
 Metrics compareFrames(const Frame& reference, const Frame& raster, const CompareOptions& options,
                       Classification* classification) {
-  // ---- validate everything before any work -------------------------------------------------
-  if (reference.width != raster.width || reference.height != raster.height) {
-    throw InputError(both(options) + ": error: frame sizes differ: " + std::to_string(reference.width) + "x" +
-                     std::to_string(reference.height) + " vs " + std::to_string(raster.width) + "x" +
-                     std::to_string(raster.height) + "; expected the same camera resolution");
-  }
-  if (reference.width < 0 || reference.height < 0) {
-    throw InputError(both(options) + ": error: negative frame size");
-  }
-  for (const char* key : {"scene_hash", "camera_hash"}) {
-    std::string a = metaString(reference, key), b = metaString(raster, key);
-    if (!a.empty() && !b.empty() && a != b) {
-      throw InputError(both(options) + ": error: " + key + " differs: " + a + " vs " + b +
-                       "; expected frames of the same scene and camera");
-    }
-  }
-  if (!(options.boundaryTexels >= 0.0f && std::isfinite(options.boundaryTexels))) {
-    throw InputError("compare: error: boundaryTexels is " + std::to_string(options.boundaryTexels) +
-                     "; expected a finite number >= 0");
-  }
-  const std::string light = resolveCompareLight(reference, raster, options);
-  const std::string lp = "light." + light + ".";
-  const std::string expectLight = "a light named \"" + light + "\" (lights in this frame: ";
-  const float* refHit = requiredPlane(reference, "hit", options.referenceName, "a renderer's output frame");
-  const float* refObj = requiredPlane(reference, "object_id", options.referenceName, "a renderer's output frame");
-  const float* refVis = requiredPlane(reference, lp + "vis", options.referenceName,
-                                      expectLight + channelList(reference, "light.", ".vis") + ")");
-  const float* rasHit = requiredPlane(raster, "hit", options.rasterName, "a renderer's output frame");
-  const float* rasObj = requiredPlane(raster, "object_id", options.rasterName, "a renderer's output frame");
-  const float* rasVis = requiredPlane(raster, lp + "vis", options.rasterName,
-                                      expectLight + channelList(raster, "light.", ".vis") + ")");
-  // Evidence: optional, so that any two frames can be compared (a reference with itself has none).
-  // Without it the corresponding classes cannot be proven; see METRICS.md.
-  auto optional = [&](const Frame& f, const std::string& name) -> const float* {
-    const float* p = optionalPlane(f, name);
-    if (p && f.get(name).size() != f.pixelCount()) requiredPlane(f, name, "", "");  // throws
-    return p;
-  };
-  const float* refOccDist = optional(reference, lp + "occluder_dist");
-  const float* inMap = optional(raster, lp + "in_map");
-  const float* occId = optional(raster, lp + "occluder_id");
-  const float* recvDepth = optional(raster, lp + "receiver_depth");
-  const float* mapDepth = optional(raster, lp + "map_depth");
-  const float* biasDepth = optional(raster, lp + "bias_depth");
-  const float* biasWorld = optional(raster, lp + "bias_world");
-  const float* mPlane = optional(raster, lp + "m");
-  const bool depthEvidence = recvDepth && mapDepth && biasDepth && occId;
-  // Per-cascade metrics: only for cascaded frames, so every other row keeps its keys (the channel
-  // is 0 everywhere for the other fits). Frames built in code without metadata count as cascaded.
-  const float* cascadePlane = optional(raster, lp + "cascade");
-  int cascadeCount = 0;  // from the method, so that an empty cascade is still listed
-  if (cascadePlane) {
-    auto method = raster.meta.find("method");
-    if (method != raster.meta.end() && method->is_object()) {
-      auto fit = method->find("fit");
-      if (fit != method->end() && fit->is_string() && fit->get<std::string>() != "cascades") cascadePlane = nullptr;
-      auto count = method->find("cascades.count");
-      if (count != method->end() && count->is_number_integer()) cascadeCount = std::clamp(count->get<int>(), 0, 8);
-    }
-  }
+  // ---- step 1: evidence (validate everything before any work) --------------------------------
+  const Channels channels = readChannels(reference, raster, options);
 
-  std::string projector = firstName(reference, "projectors");
-  if (projector.empty()) projector = firstName(raster, "projectors");
-  if (projector.empty()) {
-    // Frames without metadata: the first projector channel of the reference.
-    for (const auto& n : reference.names) {
-      if (n.size() > 14 && n.compare(0, 5, "proj.") == 0 && n.compare(n.size() - 9, 9, ".coverage") == 0) {
-        projector = n.substr(5, n.size() - 14);
-        break;
-      }
-    }
-  }
-  const std::string pp = "proj." + projector + ".";
-  const float* refCov = projector.empty() ? nullptr : optional(reference, pp + "coverage");
-  const float* rasCov = projector.empty() ? nullptr : optional(raster, pp + "coverage");
-  const bool hasProjector = refCov && rasCov;
-  const float* rasReverse = hasProjector ? optional(raster, pp + "reverse") : nullptr;
-  const float* refRgb[3] = {nullptr, nullptr, nullptr};
-  const float* rasRgb[3] = {nullptr, nullptr, nullptr};
-  bool hasColor = hasProjector;
-  for (int c = 0; c < 3 && hasProjector; ++c) {
-    const std::string name = pp + "RGB"[c];
-    refRgb[c] = optional(reference, name);
-    rasRgb[c] = optional(raster, name);
-    hasColor = hasColor && refRgb[c] && rasRgb[c];
-  }
-
-  // ---- pass 1: decisions, classes that need only local evidence, sums ---------------------
+  // ---- pass 1: per pixel, step 2 where the local evidence decides, step 3's sums -------------
   const int width = reference.width, height = reference.height;
   const size_t n = reference.pixelCount();
   Classification local;
@@ -315,24 +646,23 @@ Metrics compareFrames(const Frame& reference, const Frame& raster, const Compare
   const int blocks = (height + kBlockRows - 1) / kBlockRows;
   std::vector<BlockSums> sums(size_t(std::max(blocks, 0)));
   tbb::enumerable_thread_specific<std::vector<uint32_t>> mHistLocal(
-      [&] { return std::vector<uint32_t>(mPlane ? 65536 : 0, 0); });
+      [&] { return std::vector<uint32_t>(channels.m ? 65536 : 0, 0); });
 
   tbb::parallel_for(0, blocks, [&](int b) {
     BlockSums s;
     // Local copies: the byte stores below may alias anything, and pointers reached through the
     // lambda's captures would be reloaded after every one of them.
-    const float* const refHit_ = refHit;
-    const float* const rasHit_ = rasHit;
-    const float* const refObj_ = refObj;
-    const float* const rasObj_ = rasObj;
-    const float* const refVis_ = refVis;
-    const float* const rasVis_ = rasVis;
-    const float* const mPlane_ = mPlane;
+    const Channels ch = channels;
+    const float* const refHit_ = ch.refHit;
+    const float* const rasHit_ = ch.rasHit;
+    const float* const refObj_ = ch.refObj;
+    const float* const rasObj_ = ch.rasObj;
+    const float* const refVis_ = ch.refVis;
+    const float* const rasVis_ = ch.rasVis;
+    const float* const mPlane_ = ch.m;
     uint8_t* const klass_ = klass;
     uint8_t* const refLit_ = refLit;
     uint8_t* const decision_ = decision;
-    const float* const inMap_ = inMap;
-    const float* const occId_ = occId;
     uint32_t* hist = mPlane_ ? mHistLocal.local().data() : nullptr;
     // m is smooth over the image, so neighbours share a histogram bin: count runs in a register
     // instead of incrementing the same memory counter back to back (a store-to-load chain).
@@ -343,18 +673,15 @@ Metrics compareFrames(const Frame& reference, const Frame& raster, const Compare
       const bool hr = refHit_[i] >= 0.5f, hs = rasHit_[i] >= 0.5f;
       refLit_[i] = 0;
       decision_[i] = kDecisionNone;
-      if (!hr && !hs) {
-        klass_[i] = uint8_t(PixelClass::NotCompared);
-        continue;
-      }
-      if (!(hr && hs) || refObj_[i] != rasObj_[i]) {
-        klass_[i] = uint8_t(PixelClass::GeometryMismatch);
-        ++s.mismatch;
+      const PixelClass scored = scoredClass(hr, hs, refObj_[i], rasObj_[i]);
+      if (scored != PixelClass::Correct) {  // not compared, geometry mismatch
+        klass_[i] = uint8_t(scored);
+        ++s.counts[classIndex(scored)];
         continue;
       }
       ++s.compared;
       const float rv = clamp01(refVis_[i]), sv = clamp01(rasVis_[i]);
-      const bool rLit = rv >= 0.5f, sLit = sv >= 0.5f;
+      const bool rLit = litDecision(refVis_[i]), sLit = litDecision(rasVis_[i]);
       refLit_[i] = rLit;
       decision_[i] = rLit ? kDecisionLit : kDecisionShadowed;
       const double d = double(rv) - double(sv);
@@ -376,39 +703,32 @@ Metrics compareFrames(const Frame& reference, const Frame& raster, const Compare
         }
         ++runLength;
       }
-      if (hasProjector) {
-        const float rc = clamp01(refCov[i]), sc = clamp01(rasCov[i]);
+      if (ch.hasProjector) {
+        const float rc = clamp01(ch.refCov[i]), sc = clamp01(ch.rasCov[i]);
         const bool rIn = rc >= 0.5f, sIn = sc >= 0.5f;
         s.projRef += rIn;
         s.projRas += sIn;
         s.projBoth += rIn && sIn;
-        if (rasReverse && rasReverse[i] >= 0.5f && sc > 0.0f) ++s.reverse;
-        if (hasColor) {
-          double e = 0;
-          for (int c = 0; c < 3; ++c) e += std::fabs(double(refRgb[c][i]) - double(rasRgb[c][i]));
-          s.projColorAbs += std::isfinite(e) ? e / 3.0 : 1.0;
+        if (ch.rasReverse && ch.rasReverse[i] >= 0.5f && sc > 0.0f) ++s.reverse;
+        if (ch.hasColor) {
+          double err = 0;
+          for (int c = 0; c < 3; ++c) err += std::fabs(double(ch.refRgb[c][i]) - double(ch.rasRgb[c][i]));
+          s.projColorAbs += std::isfinite(err) ? err / 3.0 : 1.0;
         }
       }
-      PixelClass c;
-      if (rLit == sLit) {
-        c = PixelClass::Correct;
-      } else if (inMap_ && !(inMap_[i] >= 0.5f)) {
-        c = PixelClass::Coverage;
-      } else if (rLit && occId_ && occId_[i] == rasObj_[i]) {
-        c = PixelClass::Acne;
-      } else {
-        // Aliasing or, beyond the boundary band, leak (with its evidence) or other: pass 2.
-        const bool leakEvidence =
-            !rLit && ((depthEvidence && occId_[i] != 0.0f && occId_[i] != rasObj_[i] && recvDepth[i] > mapDepth[i] &&
-                       recvDepth[i] <= mapDepth[i] + biasDepth[i]) ||  // (a) an occluder in the map, let through by the bias
-                      (refOccDist && biasWorld && refOccDist[i] >= 0.0f &&
-                       refOccDist[i] <= leakFactor * biasWorld[i]));  // (b) the true occluder within the bias distance
-        klass_[i] = leakEvidence ? kCandidateLeak : kCandidate;
-        ++s.candidates;
-        s.candidateLimitPx = std::max(s.candidateLimitPx, mPlane_ ? m : 1.0f);
-        continue;
+      PixelClass c = PixelClass::Correct;
+      if (rLit != sLit) {
+        const DisagreementClass dc = classifyDisagreement(ch.evidence(i), leakFactor);
+        if (dc.candidate) {
+          // Aliasing or, beyond the boundary band, leak (with its evidence) or other: pass 2.
+          klass_[i] = dc.leakEvidence ? kCandidateLeak : kCandidate;
+          ++s.candidates;
+          s.candidateLimitPx = std::max(s.candidateLimitPx, mPlane_ ? m : 1.0f);
+          continue;
+        }
+        c = dc.cls;
       }
-      ++s.counts[size_t(c)];
+      ++s.counts[classIndex(c)];
       klass_[i] = uint8_t(c);
     }
     if (hist) hist[runBin] += runLength;
@@ -418,8 +738,7 @@ Metrics compareFrames(const Frame& reference, const Frame& raster, const Compare
   BlockSums t;
   for (const auto& s : sums) {
     t.compared += s.compared;
-    t.mismatch += s.mismatch;
-    for (int k = 0; k < 8; ++k) t.counts[k] += s.counts[k];
+    for (size_t k = 0; k < kPixelClassCount; ++k) t.counts[k] += s.counts[k];
     t.refShadow += s.refShadow;
     t.rasShadow += s.rasShadow;
     t.bothShadow += s.bothShadow;
@@ -435,268 +754,35 @@ Metrics compareFrames(const Frame& reference, const Frame& raster, const Compare
     t.projColorAbs += s.projColorAbs;
   }
 
-  // ---- pass 2: aliasing = remaining disagreements near a reference shadow boundary -----------
-  // Boundary pixels: compared pixels with a 4-neighbour compared pixel of the other reference
-  // decision. Their exact Euclidean distance transform (Meijster et al. 2000: column scans, then
-  // per row the lower envelope of parabolas of Felzenszwalb & Huttenlocher 2012), in pixels.
-  // Only distances up to the largest candidate limit (boundaryTexels * m) matter, which bounds the
-  // rows and columns the transform has to visit; larger distances may come out overestimated, but
-  // only beyond every limit, so no class changes.
-  if (t.candidates > 0) {
-    // Per row: the reach (largest limit in pixels, rounded up) of its candidates whose limit is
-    // shorter than the image diagonal; a candidate with a longer limit (m is huge near the
-    // horizon) is within it of any boundary pixel, so it needs no distance at all, only whether
-    // a boundary exists anywhere.
-    const float boundaryTexels = options.boundaryTexels;
-    const double diagonalPx = std::sqrt(double(width) * width + double(height) * height);
-    auto limitPx = [&](size_t i) { return double(boundaryTexels) * (mPlane ? double(sanitizeM(mPlane[i])) : 1.0); };
-    std::vector<int> rowReach(size_t(height), -1);  // -1: no candidate that needs a distance
-    std::vector<uint8_t> rowHasCandidate(size_t(height), 0), rowHasBoundary(size_t(height), 0);
-    tbb::parallel_for(0, height, [&](int y) {
-      const uint8_t* krow = klass + size_t(y) * width;
-      const uint8_t* d = decision + size_t(y) * width;
-      const uint8_t* dd = y + 1 < height ? d + width : d;
-      uint8_t any = 0, boundary = 0;
-      int reachRow = -1;
-      for (int x = 0; x < width; ++x) {
-        boundary |= ((d[x] ^ dd[x]) == 3) | (x + 1 < width && (d[x] ^ d[x + 1]) == 3);
-        if (krow[x] < kCandidateLeak) continue;
-        any = 1;
-        const double limit = limitPx(size_t(y) * width + x);
-        if (limit < diagonalPx) reachRow = std::max(reachRow, int(std::ceil(limit)));
-      }
-      rowHasCandidate[size_t(y)] = any;
-      rowHasBoundary[size_t(y)] = boundary;
-      rowReach[size_t(y)] = reachRow;
-    });
-    const bool anyBoundary = std::find(rowHasBoundary.begin(), rowHasBoundary.end(), 1) != rowHasBoundary.end();
-    int reach = 0;  // the largest row reach: caps g
-    std::vector<std::pair<int, int>> bands;  // [y0, y1) row intervals to scan
-    for (int y = 0; y < height; ++y) {
-      const int r = rowReach[size_t(y)];
-      if (r < 0) continue;
-      reach = std::max(reach, r + 1);
-      const int y0 = std::max(0, y - r - 1), y1 = std::min(height, y + r + 2);
-      if (!bands.empty() && y0 <= bands.back().second) bands.back().second = std::max(bands.back().second, y1);
-      else bands.emplace_back(y0, y1);
-    }
-    // g = vertical distance to the nearest boundary pixel within the band, capped at `far`.
-    const uint16_t far = uint16_t(std::min(reach + 1, 65535));
-    Scratch<uint16_t> gScratch(n);
-    uint16_t* g = gScratch.data();
-    constexpr int kStrip = 512;
-    const int strips = (width + kStrip - 1) / kStrip;
-    tbb::parallel_for(0, int(bands.size()) * strips, [&](int job) {
-      const auto [y0, y1] = bands[size_t(job / strips)];
-      const int x0 = (job % strips) * kStrip, x1 = std::min(width, x0 + kStrip);
-      for (int y = y0; y < y1; ++y) {
-        const uint8_t* d = decision + size_t(y) * width;
-        const uint8_t* du = y > 0 ? d - width : d;  // out of the image: itself, never "different"
-        const uint8_t* dd = y + 1 < height ? d + width : d;
-        uint16_t* row = g + size_t(y) * width;
-        const uint16_t* above = y > y0 ? row - width : nullptr;
-        for (int x = x0; x < x1; ++x) {
-          // Decisions are 1 (lit) and 2 (shadowed), 0 for not compared: two pixels hold
-          // different decisions, both compared, exactly when their xor is 3.
-          const uint8_t c = d[x];
-          const bool boundary = (c ^ du[x]) == 3 || (c ^ dd[x]) == 3 || (x > 0 && (c ^ d[x - 1]) == 3) ||
-                                (x + 1 < width && (c ^ d[x + 1]) == 3);
-          const uint16_t up = above ? uint16_t(std::min<int>(far, above[x] + 1)) : far;
-          row[x] = boundary ? uint16_t(0) : up;
-        }
-      }
-      for (int y = y1 - 2; y >= y0; --y) {
-        uint16_t* row = g + size_t(y) * width;
-        const uint16_t* below = row + width;
-        for (int x = x0; x < x1; ++x) row[x] = uint16_t(std::min<int>(row[x], below[x] + 1));  // <= far
-      }
-    });
-    std::vector<std::array<uint64_t, 3>> rowCounts(size_t(height), {0, 0, 0});
-    struct RowScratch {
-      std::vector<int> v;
-      std::vector<double> z;
-    };
-    tbb::enumerable_thread_specific<RowScratch> scratch;
-    tbb::parallel_for(0, height, [&](int y) {
-      if (!rowHasCandidate[size_t(y)]) return;
-      uint8_t* krow = klass + size_t(y) * width;
-      std::array<uint64_t, 3> counts{0, 0, 0};  // aliasing, leak, other
-      auto resolve = [&](int x, bool withinLimit) {
-        const PixelClass c = withinLimit ? PixelClass::Aliasing
-                             : krow[x] == kCandidateLeak ? PixelClass::Leak
-                                                          : PixelClass::Other;
-        krow[x] = uint8_t(c);
-        ++counts[c == PixelClass::Aliasing ? 0 : c == PixelClass::Leak ? 1 : 2];
-      };
-      const int r = rowReach[size_t(y)];
-      int xFirst = width, xLast = -1;
-      for (int x = 0; x < width; ++x) {
-        if (krow[x] < kCandidateLeak) continue;
-        if (limitPx(size_t(y) * width + x) >= diagonalPx) {
-          resolve(x, anyBoundary);
-        } else {
-          xFirst = std::min(xFirst, x);
-          xLast = x;
-        }
-      }
-      if (r < 0 || xLast < 0) {
-        rowCounts[size_t(y)] = counts;
-        return;
-      }
-      // Columns farther than the reach from every candidate cannot bring a distance under a limit.
-      const int q0 = std::max(0, xFirst - r - 1), q1 = std::min(width, xLast + r + 2);
-      const uint16_t* grow = g + size_t(y) * width;
-      RowScratch& rs = scratch.local();
-      rs.v.resize(size_t(q1 - q0));
-      rs.z.resize(size_t(q1 - q0) + 1);
-      int* v = rs.v.data();
-      double* z = rs.z.data();
-      auto f = [&](int q) { return double(grow[q]) * double(grow[q]); };
-      auto intersect = [&](int q, int p) { return ((f(q) + double(q) * q) - (f(p) + double(p) * p)) / (2.0 * (q - p)); };
-      int k = 0;
-      v[0] = q0;
-      z[0] = -std::numeric_limits<double>::infinity();
-      z[1] = std::numeric_limits<double>::infinity();
-      for (int q = q0 + 1; q < q1; ++q) {
-        double sq = intersect(q, v[k]);
-        while (sq <= z[k]) {  // z[0] = -inf stops this at k = 0
-          --k;
-          sq = intersect(q, v[k]);
-        }
-        ++k;
-        v[k] = q;
-        z[k] = sq;
-        z[k + 1] = std::numeric_limits<double>::infinity();
-      }
-      k = 0;
-      for (int x = xFirst; x <= xLast; ++x) {
-        while (z[k + 1] < x) ++k;
-        if (krow[x] < kCandidateLeak) continue;  // not a candidate, or resolved above
-        const int p = v[k];
-        const double dist2 = double(x - p) * double(x - p) + f(p);
-        const double limit = limitPx(size_t(y) * width + x);
-        resolve(x, dist2 <= limit * limit);
-      }
-      rowCounts[size_t(y)] = counts;
-    });
-    for (const auto& rc : rowCounts) {
-      t.counts[size_t(PixelClass::Aliasing)] += rc[0];
-      t.counts[size_t(PixelClass::Leak)] += rc[1];
-      t.counts[size_t(PixelClass::Other)] += rc[2];
-    }
-  }
+  // ---- pass 2: the boundary distance resolves the candidates (step 2's last decision) -------
+  if (t.candidates > 0) resolveCandidates(klass, decision, channels.m, width, height, options.boundaryTexels, t.counts);
 
+  // ---- step 3: tallies into metrics ----------------------------------------------------------
   Metrics out;
-  if (cascadePlane) {
-    // After pass 2, so `klass` holds every pixel's final class. Cascade indices come from a float
-    // channel: anything not an integer 0..7 (NaN included) is read as the nearest valid index.
-    constexpr int kMaxCascades = 8;
-    std::vector<uint64_t> pixels(kMaxCascades, 0), errors(kMaxCascades, 0);
-    std::vector<std::vector<float>> mValues(kMaxCascades);
-    for (size_t i = 0; i < n; ++i) {
-      if (decision[i] == kDecisionNone) continue;  // not compared
-      const float v = cascadePlane[i];
-      const int k = v >= 0.0f ? (v < float(kMaxCascades - 1) ? int(v + 0.5f) : kMaxCascades - 1) : 0;
-      ++pixels[size_t(k)];
-      errors[size_t(k)] += klass[i] >= uint8_t(PixelClass::Acne) && klass[i] <= uint8_t(PixelClass::Other);
-      if (mPlane) mValues[size_t(k)].push_back(sanitizeM(mPlane[i]));
-      cascadeCount = std::max(cascadeCount, k + 1);
-    }
-    for (int k = 0; k < cascadeCount; ++k) {
-      CascadeMetrics c;
-      c.index = k;
-      c.pixels = pixels[size_t(k)];
-      c.errors = errors[size_t(k)];
-      c.errorRate = c.pixels ? double(c.errors) / double(c.pixels) : 0.0;
-      std::vector<float>& m = mValues[size_t(k)];
-      if (!m.empty()) {  // nearest rank, as m_p95: sorted index ceil(0.95 N) - 1
-        const size_t rank = size_t(std::ceil(0.95 * double(m.size()))) - 1;
-        std::nth_element(m.begin(), m.begin() + std::ptrdiff_t(rank), m.end());
-        c.mP95 = double(m[rank]);
-      }
-      out.cascades.push_back(c);
-    }
+  setClassMetrics(out, t.counts);
+  if (out.pixelsCompared != t.compared) {
+    throw DriverError("compare: " + std::to_string(out.pixelsCompared) + " pixels classified as compared, " +
+                      std::to_string(t.compared) + " counted; expected the same");
   }
-  out.acne = t.counts[size_t(PixelClass::Acne)];
-  out.leak = t.counts[size_t(PixelClass::Leak)];
-  out.aliasing = t.counts[size_t(PixelClass::Aliasing)];
-  out.coverage = t.counts[size_t(PixelClass::Coverage)];
-  out.other = t.counts[size_t(PixelClass::Other)];
-  out.pixelsCompared = t.compared;
-  out.geometryMismatch = t.mismatch;
-  out.errors = out.acne + out.leak + out.aliasing + out.coverage + out.other;
+  if (channels.cascade) out.cascades = cascadeMetrics(klass, decision, channels, n);
   const double denom = double(t.compared);
-  auto rate = [&](uint64_t count) { return t.compared ? double(count) / denom : 0.0; };
-  out.errorRate = rate(out.errors);
-  out.acneRate = rate(out.acne);
-  out.leakRate = rate(out.leak);
-  out.aliasingRate = rate(out.aliasing);
-  out.coverageRate = rate(out.coverage);
-  out.otherRate = rate(out.other);
   const uint64_t shadowUnion = t.refShadow + t.rasShadow - t.bothShadow;
   out.shadowIou = shadowUnion ? double(t.bothShadow) / double(shadowUnion) : 1.0;
   out.mae = t.compared ? t.sumAbs / denom : 0.0;
   out.rmse = t.compared ? std::sqrt(t.sumSq / denom) : 0.0;
-
-  // m quantiles, exact, in linear time: a histogram of the 16 high bits of the float (non-negative
-  // floats order like their bit patterns) in pass 1 finds the bins that hold the ranks, then a
-  // selection among the values of those bins. Nearest rank: the value at sorted index
-  // ceil(p * N) - 1.
-  if (mPlane && t.compared > 0) {
+  if (channels.m && t.compared > 0) {
     std::vector<uint64_t> high(65536, 0);
     for (const auto& h : mHistLocal)
       for (size_t k = 0; k < h.size(); ++k) high[k] += h[k];
-    const double ps[2] = {0.5, 0.95};
-    uint64_t rank[2];
-    uint32_t bin[2];
-    for (int q = 0; q < 2; ++q) {
-      rank[q] = uint64_t(std::ceil(ps[q] * double(t.compared)));
-      rank[q] = rank[q] > 0 ? rank[q] - 1 : 0;
-      uint32_t b = 0;
-      for (; b < 65535; ++b) {
-        if (high[b] > rank[q]) break;
-        rank[q] -= high[b];
-      }
-      bin[q] = b;  // rank[q] is now the rank within that bin
-    }
-    // Second level: the values of those two bins (a small share of the pixels), then the k-th
-    // smallest of each. The k-th smallest of a multiset does not depend on the order the threads
-    // appended the values in: deterministic.
-    tbb::enumerable_thread_specific<std::array<std::vector<float>, 2>> inBins;
-    tbb::parallel_for(0, blocks, [&](int b) {
-      // m is smooth over the image: many blocks hold no value of either bin.
-      const uint32_t lo = floatBits(sums[size_t(b)].mMin) >> 16, hi = floatBits(sums[size_t(b)].mMax) >> 16;
-      if (sums[size_t(b)].compared == 0 || ((bin[0] < lo || bin[0] > hi) && (bin[1] < lo || bin[1] > hi))) return;
-      auto& values = inBins.local();
-      const size_t begin = size_t(b) * kBlockRows * width;
-      const size_t end = std::min(n, size_t(b + 1) * kBlockRows * width);
-      for (size_t i = begin; i < end; ++i) {
-        if (decision[i] == kDecisionNone) continue;
-        const float m = sanitizeM(mPlane[i]);
-        const uint32_t key = floatBits(m) >> 16;
-        if (key == bin[0]) values[0].push_back(m);
-        if (key == bin[1]) values[1].push_back(m);
-      }
-    });
-    double value[2];
-    for (int q = 0; q < 2; ++q) {
-      std::vector<float> all;
-      for (auto& v : inBins) all.insert(all.end(), v[size_t(q)].begin(), v[size_t(q)].end());
-      if (rank[q] >= all.size()) throw DriverError("compare: m quantile bin holds fewer values than counted");
-      std::nth_element(all.begin(), all.begin() + std::ptrdiff_t(rank[q]), all.end());
-      value[q] = double(all[size_t(rank[q])]);
-    }
-    out.mMedian = value[0];
-    out.mP95 = value[1];
+    setFootprintQuantiles(out, high, t.compared, sums, decision, channels.m, width, n);
     out.mMax = t.mMax;
   }
-
-  out.hasProjector = hasProjector;
-  if (hasProjector) {
+  out.hasProjector = channels.hasProjector;
+  if (channels.hasProjector) {
     const uint64_t u = t.projRef + t.projRas - t.projBoth;
     out.projectorCoverageIou = u ? double(t.projBoth) / double(u) : 1.0;
     out.reverseProjectionPixels = t.reverse;
-    out.projectorColorMae = t.compared && hasColor ? t.projColorAbs / denom : 0.0;
+    out.projectorColorMae = t.compared && channels.hasColor ? t.projColorAbs / denom : 0.0;
   }
   return out;
 }

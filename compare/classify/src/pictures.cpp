@@ -8,7 +8,7 @@
 #include <cstdio>
 #include <string>
 
-#include "shadowlab/compare/compare.h"
+#include "shadowlab/compare/classify.h"
 #include "shadowlab/scenes/error.h"
 
 namespace shadowlab {
@@ -85,7 +85,6 @@ struct Canvas {
   }
 };
 
-constexpr uint8_t kBackground[3] = {18, 20, 40};
 constexpr uint8_t kLegendBackground[3] = {12, 12, 12};
 constexpr uint8_t kText[3] = {235, 235, 235};
 
@@ -107,22 +106,15 @@ std::string percent(uint64_t count, uint64_t total) {
 }  // namespace
 
 void classColor(PixelClass c, bool referenceLit, uint8_t rgb[3]) {
-  auto set = [&](uint8_t r, uint8_t g, uint8_t b) {
-    rgb[0] = r;
-    rgb[1] = g;
-    rgb[2] = b;
-  };
-  switch (c) {
-    case PixelClass::NotCompared: set(kBackground[0], kBackground[1], kBackground[2]); break;
-    case PixelClass::GeometryMismatch: set(150, 95, 45); break;   // brown
-    case PixelClass::Correct: referenceLit ? set(190, 190, 190) : set(85, 85, 85); break;
-    case PixelClass::Acne: set(235, 35, 35); break;               // red
-    case PixelClass::Leak: set(30, 120, 255); break;              // blue
-    case PixelClass::Aliasing: set(255, 215, 0); break;           // yellow
-    case PixelClass::Coverage: set(40, 200, 70); break;           // green
-    case PixelClass::Other: set(255, 0, 255); break;              // magenta
-    default: set(0, 0, 0); break;
+  if (size_t(c) >= kPixelClassCount) {  // not a class code: black, so it stands out
+    rgb[0] = rgb[1] = rgb[2] = 0;
+    return;
   }
+  const PixelClassInfo& info = classInfo(c);
+  const uint32_t v = referenceLit ? info.rgbLit : info.rgbShadowed;
+  rgb[0] = uint8_t(v >> 16);
+  rgb[1] = uint8_t(v >> 8);
+  rgb[2] = uint8_t(v);
 }
 
 namespace {
@@ -158,21 +150,28 @@ std::vector<uint8_t> errorsPicture(const Classification& c, int* outWidth, int* 
     throw InputError("errors picture: error: classification is " + std::to_string(w) + "x" + std::to_string(h) +
                      " with " + std::to_string(c.classes.size()) + " pixels; expected a non-empty frame");
   }
-  uint64_t counts[8] = {};
-  for (PixelClass k : c.classes) ++counts[size_t(k) & 7];
-  const uint64_t compared = counts[size_t(PixelClass::Correct)] + counts[size_t(PixelClass::Acne)] +
-                            counts[size_t(PixelClass::Leak)] + counts[size_t(PixelClass::Aliasing)] +
-                            counts[size_t(PixelClass::Coverage)] + counts[size_t(PixelClass::Other)];
-  std::vector<LegendEntry> entries = {
-      {PixelClass::Correct, true, "correct lit"},
-      {PixelClass::Correct, false, "correct shadowed"},
-  };
-  for (PixelClass k : {PixelClass::Acne, PixelClass::Leak, PixelClass::Aliasing, PixelClass::Coverage, PixelClass::Other}) {
-    entries.push_back({k, false, std::string(toString(k)) + " " + std::to_string(counts[size_t(k)]) + " " +
-                                     percent(counts[size_t(k)], compared)});
+  const PerPixelClass<uint64_t> counts = countClasses(c.classes);
+  Metrics shares;  // pixels_compared and the rates the legend prints
+  setClassMetrics(shares, counts);
+  // The table's rows in its order: an error class with its count and share of the compared
+  // pixels, another counted class (geometry mismatch) with its count, a class whose colour shows
+  // the reference's decision (correct) once per decision, a class without a label not at all.
+  std::vector<LegendEntry> entries;
+  for (const PixelClassInfo& k : kPixelClasses) {
+    const std::string label = k.label;
+    if (label.empty()) continue;
+    const uint64_t n = counts[classIndex(k.cls)];
+    if (k.error) {
+      entries.push_back({k.cls, false, label + " " + std::to_string(n) + " " + percent(n, shares.pixelsCompared)});
+    } else if (k.countMetric) {
+      entries.push_back({k.cls, false, label + " " + std::to_string(n)});
+    } else if (k.rgbLit != k.rgbShadowed) {
+      entries.push_back({k.cls, true, label + " lit"});
+      entries.push_back({k.cls, false, label + " shadowed"});
+    } else {
+      entries.push_back({k.cls, false, label});
+    }
   }
-  entries.push_back({PixelClass::GeometryMismatch, false,
-                     "geometry mismatch " + std::to_string(counts[size_t(PixelClass::GeometryMismatch)])});
 
   // Lay the legend out in rows below the image, wrapping at the image width.
   const int s = fontScale(w);
@@ -238,7 +237,7 @@ std::vector<uint8_t> visibilityPicture(const Frame& f, const std::string& light)
   for (size_t i = 0; i < f.pixelCount(); ++i) {
     uint8_t* p = &rgb[i * 3];
     if (!hit || !(hit[i] >= 0.5f)) {
-      std::copy(kBackground, kBackground + 3, p);
+      classColor(PixelClass::NotCompared, false, p);
       continue;
     }
     float v = vis ? vis[i] : 1.0f;

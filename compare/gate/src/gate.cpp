@@ -9,6 +9,7 @@
 #include <set>
 #include <sstream>
 
+#include "shadowlab/compare/classes.h"
 #include "shadowlab/compare/timings.h"
 #include "shadowlab/scenes/error.h"
 #include "shadowlab/scenes/io.h"
@@ -210,41 +211,39 @@ double MetricTolerance::allowed(double baseline) const {
 
 Direction builtinDirection(const std::string& metric, bool* known) {
   // The names Metrics::toJson writes (compare/METRICS.md). Counts and rates of wrong pixels, the
-  // mean errors and Lloyd's texel footprint m only get better by going down.
-  static const std::map<std::string, Direction> kBuiltin = {
-      {"pixels_compared", Direction::Equal},
-      {"geometry_mismatch", Direction::LowerIsBetter},
-      {"errors", Direction::LowerIsBetter},
-      {"acne", Direction::LowerIsBetter},
-      {"leak", Direction::LowerIsBetter},
-      {"aliasing", Direction::LowerIsBetter},
-      {"coverage", Direction::LowerIsBetter},
-      {"other", Direction::LowerIsBetter},
-      {"error_rate", Direction::LowerIsBetter},
-      {"acne_rate", Direction::LowerIsBetter},
-      {"leak_rate", Direction::LowerIsBetter},
-      {"aliasing_rate", Direction::LowerIsBetter},
-      {"coverage_rate", Direction::LowerIsBetter},
-      {"other_rate", Direction::LowerIsBetter},
-      {"shadow_iou", Direction::HigherIsBetter},
-      {"mae", Direction::LowerIsBetter},
-      {"rmse", Direction::LowerIsBetter},
-      {"m_median", Direction::LowerIsBetter},
-      {"m_p95", Direction::LowerIsBetter},
-      {"m_max", Direction::LowerIsBetter},
-      {"has_projector", Direction::Equal},
-      {"projector_coverage_iou", Direction::HigherIsBetter},
-      {"reverse_projection_pixels", Direction::LowerIsBetter},
-      {"projector_color_mae", Direction::LowerIsBetter},
-      // stability.json (compare/METRICS.md, "Temporal stability"): shimmer and the per-frame error
-      // rate's statistics only get better by going down; the path's frame count must not move.
-      {"frames", Direction::Equal},
-      {"shimmer_rate", Direction::LowerIsBetter},
-      {"error_rate_mean", Direction::LowerIsBetter},
-      {"error_rate_max", Direction::LowerIsBetter},
-      {"error_rate_std", Direction::LowerIsBetter},
-      {"error_jump_max", Direction::LowerIsBetter},
-  };
+  // mean errors and Lloyd's texel footprint m only get better by going down. The per-class counts
+  // and rates, and their directions, come from the class table (classes.h).
+  static const std::map<std::string, Direction> kBuiltin = [] {
+    std::map<std::string, Direction> m = {
+        {"pixels_compared", Direction::Equal},
+        {"errors", Direction::LowerIsBetter},
+        {"error_rate", Direction::LowerIsBetter},
+        {"shadow_iou", Direction::HigherIsBetter},
+        {"mae", Direction::LowerIsBetter},
+        {"rmse", Direction::LowerIsBetter},
+        {"m_median", Direction::LowerIsBetter},
+        {"m_p95", Direction::LowerIsBetter},
+        {"m_max", Direction::LowerIsBetter},
+        {"has_projector", Direction::Equal},
+        {"projector_coverage_iou", Direction::HigherIsBetter},
+        {"reverse_projection_pixels", Direction::LowerIsBetter},
+        {"projector_color_mae", Direction::LowerIsBetter},
+        // stability.json (compare/METRICS.md, "Temporal stability"): shimmer and the per-frame error
+        // rate's statistics only get better by going down; the path's frame count must not move.
+        {"frames", Direction::Equal},
+        {"shimmer_rate", Direction::LowerIsBetter},
+        {"error_rate_mean", Direction::LowerIsBetter},
+        {"error_rate_max", Direction::LowerIsBetter},
+        {"error_rate_std", Direction::LowerIsBetter},
+        {"error_jump_max", Direction::LowerIsBetter},
+    };
+    for (const PixelClassInfo& c : kPixelClasses) {
+      const Direction d = c.better == MetricBetter::Lower ? Direction::LowerIsBetter : Direction::HigherIsBetter;
+      if (c.countMetric) m[c.countMetric] = d;
+      if (c.rateMetric) m[c.rateMetric] = d;
+    }
+    return m;
+  }();
   auto it = kBuiltin.find(metric);
   if (known) *known = it != kBuiltin.end();
   if (it != kBuiltin.end()) return it->second;

@@ -20,6 +20,7 @@
 #include <set>
 #include <sstream>
 
+#include "shadowlab/compare/compare.h"
 #include "shadowlab/compare/sweep.h"
 #include "shadowlab/compare/timings.h"
 #include "shadowlab/scenes/error.h"
@@ -84,6 +85,20 @@ std::string pct(double rate) {
   char buf[64];
   std::snprintf(buf, sizeof buf, "%.3f%%", rate * 100.0);
   return buf;
+}
+
+// The error classes' rate metrics (classes.h), in table order: the report's class columns.
+std::vector<const char*> errorRateMetrics() {
+  std::vector<const char*> names;
+  for (const PixelClassInfo& c : kPixelClasses)
+    if (c.error && c.rateMetric) names.push_back(c.rateMetric);
+  return names;
+}
+
+std::string headerCells(const std::vector<const char*>& names) {
+  std::string h;
+  for (const char* n : names) h += std::string("<th>") + n + "</th>";
+  return h;
 }
 
 // The report's "raster time": the two GPU passes, so CPU scheduling noise does not reorder the front.
@@ -261,6 +276,10 @@ std::vector<std::string> writeSweepReport(const SweepPlan& plan, const std::vect
   const std::string resultsPath = joinPath(options.outDir, "results.json");
   const std::string manifestPath = joinPath(figuresDir, "charts.json");
 
+  // The chart script takes the classes (keys, metric names, labels, colours) from classes.json
+  // next to results.json, so that it never holds its own copy of the class table.
+  writeJsonAtomic(joinPath(options.outDir, "classes.json"), pixelClassesJson());
+
   // Charts, in a child process that runs while the triptychs render (the two use different
   // resources: one Python thread against lavapipe's threads). A stale manifest from an earlier
   // run must not pass for this run's charts.
@@ -381,7 +400,7 @@ std::vector<std::string> writeSweepReport(const SweepPlan& plan, const std::vect
   fact("configuration loop", fmt(sweepSeconds, "%.2f") + " s" +
                                  (ran ? " (" + fmt(sweepSeconds / double(ran) * 1000.0, "%.1f") + " ms per row)" : ""));
   fact("outputs", "<a href=\"results.json\">results.json</a>, <a href=\"results.csv\">results.csv</a>, "
-                  "<a href=\"rows.jsonl\">rows.jsonl</a>");
+                  "<a href=\"rows.jsonl\">rows.jsonl</a>, <a href=\"classes.json\">classes.json</a>");
   h << "</table>\n";
 
   // Scenes.
@@ -438,15 +457,15 @@ std::vector<std::string> writeSweepReport(const SweepPlan& plan, const std::vect
       h << "<p class=\"note\">No row with an error rate.</p>\n";
       continue;
     }
-    h << "<table>\n<tr><th>time budget (shadow_gpu_ms + camera_gpu_ms)</th><th class=\"t\">configuration</th><th>error_rate</th><th>acne_rate</th>"
-         "<th>leak_rate</th><th>aliasing_rate</th><th>coverage_rate</th><th>m_p95 (px)</th><th>compare_ms</th></tr>\n";
+    h << "<table>\n<tr><th>time budget (shadow_gpu_ms + camera_gpu_ms)</th><th class=\"t\">configuration</th><th>error_rate</th>"
+      << headerCells(errorRateMetrics()) << "<th>m_p95 (px)</th><th>compare_ms</th></tr>\n";
     for (size_t i : front) {
       const ResultRow& r = rows[i];
       h << "<tr><td>&le; " << fmt(rasterMs(r), "%.2f") << "</td><td class=\"t\">" << escapeMarkup(r.config) << "</td><td>"
-        << pct(num(r.metrics, "error_rate")) << "</td><td>" << pct(num(r.metrics, "acne_rate")) << "</td><td>"
-        << pct(num(r.metrics, "leak_rate")) << "</td><td>" << pct(num(r.metrics, "aliasing_rate")) << "</td><td>"
-        << pct(num(r.metrics, "coverage_rate")) << "</td><td>" << fmt(num(r.metrics, "m_p95")) << "</td><td>"
-        << fmt(num(r.timings, "compare_ms"), "%.1f") << "</td></tr>\n";
+        << pct(num(r.metrics, "error_rate")) << "</td>";
+      for (const char* k : errorRateMetrics()) h << "<td>" << pct(num(r.metrics, k)) << "</td>";
+      h << "<td>" << fmt(num(r.metrics, "m_p95")) << "</td><td>" << fmt(num(r.timings, "compare_ms"), "%.1f")
+        << "</td></tr>\n";
     }
     h << "</table>\n";
   }
@@ -513,23 +532,26 @@ std::vector<std::string> writeSweepReport(const SweepPlan& plan, const std::vect
       } else {
         h << "<img src=\"" << escapeMarkup(p.file) << "\" alt=\"" << escapeMarkup(name + " " + p.label + " triptych") << "\">\n";
       }
-      h << "<figcaption>error_rate " << pct(num(r.metrics, "error_rate")) << " (acne " << pct(num(r.metrics, "acne_rate"))
-        << ", leak " << pct(num(r.metrics, "leak_rate")) << ", aliasing " << pct(num(r.metrics, "aliasing_rate"))
-        << ", coverage " << pct(num(r.metrics, "coverage_rate")) << "); raster " << fmt(rasterMs(r), "%.2f")
-        << " ms.</figcaption>\n</figure>\n";
+      std::string byClass;
+      for (const PixelClassInfo& c : kPixelClasses)
+        if (c.error && c.rateMetric)
+          byClass += (byClass.empty() ? "" : ", ") + std::string(c.key) + " " + pct(num(r.metrics, c.rateMetric));
+      h << "<figcaption>error_rate " << pct(num(r.metrics, "error_rate")) << " (" << escapeMarkup(byClass) << "); raster "
+        << fmt(rasterMs(r), "%.2f") << " ms.</figcaption>\n</figure>\n";
     }
   }
 
   // Every row.
   h << "<h2>All rows</h2>\n<details>\n<summary>" << rows.size() << " rows (also in results.csv)</summary>\n<table>\n"
     << "<tr><th class=\"t\">scene</th><th class=\"t\">configuration</th><th class=\"t\">light</th><th>error_rate</th>"
-       "<th>acne_rate</th><th>leak_rate</th><th>aliasing_rate</th><th>coverage_rate</th><th>m_median</th><th>m_p95</th>"
+    << headerCells(errorRateMetrics())
+    << "<th>m_median</th><th>m_p95</th>"
        "<th>m_max</th><th>shadow_gpu_ms</th><th>camera_gpu_ms</th><th>compare_ms</th><th>config_wall_ms</th></tr>\n";
   for (const auto& r : rows) {
     h << "<tr><td class=\"t\">" << escapeMarkup(r.scene) << "</td><td class=\"t\">" << escapeMarkup(r.config) << "</td><td class=\"t\">"
       << escapeMarkup(r.light) << "</td>";
-    for (const char* k : {"error_rate", "acne_rate", "leak_rate", "aliasing_rate", "coverage_rate"})
-      h << "<td>" << pct(num(r.metrics, k)) << "</td>";
+    h << "<td>" << pct(num(r.metrics, "error_rate")) << "</td>";
+    for (const char* k : errorRateMetrics()) h << "<td>" << pct(num(r.metrics, k)) << "</td>";
     for (const char* k : {"m_median", "m_p95", "m_max"}) h << "<td>" << fmt(num(r.metrics, k)) << "</td>";
     for (const char* k : {timing::kShadowGpuMs, timing::kCameraGpuMs, timing::kCompareMs, timing::kConfigWallMs})
       h << "<td>" << fmt(num(r.timings, k), "%.2f") << "</td>";

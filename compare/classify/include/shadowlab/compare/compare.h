@@ -7,22 +7,12 @@
 
 #include <nlohmann/json.hpp>
 
+#include "shadowlab/compare/classes.h"
 #include "shadowlab/scenes/frame.h"
 
 namespace shadowlab {
 
-// Per-pixel class codes (stable: they are written to files).
-enum class PixelClass : uint8_t {
-  NotCompared = 0,       // background in either frame
-  GeometryMismatch = 1,  // the two renderers see different objects
-  Correct = 2,
-  Acne = 3,
-  Leak = 4,
-  Aliasing = 5,
-  Coverage = 6,
-  Other = 7,
-};
-const char* toString(PixelClass c);
+const char* toString(PixelClass c);  // the class's key (classes.h)
 
 struct CompareOptions {
   std::string light;            // empty: the light the raster frame rendered (meta "light")
@@ -47,9 +37,19 @@ struct CascadeMetrics {
 
 struct Metrics {
   uint64_t pixelsCompared = 0;
-  uint64_t geometryMismatch = 0;
-  uint64_t errors = 0, acne = 0, leak = 0, aliasing = 0, coverage = 0, other = 0;  // counts
-  double errorRate = 0, acneRate = 0, leakRate = 0, aliasingRate = 0, coverageRate = 0, otherRate = 0;
+  // Per class (classes.h), indexed by the class code: pixels of the class over the whole frame, and
+  // their share of pixelsCompared (0 when none are compared). Metrics::toJson writes the classes'
+  // count and rate metrics from these; the classes without a metric (correct, not compared) are
+  // filled all the same.
+  PerPixelClass<uint64_t> classCounts{};
+  PerPixelClass<double> classRates{};
+  static_assert(std::tuple_size<decltype(classCounts)>::value == kPixelClassCount &&
+                    std::tuple_size<decltype(classRates)>::value == kPixelClassCount,
+                "one count and one rate per row of the class table");
+  uint64_t errors = 0;  // the sum over the error classes
+  double errorRate = 0;
+  uint64_t count(PixelClass c) const { return classCounts[classIndex(c)]; }
+  double rate(PixelClass c) const { return classRates[classIndex(c)]; }
   double shadowIou = 1;
   double mae = 0, rmse = 0;
   double mMedian = 0, mP95 = 0, mMax = 0;
@@ -76,8 +76,17 @@ struct Classification {
 // The light compareFrames would use for these frames and options (see CompareOptions::light).
 std::string resolveCompareLight(const Frame& reference, const Frame& raster, const CompareOptions& options);
 
-// RGB color of each class in errors.png (and the legend).
+// RGB color of each class in errors.png (and the legend): the table's colour (classes.h).
 void classColor(PixelClass c, bool referenceLit, uint8_t rgb[3]);
+
+// The error classes for a one-line summary, in table order: "acne 37, leak 11, ..." (counts) or
+// "acne 0.0123, leak 0.0004, ..." (rates, 4 decimals).
+std::string errorClassSummary(const Metrics& m, bool rates);
+
+// The class table as JSON, for the chart script and `shadowlab classes --json`: a list, in legend
+// order, of {code, key, label, error, count_metric, rate_metric, color ("#rrggbb"), help}, the
+// metric names null where the class has none.
+nlohmann::json pixelClassesJson();
 
 // Throws InputError on mismatched sizes, scene hashes or missing channels.
 Metrics compareFrames(const Frame& reference, const Frame& raster, const CompareOptions& options = {},

@@ -1,0 +1,97 @@
+#pragma once
+// The steps of compareFrames (compare.h), public so that each can be tested on its own:
+//   evidence  PixelEvidence: what the channels of both frames say at one pixel
+//   class     classifyPixel: a pure function from evidence to a PixelClass (precedence below)
+//   tallies   countClasses, setClassMetrics: per-class counts and rates of a set of classes
+// compareFrames runs the same functions pixel by pixel, reading the evidence channels only where
+// the decisions disagree (the frames' evidence planes are most of the memory traffic). The class
+// functions are inline: the pass-1 loop calls them for every pixel.
+// compare/METRICS.md defines each class and why the precedence is what it is.
+#include <vector>
+
+#include "shadowlab/compare/compare.h"
+
+namespace shadowlab {
+
+// One pixel's channels. The first group decides whether the pixel is scored and how each renderer
+// decides; compareFrames reads the evidence after it only where the two decisions disagree. A
+// missing evidence channel proves nothing (its `has` flag false).
+struct PixelEvidence {
+  bool referenceHit = false, rasterHit = false;   // `hit` >= 0.5
+  float referenceObject = 0, rasterObject = 0;    // `object_id`
+  float referenceVis = 0, rasterVis = 0;          // `light.L.vis`, raw (clamped to [0, 1] when decided, NaN as 0)
+
+  bool hasInMap = false;
+  float inMap = 1;                                // raster `light.L.in_map`; < 0.5: outside the map
+  bool hasOccluderId = false;
+  float occluderId = 0;                           // raster `light.L.occluder_id`: who wrote the map texel
+  bool hasDepths = false;                         // all three below (map depth units)
+  float receiverDepth = 0, mapDepth = 0, biasDepth = 0;  // raster `receiver_depth`, `map_depth`, `bias_depth`
+  bool hasOccluderDistance = false;               // both below (world units)
+  float referenceOccluderDist = 0, biasWorld = 0;  // reference `occluder_dist`, raster `bias_world`
+  // The disagreement lies within boundaryTexels * m pixels of a reference shadow boundary. Known
+  // only after the boundary distance transform (compareFrames' second pass).
+  bool withinBoundaryBand = false;
+};
+
+// The binary decision: lit when visibility >= 0.5 (NaN read as 0).
+inline bool litDecision(float visibility) { return visibility >= 0.5f; }  // the same as clamping first
+
+// Which pixels are scored: NotCompared (neither frame hits), GeometryMismatch (one hits, or the
+// objects differ), else Correct, standing for "compared" until the decisions are looked at.
+inline PixelClass scoredClass(bool referenceHit, bool rasterHit, float referenceObject, float rasterObject) {
+  if (!referenceHit && !rasterHit) return PixelClass::NotCompared;
+  if (!(referenceHit && rasterHit) || referenceObject != rasterObject) return PixelClass::GeometryMismatch;
+  return PixelClass::Correct;
+}
+
+// A compared pixel whose decisions disagree, before the boundary distance is known: coverage or
+// acne are final; anything else is an aliasing candidate, carrying whether the leak evidence holds.
+struct DisagreementClass {
+  PixelClass cls = PixelClass::Other;  // Coverage or Acne when !candidate
+  bool candidate = false;
+  bool leakEvidence = false;
+};
+inline DisagreementClass classifyDisagreement(const PixelEvidence& e, float leakBiasFactor) {
+  const bool referenceLit = litDecision(e.referenceVis);
+  // Outside the map no other evidence (occluder, depth) is meaningful.
+  if (e.hasInMap && !(e.inMap >= 0.5f)) return {PixelClass::Coverage, false, false};
+  if (referenceLit && e.hasOccluderId && e.occluderId == e.rasterObject) return {PixelClass::Acne, false, false};
+  // (a) another object in the map, let through by the bias; a texel the receiver wrote itself
+  // proves no occluder.
+  const bool throughMap = e.hasDepths && e.hasOccluderId && e.occluderId != 0.0f && e.occluderId != e.rasterObject &&
+                          e.receiverDepth > e.mapDepth && e.receiverDepth <= e.mapDepth + e.biasDepth;
+  // (b) the true occluder within the bias distance (with the sampling slack).
+  const bool withinBias = e.hasOccluderDistance && e.referenceOccluderDist >= 0.0f &&
+                          e.referenceOccluderDist <= leakBiasFactor * e.biasWorld;
+  return {PixelClass::Other, true, !referenceLit && (throughMap || withinBias)};
+}
+
+// A candidate's class once its boundary distance is known: aliasing within the band, beyond it
+// leak (with the leak evidence) or other.
+inline PixelClass resolveCandidate(bool leakEvidence, bool withinBoundaryBand) {
+  // Aliasing before leak: within the band the map's resolution alone explains the error (METRICS.md).
+  if (withinBoundaryBand) return PixelClass::Aliasing;
+  return leakEvidence ? PixelClass::Leak : PixelClass::Other;
+}
+
+// The class of one pixel; the first that holds, in this order (the precedence):
+//   not compared, geometry mismatch, correct (the decisions agree), then for a disagreement
+//   coverage (outside the map), acne (lit in truth, the receiver's own texel in the map),
+//   aliasing (within the boundary band), leak (the bias let a real occluder through), other.
+inline PixelClass classifyPixel(const PixelEvidence& e, float leakBiasFactor = CompareOptions{}.leakBiasFactor) {
+  const PixelClass scored = scoredClass(e.referenceHit, e.rasterHit, e.referenceObject, e.rasterObject);
+  if (scored != PixelClass::Correct) return scored;
+  if (litDecision(e.referenceVis) == litDecision(e.rasterVis)) return PixelClass::Correct;
+  const DisagreementClass d = classifyDisagreement(e, leakBiasFactor);
+  return d.candidate ? resolveCandidate(d.leakEvidence, e.withinBoundaryBand) : d.cls;
+}
+
+// Tallies: pixels per class (indexed by the class code).
+PerPixelClass<uint64_t> countClasses(const std::vector<PixelClass>& classes);
+
+// Fills m's per-class counts and rates, `errors`, `error_rate` and `pixels_compared` (correct plus
+// the error classes) from per-class counts; rates are 0 when no pixel is compared.
+void setClassMetrics(Metrics& m, const PerPixelClass<uint64_t>& counts);
+
+}  // namespace shadowlab
