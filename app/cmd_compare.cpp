@@ -104,6 +104,7 @@ int run(const Options& o) {
               (unsigned long long)metrics.pixelsCompared,
               (unsigned long long)metrics.count(PixelClass::GeometryMismatch), metrics.errorRate,
               errorClassSummary(metrics, false).c_str(), compareMs);
+  if (metrics.hasProjector) std::printf("%s\n", projectorSummary(metrics).c_str());
   std::printf("wrote %s/metrics.json, errors.png, triptych.png\n", o.outDir.c_str());
   return 0;
 }

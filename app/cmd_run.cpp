@@ -46,8 +46,8 @@ int run(const Options& o) {
     throw InputError("--light " + o.light + ": error: scene " + scene.path + " has no light \"" + o.light +
                      "\"; expected one of: " + (names.empty() ? "(none)" : names));
   }
-  if (scene.lights.empty()) {
-    throw InputError(formatError(scene.path, "/lights", "the scene has no light; expected at least one to compare"));
+  if (scene.lights.empty() && scene.projectors.empty()) {
+    throw InputError(formatError(scene.path, "/lights", "the scene has no light and no projector; expected at least one to compare"));
   }
   if (o.spp < 1) throw InputError("--spp: error: got " + std::to_string(o.spp) + "; expected an integer >= 1");
   const std::string light = scene.lightOrDefault(o.light);
@@ -110,6 +110,7 @@ int run(const Options& o) {
   std::printf("compare: %.1f ms, %llu pixels: error_rate %.4f (%s), shadow_iou %.4f, m_median %.2f\n", r.compareMs,
               (unsigned long long)m.pixelsCompared, m.errorRate, errorClassSummary(m, true).c_str(), m.shadowIou,
               m.mMedian);
+  if (m.hasProjector) std::printf("%s\n", projectorSummary(m).c_str());
   std::printf("wrote %s/metrics.json, errors.png, triptych.png%s\n", o.outDir.c_str(),
               o.keepImages ? ", reference.exr, raster.exr" : "");
   return 0;

@@ -383,6 +383,48 @@ TEST(CompareMetrics, ProjectorMetrics) {
   EXPECT_TRUE(j.contains("projector_coverage_iou"));
 }
 
+// A projector-only scene (no light): the projector metrics are computed, no pixel can be a
+// shadow error, and the JSON says the light was not compared. Without a projector either, there
+// is nothing to compare.
+TEST(CompareMetrics, ProjectorOnlyFramesCompareTheProjector) {
+  auto makeFrame = [](bool withProjector) {
+    Frame f;
+    f.width = 16;
+    f.height = 8;
+    f.add("hit", 1.0f);
+    f.add("object_id", 1.0f);
+    if (withProjector) {
+      f.meta["projectors"] = {"slide"};
+      f.add("proj.slide.coverage", 0.0f);
+      for (const char* c : {"R", "G", "B"}) f.add(std::string("proj.slide.") + c, 0.0f);
+    }
+    return f;
+  };
+  Frame reference = makeFrame(true), raster = makeFrame(true);
+  for (int y = 0; y < 8; ++y)
+    for (int x = 0; x < 10; ++x) {
+      const size_t i = size_t(y) * 16 + size_t(x);
+      if (x < 8) reference.get("proj.slide.coverage")[i] = 1;
+      raster.get("proj.slide.coverage")[i] = 1;  // 16 pixels more than the reference
+    }
+  const Metrics m = compareFrames(reference, raster);
+  EXPECT_FALSE(m.lightCompared);
+  ASSERT_TRUE(m.hasProjector);
+  EXPECT_EQ(m.pixelsCompared, 128u);
+  EXPECT_EQ(m.errors, 0u);
+  EXPECT_DOUBLE_EQ(m.projectorCoverageIou, 64.0 / 80.0);
+  EXPECT_EQ(m.toJson().at("light_compared"), false);
+  EXPECT_EQ(projectorSummary(m).rfind("no light (projector-only scene); projector: coverage_iou 0.8000", 0), 0u)
+      << projectorSummary(m);
+
+  try {
+    compareFrames(makeFrame(false), makeFrame(false));
+    ADD_FAILURE() << "frames with neither a light nor a projector were compared";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("nothing to compare"), std::string::npos) << e.what();
+  }
+}
+
 TEST(CompareMetrics, DeterministicForAnyThreadCount) {
   // A large random pair (many blocks, fractional visibility): the metrics and every class must
   // be bit-identical with one thread and with all of them.

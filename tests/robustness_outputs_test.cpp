@@ -158,3 +158,32 @@ TEST(JobLimits, ProgressOnATerminalOnly) {
   EXPECT_EQ(piped.code, 0) << piped.err;
   EXPECT_EQ(piped.err.find('%'), std::string::npos) << "no progress line into a pipe: " << piped.err;
 }
+
+// A scene with projectors and no light is valid (scenes/FORMAT.md) and `reference` traces it; `run`
+// and `compare` compare what it has: the projector's metrics, no light ("light_compared": false).
+TEST(ProjectorOnly, RunAndCompareCompareTheProjector) {
+  const fs::path dir = tempDir("projector_only");
+  const std::string image = std::string(SHADOWLAB_SOURCE_DIR) + "/scenes/data/projector_image.png";
+  std::ofstream(dir / "slide.json") << R"({
+  "camera": {"position": [6, 4, 6], "look_at": [0, 1, -2], "vfov_deg": 50, "width": 96, "height": 64},
+  "objects": [{"type": "plane", "size": [20, 20]},
+              {"type": "quad", "size": [8, 5], "transform": {"translate": [0, 2.5, -4]}}],
+  "projectors": [{"name": "slide", "position": [0, 2.5, 3], "look_at": [0, 2.5, -5], "fov_deg": 40,
+                  "image": ")" + image + R"("}]
+})";
+  const std::string scene = "'" + (dir / "slide.json").string() + "'";
+  CliRun run = runShadowlab("run " + scene + " --cache '" + (dir / "cache").string() + "' -o '" + (dir / "run").string() + "'", dir);
+  if (run.code == 3) GTEST_SKIP() << "no Vulkan device (shadowlab exit 3): " << run.err;
+  ASSERT_EQ(run.code, 0) << run.err;
+  EXPECT_NE(run.out.find("no light (projector-only scene); projector: coverage_iou"), std::string::npos) << run.out;
+  const std::string metrics = slurp(dir / "run" / "metrics.json");
+  EXPECT_NE(metrics.find("\"light_compared\": false"), std::string::npos) << metrics;
+  EXPECT_NE(metrics.find("\"projector_coverage_iou\""), std::string::npos) << metrics;
+
+  ASSERT_EQ(runShadowlab("reference " + scene + " -o '" + (dir / "ref").string() + "'", dir).code, 0);
+  ASSERT_EQ(runShadowlab("raster " + scene + " -o '" + (dir / "ras").string() + "'", dir).code, 0);
+  CliRun cmp = runShadowlab(
+      "compare '" + (dir / "ref").string() + "' '" + (dir / "ras").string() + "' -o '" + (dir / "cmp").string() + "'", dir);
+  EXPECT_EQ(cmp.code, 0) << cmp.err;
+  EXPECT_NE(cmp.out.find("no light (projector-only scene)"), std::string::npos) << cmp.out;
+}

@@ -41,6 +41,7 @@ nlohmann::json Metrics::toJson() const {
   j["m_median"] = mMedian;
   j["m_p95"] = mP95;
   j["m_max"] = mMax;
+  if (!lightCompared) j["light_compared"] = false;
   if (hasProjector) {
     j["projector_coverage_iou"] = projectorCoverageIou;
     j["reverse_projection_pixels"] = reverseProjectionPixels;
@@ -53,6 +54,14 @@ nlohmann::json Metrics::toJson() const {
     j["cascades"] = list;
   }
   return j;
+}
+
+std::string projectorSummary(const Metrics& m) {
+  if (!m.hasProjector) return "";
+  char buf[160];
+  std::snprintf(buf, sizeof buf, "projector: coverage_iou %.4f, reverse_projection_pixels %llu, color_mae %.4f",
+                m.projectorCoverageIou, (unsigned long long)m.reverseProjectionPixels, m.projectorColorMae);
+  return (m.lightCompared ? "" : "no light (projector-only scene); ") + std::string(buf);
 }
 
 std::string errorClassSummary(const Metrics& m, bool rates) {
@@ -216,6 +225,9 @@ struct Channels {
   const float* m = nullptr;        // texel footprint, pixels per map texel
   const float* cascade = nullptr;  // only for cascaded frames (readChannels says why)
   int cascadeCount = 0;            // from the method, so that an empty cascade is still listed
+  // Without a light (a projector-only scene), both decisions read this plane of ones: lit
+  // everywhere, so no pixel can disagree about a shadow.
+  std::vector<float> noLightVis;
   // The first projector, when both frames have its coverage.
   const float *refCov = nullptr, *rasCov = nullptr, *rasReverse = nullptr;
   const float* refRgb[3] = {nullptr, nullptr, nullptr};
@@ -277,12 +289,17 @@ Channels readChannels(const Frame& reference, const Frame& raster, const Compare
   Channels ch;
   ch.refHit = requiredPlane(reference, "hit", options.referenceName, "a renderer's output frame");
   ch.refObj = requiredPlane(reference, "object_id", options.referenceName, "a renderer's output frame");
-  ch.refVis = requiredPlane(reference, lp + "vis", options.referenceName,
-                            expectLight + channelList(reference, "light.", ".vis") + ")");
   ch.rasHit = requiredPlane(raster, "hit", options.rasterName, "a renderer's output frame");
   ch.rasObj = requiredPlane(raster, "object_id", options.rasterName, "a renderer's output frame");
-  ch.rasVis = requiredPlane(raster, lp + "vis", options.rasterName,
-                            expectLight + channelList(raster, "light.", ".vis") + ")");
+  if (light.empty()) {
+    ch.noLightVis.assign(reference.pixelCount(), 1.0f);
+    ch.refVis = ch.rasVis = ch.noLightVis.data();
+  } else {
+    ch.refVis = requiredPlane(reference, lp + "vis", options.referenceName,
+                              expectLight + channelList(reference, "light.", ".vis") + ")");
+    ch.rasVis = requiredPlane(raster, lp + "vis", options.rasterName,
+                              expectLight + channelList(raster, "light.", ".vis") + ")");
+  }
   // Evidence: optional, so that any two frames can be compared (a reference with itself has none).
   // Without it the corresponding classes cannot be proven; see METRICS.md.
   auto optional = [&](const Frame& f, const std::string& name) -> const float* {
@@ -290,24 +307,26 @@ Channels readChannels(const Frame& reference, const Frame& raster, const Compare
     if (p && f.get(name).size() != f.pixelCount()) requiredPlane(f, name, "", "");  // throws
     return p;
   };
-  ch.refOccDist = optional(reference, lp + "occluder_dist");
-  ch.inMap = optional(raster, lp + "in_map");
-  ch.occId = optional(raster, lp + "occluder_id");
-  ch.recvDepth = optional(raster, lp + "receiver_depth");
-  ch.mapDepth = optional(raster, lp + "map_depth");
-  ch.biasDepth = optional(raster, lp + "bias_depth");
-  ch.biasWorld = optional(raster, lp + "bias_world");
-  ch.m = optional(raster, lp + "m");
-  // Per-cascade metrics: only for cascaded frames, so every other row keeps its keys (the channel
-  // is 0 everywhere for the other fits). Frames built in code without metadata count as cascaded.
-  ch.cascade = optional(raster, lp + "cascade");
-  if (ch.cascade) {
-    auto method = raster.meta.find("method");
-    if (method != raster.meta.end() && method->is_object()) {
-      auto fit = method->find("fit");
-      if (fit != method->end() && fit->is_string() && fit->get<std::string>() != "cascades") ch.cascade = nullptr;
-      auto count = method->find("cascades.count");
-      if (count != method->end() && count->is_number_integer()) ch.cascadeCount = std::clamp(count->get<int>(), 0, 8);
+  if (!light.empty()) {  // the light's evidence; a projector-only frame has none
+    ch.refOccDist = optional(reference, lp + "occluder_dist");
+    ch.inMap = optional(raster, lp + "in_map");
+    ch.occId = optional(raster, lp + "occluder_id");
+    ch.recvDepth = optional(raster, lp + "receiver_depth");
+    ch.mapDepth = optional(raster, lp + "map_depth");
+    ch.biasDepth = optional(raster, lp + "bias_depth");
+    ch.biasWorld = optional(raster, lp + "bias_world");
+    ch.m = optional(raster, lp + "m");
+    // Per-cascade metrics: only for cascaded frames, so every other row keeps its keys (the channel
+    // is 0 everywhere for the other fits). Frames built in code without metadata count as cascaded.
+    ch.cascade = optional(raster, lp + "cascade");
+    if (ch.cascade) {
+      auto method = raster.meta.find("method");
+      if (method != raster.meta.end() && method->is_object()) {
+        auto fit = method->find("fit");
+        if (fit != method->end() && fit->is_string() && fit->get<std::string>() != "cascades") ch.cascade = nullptr;
+        auto count = method->find("cascades.count");
+        if (count != method->end() && count->is_number_integer()) ch.cascadeCount = std::clamp(count->get<int>(), 0, 8);
+      }
     }
   }
 
@@ -619,8 +638,12 @@ std::string resolveCompareLight(const Frame& reference, const Frame& raster, con
       return n.substr(6, n.size() - 10);
     }
   }
-  throw InputError(both(options) + ": error: no light to compare: no \"light.NAME.vis\" channel and no "
-                   "light named in the metadata; expected a frame rendered with at least one light");
+  // A projector-only scene (projective texturing): "" = no light; the projectors are compared.
+  if (!firstName(reference, "projectors").empty()) return "";
+  for (const auto& n : reference.names)
+    if (n.compare(0, 5, "proj.") == 0) return "";
+  throw InputError(both(options) + ": error: nothing to compare: no \"light.NAME.vis\" channel, no light named in "
+                   "the metadata and no projector; expected a frame rendered with at least one light or projector");
 }
 
 Metrics compareFrames(const Frame& reference, const Frame& raster, const CompareOptions& options,
@@ -778,6 +801,7 @@ Metrics compareFrames(const Frame& reference, const Frame& raster, const Compare
     out.mMax = t.mMax;
   }
   out.hasProjector = channels.hasProjector;
+  out.lightCompared = channels.noLightVis.empty();
   if (channels.hasProjector) {
     const uint64_t u = t.projRef + t.projRas - t.projBoth;
     out.projectorCoverageIou = u ? double(t.projBoth) / double(u) : 1.0;

@@ -55,6 +55,10 @@ struct Metrics {
   double mMedian = 0, mP95 = 0, mMax = 0;
   // projectors (first projector, when the scene has one; otherwise 0 / absent in JSON)
   bool hasProjector = false;
+  // false for frames of a scene with projectors and no light (projective texturing studies): no
+  // shadow decision to score, every compared pixel counts as correct for the light's classes and
+  // the projector metrics carry the comparison. In JSON as "light_compared": false, absent otherwise.
+  bool lightCompared = true;
   double projectorCoverageIou = 1;
   uint64_t reverseProjectionPixels = 0;
   double projectorColorMae = 0;
@@ -82,6 +86,10 @@ void classColor(PixelClass c, bool referenceLit, uint8_t rgb[3]);
 // The error classes for a one-line summary, in table order: "acne 37, leak 11, ..." (counts) or
 // "acne 0.0123, leak 0.0004, ..." (rates, 4 decimals).
 std::string errorClassSummary(const Metrics& m, bool rates);
+// The projector's line of a summary ("" without one): "projector: coverage_iou 0.9859,
+// reverse_projection_pixels 0, color_mae 0.0014", prefixed "no light (projector-only scene); "
+// when the frames had no light to compare.
+std::string projectorSummary(const Metrics& m);
 
 // The class table as JSON, for the chart script and `shadowlab classes --json`: a list, in legend
 // order, of {code, key, label, error, count_metric, rate_metric, color ("#rrggbb"), help}, the
