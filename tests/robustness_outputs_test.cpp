@@ -187,3 +187,22 @@ TEST(ProjectorOnly, RunAndCompareCompareTheProjector) {
   EXPECT_EQ(cmp.code, 0) << cmp.err;
   EXPECT_NE(cmp.out.find("no light (projector-only scene)"), std::string::npos) << cmp.out;
 }
+
+// A failing or lost device call (simulated with the test-only SHADOWLAB_VK_FAIL switch, vk/check.h)
+// ends as exit 3 naming the call and the result, never a hang or a crash, and leaves no output.
+TEST(DeviceFailure, FailingVulkanCallExitsThreeNamingIt) {
+  const fs::path dir = tempDir("device_failure");
+  CliRun healthy = runShadowlab("raster grazing" + kSmall + " -o '" + (dir / "ok").string() + "'", dir);
+  if (healthy.code == 3) GTEST_SKIP() << "no Vulkan device (shadowlab exit 3): " << healthy.err;
+  ASSERT_EQ(healthy.code, 0) << healthy.err;
+  for (const char* call : {"vkCreateDevice", "vkAllocateMemory", "vkQueueSubmit", "vkWaitForFences", "vkMapMemory"}) {
+    SCOPED_TRACE(call);
+    const fs::path out = dir / (std::string("out_") + call);
+    CliRun r = runShadowlab("raster grazing" + kSmall + " -o '" + out.string() + "'", dir,
+                            std::string("SHADOWLAB_VK_FAIL=") + call + " timeout 120 ");
+    EXPECT_EQ(r.code, 3) << r.err;
+    EXPECT_NE(r.err.find(call), std::string::npos) << r.err;
+    EXPECT_NE(r.err.find("VK_ERROR_DEVICE_LOST"), std::string::npos) << r.err;
+    EXPECT_FALSE(fs::exists(out)) << "a failed render left its folder";
+  }
+}

@@ -1,10 +1,16 @@
 #include "vk/commands.h"
 
 #include <cstdint>
+#include <string>
 
+#include "shadowlab/scenes/error.h"
 #include "vk/check.h"
 
 namespace shadowlab::vk {
+
+namespace {
+constexpr uint64_t kSubmitTimeoutNs = 120ull * 1000000000ull;  // 2 minutes
+}  // namespace
 
 Commands::Commands(const Context& context) : context_(context) {
   VkCommandBufferAllocateInfo info{VK_STRUCTURE_TYPE_COMMAND_BUFFER_ALLOCATE_INFO};
@@ -38,7 +44,14 @@ void Commands::submitAndWait() {
   submit.commandBufferCount = 1;
   submit.pCommandBuffers = &cmd_;
   VK_CHECK(vkQueueSubmit(context_.queue(), 1, &submit, fence));
-  VK_CHECK(vkWaitForFences(context_.device(), 1, &fence, VK_TRUE, UINT64_MAX));
+  // Bounded: a hung or lost GPU must end as a driver error (exit 3), never as a process that
+  // waits forever. The largest jobs the limits allow take seconds on lavapipe.
+  const VkResult waited = checkedResult("vkWaitForFences", vkWaitForFences(context_.device(), 1, &fence, VK_TRUE,
+                                                                            kSubmitTimeoutNs));
+  if (waited == VK_TIMEOUT)
+    throw DriverError("vkWaitForFences: error: the device did not finish the submitted passes within " +
+                      std::to_string(kSubmitTimeoutNs / 1000000000ull) + " s; expected a working device (a hung or lost GPU?)");
+  if (waited != VK_SUCCESS) throwVkError("vkWaitForFences(...)", waited, __FILE__, __LINE__);
 }
 
 }  // namespace shadowlab::vk

@@ -3,6 +3,7 @@
 #include <sys/mman.h>
 
 #include <cstdint>
+#include <cstdlib>
 #include <cstdio>
 #include <cstring>
 
@@ -38,6 +39,14 @@ const char* resultName(VkResult r) {
     default:
       return "VK_RESULT_UNKNOWN_CODE";
   }
+}
+
+VkResult checkedResult(const char* expression, VkResult result) {
+  static const char* const fail = [] {
+    const char* v = std::getenv("SHADOWLAB_VK_FAIL");
+    return v && *v ? v : nullptr;
+  }();
+  return fail && std::strstr(expression, fail) ? VK_ERROR_DEVICE_LOST : result;
 }
 
 void throwVkError(const char* expression, VkResult result, const char* file, int line) {
