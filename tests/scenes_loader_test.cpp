@@ -363,7 +363,7 @@ TEST(ScenesOverrides, ReplaceValuesBeforeResolving) {
   EXPECT_EQ(errorOf([&] { loadScene(path, {{"/lights/5/elevation_deg", 10}}); }),
             path + ": override /lights/5/elevation_deg: error: no such value in the scene; expected a pointer to an existing value");
   EXPECT_EQ(errorOf([&] { loadScene(path, {{"/camera/width", 0}}); }),
-            path + ": /camera/width: error: got 0; expected an integer 1..16384");
+            path + ": /camera/width: error: got 0; expected an integer 1..16384 (the largest image every Vulkan device must support)");
   EXPECT_NE(errorOf([&] { loadScene(path, {{"/camera/fovy", 30}}); }).find(path + ": /camera/fovy: error: unknown key \"fovy\""),
             std::string::npos);
   EXPECT_NE(errorOf([&] { loadScene(path, {{"lights", 1}}); }).find("override lights: error: got \"lights\"; expected a JSON pointer"),

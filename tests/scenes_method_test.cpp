@@ -124,9 +124,9 @@ TEST(ScenesMethod, JsonRoundTrip) {
 }
 
 TEST(ScenesMethod, TextErrorsAreExact) {
-  EXPECT_EQ(setError("map.size", "abc"), "--set: map.size: error: got \"abc\"; expected an integer 16..16384");
-  EXPECT_EQ(setError("map.size", "8"), "--set: map.size: error: got \"8\"; expected an integer 16..16384");
-  EXPECT_EQ(setError("map.size", "1024.5"), "--set: map.size: error: got \"1024.5\"; expected an integer 16..16384");
+  EXPECT_EQ(setError("map.size", "abc"), "--set: map.size: error: got \"abc\"; expected an integer 16..16384 (16384: the largest 2D image every Vulkan device must support, lavapipe's limit)");
+  EXPECT_EQ(setError("map.size", "8"), "--set: map.size: error: got \"8\"; expected an integer 16..16384 (16384: the largest 2D image every Vulkan device must support, lavapipe's limit)");
+  EXPECT_EQ(setError("map.size", "1024.5"), "--set: map.size: error: got \"1024.5\"; expected an integer 16..16384 (16384: the largest 2D image every Vulkan device must support, lavapipe's limit)");
   EXPECT_EQ(setError("filter", "pcff"),
             "--set: filter: error: got \"pcff\"; expected one of none, hw2x2, bilinear4, pcf, poisson");
   EXPECT_EQ(setError("map.format", "d8"), "--set: map.format: error: got \"d8\"; expected one of d16, d24, d32f");
@@ -155,7 +155,7 @@ TEST(ScenesMethod, ValueThatIsNotUtf8IsAnInputError) {
 TEST(ScenesMethod, JsonErrors) {
   Method m;
   EXPECT_EQ(errorOf([&] { applyMethodJson(m, "map.size", "2048", "grid.json: /grid/map.size/1"); }),
-            "grid.json: /grid/map.size/1: map.size: error: got \"2048\"; expected an integer 16..16384");
+            "grid.json: /grid/map.size/1: map.size: error: got \"2048\"; expected an integer 16..16384 (16384: the largest 2D image every Vulkan device must support, lavapipe's limit)");
   EXPECT_EQ(errorOf([&] { applyMethodJson(m, "bias.slope", std::numeric_limits<double>::infinity(), "g"); }),
             "g: bias.slope: error: got inf (a number too large for a double); expected a finite number -1e6..1e6");
   EXPECT_EQ(errorOf([&] { applyMethodJson(m, "cull", 3, "g"); }), "g: cull: error: got 3; expected one of back, front, none");
@@ -233,8 +233,8 @@ TEST(ScenesMethod, CascadeKeys) {
   nlohmann::json j = roundTripped(m);
   EXPECT_EQ(j["fit"], "cascades");
   EXPECT_EQ(j["cascades.count"], 8);
-  EXPECT_EQ(setError("cascades.count", "0"), "--set: cascades.count: error: got \"0\"; expected an integer 1..8");
-  EXPECT_EQ(setError("cascades.count", "9"), "--set: cascades.count: error: got \"9\"; expected an integer 1..8");
+  EXPECT_EQ(setError("cascades.count", "0"), "--set: cascades.count: error: got \"0\"; expected an integer 1..8 (the resolve shader's 8 light layers, resolve_abi.h)");
+  EXPECT_EQ(setError("cascades.count", "9"), "--set: cascades.count: error: got \"9\"; expected an integer 1..8 (the resolve shader's 8 light layers, resolve_abi.h)");
   EXPECT_EQ(setError("cascades.lambda", "1.5"),
             "--set: cascades.lambda: error: got \"1.5\"; expected a number 0..1 (0 uniform, 1 logarithmic splits)");
   EXPECT_EQ(setError("cascades.blend", "0.6"),

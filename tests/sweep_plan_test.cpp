@@ -59,6 +59,18 @@ TEST(SweepPlan, MalformedGridArgumentsNameTheArgument) {
   EXPECT_NE(inputErrorOf([] { parseGridArgument("=1,2"); }).find("empty key"), std::string::npos);
 }
 
+// The sweep-size limit: 1000 map sizes x 101 slopes = 101,000 configurations, over the 100,000
+// a plan holds; the message says the limit and why.
+TEST(SweepPlan, GridAboveTheConfigurationLimitIsRefused) {
+  std::string sizes = "map.size=", slopes = "bias.slope=";
+  for (int k = 0; k < 1000; ++k) sizes += (k ? "," : "") + std::to_string(16 + k);
+  for (int k = 0; k <= 100; ++k) slopes += (k ? "," : "") + std::to_string(k * 0.01);
+  const std::string e = inputErrorOf([&] { planSweep(specWithGrid({sizes, slopes})); });
+  EXPECT_NE(e.find("the grid has more than 100000 configurations"), std::string::npos) << e;
+  EXPECT_NE(e.find("held in memory"), std::string::npos) << e;
+  EXPECT_NO_THROW(planSweep(specWithGrid({sizes, "bias.slope=0,1"})));  // 2,000: fine
+}
+
 TEST(SweepPlan, UnknownKeyAndBadValuesAreRejected) {
   std::string unknown = inputErrorOf([] { planSweep(specWithGrid({"map.sise=256,512"})); });
   EXPECT_NE(unknown.find("--grid map.sise=256,512: error: unknown key \"map.sise\""), std::string::npos) << unknown;

@@ -39,8 +39,13 @@ namespace {
 
 constexpr double kPi = 3.14159265358979323846;
 constexpr int kMaxResolution = 16384;
+constexpr const char* kResolutionWhy = "the largest image every Vulkan device must support";
 // Object ids travel through float channels: exact only below 2^24.
 constexpr long long kMaxObjectId = (1ll << 24) - 1;
+// Triangle (primitive) ids too, and the rasterizer's global triangle id + 1 read back through a
+// float: a scene holds at most 2^24 - 1 triangles in all (also about 3 GB of BVH and vertex
+// buffers, within this 24 GB machine).
+constexpr uint64_t kMaxSceneTriangles = (1ull << 24) - 1;
 
 // A value in the document together with its JSON pointer, for error messages.
 struct Node {
@@ -103,8 +108,9 @@ class Reader {
   double positive(const Node& n, const std::string& unit = "") const {
     return range(n, 0, true, 1e30, false, "a positive number" + unit);
   }
-  long long integer(const Node& n, long long lo, long long hi) const {
-    std::string what = "an integer " + std::to_string(lo) + ".." + std::to_string(hi);
+  long long integer(const Node& n, long long lo, long long hi, const char* why = nullptr) const {
+    std::string what = "an integer " + std::to_string(lo) + ".." + std::to_string(hi) +
+                       (why ? std::string(" (") + why + ")" : std::string());
     if (n.j->is_number_integer()) {
       long long v = n.j->is_number_unsigned() && n.j->get<unsigned long long>() > (1ull << 62)
                         ? hi + 1
@@ -545,8 +551,10 @@ void readCamera(const Reader& r, const Node& root, Camera& cam) {
   if (Node n = r.child(c, "up")) cam.up = direction(r, n);
   cam.vfovDeg = float(r.range(r.require(c, "vfov_deg", "a number in (0, 180)"), 0, true, 180, true,
                               "a field of view in degrees, 0 < vfov_deg < 180"));
-  cam.width = int(r.integer(r.require(c, "width", "an integer 1..16384"), 1, kMaxResolution));
-  cam.height = int(r.integer(r.require(c, "height", "an integer 1..16384"), 1, kMaxResolution));
+  // 16384: the largest 2D image every Vulkan device must support (maxImageDimension2D, lavapipe's
+  // limit); memory is checked per command (--max-memory).
+  cam.width = int(r.integer(r.require(c, "width", "an integer 1..16384"), 1, kMaxResolution, kResolutionWhy));
+  cam.height = int(r.integer(r.require(c, "height", "an integer 1..16384"), 1, kMaxResolution, kResolutionWhy));
   if (Node n = r.child(c, "near")) cam.nearPlane = float(r.positive(n));
   if (Node n = r.child(c, "far")) cam.farPlane = float(r.positive(n));
   glm::vec3 view = cam.lookAt - cam.position;
@@ -599,6 +607,7 @@ void readObjects(const Reader& r, const Node& root, const fs::path& dir, Scene& 
   if (!os.j->is_array() || os.j->empty()) r.expected(os, "a non-empty array of objects");
   std::map<uint32_t, std::string> idOwner;
   std::set<std::string> names;
+  uint64_t sceneTriangles = 0;
   for (size_t i = 0; i < os.j->size(); ++i) {
     Node o = r.at(os, i);
     if (!o.j->is_object()) r.expected(o, "an object");
@@ -689,6 +698,10 @@ void readObjects(const Reader& r, const Node& root, const fs::path& dir, Scene& 
       if (scene.materials[obj.triangleMaterial[t]].hasAlpha && obj.uvs.empty())
         r.fail(matNode ? matNode.ptr : o.ptr, "material \"" + scene.materials[obj.triangleMaterial[t]].name +
                                                   "\" has an alpha texture but a " + type + " has no uv coordinates; expected a plane, quad, box or an OBJ with vt");
+    sceneTriangles += obj.triangles.size();
+    if (sceneTriangles > kMaxSceneTriangles)
+      r.fail(o.ptr, "the scene reaches " + std::to_string(sceneTriangles) + " triangles with this object; expected at most " +
+                        std::to_string(kMaxSceneTriangles) + " (triangle ids travel through float channels, exact below 2^24)");
     scene.objects.push_back(std::move(obj));
   }
 }

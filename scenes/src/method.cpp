@@ -126,9 +126,14 @@ struct Value {
   }
 };
 
-int intIn(const Value& v, const Where& w, long long lo, long long hi) {
+// `why`, when given, says where a limit comes from: " (" + why + ")" follows the range.
+constexpr const char* kMapSizeWhy = "16384: the largest 2D image every Vulkan device must support, lavapipe's limit";
+constexpr const char* kCascadeWhy = "the resolve shader's 8 light layers, resolve_abi.h";
+
+int intIn(const Value& v, const Where& w, long long lo, long long hi, const char* why = nullptr) {
   long long x = 0;
-  std::string expected = "an integer " + std::to_string(lo) + ".." + std::to_string(hi);
+  std::string expected = "an integer " + std::to_string(lo) + ".." + std::to_string(hi) +
+                         (why ? std::string(" (") + why + ")" : std::string());
   if (!v.asInt(x) || x < lo || x > hi) fail(w.file, w.place, v.got(), expected);
   return int(x);
 }
@@ -183,11 +188,11 @@ using Setter = std::function<void(Method&, const Value&, const Where&)>;
 
 const std::vector<std::pair<std::string, Setter>>& setters() {
   static const std::vector<std::pair<std::string, Setter>> table = {
-      {"map.size", [](Method& m, const Value& v, const Where& w) { m.mapSize = intIn(v, w, 16, 16384); }},
+      {"map.size", [](Method& m, const Value& v, const Where& w) { m.mapSize = intIn(v, w, 16, 16384, kMapSizeWhy); }},
       {"map.format", [](Method& m, const Value& v, const Where& w) { m.mapFormat = enumOf(v, w, kFormats); }},
       {"cull", [](Method& m, const Value& v, const Where& w) { m.cull = enumOf(v, w, kCulls); }},
       {"fit", [](Method& m, const Value& v, const Where& w) { m.fit = enumOf(v, w, kFits); }},
-      {"cascades.count", [](Method& m, const Value& v, const Where& w) { m.cascadeCount = intIn(v, w, 1, 8); }},
+      {"cascades.count", [](Method& m, const Value& v, const Where& w) { m.cascadeCount = intIn(v, w, 1, 8, kCascadeWhy); }},
       {"cascades.lambda",
        [](Method& m, const Value& v, const Where& w) {
          m.cascadeLambda = floatIn(v, w, 0.0, 1.0, false, "a number 0..1 (0 uniform, 1 logarithmic splits)");
