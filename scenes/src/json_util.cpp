@@ -227,6 +227,8 @@ std::string didYouMean(const std::string& got, const std::vector<std::string>& c
 
 namespace shadowlab {
 
+std::string describeJson(const nlohmann::json& v) { return detail::describe(v); }
+
 std::string dumpJson(const nlohmann::json& v) { return v.dump(-1, ' ', false, nlohmann::json::error_handler_t::replace); }
 
 nlohmann::json parseJsonText(const std::string& text, const std::string& file) {

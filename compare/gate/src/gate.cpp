@@ -74,7 +74,7 @@ ToleranceSpec parseSpec(const nlohmann::json& j, const std::string& file, const 
     if (it.key() == "direction") {
       auto d = v.is_string() ? parseDirection(v.get<std::string>()) : std::nullopt;
       if (!d)
-        throw InputError(formatError(file, place, "got " + v.dump() +
+        throw InputError(formatError(file, place, "got " + describeJson(v) +
                                                       "; expected \"lower_is_better\", \"higher_is_better\", "
                                                       "\"equal\" or \"ignore\""));
       spec.direction = d;
@@ -83,7 +83,7 @@ ToleranceSpec parseSpec(const nlohmann::json& j, const std::string& file, const 
         throw InputError(formatError(file, place, "got " + jsonTypeName(v) + "; expected a number >= 0"));
       double x = v.get<double>();
       if (!(x >= 0) || !std::isfinite(x))
-        throw InputError(formatError(file, place, "got " + v.dump() + "; expected a number >= 0 (a tolerance)"));
+        throw InputError(formatError(file, place, "got " + describeJson(v) + "; expected a number >= 0 (a tolerance)"));
       (it.key() == "abs" ? spec.absTolerance : spec.relTolerance) = x;
     } else {
       throw InputError(formatError(file, place, "unknown key \"" + it.key() +
@@ -98,7 +98,7 @@ TimingTolerance parseTiming(const nlohmann::json& j, const std::string& file) {
   auto mode = [&](const nlohmann::json& v, const std::string& place) {
     if (v == "report") return TimingMode::Report;
     if (v == "fail") return TimingMode::Fail;
-    throw InputError(formatError(file, place, "got " + v.dump() + "; expected \"report\" or \"fail\""));
+    throw InputError(formatError(file, place, "got " + describeJson(v) + "; expected \"report\" or \"fail\""));
   };
   if (j.is_string()) {
     t.mode = mode(j, "/timing");
@@ -115,12 +115,12 @@ TimingTolerance parseTiming(const nlohmann::json& j, const std::string& file) {
       t.mode = mode(v, place);
     } else if (it.key() == "max_ratio") {
       if (!v.is_number() || !(v.get<double>() >= 1.0))
-        throw InputError(formatError(file, place, "got " + v.dump() +
+        throw InputError(formatError(file, place, "got " + describeJson(v) +
                                                       "; expected a number >= 1 (current/baseline time)"));
       t.maxRatio = v.get<double>();
     } else if (it.key() == "min_ms") {
       if (!v.is_number() || !(v.get<double>() >= 0.0))
-        throw InputError(formatError(file, place, "got " + v.dump() + "; expected a number >= 0 (milliseconds)"));
+        throw InputError(formatError(file, place, "got " + describeJson(v) + "; expected a number >= 0 (milliseconds)"));
       t.minMs = v.get<double>();
     } else {
       throw InputError(formatError(file, place, "unknown key \"" + it.key() +
@@ -294,7 +294,7 @@ Tolerances parseTolerances(const nlohmann::json& j, const std::string& file) {
     std::string place = "/" + jsonPointerToken(key);
     if (key == "schema") {
       if (it.value() != kTolerancesSchema)
-        throw InputError(formatError(file, place, "got " + it.value().dump() + "; expected \"" +
+        throw InputError(formatError(file, place, "got " + describeJson(it.value()) + "; expected \"" +
                                                       kTolerancesSchema + "\""));
     } else if (key == "default") {
       ToleranceSpec spec = parseSpec(it.value(), file, place);

@@ -229,7 +229,7 @@ void loadSweepFile(const std::string& path, SweepSpec& spec) {
       spec.light = v.get<std::string>();
     } else if (k == "spp") {
       if (!v.is_number_integer() || v.get<int64_t>() < 1 || v.get<int64_t>() > 4096)
-        fail(ptr, "got " + v.dump() + "; expected an integer from 1 to 4096");
+        fail(ptr, "got " + describeJson(v) + "; expected an integer from 1 to 4096");
       spec.spp = v.get<int>();
     } else if (k == "keep_images") {
       if (!v.is_boolean()) fail(ptr, "got " + jsonTypeName(v) + "; expected true or false");

@@ -27,6 +27,11 @@ nlohmann::json readJsonFile(const std::string& path);
 std::string jsonTypeName(const nlohmann::json& v);
 std::string jsonTypeName(const nlohmann::ordered_json& v);
 
+// The one describer of "got X; expected Y" messages: strings quoted (cut at 60 characters, any
+// bytes safe), numbers as written (NaN, inf named), true/false/null, "an array of 3 values",
+// "an object" (never a whole document dumped into a message).
+std::string describeJson(const nlohmann::json& v);
+
 // v.dump() that never throws: bytes that are not UTF-8 (which a command-line argument may hold,
 // though no parsed file can) become U+FFFD instead of nlohmann's type_error 316.
 std::string dumpJson(const nlohmann::json& v);
