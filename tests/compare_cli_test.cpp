@@ -64,11 +64,14 @@ Frame syntheticFrame(int w, int h, bool raster, int acne, const std::string& sce
     f.meta["light"] = "sun";
     f.meta["method"] = {{"name", "synthetic_method"}, {"map.size", 64}};
     f.add("light.sun.in_map", 1.0f);
-    auto& occ = f.add("light.sun.occluder_id", 1.0f);
+    f.add("light.sun.occluder_id", 1.0f);
     f.add("light.sun.m", 1.0f);
+    // add() may move every plane: look both up again after the last one.
+    auto& rasterVis = f.get("light.sun.vis");
+    auto& occ = f.get("light.sun.occluder_id");
     for (int k = 0; k < acne; ++k) {
       const size_t i = size_t(1 + k / (w / 4)) * w + k % (w / 4);
-      vis[i] = 0.0f;
+      rasterVis[i] = 0.0f;
       occ[i] = 1.0f;
     }
   }

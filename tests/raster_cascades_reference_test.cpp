@@ -78,8 +78,11 @@ TEST_F(CascadesVsReference, FourCascadesBeatOneMapOfTheSameTexelCountOnLongView)
       for (float v : f.data[c]) ASSERT_TRUE(std::isfinite(v)) << f.names[c];
   }
   // Blending: vis takes values strictly between 0 and 1 only in the bands (filter none is 0/1).
+  // The frame is a named local: a range-for over get() of the temporary render() returns would read
+  // a plane the temporary's destruction had already freed.
   size_t fractional = 0;
-  for (float v : R->render(s, blended).get("light." + light + ".vis")) fractional += v > 0.0f && v < 1.0f;
+  const Frame blendedFrame = R->render(s, blended);
+  for (float v : blendedFrame.get("light." + light + ".vis")) fractional += v > 0.0f && v < 1.0f;
   std::printf("  blend 0.2: %zu pixels with fractional visibility\n", fractional);
   EXPECT_GT(fractional, 0u) << "where two cascades disagree inside a band, the blend must mix them";
 }

@@ -106,6 +106,20 @@ EmbreeScene::EmbreeScene(const Scene& scene) {
   if (!device_) {
     throw DriverError(std::string("embree: rtcNewDevice failed: ") + errorName(rtcGetDeviceError(nullptr)));
   }
+  // A constructor that throws (a bad mesh, an Embree error) runs no destructor: release what was
+  // made so far on the way out, or every rejected scene leaks its device.
+  struct ReleaseOnThrow {
+    RTCDevice& device;
+    RTCScene& scene;
+    bool armed = true;
+    ~ReleaseOnThrow() {
+      if (!armed) return;
+      if (scene) rtcReleaseScene(scene);
+      rtcReleaseDevice(device);
+      scene = nullptr;
+      device = nullptr;
+    }
+  } releaseOnThrow{device_, scene_};
   rtcSetDeviceErrorFunction(device_, &EmbreeScene::errorCallback, this);
   check("rtcNewDevice");
 
@@ -188,6 +202,7 @@ EmbreeScene::EmbreeScene(const Scene& scene) {
   }
   rtcCommitScene(scene_);
   check("rtcCommitScene");
+  releaseOnThrow.armed = false;
 }
 
 EmbreeScene::~EmbreeScene() {

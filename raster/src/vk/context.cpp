@@ -1,5 +1,7 @@
 #include "vk/context.h"
 
+#include <dlfcn.h>
+#include <link.h>
 #include <sys/mman.h>
 
 #include <cstdint>
@@ -11,6 +13,25 @@
 #include "vk/check.h"
 
 namespace shadowlab::vk {
+
+#if defined(__SANITIZE_ADDRESS__)
+// AddressSanitizer builds only (scripts/sanitize.sh). The Vulkan loader dlopens the driver (Mesa's
+// lavapipe, with LLVM) in vkCreateInstance and dlcloses it in vkDestroyInstance. The blocks that
+// the driver keeps for its whole life are then referenced only from its unmapped globals, so
+// LeakSanitizer reports them at exit as leaks from "<unknown module>", which no suppression can
+// name. Marking every library loaded by now RTLD_NODELETE keeps the driver mapped: its blocks stay
+// reachable and a real leak in it is reported under the library's name.
+static void keepLoadedLibrariesMapped() {
+  dl_iterate_phdr(
+      [](dl_phdr_info* info, size_t, void*) {
+        if (info->dlpi_name && info->dlpi_name[0]) dlopen(info->dlpi_name, RTLD_NOW | RTLD_NOLOAD | RTLD_NODELETE);
+        return 0;
+      },
+      nullptr);
+}
+#else
+static void keepLoadedLibrariesMapped() {}
+#endif
 
 const char* resultName(VkResult r) {
   switch (r) {
@@ -110,6 +131,7 @@ Context::Context(const ContextOptions& options) {
   instanceInfo.ppEnabledExtensionNames = extensions.data();
   if (validation) instanceInfo.pNext = &messengerInfo;  // also reports instance creation itself
   VK_CHECK(vkCreateInstance(&instanceInfo, nullptr, &instance_));
+  keepLoadedLibrariesMapped();
 
   try {
     if (validation) {

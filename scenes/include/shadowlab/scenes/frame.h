@@ -56,7 +56,7 @@ struct Frame {
   nlohmann::json meta = nlohmann::json::object();
 
   bool has(const std::string& name) const;
-  // Adds a channel filled with `fill` (or returns the existing one) and returns its plane.
+  // Adds a channel filled with `fill` (or returns the existing one) and returns its plane, valid until the next add().
   std::vector<float>& add(const std::string& name, float fill = 0.0f);
   // Throws InputError "frame has no channel NAME" when absent.
   const std::vector<float>& get(const std::string& name) const;
