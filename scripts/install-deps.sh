@@ -5,7 +5,8 @@ set -euo pipefail
 pkgs=(build-essential cmake pkg-config libembree-dev libglm-dev libopenimageio-dev libopenexr-dev libpng-dev libtinyobjloader-dev
       mesa-vulkan-drivers libvulkan-dev glslang-dev glslang-tools spirv-tools vulkan-validationlayers
       nlohmann-json3-dev libcli11-dev libtbb-dev libgtest-dev libbenchmark-dev
-      python3-matplotlib chromium)
+      python3-matplotlib chromium
+      clang libclang-rt-14-dev)
 missing=()
 for p in "${pkgs[@]}"; do
   dpkg-query -W -f='${Status}\n' "$p" 2>/dev/null | grep -q '^install ok installed' || missing+=("$p")

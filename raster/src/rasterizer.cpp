@@ -140,6 +140,12 @@ struct Rasterizer::Impl {
   vk::Buffer params, output;  // output: the projector channels
 
   explicit Impl(const RasterDeviceOptions& options);
+  // Work may still be in flight when a render throws (a failed call after a submission): wait for
+  // the device before the members release what it reads and writes. Not after a timeout, where
+  // the wait could last forever; a lost device answers at once.
+  ~Impl() {
+    if (context && context->device() && !context->hung()) vkDeviceWaitIdle(context->device());
+  }
 
   // render()'s steps (defined beside render(), in its order).
   struct FramePipelines {

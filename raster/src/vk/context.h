@@ -54,10 +54,15 @@ class Context {
   // On a CPU device (lavapipe), device memory is host RAM: asks for transparent huge pages for a
   // large mapped allocation (`mapped`, `size` bytes) before its first use. Elsewhere a no-op.
   void adviseHugePages(void* mapped, VkDeviceSize size) const;
+  // Set when a submission did not finish in time: the owner must then not wait for the device
+  // (vkDeviceWaitIdle has no timeout) before it destroys what the device may still use.
+  void markHung() const { hung_ = true; }
+  bool hung() const { return hung_; }
 
  private:
   void release();  // also used when the constructor fails half way
 
+  mutable bool hung_ = false;
   VkInstance instance_ = VK_NULL_HANDLE;
   VkDebugUtilsMessengerEXT messenger_ = VK_NULL_HANDLE;
   VkPhysicalDevice physical_ = VK_NULL_HANDLE;
