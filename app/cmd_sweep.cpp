@@ -34,6 +34,7 @@ struct Options {
   std::string device;
   bool keepImages = false;
   bool noReport = false;
+  std::string shard;             // "I/N": only this shard's rows, into DIR/shards/I-of-N (no report)
   std::string frontierMetric;    // empty: not given (error_rate)
   std::string frontierThreshold; // text, checked here so "abc" is a GCC-style InputError, not CLI11's
 };
@@ -56,6 +57,8 @@ void installInterruptHandlers() {
 
 int run(const Options& o) {
   // ---- inputs: every error surfaces here, before the output folder exists --------------------
+  SweepShard shard;
+  if (!o.shard.empty()) shard = parseShardArgument(o.shard);
   SweepSpec spec;
   if (!o.sweepFile.empty()) loadSweepFile(o.sweepFile, spec);
   if (!o.scenes.empty()) spec.scenes = o.scenes;  // the command line names replace the file's
@@ -110,11 +113,15 @@ int run(const Options& o) {
   options.progressBar = ::isatty(STDERR_FILENO) == 1;
   options.stop = &gStop;
   options.writeReport = !o.noReport;
+  options.shard = shard;
   // $SHADOWLAB_HOME (an unpacked bundle, like scenes/data) holds compare/report/charts.py too.
   const char* home = std::getenv("SHADOWLAB_HOME");
   options.reportScript = defaultReportScript(home && *home ? home : SHADOWLAB_SOURCE_DIR);
   std::fprintf(stderr, "sweep: %zu scene(s) x %zu configuration(s) = %zu rows into %s (reference cache %s)\n",
                plan.sceneNames.size(), plan.configs.size(), plan.jobs.size(), o.outDir.c_str(), cacheDir.c_str());
+  if (shard.active())
+    std::fprintf(stderr, "sweep: shard %zu/%zu: every %zu-th row from row %zu, into %s\n", shard.index, shard.count,
+                 shard.count, shard.index, shardDir(o.outDir, shard).c_str());
   installInterruptHandlers();
   const SweepSummary summary = runSweep(plan, *runner, options);
   out.keep();  // rows, log and lock live there: a later run continues from them
@@ -122,7 +129,8 @@ int run(const Options& o) {
     std::fprintf(stderr,
                  "sweep: interrupted: %zu of %zu rows are saved in %s/rows.jsonl; run the same command again to "
                  "continue\n",
-                 summary.resumed + summary.ran, summary.configurations, o.outDir.c_str());
+                 summary.resumed + summary.ran, summary.configurations,
+                 (shard.active() ? shardDir(o.outDir, shard) : o.outDir).c_str());
     return 130;
   }
   for (const auto& n : summary.notes) std::fprintf(stderr, "sweep: note: %s\n", n.c_str());
@@ -134,6 +142,11 @@ int run(const Options& o) {
   }
   std::printf("sweep: %zu rows (%zu run, %zu resumed) in %.2f s\n", summary.configurations, summary.ran,
               summary.resumed, summary.commandWallSeconds);
+  if (shard.active()) {
+    std::printf("sweep: shard %zu/%zu done in %s; when every shard is done: shadowlab merge %s\n", shard.index,
+                shard.count, shardDir(o.outDir, shard).c_str(), o.outDir.c_str());
+    return 0;
+  }
   std::printf("sweep: wrote %s and %s\n", summary.resultsJson.c_str(), summary.resultsCsv.c_str());
   if (!summary.reportHtml.empty()) std::printf("report: %s\n", fs::absolute(summary.reportHtml).c_str());
   return 0;
@@ -162,6 +175,9 @@ app::Registrar reg{"sweep", [](CLI::App& app) {
   sub->add_option("--frontier-threshold", opts->frontierThreshold,
                   "Rate above which a configuration counts as broken (default 0.01)");
   sub->add_flag("--no-report", opts->noReport, "Write results.json/csv only: no charts, triptychs or report.html");
+  sub->add_option("--shard", opts->shard,
+                  "I/N: run only the rows whose plan index is I mod N, into DIR/shards/I-of-N (no report; "
+                  "`shadowlab merge DIR` gathers the shards)");
   return std::function<int()>([opts] { return run(*opts); });
 }};
 
