@@ -161,3 +161,86 @@ TEST(SweepShardCli, DamagedReferenceCacheEntriesAreTracedAgainWithIdenticalMetri
   EXPECT_NE(hash0, hash1);
   fs::remove_all(dir);
 }
+
+TEST(SweepShardCli, SlurmScriptsRunAsAnArrayThenMergeToTheUnshardedMetrics) {
+  const fs::path dir = tempDir("slurm");
+  const std::string cache = " --cache '" + (dir / "cache").string() + "'";
+  const fs::path gen = dir / "gen";
+  auto r = runShadowlab("sweep " + kPlan + " --slurm 3 --slurm-opt='--partition=debug --time=10' -o '" + gen.string() +
+                            "'" + cache,
+                        dir);
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_FALSE(fs::exists(gen / "rows.jsonl")) << "--slurm runs nothing";
+  EXPECT_FALSE(fs::exists(gen / "shards" / "0-of-3")) << "--slurm runs nothing";
+  const std::string sweep = readFile((gen / "sweep.sbatch").string()), merge = readFile((gen / "merge.sbatch").string());
+  for (const char* want : {"#!/bin/bash\n", "\n#SBATCH --array=0-2\n", "\n#SBATCH --partition=debug\n",
+                           "\n#SBATCH --time=10\n", " sweep 'sphere_on_plane' 'contact' --grid 'map.size=128,512' "
+                           "--grid 'bias.slope=0,2' --set 'scene:/camera/width=64' --set 'scene:/camera/height=48' ",
+                           " --shard \"$SLURM_ARRAY_TASK_ID/3\"\n"})
+    EXPECT_NE(sweep.find(want), std::string::npos) << "missing: " << want << "\n" << sweep;
+  EXPECT_NE(sweep.find("-o '" + gen.string() + "'"), std::string::npos) << sweep;
+  for (const char* want : {"#!/bin/bash\n", "\n#SBATCH --partition=debug\n", " merge '", " --no-report\n"})
+    EXPECT_NE(merge.find(want), std::string::npos) << "missing: " << want << "\n" << merge;
+  EXPECT_EQ(merge.find("--array"), std::string::npos) << merge;
+  EXPECT_NE(r.out.find("sbatch --parsable '" + (gen / "sweep.sbatch").string() + "'"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("sbatch --dependency=afterok:$jobid '" + (gen / "merge.sbatch").string() + "'"), std::string::npos)
+      << r.out;
+
+  // What Slurm would do: each array task with its SLURM_ARRAY_TASK_ID, then the merge.
+  for (int i = 0; i < 3; ++i) {
+    const std::string cmd = "SLURM_ARRAY_TASK_ID=" + std::to_string(i) + " bash '" + (gen / "sweep.sbatch").string() +
+                            "' >'" + (dir / "task.log").string() + "' 2>&1";
+    ASSERT_EQ(std::system(cmd.c_str()), 0) << readFile((dir / "task.log").string());
+  }
+  ASSERT_EQ(std::system(("bash '" + (gen / "merge.sbatch").string() + "' >'" + (dir / "merge.log").string() + "' 2>&1").c_str()), 0)
+      << readFile((dir / "merge.log").string());
+  auto one = runShadowlab("sweep " + kPlan + " -o '" + (dir / "one").string() + "'" + cache, dir);
+  ASSERT_EQ(one.code, 0) << one.err;
+  expectSameMetrics(dir / "one" / "results.json", gen / "results.json");
+  fs::remove_all(dir);
+}
+
+TEST(SweepShardCli, SlurmSubmitWithoutSbatchExitsTwoAndWritesNothing) {
+  const fs::path dir = tempDir("nosbatch");
+  auto r = runShadowlab("sweep sphere_on_plane --slurm 2 --submit -o '" + (dir / "out").string() + "'", dir,
+                        "PATH=/nonexistent ");
+  EXPECT_EQ(r.code, 2) << r.err;
+  EXPECT_NE(r.err.find("no Slurm installed (sbatch not found"), std::string::npos) << r.err;
+  EXPECT_FALSE(fs::exists(dir / "out"));
+  for (const char* bad : {"0", "x", "-1"}) {
+    r = runShadowlab("sweep sphere_on_plane --slurm=" + std::string(bad) + " -o '" + (dir / "out").string() + "'", dir);
+    EXPECT_EQ(r.code, 2) << bad << "\n" << r.err;
+    EXPECT_NE(r.err.find(std::string("--slurm ") + bad), std::string::npos) << r.err;
+    EXPECT_FALSE(fs::exists(dir / "out")) << bad;
+  }
+  r = runShadowlab("sweep sphere_on_plane --slurm 2 --shard 0/2 -o '" + (dir / "out").string() + "'", dir);
+  EXPECT_EQ(r.code, 2) << r.err;
+  EXPECT_FALSE(fs::exists(dir / "out"));
+  fs::remove_all(dir);
+}
+
+TEST(SweepShardCli, SlurmSubmitRunsTheArrayThenTheMergeAfterIt) {
+  const fs::path dir = tempDir("submit");
+  // A stand-in sbatch: records its arguments, answers job id 4242 (then 4243) like --parsable.
+  fs::create_directories(dir / "bin");
+  const fs::path calls = dir / "calls.txt";
+  {
+    std::ofstream f(dir / "bin" / "sbatch");
+    f << "#!/bin/sh\necho \"$*\" >> '" << calls.string() << "'\nn=$(wc -l < '" << calls.string()
+      << "')\necho $((4241 + n))\n";
+  }
+  fs::permissions(dir / "bin" / "sbatch", fs::perms::owner_all);
+  const fs::path out = dir / "out";
+  auto r = runShadowlab("sweep sphere_on_plane --grid map.size=128,256 --slurm 2 --submit -o '" + out.string() + "'", dir,
+                        "PATH='" + (dir / "bin").string() + "':\"$PATH\" ");
+  ASSERT_EQ(r.code, 0) << r.err;
+  std::ifstream in(calls);
+  std::string first, second;
+  std::getline(in, first);
+  std::getline(in, second);
+  EXPECT_EQ(first, "--parsable " + (out / "sweep.sbatch").string());
+  EXPECT_EQ(second, "--parsable --dependency=afterok:4242 " + (out / "merge.sbatch").string());
+  EXPECT_NE(r.out.find("job 4242"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("job 4243"), std::string::npos) << r.out;
+  fs::remove_all(dir);
+}
