@@ -62,7 +62,9 @@ struct StoredRow {
 
 // Reads rows.jsonl; drops (and truncates away) a torn last line. A damaged line before the last
 // is not a torn write: refuse it rather than silently run its configuration again.
-std::map<std::string, StoredRow> readJournal(const std::string& path) {
+// `repair` false (the merge reads other processes' journals): a torn last line is ignored, not
+// truncated away.
+std::map<std::string, StoredRow> readJournal(const std::string& path, bool repair = true) {
   std::map<std::string, StoredRow> rows;
   std::error_code ec;
   if (!fs::exists(path, ec)) return rows;
@@ -114,7 +116,7 @@ std::map<std::string, StoredRow> readJournal(const std::string& path) {
                                        "); expected one JSON row per line. Delete the line or the file to run it again"));
     pos = next;
   }
-  if (goodEnd < text.size()) {
+  if (repair && goodEnd < text.size()) {
     if (::truncate(path.c_str(), static_cast<off_t>(goodEnd)) != 0)
       throw InputError(formatError(path, "", std::string("cannot drop the torn last line: ") + std::strerror(errno)));
   }
@@ -291,112 +293,11 @@ nlohmann::json sweepDescription(const SweepPlan& plan) {
   return d;
 }
 
-}  // namespace
-
-std::string defaultSweepCacheDir(const std::string& outDir) {
-  const char* env = std::getenv("SHADOWLAB_CACHE");
-  if (env && *env) return env;
-  fs::path out = fs::absolute(fs::path(outDir)).lexically_normal();
-  if (!out.has_filename()) out = out.parent_path();  // trailing slash
-  return (out.parent_path() / ".shadowlab-cache").string();
-}
-
-SweepSummary runSweep(const SweepPlan& plan, SweepRunner& runner, const SweepOptions& options) {
-  const auto t0 = Clock::now();
-  SweepSummary summary;
-  summary.configurations = plan.jobs.size();
-  if (options.outDir.empty()) throw InputError("shadowlab sweep: error: no output folder; expected -o DIR");
-  // Device limits are input errors too: found before the output folder exists.
-  for (const auto& c : plan.configs) runner.checkMethod(c.method, "shadowlab sweep: configuration " + c.config);
-  makeDirs(options.outDir);
-  FolderLock lock(options.outDir);
-  const std::string journalPath = joinPath(options.outDir, "rows.jsonl");
-  auto stored = readJournal(journalPath);
-  Journal journal(journalPath);
-  std::ofstream log(joinPath(options.outDir, "sweep.log"), std::ios::app);
-  const long pid = long(::getpid());
-  const std::string device = runner.deviceName();
-
-  // A stored row counts only for the same scene content and the same resolved method: editing a
-  // scene file or a --set between runs must not mix old rows into new results.
-  std::vector<nlohmann::json> methodJson(plan.configs.size());
-  for (size_t i = 0; i < plan.configs.size(); ++i) methodJson[i] = methodToJson(plan.configs[i].method);
-  std::vector<const StoredRow*> have(plan.jobs.size(), nullptr);
-  for (size_t i = 0; i < plan.jobs.size(); ++i) {
-    const SweepJob& job = plan.jobs[i];
-    auto it = stored.find(job.key());
-    if (it == stored.end()) continue;
-    if (it->second.sceneHash != plan.variants[job.variantIndex].hash) continue;
-    if (it->second.row.method != methodJson[job.configIndex]) continue;
-    // Timings of two devices on one axis would compare a GPU with a CPU rasterizer: refuse rather
-    // than mix (another -o folder, or the same --device, is what the user wants).
-    if (it->second.device != device)
-      throw InputError(formatError(
-          journalPath, "",
-          "row \"" + job.key() + "\" was measured on device \"" +
-              (it->second.device.empty() ? std::string("(not recorded: an older shadowlab)") : it->second.device) +
-              "\" but this sweep runs on \"" + device +
-              "\"; expected one device per output folder (use another -o folder, or --device naming the first device)"));
-    have[i] = &it->second;
-    ++summary.resumed;
-  }
-  if (log) log << "pid " << pid << " begin: " << plan.jobs.size() << " rows planned, " << summary.resumed << " already done\n";
-  if (options.progress && summary.resumed > 0)
-    std::fprintf(options.progress, "sweep: resuming: %zu of %zu rows are already in %s\n", summary.resumed,
-                 plan.jobs.size(), journalPath.c_str());
-
-  Progress progress(options.progress, options.progressBar, plan.jobs.size(), summary.resumed);
-  std::vector<StoredRow> fresh(plan.jobs.size());
-  const auto loop0 = Clock::now();
-  for (size_t i = 0; i < plan.jobs.size(); ++i) {
-    if (have[i]) continue;
-    if (options.stop && options.stop->load()) {
-      summary.interrupted = true;
-      break;
-    }
-    const SweepJob& job = plan.jobs[i];
-    const SweepConfig& config = plan.configs[job.configIndex];
-    const Scene& scene = plan.variants[job.variantIndex];
-    const std::string what = job.sceneName + " " + job.config;
-    if (log) log << "pid " << pid << " start " << job.key() << "\n" << std::flush;
-    progress.start(what);
-    std::string imagesDir;
-    if (plan.spec.keepImages) {
-      imagesDir = joinPath(joinPath(joinPath(options.outDir, "images"), slug(job.sceneName)), slug(job.config));
-      makeDirs(imagesDir);
-    }
-    const auto c0 = Clock::now();
-    SweepRunOutput out = runner.run(scene, config.method, job.light, imagesDir);
-    const double seconds = secondsSince(c0);
-    StoredRow s;
-    s.row.scene = job.sceneName;
-    s.row.config = job.config;
-    s.row.light = job.light;
-    s.row.method = methodJson[job.configIndex];
-    s.row.metrics = out.metrics;
-    s.row.timings = out.timings;
-    s.row.timings[timing::kConfigWallMs] = seconds * 1000.0;  // wall time of this configuration in the sweep
-    s.sceneHash = scene.hash;
-    s.configWallSeconds = seconds;
-    s.device = device;
-    nlohmann::json line = {{"scene_hash", s.sceneHash}, {"config_wall_seconds", seconds}, {"pid", pid},
-                           {"device", device}, {"row", s.row.toJson()}};
-    journal.append(line.dump(), /*sync=*/true);
-    if (log) log << "pid " << pid << " done " << job.key() << " " << seconds << " s\n" << std::flush;
-    double errorRate = out.metrics.value("error_rate", 0.0);
-    fresh[i] = std::move(s);
-    have[i] = &fresh[i];
-    ++summary.ran;
-    progress.finish(what, errorRate, seconds);
-  }
-  progress.end();
-  const double loopSeconds = secondsSince(loop0);
-  if (summary.interrupted) {
-    if (log) log << "pid " << pid << " interrupted after " << summary.ran << " rows\n";
-    summary.commandWallSeconds = secondsSince(t0);
-    return summary;
-  }
-
+// results.json, results.csv and (options.writeReport) the report from one row per job: the end of
+// runSweep and of mergeSweepShards. `extra` keys are added to results.json (e.g. "shards").
+void writeSweepOutputs(const SweepPlan& plan, const std::vector<const StoredRow*>& have, SweepRunner& runner,
+                       const SweepOptions& options, double loopSeconds, Clock::time_point t0,
+                       const nlohmann::json& extra, SweepSummary& summary) {
   std::vector<ResultRow> rows;
   nlohmann::json configSeconds = nlohmann::json::array();
   double secondsSum = 0;
@@ -429,6 +330,7 @@ SweepSummary runSweep(const SweepPlan& plan, SweepRunner& runner, const SweepOpt
   results["runner"] = runner.info();
   results["report_wall_seconds"] = nullptr;
   results["command_wall_seconds"] = secondsSince(t0);
+  for (auto it = extra.begin(); it != extra.end(); ++it) results[it.key()] = it.value();
 
   summary.resultsJson = joinPath(options.outDir, "results.json");
   summary.resultsCsv = joinPath(options.outDir, "results.csv");
@@ -449,8 +351,310 @@ SweepSummary runSweep(const SweepPlan& plan, SweepRunner& runner, const SweepOpt
     results["command_wall_seconds"] = secondsSince(t0);
     writeJsonAtomic(summary.resultsJson, results);
   }
+}
+
+}  // namespace
+
+std::string defaultSweepCacheDir(const std::string& outDir) {
+  const char* env = std::getenv("SHADOWLAB_CACHE");
+  if (env && *env) return env;
+  fs::path out = fs::absolute(fs::path(outDir)).lexically_normal();
+  if (!out.has_filename()) out = out.parent_path();  // trailing slash
+  return (out.parent_path() / ".shadowlab-cache").string();
+}
+
+SweepSummary runSweep(const SweepPlan& plan, SweepRunner& runner, const SweepOptions& options) {
+  const auto t0 = Clock::now();
+  SweepSummary summary;
+  const SweepShard& shard = options.shard;
+  if (shard.active() && shard.index >= shard.count)
+    throw InputError("--shard: error: I >= N; expected 0 <= I < N");
+  for (size_t i = 0; i < plan.jobs.size(); ++i) summary.configurations += shard.owns(i) ? 1 : 0;
+  if (options.outDir.empty()) throw InputError("shadowlab sweep: error: no output folder; expected -o DIR");
+  // Device limits are input errors too: found before the output folder exists.
+  for (const auto& c : plan.configs) runner.checkMethod(c.method, "shadowlab sweep: configuration " + c.config);
+  // A shard works in its own folder with its own lock and journal: two shards never write one file.
+  const std::string workDir = shard.active() ? shardDir(options.outDir, shard) : options.outDir;
+  makeDirs(workDir);
+  FolderLock lock(workDir);
+  if (shard.active()) {
+    // shard.json ties the journal to its plan; a shard folder of another plan is refused rather
+    // than half-reused (the merge could not tell which rows belong to which plan).
+    const std::string metaPath = joinPath(workDir, "shard.json");
+    const std::string fingerprint = planFingerprint(plan);
+    std::error_code ec;
+    if (fs::exists(metaPath, ec)) {
+      const nlohmann::json old = nlohmann::json::parse(readFile(metaPath), nullptr, false);
+      const std::string oldFp = old.is_object() ? old.value("plan_fingerprint", std::string()) : std::string();
+      if (oldFp != fingerprint)
+        throw InputError(formatError(metaPath, "", "this shard folder holds plan " + (oldFp.empty() ? "(unreadable)" : oldFp) +
+                                                       " but this sweep is plan " + fingerprint +
+                                                       "; expected the same sweep arguments and inputs (or another -o)"));
+    } else {
+      nlohmann::json meta = {{"schema", "shadowlab.shard/1"},
+                             {"plan_fingerprint", fingerprint},
+                             {"shard_index", shard.index},
+                             {"shard_count", shard.count},
+                             {"rows_planned", summary.configurations},
+                             {"plan_rows", plan.jobs.size()},
+                             {"spec", sweepSpecToJson(plan)}};
+      writeJsonAtomic(metaPath, meta);
+    }
+  }
+  const std::string journalPath = joinPath(workDir, "rows.jsonl");
+  auto stored = readJournal(journalPath);
+  Journal journal(journalPath);
+  std::ofstream log(joinPath(workDir, "sweep.log"), std::ios::app);
+  const long pid = long(::getpid());
+  const std::string device = runner.deviceName();
+
+  // A stored row counts only for the same scene content and the same resolved method: editing a
+  // scene file or a --set between runs must not mix old rows into new results.
+  std::vector<nlohmann::json> methodJson(plan.configs.size());
+  for (size_t i = 0; i < plan.configs.size(); ++i) methodJson[i] = methodToJson(plan.configs[i].method);
+  std::vector<const StoredRow*> have(plan.jobs.size(), nullptr);
+  for (size_t i = 0; i < plan.jobs.size(); ++i) {
+    if (!shard.owns(i)) continue;
+    const SweepJob& job = plan.jobs[i];
+    auto it = stored.find(job.key());
+    if (it == stored.end()) continue;
+    if (it->second.sceneHash != plan.variants[job.variantIndex].hash) continue;
+    if (it->second.row.method != methodJson[job.configIndex]) continue;
+    // Timings of two devices on one axis would compare a GPU with a CPU rasterizer: refuse rather
+    // than mix (another -o folder, or the same --device, is what the user wants).
+    if (it->second.device != device)
+      throw InputError(formatError(
+          journalPath, "",
+          "row \"" + job.key() + "\" was measured on device \"" +
+              (it->second.device.empty() ? std::string("(not recorded: an older shadowlab)") : it->second.device) +
+              "\" but this sweep runs on \"" + device +
+              "\"; expected one device per output folder (use another -o folder, or --device naming the first device)"));
+    have[i] = &it->second;
+    ++summary.resumed;
+  }
+  if (log) log << "pid " << pid << " begin: " << summary.configurations << " rows planned, " << summary.resumed << " already done\n";
+  if (options.progress && summary.resumed > 0)
+    std::fprintf(options.progress, "sweep: resuming: %zu of %zu rows are already in %s\n", summary.resumed,
+                 summary.configurations, journalPath.c_str());
+
+  Progress progress(options.progress, options.progressBar, summary.configurations, summary.resumed);
+  std::vector<StoredRow> fresh(plan.jobs.size());
+  const auto loop0 = Clock::now();
+  for (size_t i = 0; i < plan.jobs.size(); ++i) {
+    if (have[i] || !shard.owns(i)) continue;
+    if (options.stop && options.stop->load()) {
+      summary.interrupted = true;
+      break;
+    }
+    const SweepJob& job = plan.jobs[i];
+    const SweepConfig& config = plan.configs[job.configIndex];
+    const Scene& scene = plan.variants[job.variantIndex];
+    const std::string what = job.sceneName + " " + job.config;
+    if (log) log << "pid " << pid << " start " << job.key() << "\n" << std::flush;
+    progress.start(what);
+    std::string imagesDir;
+    if (plan.spec.keepImages) {
+      imagesDir = joinPath(joinPath(joinPath(options.outDir, "images"), slug(job.sceneName)), slug(job.config));
+      makeDirs(imagesDir);
+    }
+    const auto c0 = Clock::now();
+    SweepRunOutput out = runner.run(scene, config.method, job.light, imagesDir);
+    const double seconds = secondsSince(c0);
+    StoredRow s;
+    s.row.scene = job.sceneName;
+    s.row.config = job.config;
+    s.row.light = job.light;
+    s.row.method = methodJson[job.configIndex];
+    s.row.metrics = out.metrics;
+    s.row.timings = out.timings;
+    s.row.timings[timing::kConfigWallMs] = seconds * 1000.0;  // wall time of this configuration in the sweep
+    s.sceneHash = scene.hash;
+    s.configWallSeconds = seconds;
+    s.device = device;
+    nlohmann::json line = {{"scene_hash", s.sceneHash}, {"config_wall_seconds", seconds}, {"pid", pid},
+                           {"device", device}, {"row", s.row.toJson()}};
+    if (shard.active()) line["shard"] = std::to_string(shard.index) + "/" + std::to_string(shard.count);
+    journal.append(line.dump(), /*sync=*/true);
+    if (log) log << "pid " << pid << " done " << job.key() << " " << seconds << " s\n" << std::flush;
+    double errorRate = out.metrics.value("error_rate", 0.0);
+    fresh[i] = std::move(s);
+    have[i] = &fresh[i];
+    ++summary.ran;
+    progress.finish(what, errorRate, seconds);
+  }
+  progress.end();
+  const double loopSeconds = secondsSince(loop0);
+  if (summary.interrupted) {
+    if (log) log << "pid " << pid << " interrupted after " << summary.ran << " rows\n";
+    summary.commandWallSeconds = secondsSince(t0);
+    return summary;
+  }
+  if (shard.active()) {
+    // The merge writes results and the report once every shard is done.
+    if (log) log << "pid " << pid << " shard end: " << summary.ran << " rows run\n";
+    summary.commandWallSeconds = secondsSince(t0);
+    return summary;
+  }
+
+  writeSweepOutputs(plan, have, runner, options, loopSeconds, t0, nlohmann::json::object(), summary);
   summary.commandWallSeconds = secondsSince(t0);
   if (log) log << "pid " << pid << " end: " << summary.ran << " rows run, " << summary.commandWallSeconds << " s\n";
+  return summary;
+}
+
+SweepSummary mergeSweepShards(const SweepPlan& plan, SweepRunner& runner, const SweepOptions& options) {
+  const auto t0 = Clock::now();
+  SweepSummary summary;
+  summary.configurations = plan.jobs.size();
+  if (options.outDir.empty()) throw InputError("shadowlab merge: error: no output folder; expected OUT_DIR");
+  const std::string fingerprint = planFingerprint(plan);
+  const fs::path shardsDir = fs::path(options.outDir) / "shards";
+
+  // Every problem is gathered first and reported together, each naming its file; nothing is
+  // written unless there is none.
+  std::vector<std::string> problems;
+  struct Shard {
+    std::string dir, meta;
+    size_t index = 0, count = 0;
+  };
+  std::vector<Shard> shards;
+  std::error_code ec;
+  std::vector<fs::path> dirs;
+  if (fs::is_directory(shardsDir, ec))
+    for (const auto& e : fs::directory_iterator(shardsDir, ec))
+      if (e.is_directory(ec)) dirs.push_back(e.path());
+  std::sort(dirs.begin(), dirs.end());
+  for (const auto& d : dirs) {
+    Shard sh;
+    sh.dir = d.string();
+    sh.meta = (d / "shard.json").string();
+    const nlohmann::json meta =
+        fs::exists(sh.meta, ec) ? nlohmann::json::parse(readFile(sh.meta), nullptr, false) : nlohmann::json();
+    if (!meta.is_object() || !meta.value("plan_fingerprint", nlohmann::json()).is_string() ||
+        !meta.value("shard_index", nlohmann::json()).is_number_unsigned() ||
+        !meta.value("shard_count", nlohmann::json()).is_number_unsigned()) {
+      problems.push_back(formatError(sh.meta, "", "missing or damaged shard description; expected the shard.json "
+                                                  "`shadowlab sweep --shard I/N` writes"));
+      continue;
+    }
+    sh.index = meta.at("shard_index").get<size_t>();
+    sh.count = meta.at("shard_count").get<size_t>();
+    const std::string fp = meta.at("plan_fingerprint").get<std::string>();
+    if (fp != fingerprint)
+      problems.push_back(formatError(sh.meta, "/plan_fingerprint",
+                                     "plan " + fp + " differs from plan " + fingerprint +
+                                         " (the sweep recorded in the first shard.json, planned again from the "
+                                         "files as they are now); expected shards of one sweep (same arguments, "
+                                         "same scene and method files)"));
+    shards.push_back(sh);
+  }
+  if (shards.empty() && problems.empty())
+    throw InputError(formatError(shardsDir.string(), "", "no shard folders; expected the output of "
+                                                         "`shadowlab sweep ... --shard I/N -o " + options.outDir + "`"));
+  const size_t count = shards.empty() ? 0 : shards.front().count;
+  for (const auto& sh : shards)
+    if (sh.count != count)
+      problems.push_back(formatError(sh.meta, "/shard_count", "N is " + std::to_string(sh.count) + " but " +
+                                                                  shards.front().meta + " has N = " + std::to_string(count) +
+                                                                  "; expected every shard of one sweep to share N"));
+  if (!problems.empty()) {
+    std::string all;
+    for (const auto& p : problems) all += (all.empty() ? "" : "\n") + p;
+    throw InputError(all);
+  }
+  std::vector<const Shard*> byIndex(count, nullptr);
+  for (const auto& sh : shards) {
+    if (sh.index >= count || byIndex[sh.index])
+      problems.push_back(formatError(sh.meta, "/shard_index", "shard " + std::to_string(sh.index) + " of " +
+                                                                  std::to_string(count) +
+                                                                  (sh.index >= count ? " is out of range" : " appears twice (also " + byIndex[sh.index]->meta + ")") +
+                                                                  "; expected one folder per shard I < N"));
+    else byIndex[sh.index] = &sh;
+  }
+  if (!problems.empty()) {
+    std::string all;
+    for (const auto& p : problems) all += (all.empty() ? "" : "\n") + p;
+    throw InputError(all);
+  }
+  std::string missing;
+  for (size_t i = 0; i < count; ++i)
+    if (!byIndex[i]) missing += (missing.empty() ? "" : ", ") + std::to_string(i);
+  if (!missing.empty())
+    throw InputError(formatError(shardsDir.string(), "", "missing shard(s) " + missing + " of " + std::to_string(count) +
+                                                             "; expected one folder I-of-" + std::to_string(count) +
+                                                             " for every I in 0.." + std::to_string(count - 1) +
+                                                             " (run `shadowlab sweep ... --shard I/" +
+                                                             std::to_string(count) + "` for each)"));
+
+  // Rows: each must belong to the plan (same scene content and method); a configuration held by
+  // two journals must agree in every metric.
+  std::vector<nlohmann::json> methodJson(plan.configs.size());
+  for (size_t i = 0; i < plan.configs.size(); ++i) methodJson[i] = methodToJson(plan.configs[i].method);
+  std::map<std::string, size_t> jobOf;
+  for (size_t i = 0; i < plan.jobs.size(); ++i) jobOf[plan.jobs[i].key()] = i;
+  std::vector<std::map<std::string, StoredRow>> journals(count);
+  std::vector<const StoredRow*> have(plan.jobs.size(), nullptr);
+  std::vector<std::string> haveFrom(plan.jobs.size());
+  for (size_t si = 0; si < count; ++si) {
+    const std::string path = joinPath(byIndex[si]->dir, "rows.jsonl");
+    journals[si] = readJournal(path, /*repair=*/false);
+    size_t own = 0, share = 0;
+    for (size_t i = 0; i < plan.jobs.size(); ++i) share += i % count == si ? 1 : 0;
+    for (const auto& [key, row] : journals[si]) {
+      auto j = jobOf.find(key);
+      if (j == jobOf.end() || row.sceneHash != plan.variants[plan.jobs[j->second].variantIndex].hash ||
+          row.row.method != methodJson[plan.jobs[j->second].configIndex]) {
+        problems.push_back(formatError(path, "", "row \"" + key + "\" is not a row of plan " + fingerprint +
+                                                     " (unknown configuration, or another scene content or method)"));
+        continue;
+      }
+      const size_t i = j->second;
+      if (i % count == si) ++own;
+      if (have[i]) {
+        if (have[i]->row.metrics != row.row.metrics)
+          problems.push_back(formatError(path, "", "row \"" + key + "\" is also in " + haveFrom[i] +
+                                                       " with different metrics; expected one result per configuration"));
+        if (i % count != si) continue;  // the owner's row is the one kept
+      }
+      have[i] = &row;
+      haveFrom[i] = path;
+    }
+    if (own < share)
+      problems.push_back(formatError(path, "", "shard " + std::to_string(si) + "/" + std::to_string(count) +
+                                                   " is incomplete: " + std::to_string(own) + " of its " +
+                                                   std::to_string(share) + " rows; expected it finished (run the "
+                                                   "same `shadowlab sweep ... --shard " + std::to_string(si) + "/" +
+                                                   std::to_string(count) + "` again to complete it)"));
+  }
+  // One time axis never holds two devices (as runSweep refuses to resume across devices).
+  std::string device;
+  std::string deviceFrom;
+  for (size_t i = 0; i < have.size(); ++i) {
+    if (!have[i]) continue;
+    if (deviceFrom.empty()) {
+      device = have[i]->device;
+      deviceFrom = haveFrom[i];
+    } else if (have[i]->device != device) {
+      problems.push_back(formatError(haveFrom[i], "", "rows measured on device \"" + have[i]->device + "\" but " +
+                                                          deviceFrom + " has rows of \"" + device +
+                                                          "\"; expected every shard on one device (--device)"));
+      break;
+    }
+  }
+  if (!problems.empty()) {
+    std::string all;
+    for (const auto& p : problems) all += (all.empty() ? "" : "\n") + p;
+    throw InputError(all);
+  }
+  for (size_t i = 0; i < have.size(); ++i)
+    if (!have[i]) throw DriverError("shadowlab merge: error: row " + plan.jobs[i].key() + " not found after the checks");
+
+  makeDirs(options.outDir);
+  FolderLock lock(options.outDir);
+  summary.resumed = plan.jobs.size();
+  nlohmann::json extra = {{"shards", count}, {"plan_fingerprint", fingerprint}};
+  writeSweepOutputs(plan, have, runner, options, 0.0, t0, extra, summary);
+  summary.commandWallSeconds = secondsSince(t0);
   return summary;
 }
 

@@ -154,8 +154,39 @@ std::unique_ptr<SweepRunner> makePipelineRunner(const std::string& cacheDir, int
 // <parent of outDir>/.shadowlab-cache, so sweeps side by side share their references.
 std::string defaultSweepCacheDir(const std::string& outDir);
 
+// One of N machines' share of a plan (--shard I/N): the jobs whose index in SweepPlan::jobs is
+// congruent to I mod N. Round-robin rather than contiguous blocks because jobs are scene-major
+// and the grid's last axis varies fastest: a block would give one shard all of a slow scene or
+// all of the largest map sizes, whereas every N-th job spreads scenes and expensive values evenly.
+struct SweepShard {
+  size_t index = 0;  // I, 0-based
+  size_t count = 0;  // N; 0 = not sharded
+  bool active() const { return count > 0; }
+  bool owns(size_t jobIndex) const { return !active() || jobIndex % count == index; }
+};
+
+// "2/3" (from --shard). InputError "--shard TEXT: error: ..." unless it is I/N with 0 <= I < N.
+SweepShard parseShardArgument(const std::string& text);
+// OUT/shards/I-of-N: a shard's own folder (journal, log, lock, shard.json).
+std::string shardDir(const std::string& outDir, const SweepShard& shard);
+// A 16-hex-digit hash of what decides the plan's rows: every job's key, its scene content hash and
+// resolved method (so the --set values, the grid and the method file content are all in it), the
+// method file's bytes, spp, light and the frontier settings. Shards of one sweep share it; the
+// merge refuses shards whose fingerprints differ.
+std::string planFingerprint(const SweepPlan& plan);
+// The spec as JSON (scene paths absolute, so another machine or folder can plan it again) and
+// back; shard.json holds it so that `shadowlab merge OUT` needs no sweep arguments.
+nlohmann::json sweepSpecToJson(const SweepPlan& plan);
+SweepSpec sweepSpecFromJson(const nlohmann::json& j, const std::string& origin);
+// The spec recorded by the shards under outDir (the first shard folder's shard.json).
+// InputError when outDir/shards holds no shard.
+SweepSpec loadShardedSpec(const std::string& outDir);
+
 struct SweepOptions {
   std::string outDir;
+  // Active: run only this shard's jobs into shardDir(outDir, shard) and write no results or
+  // report (mergeSweepShards does).
+  SweepShard shard;
   // Progress: a bar with rate and ETA when `progressBar`, plain lines otherwise; null: silent.
   std::FILE* progress = stderr;
   bool progressBar = false;
@@ -184,6 +215,14 @@ struct SweepSummary {
 // than runner.deviceName() is an InputError naming both devices (nothing is run or rewritten). At the end writes results.json, results.csv, figures/
 // and report.html. Log of starts/finishes: outDir/sweep.log.
 SweepSummary runSweep(const SweepPlan& plan, SweepRunner& runner, const SweepOptions& options);
+
+// Gathers every shard journal under options.outDir/shards into options.outDir/results.json,
+// results.csv and the report, exactly as an unsharded runSweep of `plan` would. InputError (nothing
+// written) naming the files when shards come from different plans (fingerprint or N differ), a
+// shard is missing (the missing I listed), a shard holds fewer rows than its share, a row does not
+// belong to the plan, a configuration appears twice with different metrics, or the rows were
+// measured on different devices.
+SweepSummary mergeSweepShards(const SweepPlan& plan, SweepRunner& runner, const SweepOptions& options);
 
 // The report of a finished sweep whose results.json is written: runs the chart script into
 // outDir/figures (PNG, PDF, SVG and figures/charts.json), renders the best and worst configuration

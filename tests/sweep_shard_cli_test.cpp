@@ -1,0 +1,246 @@
+// Sharded sweeps through the real binary with the real renderers: a bad --shard exits 2 and
+// writes nothing; 3 shards merged by `shadowlab merge` give exactly the metrics of an unsharded run
+// of the same plan (2 scenes x 4 configurations at 64x48); a doctored shard journal makes the merge
+// exit 2 naming the file; a truncated or foreign reference cache entry is traced again and the
+// metrics stay identical.
+#include <gtest/gtest.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <chrono>
+#include <filesystem>
+#include <fstream>
+
+#include <nlohmann/json.hpp>
+
+#include "shadowlab/compare/results.h"
+#include "shadowlab/scenes/frame.h"
+#include "shadowlab/scenes/io.h"
+#include "support/cli.h"
+
+namespace fs = std::filesystem;
+using namespace shadowlab;
+using shadowlab::testing::runShadowlab;
+
+namespace {
+
+fs::path tempDir(const std::string& name) {
+  fs::path d = fs::temp_directory_path() / ("shadowlab_shard_cli_" + name + "_" + std::to_string(::getpid()));
+  fs::remove_all(d);
+  fs::create_directories(d);
+  return d;
+}
+
+// The small plan: 2 scenes x 4 configurations at a small camera.
+const std::string kPlan =
+    "sphere_on_plane contact --grid map.size=128,512 --grid bias.slope=0,2 "
+    "--set scene:/camera/width=64 --set scene:/camera/height=48 --no-report";
+
+double seconds(std::chrono::steady_clock::time_point t0) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+}
+
+void expectSameMetrics(const fs::path& a, const fs::path& b) {
+  auto ra = loadResultRows(a.string()), rb = loadResultRows(b.string());
+  ASSERT_EQ(ra.size(), rb.size());
+  for (size_t i = 0; i < ra.size(); ++i) {
+    EXPECT_EQ(ra[i].key(), rb[i].key());
+    EXPECT_EQ(ra[i].method, rb[i].method) << ra[i].key();
+    EXPECT_EQ(ra[i].metrics, rb[i].metrics) << ra[i].key() << ": every metric must match exactly";
+  }
+}
+
+}  // namespace
+
+TEST(SweepShardCli, BadShardExitsTwoAndWritesNothing) {
+  const fs::path dir = tempDir("bad");
+  for (const char* bad : {"3/3", "0/0", "two", "1/", "-1/2"}) {
+    const fs::path out = dir / "out";
+    auto r = runShadowlab("sweep sphere_on_plane --grid map.size=128,256 --shard '" + std::string(bad) + "' -o '" +
+                              out.string() + "' --cache '" + (dir / "cache").string() + "'",
+                          dir);
+    EXPECT_EQ(r.code, 2) << bad << "\n" << r.err;
+    EXPECT_NE(r.err.find(std::string("--shard ") + bad), std::string::npos) << r.err;
+    EXPECT_FALSE(fs::exists(out)) << bad << ": nothing may be written";
+    EXPECT_FALSE(fs::exists(dir / "cache")) << bad;
+  }
+  auto r = runShadowlab("merge '" + (dir / "nothing").string() + "'", dir);
+  EXPECT_EQ(r.code, 2) << r.err;
+  EXPECT_NE(r.err.find("shards"), std::string::npos) << r.err;
+  fs::remove_all(dir);
+}
+
+TEST(SweepShardCli, ThreeShardsMergedEqualAnUnshardedRunInEveryMetric) {
+  const fs::path dir = tempDir("merge");
+  const std::string cache = " --cache '" + (dir / "cache").string() + "'";
+  // Warm the reference cache first so neither timing below includes tracing.
+  auto warm = runShadowlab("sweep " + kPlan + " --grid map.size=16 -o '" + (dir / "warm").string() + "'" + cache, dir);
+  ASSERT_EQ(warm.code, 0) << warm.err;
+
+  auto t0 = std::chrono::steady_clock::now();
+  auto one = runShadowlab("sweep " + kPlan + " -o '" + (dir / "one").string() + "'" + cache, dir);
+  const double unsharded = seconds(t0);
+  ASSERT_EQ(one.code, 0) << one.err;
+
+  const fs::path many = dir / "many";
+  double slowest = 0;
+  for (int i = 0; i < 3; ++i) {
+    t0 = std::chrono::steady_clock::now();
+    auto r = runShadowlab("sweep " + kPlan + " --shard " + std::to_string(i) + "/3 -o '" + many.string() + "'" + cache, dir);
+    slowest = std::max(slowest, seconds(t0));
+    ASSERT_EQ(r.code, 0) << r.err;
+    EXPECT_NE(r.out.find("shadowlab merge"), std::string::npos) << r.out;
+    EXPECT_TRUE(fs::exists(many / "shards" / (std::to_string(i) + "-of-3") / "rows.jsonl"));
+  }
+  EXPECT_FALSE(fs::exists(many / "results.json")) << "shards write no results";
+  EXPECT_FALSE(fs::exists(many / "report.html"));
+  t0 = std::chrono::steady_clock::now();
+  auto m = runShadowlab("merge '" + many.string() + "' --no-report" + cache, dir);
+  const double merge = seconds(t0);
+  ASSERT_EQ(m.code, 0) << m.err;
+  std::printf("timing: unsharded %.2f s; slowest of 3 shards %.2f s; merge %.2f s (shards run one after another here)\n",
+              unsharded, slowest, merge);
+  expectSameMetrics(dir / "one" / "results.json", many / "results.json");
+  EXPECT_EQ(loadResultRows((many / "results.json").string()).size(), 8u);
+
+  // A doctored journal: shard 2 gains a copy of shard 0's first row with another error_rate.
+  const fs::path journal0 = many / "shards" / "0-of-3" / "rows.jsonl", journal2 = many / "shards" / "2-of-3" / "rows.jsonl";
+  std::string first;
+  {
+    std::ifstream in(journal0);
+    std::getline(in, first);
+  }
+  auto row = nlohmann::json::parse(first);
+  row["row"]["metrics"]["error_rate"] = row["row"]["metrics"]["error_rate"].get<double>() + 0.25;
+  std::ofstream(journal2, std::ios::app) << row.dump() << "\n";
+  fs::remove(many / "results.json");
+  fs::remove(many / "results.csv");
+  auto bad = runShadowlab("merge '" + many.string() + "' --no-report" + cache, dir);
+  EXPECT_EQ(bad.code, 2) << bad.err;
+  EXPECT_NE(bad.err.find(journal2.string()), std::string::npos) << bad.err;
+  EXPECT_NE(bad.err.find("different metrics"), std::string::npos) << bad.err;
+  EXPECT_FALSE(fs::exists(many / "results.json")) << "a refused merge writes nothing";
+
+  // A missing shard is named.
+  fs::remove_all(many / "shards" / "1-of-3");
+  bad = runShadowlab("merge '" + many.string() + "' --no-report" + cache, dir);
+  EXPECT_EQ(bad.code, 2) << bad.err;
+  EXPECT_NE(bad.err.find("missing shard(s) 1 of 3"), std::string::npos) << bad.err;
+  fs::remove_all(dir);
+}
+
+TEST(SweepShardCli, DamagedReferenceCacheEntriesAreTracedAgainWithIdenticalMetrics) {
+  const fs::path dir = tempDir("cache");
+  const fs::path cache = dir / "cache";
+  const std::string args = "sweep sphere_on_plane contact --grid map.size=256 --set scene:/camera/width=64 "
+                           "--set scene:/camera/height=48 --no-report --cache '" + cache.string() + "'";
+  auto first = runShadowlab(args + " -o '" + (dir / "a").string() + "'", dir);
+  ASSERT_EQ(first.code, 0) << first.err;
+  std::vector<fs::path> entries;
+  for (const auto& e : fs::directory_iterator(cache))
+    if (e.path().extension() == ".exr") entries.push_back(e.path());
+  std::sort(entries.begin(), entries.end());
+  ASSERT_EQ(entries.size(), 2u) << "one reference per scene";
+  // No temporary file is left beside the entries (they are written under a temp name, then renamed).
+  for (const auto& e : fs::directory_iterator(cache)) EXPECT_EQ(e.path().extension(), ".exr") << e.path();
+  const auto size0 = fs::file_size(entries[0]);
+  const nlohmann::json hash0 = readFrameExr(entries[0].string()).meta.at("scene_hash");
+  const nlohmann::json hash1 = readFrameExr(entries[1].string()).meta.at("scene_hash");
+
+  // Entry 0 truncated to half; entry 1 replaced by entry 0's intact bytes (a readable frame whose
+  // scene_hash names the other scene).
+  fs::copy_file(entries[0], entries[1], fs::copy_options::overwrite_existing);
+  fs::resize_file(entries[0], size0 / 2);
+  auto second = runShadowlab(args + " -o '" + (dir / "b").string() + "'", dir);
+  ASSERT_EQ(second.code, 0) << second.err;
+  expectSameMetrics(dir / "a" / "results.json", dir / "b" / "results.json");
+  // Both entries were traced again and replaced by whole files naming their own scenes again.
+  const Frame a = readFrameExr(entries[0].string()), b = readFrameExr(entries[1].string());
+  EXPECT_EQ(a.meta.at("scene_hash"), hash0);
+  EXPECT_EQ(b.meta.at("scene_hash"), hash1);
+  EXPECT_NE(hash0, hash1);
+  fs::remove_all(dir);
+}
+
+TEST(SweepShardCli, SlurmScriptsRunAsAnArrayThenMergeToTheUnshardedMetrics) {
+  const fs::path dir = tempDir("slurm");
+  const std::string cache = " --cache '" + (dir / "cache").string() + "'";
+  const fs::path gen = dir / "gen";
+  auto r = runShadowlab("sweep " + kPlan + " --slurm 3 --slurm-opt='--partition=debug --time=10' -o '" + gen.string() +
+                            "'" + cache,
+                        dir);
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_FALSE(fs::exists(gen / "rows.jsonl")) << "--slurm runs nothing";
+  EXPECT_FALSE(fs::exists(gen / "shards" / "0-of-3")) << "--slurm runs nothing";
+  const std::string sweep = readFile((gen / "sweep.sbatch").string()), merge = readFile((gen / "merge.sbatch").string());
+  for (const char* want : {"#!/bin/bash\n", "\n#SBATCH --array=0-2\n", "\n#SBATCH --partition=debug\n",
+                           "\n#SBATCH --time=10\n", " sweep 'sphere_on_plane' 'contact' --grid 'map.size=128,512' "
+                           "--grid 'bias.slope=0,2' --set 'scene:/camera/width=64' --set 'scene:/camera/height=48' ",
+                           " --shard \"$SLURM_ARRAY_TASK_ID/3\"\n"})
+    EXPECT_NE(sweep.find(want), std::string::npos) << "missing: " << want << "\n" << sweep;
+  EXPECT_NE(sweep.find("-o '" + gen.string() + "'"), std::string::npos) << sweep;
+  for (const char* want : {"#!/bin/bash\n", "\n#SBATCH --partition=debug\n", " merge '", " --no-report\n"})
+    EXPECT_NE(merge.find(want), std::string::npos) << "missing: " << want << "\n" << merge;
+  EXPECT_EQ(merge.find("--array"), std::string::npos) << merge;
+  EXPECT_NE(r.out.find("sbatch --parsable '" + (gen / "sweep.sbatch").string() + "'"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("sbatch --dependency=afterok:$jobid '" + (gen / "merge.sbatch").string() + "'"), std::string::npos)
+      << r.out;
+
+  // What Slurm would do: each array task with its SLURM_ARRAY_TASK_ID, then the merge.
+  for (int i = 0; i < 3; ++i) {
+    const std::string cmd = "SLURM_ARRAY_TASK_ID=" + std::to_string(i) + " bash '" + (gen / "sweep.sbatch").string() +
+                            "' >'" + (dir / "task.log").string() + "' 2>&1";
+    ASSERT_EQ(std::system(cmd.c_str()), 0) << readFile((dir / "task.log").string());
+  }
+  ASSERT_EQ(std::system(("bash '" + (gen / "merge.sbatch").string() + "' >'" + (dir / "merge.log").string() + "' 2>&1").c_str()), 0)
+      << readFile((dir / "merge.log").string());
+  auto one = runShadowlab("sweep " + kPlan + " -o '" + (dir / "one").string() + "'" + cache, dir);
+  ASSERT_EQ(one.code, 0) << one.err;
+  expectSameMetrics(dir / "one" / "results.json", gen / "results.json");
+  fs::remove_all(dir);
+}
+
+TEST(SweepShardCli, SlurmSubmitWithoutSbatchExitsTwoAndWritesNothing) {
+  const fs::path dir = tempDir("nosbatch");
+  auto r = runShadowlab("sweep sphere_on_plane --slurm 2 --submit -o '" + (dir / "out").string() + "'", dir,
+                        "PATH=/nonexistent ");
+  EXPECT_EQ(r.code, 2) << r.err;
+  EXPECT_NE(r.err.find("no Slurm installed (sbatch not found"), std::string::npos) << r.err;
+  EXPECT_FALSE(fs::exists(dir / "out"));
+  for (const char* bad : {"0", "x", "-1"}) {
+    r = runShadowlab("sweep sphere_on_plane --slurm=" + std::string(bad) + " -o '" + (dir / "out").string() + "'", dir);
+    EXPECT_EQ(r.code, 2) << bad << "\n" << r.err;
+    EXPECT_NE(r.err.find(std::string("--slurm ") + bad), std::string::npos) << r.err;
+    EXPECT_FALSE(fs::exists(dir / "out")) << bad;
+  }
+  r = runShadowlab("sweep sphere_on_plane --slurm 2 --shard 0/2 -o '" + (dir / "out").string() + "'", dir);
+  EXPECT_EQ(r.code, 2) << r.err;
+  EXPECT_FALSE(fs::exists(dir / "out"));
+  fs::remove_all(dir);
+}
+
+TEST(SweepShardCli, SlurmSubmitRunsTheArrayThenTheMergeAfterIt) {
+  const fs::path dir = tempDir("submit");
+  // A stand-in sbatch: records its arguments, answers job id 4242 (then 4243) like --parsable.
+  fs::create_directories(dir / "bin");
+  const fs::path calls = dir / "calls.txt";
+  {
+    std::ofstream f(dir / "bin" / "sbatch");
+    f << "#!/bin/sh\necho \"$*\" >> '" << calls.string() << "'\nn=$(wc -l < '" << calls.string()
+      << "')\necho $((4241 + n))\n";
+  }
+  fs::permissions(dir / "bin" / "sbatch", fs::perms::owner_all);
+  const fs::path out = dir / "out";
+  auto r = runShadowlab("sweep sphere_on_plane --grid map.size=128,256 --slurm 2 --submit -o '" + out.string() + "'", dir,
+                        "PATH='" + (dir / "bin").string() + "':\"$PATH\" ");
+  ASSERT_EQ(r.code, 0) << r.err;
+  std::ifstream in(calls);
+  std::string first, second;
+  std::getline(in, first);
+  std::getline(in, second);
+  EXPECT_EQ(first, "--parsable " + (out / "sweep.sbatch").string());
+  EXPECT_EQ(second, "--parsable --dependency=afterok:4242 " + (out / "merge.sbatch").string());
+  EXPECT_NE(r.out.find("job 4242"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("job 4243"), std::string::npos) << r.out;
+  fs::remove_all(dir);
+}
