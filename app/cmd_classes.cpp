@@ -24,11 +24,12 @@ int run(bool json) {
   return 0;
 }
 
-shadowlab::app::Registrar reg{"classes", [](CLI::App& app) {
-  auto json = std::make_shared<bool>(false);
-  auto* sub = app.add_subcommand("classes", "List the pixel classes compare assigns (code, key, metrics, colour)");
-  sub->add_flag("--json", *json, "Print the class table as JSON (what the sweep writes as classes.json)");
-  return std::function<int()>([json] { return run(*json); });
-}};
+shadowlab::app::Registrar reg{
+    "classes", [](CLI::App& app) {
+      auto json = std::make_shared<bool>(false);
+      auto* sub = app.add_subcommand("classes", "List the pixel classes compare assigns (code, key, metrics, colour)");
+      sub->add_flag("--json", *json, "Print the class table as JSON (what the sweep writes as classes.json)");
+      return std::function<int()>([json] { return run(*json); });
+    }};
 
 }  // namespace

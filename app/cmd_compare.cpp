@@ -66,8 +66,9 @@ int run(const Options& o) {
   std::error_code ec;
   for (const auto& [path, what] : {std::pair{refPath, "shadowlab reference"}, std::pair{rasPath, "shadowlab raster"}}) {
     if (!fs::is_regular_file(path, ec)) {
-      throw InputError(formatError(path, "", std::string("no such file; expected the output of `") + what +
-                                                 "` (comparing " + refPath + " with " + rasPath + ")"));
+      throw InputError(formatError(path, "",
+                                   std::string("no such file; expected the output of `") + what + "` (comparing " +
+                                       refPath + " with " + rasPath + ")"));
     }
   }
   OutputFolder out(o.outDir);  // an unusable -o fails before the frames are read and compared
@@ -88,9 +89,10 @@ int run(const Options& o) {
   row.light = resolveCompareLight(reference, raster, options);
   auto method = raster.meta.find("method");
   if (method != raster.meta.end() && method->is_object()) row.method = *method;
-  row.config = row.method.contains("name") && row.method["name"].is_string() && !row.method["name"].get<std::string>().empty()
-                   ? row.method["name"].get<std::string>()
-                   : "default";
+  row.config =
+      row.method.contains("name") && row.method["name"].is_string() && !row.method["name"].get<std::string>().empty()
+          ? row.method["name"].get<std::string>()
+          : "default";
   row.metrics = metrics.toJson();
   row.timings = rasterTimings(rasPath);
   row.timings["compare_ms"] = compareMs;
@@ -109,18 +111,20 @@ int run(const Options& o) {
   return 0;
 }
 
-app::Registrar reg{"compare", [](CLI::App& app) {
-  auto opts = std::make_shared<Options>();
-  auto* sub = app.add_subcommand("compare", "Classify every wrong shadow pixel of a raster frame against the reference");
-  sub->add_option("REF_DIR", opts->referenceDir, "Folder with reference.exr (or the .exr itself)")->required();
-  sub->add_option("RASTER_DIR", opts->rasterDir, "Folder with raster.exr (or the .exr itself)")->required();
-  sub->add_option("-o,--out", opts->outDir, "Output folder for metrics.json, errors.png, triptych.png")->required();
-  sub->add_option("--light", opts->light, "Light to compare (default: the light the raster frame rendered)");
-  sub->add_option("--boundary-texels", opts->boundaryTexels,
-                  "Aliasing: disagreements within this many map texels of a reference shadow boundary")
-      ->check(CLI::NonNegativeNumber)
-      ->capture_default_str();
-  return std::function<int()>([opts] { return run(*opts); });
-}};
+app::Registrar reg{
+    "compare", [](CLI::App& app) {
+      auto opts = std::make_shared<Options>();
+      auto* sub =
+          app.add_subcommand("compare", "Classify every wrong shadow pixel of a raster frame against the reference");
+      sub->add_option("REF_DIR", opts->referenceDir, "Folder with reference.exr (or the .exr itself)")->required();
+      sub->add_option("RASTER_DIR", opts->rasterDir, "Folder with raster.exr (or the .exr itself)")->required();
+      sub->add_option("-o,--out", opts->outDir, "Output folder for metrics.json, errors.png, triptych.png")->required();
+      sub->add_option("--light", opts->light, "Light to compare (default: the light the raster frame rendered)");
+      sub->add_option("--boundary-texels", opts->boundaryTexels,
+                      "Aliasing: disagreements within this many map texels of a reference shadow boundary")
+          ->check(CLI::NonNegativeNumber)
+          ->capture_default_str();
+      return std::function<int()>([opts] { return run(*opts); });
+    }};
 
 }  // namespace

@@ -16,8 +16,13 @@ int run(bool json) {
   if (json) {
     nlohmann::json out = nlohmann::json::array();
     for (const auto& d : devices)
-      out.push_back({{"name", d.name}, {"type", d.type}, {"driver", d.driver}, {"driver_info", d.driverInfo},
-                     {"api_version", d.apiVersion}, {"vulkan13", d.vulkan13}, {"default", d.isDefault}});
+      out.push_back({{"name", d.name},
+                     {"type", d.type},
+                     {"driver", d.driver},
+                     {"driver_info", d.driverInfo},
+                     {"api_version", d.apiVersion},
+                     {"vulkan13", d.vulkan13},
+                     {"default", d.isDefault}});
     std::printf("%s\n", out.dump(2).c_str());
     return 0;
   }
@@ -30,10 +35,13 @@ int run(bool json) {
 }
 
 app::Registrar reg{"devices", [](CLI::App& app) {
-  auto* sub = app.add_subcommand("devices", "List the Vulkan devices (--device NAME picks one by a substring; * = default)");
-  auto json = std::make_shared<bool>(false);
-  sub->add_flag("--json", *json, "Print a JSON array (name, type, driver, driver_info, api_version, vulkan13, default)");
-  return std::function<int()>([json] { return run(*json); });
-}};
+                     auto* sub = app.add_subcommand(
+                         "devices", "List the Vulkan devices (--device NAME picks one by a substring; * = default)");
+                     auto json = std::make_shared<bool>(false);
+                     sub->add_flag(
+                         "--json", *json,
+                         "Print a JSON array (name, type, driver, driver_info, api_version, vulkan13, default)");
+                     return std::function<int()>([json] { return run(*json); });
+                   }};
 
 }  // namespace

@@ -71,22 +71,24 @@ int run(const Options& o) {
   return result.passed() ? 0 : 1;
 }
 
-shadowlab::app::Registrar reg{"gate", [](CLI::App& app) {
-  auto* sub = app.add_subcommand("gate",
-                                 "Compare results against a baseline under tolerances; exit 1 on a regression");
-  auto o = std::make_shared<Options>();
-  sub->add_option("current", o->currents,
-                  "Current metrics.json, results.json or stability.json files (several are gated as one set of rows)")
-      ->required();
-  sub->add_option("--baseline", o->baseline, "Baseline metrics.json, results.json or stability.json")->required();
-  sub->add_option("--tolerances", o->tolerances,
-                  "Tolerance file (JSON, see compare/GATE.md); default: exact metrics, timings reported");
-  sub->add_option("--json", o->jsonOut, "Write the verdicts as JSON here");
-  sub->add_option("--junit", o->junitOut, "Write JUnit XML here (one testcase per row x metric)");
-  sub->add_flag("--update-baseline", o->updateBaseline,
-                "Rewrite the baseline from the current results (prints what changed) instead of gating");
-  sub->add_flag("--brief", o->brief, "Table shows only regressions, improvements and new entries");
-  return std::function<int()>([o] { return run(*o); });
-}};
+shadowlab::app::Registrar reg{
+    "gate", [](CLI::App& app) {
+      auto* sub =
+          app.add_subcommand("gate", "Compare results against a baseline under tolerances; exit 1 on a regression");
+      auto o = std::make_shared<Options>();
+      sub->add_option(
+             "current", o->currents,
+             "Current metrics.json, results.json or stability.json files (several are gated as one set of rows)")
+          ->required();
+      sub->add_option("--baseline", o->baseline, "Baseline metrics.json, results.json or stability.json")->required();
+      sub->add_option("--tolerances", o->tolerances,
+                      "Tolerance file (JSON, see compare/GATE.md); default: exact metrics, timings reported");
+      sub->add_option("--json", o->jsonOut, "Write the verdicts as JSON here");
+      sub->add_option("--junit", o->junitOut, "Write JUnit XML here (one testcase per row x metric)");
+      sub->add_flag("--update-baseline", o->updateBaseline,
+                    "Rewrite the baseline from the current results (prints what changed) instead of gating");
+      sub->add_flag("--brief", o->brief, "Table shows only regressions, improvements and new entries");
+      return std::function<int()>([o] { return run(*o); });
+    }};
 
 }  // namespace

@@ -44,15 +44,18 @@ int run(const Options& o) {
   return 0;
 }
 
-app::Registrar reg{"merge", [](CLI::App& app) {
-  auto opts = std::make_shared<Options>();
-  auto* sub = app.add_subcommand("merge", "Merge the shards of a sweep (sweep --shard I/N) into results and a report");
-  sub->add_option("OUT_DIR", opts->outDir, "The -o folder the shards ran into (holds shards/I-of-N/)")->required();
-  sub->add_option("--cache", opts->cacheDir,
-                  "Reference cache folder for the triptychs (default: $SHADOWLAB_CACHE, else .shadowlab-cache beside OUT_DIR)");
-  sub->add_option("--device", opts->device, "Vulkan device name substring for the triptychs (default: lavapipe)");
-  sub->add_flag("--no-report", opts->noReport, "Write results.json/csv only: no charts, triptychs or report.html");
-  return std::function<int()>([opts] { return run(*opts); });
-}};
+app::Registrar reg{
+    "merge", [](CLI::App& app) {
+      auto opts = std::make_shared<Options>();
+      auto* sub =
+          app.add_subcommand("merge", "Merge the shards of a sweep (sweep --shard I/N) into results and a report");
+      sub->add_option("OUT_DIR", opts->outDir, "The -o folder the shards ran into (holds shards/I-of-N/)")->required();
+      sub->add_option(
+          "--cache", opts->cacheDir,
+          "Reference cache folder for the triptychs (default: $SHADOWLAB_CACHE, else .shadowlab-cache beside OUT_DIR)");
+      sub->add_option("--device", opts->device, "Vulkan device name substring for the triptychs (default: lavapipe)");
+      sub->add_flag("--no-report", opts->noReport, "Write results.json/csv only: no charts, triptychs or report.html");
+      return std::function<int()>([opts] { return run(*opts); });
+    }};
 
 }  // namespace

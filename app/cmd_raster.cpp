@@ -72,19 +72,21 @@ int run(const Options& o) {
   return 0;
 }
 
-shadowlab::app::Registrar reg{"raster", [](CLI::App& app) {
-  auto* sub = app.add_subcommand("raster", "Render a scene with the Vulkan shadow-mapping rasterizer");
-  auto opts = std::make_shared<Options>();
-  sub->add_option("scene", opts->scene, "Scene name (bundled) or path to a scene .json")->required();
-  sub->add_option("--method", opts->methodFile, "Method file (JSON, keys in raster/METHODS.md)");
-  sub->add_option("--set", opts->settings, "key=value: a method key (raster/METHODS.md) or scene:/json/pointer=value (repeatable)")
-      ->allow_extra_args(false);
-  sub->add_option("--light", opts->light, "Light to render (default: the scene's first)");
-  sub->add_option("--device", opts->device, "Vulkan device name substring (default: lavapipe/llvmpipe)");
-  sub->add_flag("--validation", opts->validation, "Enable the Khronos validation layer; fail on any message");
-  sub->add_option("-o,--out", opts->outDir, "Output folder")->required();
-  shadowlab::app::addMaxMemoryOption(sub, &opts->maxMemoryGiB);
-  return std::function<int()>([opts] { return run(*opts); });
-}};
+shadowlab::app::Registrar reg{
+    "raster", [](CLI::App& app) {
+      auto* sub = app.add_subcommand("raster", "Render a scene with the Vulkan shadow-mapping rasterizer");
+      auto opts = std::make_shared<Options>();
+      sub->add_option("scene", opts->scene, "Scene name (bundled) or path to a scene .json")->required();
+      sub->add_option("--method", opts->methodFile, "Method file (JSON, keys in raster/METHODS.md)");
+      sub->add_option("--set", opts->settings,
+                      "key=value: a method key (raster/METHODS.md) or scene:/json/pointer=value (repeatable)")
+          ->allow_extra_args(false);
+      sub->add_option("--light", opts->light, "Light to render (default: the scene's first)");
+      sub->add_option("--device", opts->device, "Vulkan device name substring (default: lavapipe/llvmpipe)");
+      sub->add_flag("--validation", opts->validation, "Enable the Khronos validation layer; fail on any message");
+      sub->add_option("-o,--out", opts->outDir, "Output folder")->required();
+      shadowlab::app::addMaxMemoryOption(sub, &opts->maxMemoryGiB);
+      return std::function<int()>([opts] { return run(*opts); });
+    }};
 
 }  // namespace

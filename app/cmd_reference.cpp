@@ -1,5 +1,5 @@
-// `shadowlab reference SCENE -o DIR [--spp N] [--threads N] [--set scene:/pointer=value ...]`: traces the Embree ground truth and
-// writes DIR/reference.exr (channels: scenes/frame.h), DIR/reference.png (a readable picture) and
+// `shadowlab reference SCENE -o DIR [--spp N] [--threads N] [--set scene:/pointer=value ...]`: traces the Embree ground
+// truth and writes DIR/reference.exr (channels: scenes/frame.h), DIR/reference.png (a readable picture) and
 // DIR/reference.json (ray counts, timings, hashes).
 #include <chrono>
 #include <cstdio>
@@ -118,21 +118,22 @@ int run(const Options& options) {
   return 0;
 }
 
-shadowlab::app::Registrar reg{"reference", [](CLI::App& app) {
-  auto* sub = app.add_subcommand("reference", "Trace the Embree ground truth of a scene");
-  auto options = std::make_shared<Options>();
-  sub->add_option("scene", options->scene, "bundled scene name (see `shadowlab scenes`) or path to a scene .json")
-      ->required();
-  sub->add_option("-o,--out", options->outDir, "output folder: reference.exr, reference.png, reference.json")
-      ->required();
-  shadowlab::app::addMaxMemoryOption(sub, &options->maxMemoryGiB);
-  sub->add_option("--set", options->sets, "scene:/json/pointer=value: override one scene value (repeatable)")
-      ->allow_extra_args(false);
-  sub->add_option("--spp", options->spp, "stratified samples per pixel, 1..1024 (fractional visibility)")
-      ->capture_default_str();
-  sub->add_option("--threads", options->threads, "worker threads, 0 = all; results are identical for any value")
-      ->capture_default_str();
-  return std::function<int()>([options] { return run(*options); });
-}};
+shadowlab::app::Registrar reg{
+    "reference", [](CLI::App& app) {
+      auto* sub = app.add_subcommand("reference", "Trace the Embree ground truth of a scene");
+      auto options = std::make_shared<Options>();
+      sub->add_option("scene", options->scene, "bundled scene name (see `shadowlab scenes`) or path to a scene .json")
+          ->required();
+      sub->add_option("-o,--out", options->outDir, "output folder: reference.exr, reference.png, reference.json")
+          ->required();
+      shadowlab::app::addMaxMemoryOption(sub, &options->maxMemoryGiB);
+      sub->add_option("--set", options->sets, "scene:/json/pointer=value: override one scene value (repeatable)")
+          ->allow_extra_args(false);
+      sub->add_option("--spp", options->spp, "stratified samples per pixel, 1..1024 (fractional visibility)")
+          ->capture_default_str();
+      sub->add_option("--threads", options->threads, "worker threads, 0 = all; results are identical for any value")
+          ->capture_default_str();
+      return std::function<int()>([options] { return run(*options); });
+    }};
 
 }  // namespace

@@ -47,7 +47,8 @@ int run(const Options& o) {
                      "\"; expected one of: " + (names.empty() ? "(none)" : names));
   }
   if (scene.lights.empty() && scene.projectors.empty()) {
-    throw InputError(formatError(scene.path, "/lights", "the scene has no light and no projector; expected at least one to compare"));
+    throw InputError(formatError(scene.path, "/lights",
+                                 "the scene has no light and no projector; expected at least one to compare"));
   }
   if (o.spp < 1) throw InputError("--spp: error: got " + std::to_string(o.spp) + "; expected an integer >= 1");
   const std::string light = scene.lightOrDefault(o.light);
@@ -91,9 +92,12 @@ int run(const Options& o) {
   row.light = light;
   row.method = methodToJson(method);
   row.metrics = r.metrics.toJson();
-  row.timings = {{timing::kShadowGpuMs, r.timings.shadowGpuMs},   {timing::kCameraGpuMs, r.timings.cameraGpuMs},
-                 {timing::kReadbackMs, r.timings.readbackMs},     {timing::kRenderWallMs, r.timings.renderWallMs},
-                 {timing::kCompareMs, r.compareMs},               {timing::kReferenceMs, r.referenceMs},
+  row.timings = {{timing::kShadowGpuMs, r.timings.shadowGpuMs},
+                 {timing::kCameraGpuMs, r.timings.cameraGpuMs},
+                 {timing::kReadbackMs, r.timings.readbackMs},
+                 {timing::kRenderWallMs, r.timings.renderWallMs},
+                 {timing::kCompareMs, r.compareMs},
+                 {timing::kReferenceMs, r.referenceMs},
                  {timing::kConfigWallMs, configWallMs}};
 
   const fs::path dir(o.outDir);
@@ -117,19 +121,23 @@ int run(const Options& o) {
 }
 
 app::Registrar reg{"run", [](CLI::App& app) {
-  auto opts = std::make_shared<Options>();
-  auto* sub = app.add_subcommand("run", "Reference (cached), raster and compare in one process");
-  sub->add_option("SCENE", opts->scene, "Bundled scene name or path to a scene file")->required();
-  sub->add_option("--method", opts->methodFile, "Method file (JSON, see raster/METHODS.md)");
-  sub->add_option("--set", opts->sets, "Method setting or scene value key=value, repeatable (e.g. --set map.size=4096, --set scene:/lights/0/elevation_deg=10)");
-  sub->add_option("--light", opts->light, "Light to render and compare (default: the scene's first)");
-  sub->add_option("--spp", opts->spp, "Reference samples per pixel")->capture_default_str();
-  sub->add_option("-o,--out", opts->outDir, "Output folder")->required();
-  app::addMaxMemoryOption(sub, &opts->maxMemoryGiB);
-  sub->add_option("--cache", opts->cacheDir, "Reference cache folder (default: $SHADOWLAB_CACHE, else .shadowlab-cache)");
-  sub->add_option("--device", opts->device, "Vulkan device name substring (default: lavapipe)");
-  sub->add_flag("--keep-images", opts->keepImages, "Also write reference.exr and raster.exr");
-  return std::function<int()>([opts] { return run(*opts); });
-}};
+                     auto opts = std::make_shared<Options>();
+                     auto* sub = app.add_subcommand("run", "Reference (cached), raster and compare in one process");
+                     sub->add_option("SCENE", opts->scene, "Bundled scene name or path to a scene file")->required();
+                     sub->add_option("--method", opts->methodFile, "Method file (JSON, see raster/METHODS.md)");
+                     sub->add_option("--set", opts->sets,
+                                     "Method setting or scene value key=value, repeatable (e.g. --set map.size=4096, "
+                                     "--set scene:/lights/0/elevation_deg=10)");
+                     sub->add_option("--light", opts->light,
+                                     "Light to render and compare (default: the scene's first)");
+                     sub->add_option("--spp", opts->spp, "Reference samples per pixel")->capture_default_str();
+                     sub->add_option("-o,--out", opts->outDir, "Output folder")->required();
+                     app::addMaxMemoryOption(sub, &opts->maxMemoryGiB);
+                     sub->add_option("--cache", opts->cacheDir,
+                                     "Reference cache folder (default: $SHADOWLAB_CACHE, else .shadowlab-cache)");
+                     sub->add_option("--device", opts->device, "Vulkan device name substring (default: lavapipe)");
+                     sub->add_flag("--keep-images", opts->keepImages, "Also write reference.exr and raster.exr");
+                     return std::function<int()>([opts] { return run(*opts); });
+                   }};
 
 }  // namespace

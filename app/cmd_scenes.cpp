@@ -49,14 +49,15 @@ int run(const Options& opts) {
   return 0;
 }
 
-shadowlab::app::Registrar reg{"scenes", [](CLI::App& app) {
-  auto* sub = app.add_subcommand("scenes", "List the bundled scenes, or validate scene files with --check");
-  auto opts = std::make_shared<Options>();
-  sub->add_flag("--names", opts->namesOnly, "Print only the scene names, one per line");
-  sub->add_option("--check", opts->check,
-                  "Load and validate these scene files (or bundled names); exit 2 on the first bad one")
-      ->expected(1, -1);
-  return std::function<int()>([opts] { return run(*opts); });
-}};
+shadowlab::app::Registrar reg{
+    "scenes", [](CLI::App& app) {
+      auto* sub = app.add_subcommand("scenes", "List the bundled scenes, or validate scene files with --check");
+      auto opts = std::make_shared<Options>();
+      sub->add_flag("--names", opts->namesOnly, "Print only the scene names, one per line");
+      sub->add_option("--check", opts->check,
+                      "Load and validate these scene files (or bundled names); exit 2 on the first bad one")
+          ->expected(1, -1);
+      return std::function<int()>([opts] { return run(*opts); });
+    }};
 
 }  // namespace

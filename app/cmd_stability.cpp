@@ -75,8 +75,10 @@ int run(const Options& o) {
   const bool framesGiven = o.framesOpt->count() > 0;
   if (framesGiven && (o.frames < 2 || o.frames > kMaxPathFrames))
     throw bad("--frames", "got " + std::to_string(o.frames) + "; expected 2.." + std::to_string(kMaxPathFrames));
-  if (generated && !framesGiven) throw bad("--frames", "missing; expected the number of frames of the " + o.path + " path");
-  if (lightPath && framesGiven) throw bad("--frames", "given with --light-path; expected the frames in KEY=FROM:TO:FRAMES");
+  if (generated && !framesGiven)
+    throw bad("--frames", "missing; expected the number of frames of the " + o.path + " path");
+  if (lightPath && framesGiven)
+    throw bad("--frames", "given with --light-path; expected the frames in KEY=FROM:TO:FRAMES");
   if (o.angleOpt->count() > 0 && o.path != "orbit")
     throw bad("--angle-deg", "given with " + (lightPath ? std::string("--light-path") : "--path " + o.path) +
                                  "; expected it only with --path orbit");
@@ -107,8 +109,7 @@ int run(const Options& o) {
   std::vector<Camera> fitCameras;
   nlohmann::json pathJson;
   std::string pathConfig;
-  const nlohmann::json sceneDocument = lightPath ? readJsonFile(scene.path)
-                                                 : nlohmann::json();
+  const nlohmann::json sceneDocument = lightPath ? readJsonFile(scene.path) : nlohmann::json();
   int frames = 0;
   if (lightPath) {
     frames = axes.front().frames;
@@ -129,8 +130,8 @@ int run(const Options& o) {
     pathJson = {{"kind", o.path}, {"frames", o.frames}};
     if (dolly) pathJson["distance_world"] = o.distanceWorld;
     else pathJson["angle_deg"] = o.angleDeg;
-    pathConfig = "path=" + o.path + "," + (dolly ? "distance=" + numberText(o.distanceWorld)
-                                                 : "angle_deg=" + numberText(o.angleDeg)) +
+    pathConfig = "path=" + o.path + "," +
+                 (dolly ? "distance=" + numberText(o.distanceWorld) : "angle_deg=" + numberText(o.angleDeg)) +
                  ",frames=" + std::to_string(o.frames);
   } else {
     const CameraPath* declared = scene.findPath(o.path);
@@ -153,8 +154,10 @@ int run(const Options& o) {
     std::vector<SceneOverride> overrides = sceneOverrides;
     for (auto& l : lightPathOverrides(sceneDocument, scene, light, axes, k)) {
       for (const auto& u : sceneOverrides)
-        if (u.pointer == l.pointer || l.pointer.rfind(u.pointer + "/", 0) == 0 || u.pointer.rfind(l.pointer + "/", 0) == 0)
-          throw bad("--set scene:" + u.pointer, "the light path moves " + l.pointer + "; expected it set by one of them");
+        if (u.pointer == l.pointer || l.pointer.rfind(u.pointer + "/", 0) == 0 ||
+            u.pointer.rfind(l.pointer + "/", 0) == 0)
+          throw bad("--set scene:" + u.pointer,
+                    "the light path moves " + l.pointer + "; expected it set by one of them");
       overrides.push_back(l);
     }
     return loadScene(scenePath, overrides);
@@ -207,7 +210,8 @@ int run(const Options& o) {
     traced += t;
     // One frame at a time against the previous one: memory stays that of two frames.
     StabilityStream stream(reference, compareOptions);
-    for (const Camera& fit : fitCameras) rasterizer.recycle(stream.add(rasterizer.render(scene, method, light, nullptr, &fit)));
+    for (const Camera& fit : fitCameras)
+      rasterizer.recycle(stream.add(rasterizer.render(scene, method, light, nullptr, &fit)));
     s = stream.result();
     nlohmann::json cameras = nlohmann::json::array();
     for (const Camera& c : fitCameras)
@@ -244,34 +248,36 @@ int run(const Options& o) {
   return 0;
 }
 
-app::Registrar reg{"stability", [](CLI::App& app) {
-  auto opts = std::make_shared<Options>();
-  auto* sub = app.add_subcommand("stability",
-                                 "Temporal stability: shimmer along a fit-camera path, or error along a light path");
-  sub->add_option("SCENE", opts->scene, "Bundled scene name or path to a scene file")->required();
-  sub->add_option("--method", opts->methodFile, "Method file (JSON, see raster/METHODS.md)");
-  sub->add_option("--set", opts->sets,
-                  "key=value, repeatable: a method key (e.g. fit=cascades) or scene:/json/pointer (e.g. "
-                  "scene:/camera/width=320)")
-      ->allow_extra_args(false);  // one value per --set: SCENE may follow it
-  sub->add_option("--light", opts->light, "Light to render, compare and move (default: the scene's first)");
-  sub->add_option("--path", opts->path, "Fit camera path: dolly, orbit, or a path the scene file declares");
-  opts->framesOpt = sub->add_option("--frames", opts->frames,
-                                    "Frames on the path, 2..1024 (dolly, orbit; replaces a scene path's own count)");
-  opts->distanceOpt = sub->add_option("--distance", opts->distanceWorld,
-                                      "dolly: total travel along the view direction, world units")
-                          ->capture_default_str();
-  opts->angleOpt = sub->add_option("--angle-deg", opts->angleDeg, "orbit: total rotation about look_at, degrees")
-                       ->capture_default_str();
-  sub->add_option("--light-path", opts->lightPaths,
-                  "Moving light, repeatable: KEY=FROM:TO:FRAMES with KEY elevation_deg or azimuth_deg "
-                  "(e.g. elevation_deg=60:10:11); the camera stays fixed")
-      ->allow_extra_args(false);  // one value per --light-path: SCENE may follow it
-  sub->add_option("-o,--out", opts->outDir, "Output folder")->required();
-  app::addMaxMemoryOption(sub, &opts->maxMemoryGiB);
-  sub->add_option("--cache", opts->cacheDir, "Reference cache folder (default: $SHADOWLAB_CACHE, else .shadowlab-cache)");
-  sub->add_option("--device", opts->device, "Vulkan device name substring (default: lavapipe)");
-  return std::function<int()>([opts] { return run(*opts); });
-}};
+app::Registrar reg{
+    "stability", [](CLI::App& app) {
+      auto opts = std::make_shared<Options>();
+      auto* sub = app.add_subcommand(
+          "stability", "Temporal stability: shimmer along a fit-camera path, or error along a light path");
+      sub->add_option("SCENE", opts->scene, "Bundled scene name or path to a scene file")->required();
+      sub->add_option("--method", opts->methodFile, "Method file (JSON, see raster/METHODS.md)");
+      sub->add_option("--set", opts->sets,
+                      "key=value, repeatable: a method key (e.g. fit=cascades) or scene:/json/pointer (e.g. "
+                      "scene:/camera/width=320)")
+          ->allow_extra_args(false);  // one value per --set: SCENE may follow it
+      sub->add_option("--light", opts->light, "Light to render, compare and move (default: the scene's first)");
+      sub->add_option("--path", opts->path, "Fit camera path: dolly, orbit, or a path the scene file declares");
+      opts->framesOpt = sub->add_option(
+          "--frames", opts->frames, "Frames on the path, 2..1024 (dolly, orbit; replaces a scene path's own count)");
+      opts->distanceOpt = sub->add_option("--distance", opts->distanceWorld,
+                                          "dolly: total travel along the view direction, world units")
+                              ->capture_default_str();
+      opts->angleOpt = sub->add_option("--angle-deg", opts->angleDeg, "orbit: total rotation about look_at, degrees")
+                           ->capture_default_str();
+      sub->add_option("--light-path", opts->lightPaths,
+                      "Moving light, repeatable: KEY=FROM:TO:FRAMES with KEY elevation_deg or azimuth_deg "
+                      "(e.g. elevation_deg=60:10:11); the camera stays fixed")
+          ->allow_extra_args(false);  // one value per --light-path: SCENE may follow it
+      sub->add_option("-o,--out", opts->outDir, "Output folder")->required();
+      app::addMaxMemoryOption(sub, &opts->maxMemoryGiB);
+      sub->add_option("--cache", opts->cacheDir,
+                      "Reference cache folder (default: $SHADOWLAB_CACHE, else .shadowlab-cache)");
+      sub->add_option("--device", opts->device, "Vulkan device name substring (default: lavapipe)");
+      return std::function<int()>([opts] { return run(*opts); });
+    }};
 
 }  // namespace

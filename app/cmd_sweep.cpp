@@ -34,12 +34,12 @@ struct Options {
   std::string device;
   bool keepImages = false;
   bool noReport = false;
-  std::string shard;             // "I/N": only this shard's rows, into DIR/shards/I-of-N (no report)
-  std::string slurm;             // N (text, checked here): write DIR/sweep.sbatch (an N-task array of shards) and DIR/merge.sbatch
+  std::string shard;  // "I/N": only this shard's rows, into DIR/shards/I-of-N (no report)
+  std::string slurm;  // N (text, checked here): write DIR/sweep.sbatch (an N-task array of shards) and DIR/merge.sbatch
   std::vector<std::string> slurmOpts;  // extra #SBATCH options, whitespace-separated, repeatable
-  bool submit = false;           // with --slurm: run sbatch on both scripts
-  std::string frontierMetric;    // empty: not given (error_rate)
-  std::string frontierThreshold; // text, checked here so "abc" is a GCC-style InputError, not CLI11's
+  bool submit = false;                 // with --slurm: run sbatch on both scripts
+  std::string frontierMetric;          // empty: not given (error_rate)
+  std::string frontierThreshold;       // text, checked here so "abc" is a GCC-style InputError, not CLI11's
 };
 
 std::atomic<bool> gStop{false};
@@ -104,8 +104,9 @@ std::string runCapture(const std::string& command) {
   while (std::fgets(buf, sizeof buf, pipe)) out += buf;
   const int status = ::pclose(pipe);
   while (!out.empty() && (out.back() == '\n' || out.back() == '\r' || out.back() == ' ')) out.pop_back();
-  if (status != 0) throw InputError("--submit: error: `" + command + "` failed (status " + std::to_string(status) + ")" +
-                                    (out.empty() ? "" : ": " + out));
+  if (status != 0)
+    throw InputError("--submit: error: `" + command + "` failed (status " + std::to_string(status) + ")" +
+                     (out.empty() ? "" : ": " + out));
   return out;
 }
 
@@ -129,8 +130,9 @@ bool onPath(const std::string& name) {
 // and, with --submit, runs them. The plan was checked already, so the scripts only run valid work.
 int writeSlurmJobs(const Options& o, const SweepPlan& plan, size_t n) {
   if (o.submit && !onPath("sbatch"))
-    throw InputError("--submit: error: no Slurm installed (sbatch not found on PATH); expected a Slurm client, or "
-                     "leave out --submit and run the printed commands where Slurm is");
+    throw InputError(
+        "--submit: error: no Slurm installed (sbatch not found on PATH); expected a Slurm client, or "
+        "leave out --submit and run the printed commands where Slurm is");
   OutputFolder out(o.outDir);
   const std::string cacheDir = o.cacheDir.empty() ? defaultSweepCacheDir(o.outDir) : o.cacheDir;
   const std::string outAbs = absolutePath(o.outDir);
@@ -150,35 +152,42 @@ int writeSlurmJobs(const Options& o, const SweepPlan& plan, size_t n) {
   std::string sbatchExtra;
   for (const auto& e : extra) sbatchExtra += "#SBATCH " + e + "\n";
   const std::string cd = "cd " + shellQuote(fs::current_path().string()) + "\n";
-  std::string sweep = "#!/bin/bash\n"
-                      "# Written by `shadowlab sweep --slurm " + std::to_string(n) + "`: task I of the array runs shard I/" +
-                      std::to_string(n) + " of a " + std::to_string(plan.jobs.size()) +
-                      "-row sweep into " + outAbs + "/shards/I-of-" + std::to_string(n) + "/.\n"
-                      "# The output folder, the reference cache and the binary must be on a filesystem every node sees.\n"
-                      "#SBATCH --job-name=shadowlab-sweep\n"
-                      "#SBATCH --array=0-" + std::to_string(n - 1) + "\n"
-                      "#SBATCH --output=" + outAbs + "/shards/slurm-%A_%a.out\n" + sbatchExtra +
-                      "set -euo pipefail\n" + cd +
-                      "exec " + shellQuote(self) + " sweep" + sweepArguments(o, cacheDir) +
-                      " --shard \"$SLURM_ARRAY_TASK_ID/" + std::to_string(n) + "\"\n";
-  std::string merge = "#!/bin/bash\n"
-                      "# Written by `shadowlab sweep --slurm " + std::to_string(n) + "`: gathers the " + std::to_string(n) +
-                      " shards into results.json, results.csv and the report; submit it with\n"
-                      "# --dependency=afterok:<the array's job id>.\n"
-                      "#SBATCH --job-name=shadowlab-merge\n"
-                      "#SBATCH --output=" + outAbs + "/merge-slurm-%j.out\n" + sbatchExtra +
-                      "set -euo pipefail\n" + cd +
-                      "exec " + shellQuote(self) + " merge " + shellQuote(outAbs) + " --cache " +
-                      shellQuote(absolutePath(cacheDir)) + (o.device.empty() ? "" : " --device " + shellQuote(o.device)) +
-                      (o.noReport ? " --no-report" : "") + "\n";
+  std::string sweep =
+      "#!/bin/bash\n"
+      "# Written by `shadowlab sweep --slurm " +
+      std::to_string(n) + "`: task I of the array runs shard I/" + std::to_string(n) + " of a " +
+      std::to_string(plan.jobs.size()) + "-row sweep into " + outAbs + "/shards/I-of-" + std::to_string(n) +
+      "/.\n"
+      "# The output folder, the reference cache and the binary must be on a filesystem every node sees.\n"
+      "#SBATCH --job-name=shadowlab-sweep\n"
+      "#SBATCH --array=0-" +
+      std::to_string(n - 1) +
+      "\n"
+      "#SBATCH --output=" +
+      outAbs + "/shards/slurm-%A_%a.out\n" + sbatchExtra + "set -euo pipefail\n" + cd + "exec " + shellQuote(self) +
+      " sweep" + sweepArguments(o, cacheDir) + " --shard \"$SLURM_ARRAY_TASK_ID/" + std::to_string(n) + "\"\n";
+  std::string merge =
+      "#!/bin/bash\n"
+      "# Written by `shadowlab sweep --slurm " +
+      std::to_string(n) + "`: gathers the " + std::to_string(n) +
+      " shards into results.json, results.csv and the report; submit it with\n"
+      "# --dependency=afterok:<the array's job id>.\n"
+      "#SBATCH --job-name=shadowlab-merge\n"
+      "#SBATCH --output=" +
+      outAbs + "/merge-slurm-%j.out\n" + sbatchExtra + "set -euo pipefail\n" + cd + "exec " + shellQuote(self) +
+      " merge " + shellQuote(outAbs) + " --cache " + shellQuote(absolutePath(cacheDir)) +
+      (o.device.empty() ? "" : " --device " + shellQuote(o.device)) + (o.noReport ? " --no-report" : "") + "\n";
   makeDirs(outAbs + "/shards");  // sbatch opens the --output files there before the task starts
   const std::string sweepPath = outAbs + "/sweep.sbatch", mergePath = outAbs + "/merge.sbatch";
   writeFileAtomic(sweepPath, sweep);
   writeFileAtomic(mergePath, merge);
-  fs::permissions(sweepPath, fs::perms::owner_exec | fs::perms::group_exec | fs::perms::others_exec, fs::perm_options::add);
-  fs::permissions(mergePath, fs::perms::owner_exec | fs::perms::group_exec | fs::perms::others_exec, fs::perm_options::add);
+  fs::permissions(sweepPath, fs::perms::owner_exec | fs::perms::group_exec | fs::perms::others_exec,
+                  fs::perm_options::add);
+  fs::permissions(mergePath, fs::perms::owner_exec | fs::perms::group_exec | fs::perms::others_exec,
+                  fs::perm_options::add);
   out.keep();
-  std::printf("slurm: wrote %s (%zu tasks, %zu rows) and %s\n", sweepPath.c_str(), n, plan.jobs.size(), mergePath.c_str());
+  std::printf("slurm: wrote %s (%zu tasks, %zu rows) and %s\n", sweepPath.c_str(), n, plan.jobs.size(),
+              mergePath.c_str());
   const std::string first = "sbatch --parsable " + shellQuote(sweepPath);
   if (!o.submit) {
     std::printf("slurm: submit with:\n  jobid=$(%s)\n  sbatch --dependency=afterok:$jobid %s\n", first.c_str(),
@@ -206,8 +215,10 @@ int run(const Options& o) {
     const bool digits = o.slurm.size() <= 6 && o.slurm.find_first_not_of("0123456789") == std::string::npos;
     slurm = digits ? size_t(std::stoul(o.slurm)) : 0;
     if (slurm < 1)
-      throw InputError("--slurm " + o.slurm + ": error: got \"" + o.slurm + "\"; expected a number of shards 1..999999");
-    if (shard.active()) throw InputError("--slurm: error: given with --shard; expected one of them (the script adds --shard)");
+      throw InputError("--slurm " + o.slurm + ": error: got \"" + o.slurm +
+                       "\"; expected a number of shards 1..999999");
+    if (shard.active())
+      throw InputError("--slurm: error: given with --shard; expected one of them (the script adds --shard)");
   }
   SweepSpec spec;
   if (!o.sweepFile.empty()) loadSweepFile(o.sweepFile, spec);
@@ -287,8 +298,9 @@ int run(const Options& o) {
   for (const auto& n : summary.notes) std::fprintf(stderr, "sweep: note: %s\n", n.c_str());
   if (gStop.load()) {
     // Every row is saved; only the report may be incomplete (its chart script saw the Ctrl-C too).
-    std::fprintf(stderr, "sweep: interrupted while writing the report; every row is saved, run the same command "
-                         "again to regenerate it\n");
+    std::fprintf(stderr,
+                 "sweep: interrupted while writing the report; every row is saved, run the same command "
+                 "again to regenerate it\n");
     return 130;
   }
   std::printf("sweep: %zu rows (%zu run, %zu resumed) in %.2f s\n", summary.configurations, summary.ran,
@@ -303,39 +315,47 @@ int run(const Options& o) {
   return 0;
 }
 
-app::Registrar reg{"sweep", [](CLI::App& app) {
-  auto opts = std::make_shared<Options>();
-  auto* sub = app.add_subcommand("sweep", "Sweep scenes x a grid of method settings into a report (compare/SWEEPS.md)");
-  sub->add_option("SCENES", opts->scenes, "Bundled scene names or scene files (default: every bundled scene)");
-  sub->add_option("--grid", opts->grid,
-                  "Swept key and its values, repeatable: key=v1,v2,... (method keys, or scene:/json/pointer)")
-      ->allow_extra_args(false);
-  sub->add_option("--sweep", opts->sweepFile, "Sweep file (JSON: scenes, grid, set, ...); the command line adds to it");
-  sub->add_option("--set", opts->sets, "Method setting for every configuration key=value, repeatable")
-      ->allow_extra_args(false);
-  sub->add_option("--method", opts->methodFile, "Base method file (JSON, see raster/METHODS.md)");
-  sub->add_option("-o,--out", opts->outDir, "Output folder (running again continues an interrupted sweep)")->required();
-  sub->add_option("--light", opts->light, "Light to render and compare (default: each scene's first)");
-  sub->add_option("--spp", opts->spp, "Reference samples per pixel (default 1)");
-  sub->add_option("--cache", opts->cacheDir,
-                  "Reference cache folder (default: $SHADOWLAB_CACHE, else .shadowlab-cache beside the output folder)");
-  sub->add_option("--device", opts->device, "Vulkan device name substring (default: lavapipe)");
-  sub->add_flag("--keep-images", opts->keepImages, "Write raster.exr and errors.png per configuration under DIR/images/");
-  sub->add_option("--frontier-metric", opts->frontierMetric,
-                  "Metric walked along swept scene: parameters for failure frontiers (default error_rate)");
-  sub->add_option("--frontier-threshold", opts->frontierThreshold,
-                  "Rate above which a configuration counts as broken (default 0.01)");
-  sub->add_flag("--no-report", opts->noReport, "Write results.json/csv only: no charts, triptychs or report.html");
-  sub->add_option("--shard", opts->shard,
-                  "I/N: run only the rows whose plan index is I mod N, into DIR/shards/I-of-N (no report; "
-                  "`shadowlab merge DIR` gathers the shards)");
-  sub->add_option("--slurm", opts->slurm,
-                  "N: write DIR/sweep.sbatch (a Slurm array of N shards) and DIR/merge.sbatch, print the sbatch "
-                  "commands; runs nothing");
-  sub->add_option("--slurm-opt", opts->slurmOpts, "Extra #SBATCH options for both scripts, e.g. \"--partition=gpu --time=2:00:00\"")
-      ->allow_extra_args(false);
-  sub->add_flag("--submit", opts->submit, "With --slurm: submit both scripts with sbatch (the merge after the array)");
-  return std::function<int()>([opts] { return run(*opts); });
-}};
+app::Registrar reg{
+    "sweep", [](CLI::App& app) {
+      auto opts = std::make_shared<Options>();
+      auto* sub =
+          app.add_subcommand("sweep", "Sweep scenes x a grid of method settings into a report (compare/SWEEPS.md)");
+      sub->add_option("SCENES", opts->scenes, "Bundled scene names or scene files (default: every bundled scene)");
+      sub->add_option("--grid", opts->grid,
+                      "Swept key and its values, repeatable: key=v1,v2,... (method keys, or scene:/json/pointer)")
+          ->allow_extra_args(false);
+      sub->add_option("--sweep", opts->sweepFile,
+                      "Sweep file (JSON: scenes, grid, set, ...); the command line adds to it");
+      sub->add_option("--set", opts->sets, "Method setting for every configuration key=value, repeatable")
+          ->allow_extra_args(false);
+      sub->add_option("--method", opts->methodFile, "Base method file (JSON, see raster/METHODS.md)");
+      sub->add_option("-o,--out", opts->outDir, "Output folder (running again continues an interrupted sweep)")
+          ->required();
+      sub->add_option("--light", opts->light, "Light to render and compare (default: each scene's first)");
+      sub->add_option("--spp", opts->spp, "Reference samples per pixel (default 1)");
+      sub->add_option(
+          "--cache", opts->cacheDir,
+          "Reference cache folder (default: $SHADOWLAB_CACHE, else .shadowlab-cache beside the output folder)");
+      sub->add_option("--device", opts->device, "Vulkan device name substring (default: lavapipe)");
+      sub->add_flag("--keep-images", opts->keepImages,
+                    "Write raster.exr and errors.png per configuration under DIR/images/");
+      sub->add_option("--frontier-metric", opts->frontierMetric,
+                      "Metric walked along swept scene: parameters for failure frontiers (default error_rate)");
+      sub->add_option("--frontier-threshold", opts->frontierThreshold,
+                      "Rate above which a configuration counts as broken (default 0.01)");
+      sub->add_flag("--no-report", opts->noReport, "Write results.json/csv only: no charts, triptychs or report.html");
+      sub->add_option("--shard", opts->shard,
+                      "I/N: run only the rows whose plan index is I mod N, into DIR/shards/I-of-N (no report; "
+                      "`shadowlab merge DIR` gathers the shards)");
+      sub->add_option("--slurm", opts->slurm,
+                      "N: write DIR/sweep.sbatch (a Slurm array of N shards) and DIR/merge.sbatch, print the sbatch "
+                      "commands; runs nothing");
+      sub->add_option("--slurm-opt", opts->slurmOpts,
+                      "Extra #SBATCH options for both scripts, e.g. \"--partition=gpu --time=2:00:00\"")
+          ->allow_extra_args(false);
+      sub->add_flag("--submit", opts->submit,
+                    "With --slurm: submit both scripts with sbatch (the merge after the array)");
+      return std::function<int()>([opts] { return run(*opts); });
+    }};
 
 }  // namespace

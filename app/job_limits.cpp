@@ -94,9 +94,9 @@ void addMaxMemoryOption(CLI::App* sub, double* maxMemoryGiB) {
 void checkMemory(const std::string& command, const MemoryEstimate& estimate, double maxMemoryGiB) {
   const double physical = physicalMemoryBytes();
   const double limit = maxMemoryGiB > 0 ? maxMemoryGiB * kGiB : 0.8 * physical;
-  const std::string limitText = maxMemoryGiB > 0 ? gib(limit) + " (--max-memory)"
-                                                 : gib(limit) + " (80% of this machine's " + gib(physical) +
-                                                       "; --max-memory sets another)";
+  const std::string limitText =
+      maxMemoryGiB > 0 ? gib(limit) + " (--max-memory)"
+                       : gib(limit) + " (80% of this machine's " + gib(physical) + "; --max-memory sets another)";
   if (limit > 0 && estimate.bytes > limit)
     throw InputError("shadowlab " + command + ": error: this job needs about " + gib(estimate.bytes) + " (" +
                      estimate.breakdown + "); expected at most " + limitText +

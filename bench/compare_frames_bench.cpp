@@ -32,8 +32,8 @@ Pair makeFrames(int width, int height, float texelPx) {
   }
   p.raster.meta["light"] = "sun";
   for (const char* c : {"P.x", "P.y", "P.z", "N.x", "N.y", "N.z", "light.sun.occluder_dist"}) p.reference.add(c, 0.0f);
-  for (const char* c : {"receiver_depth", "map_depth", "occluder_id", "occluder_prim", "in_map", "m", "bias_depth",
-                        "bias_world"})
+  for (const char* c :
+       {"receiver_depth", "map_depth", "occluder_id", "occluder_prim", "in_map", "m", "bias_depth", "bias_world"})
     p.raster.add(std::string("light.sun.") + c, 0.0f);
   const float cx = width * 0.5f, cy = height * 0.55f, radius = height * 0.3f;
   for (int y = 0; y < height; ++y) {
@@ -82,8 +82,8 @@ void BM_CompareFrames(benchmark::State& state) {
   state.counters["error_rate"] = m.errorRate;
   state.counters["aliasing"] = double(m.count(shadowlab::PixelClass::Aliasing));
   state.counters["acne"] = double(m.count(shadowlab::PixelClass::Acne));
-  state.counters["Mpix/s"] = benchmark::Counter(double(width) * height * state.iterations() * 1e-6,
-                                                benchmark::Counter::kIsRate);
+  state.counters["Mpix/s"] =
+      benchmark::Counter(double(width) * height * state.iterations() * 1e-6, benchmark::Counter::kIsRate);
 }
 // 1080p with a fine map (2 px per texel) and a very coarse one (32 px per texel, like a 32^2 map).
 BENCHMARK(BM_CompareFrames)

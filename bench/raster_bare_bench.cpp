@@ -97,9 +97,10 @@ class BareProgram {
       return vk::createGraphicsPipeline(c, p);
     };
     shadowPipe_ = pipeline(shadowVert_.get(), shadowFrag_.get(), {}, VK_FORMAT_X8_D24_UNORM_PACK32, true);
-    shadowIdsPipe_ = pipeline(shadowVert_.get(), shadowIdsFrag_.get(), {VK_FORMAT_R32_UINT},
-                              VK_FORMAT_X8_D24_UNORM_PACK32, true);
-    cameraPipe_ = pipeline(cameraVert_.get(), cameraFrag_.get(), {VK_FORMAT_R8G8B8A8_UNORM}, VK_FORMAT_D32_SFLOAT, false);
+    shadowIdsPipe_ =
+        pipeline(shadowVert_.get(), shadowIdsFrag_.get(), {VK_FORMAT_R32_UINT}, VK_FORMAT_X8_D24_UNORM_PACK32, true);
+    cameraPipe_ =
+        pipeline(cameraVert_.get(), cameraFrag_.get(), {VK_FORMAT_R8G8B8A8_UNORM}, VK_FORMAT_D32_SFLOAT, false);
     for (int linear = 0; linear < 2; ++linear) {
       VkSamplerCreateInfo s{VK_STRUCTURE_TYPE_SAMPLER_CREATE_INFO};
       s.magFilter = s.minFilter = linear ? VK_FILTER_LINEAR : VK_FILTER_NEAREST;
@@ -149,8 +150,9 @@ class BareProgram {
     cameraClip_ = s.camera.clipFromView() * s.camera.viewFromWorld();
     width_ = s.camera.width;
     height_ = s.camera.height;
-    map_ = vk::Image(c_, kMapSize, kMapSize, 1, VK_FORMAT_X8_D24_UNORM_PACK32,
-                     VK_IMAGE_USAGE_DEPTH_STENCIL_ATTACHMENT_BIT | VK_IMAGE_USAGE_SAMPLED_BIT, VK_IMAGE_ASPECT_DEPTH_BIT);
+    map_ =
+        vk::Image(c_, kMapSize, kMapSize, 1, VK_FORMAT_X8_D24_UNORM_PACK32,
+                  VK_IMAGE_USAGE_DEPTH_STENCIL_ATTACHMENT_BIT | VK_IMAGE_USAGE_SAMPLED_BIT, VK_IMAGE_ASPECT_DEPTH_BIT);
     mapIds_ = vk::Image(c_, kMapSize, kMapSize, 1, VK_FORMAT_R32_UINT, VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT,
                         VK_IMAGE_ASPECT_COLOR_BIT);
     color_ = vk::Image(c_, width_, height_, 1, VK_FORMAT_R8G8B8A8_UNORM, VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT,

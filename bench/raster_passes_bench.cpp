@@ -35,7 +35,8 @@ void passes(benchmark::State& state, Filter filter, int copies) {
   for (auto _ : state) {
     rasterizer().render(s, m, "", &t);
     state.SetIterationTime((t.shadowGpuMs + t.cameraGpuMs) * 1e-3);
-    shadow += t.shadowGpuMs, camera += t.cameraGpuMs, visibility += t.visibilityGpuMs, readback += t.readbackMs, total += t.renderWallMs;
+    shadow += t.shadowGpuMs, camera += t.cameraGpuMs, visibility += t.visibilityGpuMs, readback += t.readbackMs,
+        total += t.renderWallMs;
   }
   double n = double(state.iterations());
   state.counters["shadow_gpu_ms"] = shadow / n;
@@ -49,7 +50,7 @@ void passes(benchmark::State& state, Filter filter, int copies) {
 
 }  // namespace
 
-#define SHADOWLAB_PASSES(filter, name)                                                              \
+#define SHADOWLAB_PASSES(filter, name)                                                                \
   BENCHMARK_CAPTURE(passes, name##_bunny, filter, 1)->UseManualTime()->Unit(benchmark::kMillisecond); \
   BENCHMARK_CAPTURE(passes, name##_bunny_x4, filter, 4)->UseManualTime()->Unit(benchmark::kMillisecond);
 

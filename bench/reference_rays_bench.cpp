@@ -40,7 +40,8 @@ const Scene& scene1080(const std::string& name) {
   static std::map<std::string, std::unique_ptr<Scene>> cache;
   auto& slot = cache[name];
   if (!slot) {
-    slot = std::make_unique<Scene>(loadScene(resolveScenePath(name), {{"/camera/width", kWidth}, {"/camera/height", kHeight}}));
+    slot = std::make_unique<Scene>(
+        loadScene(resolveScenePath(name), {{"/camera/width", kWidth}, {"/camera/height", kHeight}}));
   }
   return *slot;
 }
@@ -130,10 +131,10 @@ struct BareScene {
     rtcSetSceneBuildQuality(scene, RTC_BUILD_QUALITY_HIGH);
     for (const Object& object : s.objects) {
       RTCGeometry g = rtcNewGeometry(device, RTC_GEOMETRY_TYPE_TRIANGLE);
-      auto* v = static_cast<float*>(rtcSetNewGeometryBuffer(g, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3,
-                                                            12, object.positions.size()));
-      auto* i = static_cast<unsigned*>(rtcSetNewGeometryBuffer(g, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3,
-                                                               12, object.triangles.size()));
+      auto* v = static_cast<float*>(
+          rtcSetNewGeometryBuffer(g, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3, 12, object.positions.size()));
+      auto* i = static_cast<unsigned*>(
+          rtcSetNewGeometryBuffer(g, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3, 12, object.triangles.size()));
       std::memcpy(v, object.positions.data(), object.positions.size() * 12);
       std::memcpy(i, object.triangles.data(), object.triangles.size() * 12);
       rtcCommitGeometry(g);
@@ -195,7 +196,8 @@ void BM_BareOccluded8(benchmark::State& state, const std::string& name) {
   BareScene bare(scene1080(name));
   const size_t count = bare.ox.size();
   const size_t packets = (count + 7) / 8;
-  const unsigned threads = state.range(0) > 0 ? unsigned(state.range(0)) : std::max(1u, std::thread::hardware_concurrency());
+  const unsigned threads =
+      state.range(0) > 0 ? unsigned(state.range(0)) : std::max(1u, std::thread::hardware_concurrency());
   double total = 0, cpuTotal = 0;
   for (auto _ : state) {
     const double cpu0 = processCpuSeconds();
@@ -246,7 +248,8 @@ void BM_BareOccluded8(benchmark::State& state, const std::string& name) {
 void BM_BareIntersect8(benchmark::State& state, const std::string& name) {
   BareScene bare(scene1080(name));
   const Camera& camera = scene1080(name).camera;
-  const unsigned threads = state.range(0) > 0 ? unsigned(state.range(0)) : std::max(1u, std::thread::hardware_concurrency());
+  const unsigned threads =
+      state.range(0) > 0 ? unsigned(state.range(0)) : std::max(1u, std::thread::hardware_concurrency());
   const int blockRows = kHeight / 2;
   double total = 0, cpuTotal = 0;
   for (auto _ : state) {

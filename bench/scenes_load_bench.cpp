@@ -15,7 +15,8 @@ void BM_LoadScene(benchmark::State& state, const char* name) {
     benchmark::DoNotOptimize(s.hash);
   }
   state.counters["triangles"] = double(triangles);
-  state.counters["Mtris/s"] = benchmark::Counter(double(triangles) * state.iterations() / 1e6, benchmark::Counter::kIsRate);
+  state.counters["Mtris/s"] =
+      benchmark::Counter(double(triangles) * state.iterations() / 1e6, benchmark::Counter::kIsRate);
 }
 BENCHMARK_CAPTURE(BM_LoadScene, sphere_on_plane, "sphere_on_plane")->Unit(benchmark::kMillisecond);
 BENCHMARK_CAPTURE(BM_LoadScene, bunny, "bunny")->Unit(benchmark::kMillisecond);

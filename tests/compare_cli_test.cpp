@@ -83,7 +83,8 @@ TEST_F(CompareCli, ComparesSyntheticFramesAndWritesAllOutputs) {
   fs::create_directories(path("ras"));
   writeFrameExr(syntheticFrame(96, 64, false, 0), path("ref/reference.exr"));
   writeFrameExr(syntheticFrame(96, 64, true, 37), path("ras/raster.exr"));
-  writeFileAtomic(path("ras/raster.json"), R"({"shadow_gpu_ms": 1.5, "camera_gpu_ms": 2.5, "readback_ms": 0.5, "device": "x"})");
+  writeFileAtomic(path("ras/raster.json"),
+                  R"({"shadow_gpu_ms": 1.5, "camera_gpu_ms": 2.5, "readback_ms": 0.5, "device": "x"})");
   const Result r = shadowlab("compare ref ras -o out");
   ASSERT_EQ(r.code, 0) << r.err;
   const nlohmann::json j = nlohmann::json::parse(slurp(path("out/metrics.json")));

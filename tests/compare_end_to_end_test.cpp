@@ -36,12 +36,12 @@ Rasterizer* rasterizer(std::string* why) {
   return instance.get();
 }
 
-#define REQUIRE_RASTERIZER(r)                                                                   \
-  std::string why;                                                                              \
-  Rasterizer* r = rasterizer(&why);                                                             \
-  if (!r) {                                                                                     \
+#define REQUIRE_RASTERIZER(r)                                                                             \
+  std::string why;                                                                                        \
+  Rasterizer* r = rasterizer(&why);                                                                       \
+  if (!r) {                                                                                               \
     std::fprintf(stderr, "\n*** SKIPPING: no Vulkan device for the rasterizer: %s ***\n\n", why.c_str()); \
-    GTEST_SKIP() << "no Vulkan device for the rasterizer: " << why;                             \
+    GTEST_SKIP() << "no Vulkan device for the rasterizer: " << why;                                       \
   }
 
 Scene smallScene(const std::string& name) {
@@ -57,7 +57,8 @@ Method method(const std::map<std::string, std::string>& settings) {
 
 // A private cache folder for this executable, removed at exit.
 struct TempCache {
-  std::string dir = (std::filesystem::temp_directory_path() / ("shadowlab-e2e-cache-" + std::to_string(::getpid()))).string();
+  std::string dir =
+      (std::filesystem::temp_directory_path() / ("shadowlab-e2e-cache-" + std::to_string(::getpid()))).string();
   ReferenceCache cache{dir};
   ~TempCache() {
     std::error_code ec;
@@ -104,7 +105,8 @@ TEST(CompareEndToEnd, HugeBiasOnContactAndThinWallIsLeak) {
   for (const char* scene : {"contact", "thin_wall"}) {
     const Shares s = run(*r, scene, {{"bias.compare", "0.1"}});
     expectDominated(s, s.m.count(PixelClass::Leak), "leak", 0.005);
-    EXPECT_LT(100 * s.m.count(PixelClass::Acne), s.m.count(PixelClass::Leak)) << "a huge bias leaves (almost) no acne: " << s.text;
+    EXPECT_LT(100 * s.m.count(PixelClass::Acne), s.m.count(PixelClass::Leak))
+        << "a huge bias leaves (almost) no acne: " << s.text;
   }
 }
 
@@ -147,8 +149,8 @@ TEST(CompareEndToEnd, FramesComparedWithThemselvesHaveZeroError) {
 
 TEST(CompareEndToEnd, ReferenceCacheTracesOnce) {
   REQUIRE_RASTERIZER(r);
-  const std::string dir = (std::filesystem::temp_directory_path() /
-                           ("shadowlab-e2e-cache-once-" + std::to_string(::getpid()))).string();
+  const std::string dir =
+      (std::filesystem::temp_directory_path() / ("shadowlab-e2e-cache-once-" + std::to_string(::getpid()))).string();
   std::filesystem::remove_all(dir);
   ReferenceCache c(dir);
   const Scene s = smallScene("sphere_on_plane");

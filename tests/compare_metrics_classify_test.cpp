@@ -61,10 +61,14 @@ TEST(CompareClassTable, CodesKeysAndMetricNamesAreTheStableOnes) {
     PixelClass cls;
     int code;
     const char* key;
-  } expected[] = {{PixelClass::NotCompared, 0, "not_compared"}, {PixelClass::GeometryMismatch, 1, "geometry_mismatch"},
-                  {PixelClass::Correct, 2, "correct"},          {PixelClass::Acne, 3, "acne"},
-                  {PixelClass::Leak, 4, "leak"},                {PixelClass::Aliasing, 5, "aliasing"},
-                  {PixelClass::Coverage, 6, "coverage"},        {PixelClass::Other, 7, "other"}};
+  } expected[] = {{PixelClass::NotCompared, 0, "not_compared"},
+                  {PixelClass::GeometryMismatch, 1, "geometry_mismatch"},
+                  {PixelClass::Correct, 2, "correct"},
+                  {PixelClass::Acne, 3, "acne"},
+                  {PixelClass::Leak, 4, "leak"},
+                  {PixelClass::Aliasing, 5, "aliasing"},
+                  {PixelClass::Coverage, 6, "coverage"},
+                  {PixelClass::Other, 7, "other"}};
   for (const auto& x : expected) {
     EXPECT_EQ(int(x.cls), x.code) << x.key;
     EXPECT_STREQ(toString(x.cls), x.key);
@@ -82,10 +86,26 @@ TEST(CompareClassTable, CodesKeysAndMetricNamesAreTheStableOnes) {
   const nlohmann::json j = Metrics{}.toJson();
   std::set<std::string> keys;
   for (auto it = j.begin(); it != j.end(); ++it) keys.insert(it.key());
-  EXPECT_EQ(keys, (std::set<std::string>{"pixels_compared", "geometry_mismatch", "errors", "acne", "leak", "aliasing",
-                                         "coverage", "other", "error_rate", "acne_rate", "leak_rate", "aliasing_rate",
-                                         "coverage_rate", "other_rate", "shadow_iou", "mae", "rmse", "m_median",
-                                         "m_p95", "m_max"}));
+  EXPECT_EQ(keys, (std::set<std::string>{"pixels_compared",
+                                         "geometry_mismatch",
+                                         "errors",
+                                         "acne",
+                                         "leak",
+                                         "aliasing",
+                                         "coverage",
+                                         "other",
+                                         "error_rate",
+                                         "acne_rate",
+                                         "leak_rate",
+                                         "aliasing_rate",
+                                         "coverage_rate",
+                                         "other_rate",
+                                         "shadow_iou",
+                                         "mae",
+                                         "rmse",
+                                         "m_median",
+                                         "m_p95",
+                                         "m_max"}));
 }
 
 TEST(CompareClassTable, ColoursAreTheOnesErrorsPngHasAlwaysUsed) {

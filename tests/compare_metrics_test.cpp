@@ -15,7 +15,7 @@ namespace shadowlab {
 namespace {
 
 constexpr int kW = 64, kH = 48;
-constexpr int kBoundaryX = 32;  // reference: columns < 32 lit, >= 32 shadowed
+constexpr int kBoundaryX = 32;      // reference: columns < 32 lit, >= 32 shadowed
 constexpr int kBackgroundRows = 4;  // the bottom rows: no hit in either frame
 constexpr float kPlane = 1, kCaster = 2;
 
@@ -541,7 +541,9 @@ TEST(CompareMetrics, ErrorsPictureHasLegendAndClassColors) {
   EXPECT_EQ(w, kW);
   EXPECT_GT(h, kH);  // the legend is drawn below the classes
   ASSERT_EQ(rgb.size(), size_t(w) * h * 3);
-  auto pixel = [&](int x, int y) { return std::vector<uint8_t>(&rgb[(size_t(y) * w + x) * 3], &rgb[(size_t(y) * w + x) * 3] + 3); };
+  auto pixel = [&](int x, int y) {
+    return std::vector<uint8_t>(&rgb[(size_t(y) * w + x) * 3], &rgb[(size_t(y) * w + x) * 3] + 3);
+  };
   uint8_t expect[3];
   classColor(PixelClass::Acne, false, expect);
   EXPECT_EQ(pixel(2, 2), std::vector<uint8_t>(expect, expect + 3));

@@ -50,9 +50,8 @@ nlohmann::json baselineDoc() {
 class GateCli : public ::testing::Test {
  protected:
   void SetUp() override {
-    dir_ = fs::temp_directory_path() /
-           ("shadowlab_gate_cli_" + std::to_string(::getpid()) + "_" +
-            ::testing::UnitTest::GetInstance()->current_test_info()->name());
+    dir_ = fs::temp_directory_path() / ("shadowlab_gate_cli_" + std::to_string(::getpid()) + "_" +
+                                        ::testing::UnitTest::GetInstance()->current_test_info()->name());
     fs::remove_all(dir_);
     fs::create_directories(dir_);
     spit(dir_ / "base.json", baselineDoc().dump(2));
@@ -82,8 +81,8 @@ class GateCli : public ::testing::Test {
 
   CliRun gate(const std::string& args) {
     CliRun r;
-    std::string cmd = std::string(SHADOWLAB_BINARY) + " gate " + args + " >" + path("stdout.txt") + " 2>" +
-                      path("stderr.txt");
+    std::string cmd =
+        std::string(SHADOWLAB_BINARY) + " gate " + args + " >" + path("stdout.txt") + " 2>" + path("stderr.txt");
     int status = std::system(cmd.c_str());
     r.code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
     r.out = slurp(dir_ / "stdout.txt");
@@ -97,7 +96,7 @@ class GateCli : public ::testing::Test {
 TEST_F(GateCli, DoctoredAcneRateFailsAndNamesTheMetric) {
   std::string cur = current("cur.json", [](nlohmann::json& d) { d["rows"][0]["metrics"]["acne_rate"] = 0.031; });
   CliRun r = gate(cur + " --baseline " + path("base.json") + " --tolerances " + path("tol.json") + " --junit " +
-               path("gate.xml") + " --json " + path("gate.json"));
+                  path("gate.xml") + " --json " + path("gate.json"));
   EXPECT_EQ(r.code, 1) << r.out << r.err;
   EXPECT_EQ(r.err,
             "shadowlab gate: error: grazing | bias.slope=0 | sun: metric \"acne_rate\" is 0.031, above the baseline "
@@ -186,9 +185,10 @@ TEST_F(GateCli, SlowerTimingsAreReportedNotFailedByDefault) {
   spit(dir_ / "strict.json", R"({"timing": {"mode": "fail", "max_ratio": 2}})");
   CliRun s = gate(cur + " --baseline " + path("base.json") + " --tolerances " + path("strict.json"));
   EXPECT_EQ(s.code, 1) << s.out << s.err;
-  EXPECT_EQ(s.err,
-            "shadowlab gate: error: grazing | default | sun: timing \"config_wall_ms\" is 80 ms, 4.00x the baseline 20 ms, "
-            "above the limit 2.00x\n");
+  EXPECT_EQ(
+      s.err,
+      "shadowlab gate: error: grazing | default | sun: timing \"config_wall_ms\" is 80 ms, 4.00x the baseline 20 ms, "
+      "above the limit 2.00x\n");
 }
 
 TEST_F(GateCli, MetricsJsonAgainstResultsJson) {
@@ -207,12 +207,14 @@ TEST_F(GateCli, MetricsJsonAgainstResultsJson) {
 }
 
 TEST_F(GateCli, MissingBaselineExits2AndWritesNothing) {
-  CliRun r = gate(path("base.json") + " --baseline " + path("nope.json") + " --json " + path("gate.json") + " --junit " +
-               path("gate.xml"));
+  CliRun r = gate(path("base.json") + " --baseline " + path("nope.json") + " --json " + path("gate.json") +
+                  " --junit " + path("gate.xml"));
   EXPECT_EQ(r.code, 2) << r.out << r.err;
-  EXPECT_EQ(r.err, path("nope.json") +
-                       ": error: baseline file not found; expected a metrics.json, results.json or stability.json (create it on "
-                       "purpose with --update-baseline)\n");
+  EXPECT_EQ(
+      r.err,
+      path("nope.json") +
+          ": error: baseline file not found; expected a metrics.json, results.json or stability.json (create it on "
+          "purpose with --update-baseline)\n");
   EXPECT_FALSE(fs::exists(dir_ / "gate.json"));
   EXPECT_FALSE(fs::exists(dir_ / "gate.xml"));
 }
@@ -221,8 +223,9 @@ TEST_F(GateCli, MissingRowExits2) {
   std::string cur = current("cur.json", [](nlohmann::json& d) { d["rows"].erase(1); });
   CliRun r = gate(cur + " --baseline " + path("base.json") + " --json " + path("gate.json"));
   EXPECT_EQ(r.code, 2) << r.out << r.err;
-  EXPECT_EQ(r.err, path("base.json") + ": /rows/1: error: row \"grazing | default | sun\" is in the baseline but "
-                                       "missing from " +
+  EXPECT_EQ(r.err, path("base.json") +
+                       ": /rows/1: error: row \"grazing | default | sun\" is in the baseline but "
+                       "missing from " +
                        cur + "; expected every baseline row in the current results\n");
   EXPECT_FALSE(fs::exists(dir_ / "gate.json"));
 }
@@ -244,8 +247,9 @@ TEST_F(GateCli, MalformedToleranceFilesExit2) {
   spit(dir_ / "syntax.json", "{\n  \"metrics\": {\n    \"acne_rate\": { \"abs\": 0.005, }\n  }\n}\n");
   CliRun s = gate(cur + " --baseline " + cur + " --tolerances " + path("syntax.json"));
   EXPECT_EQ(s.code, 2) << s.out << s.err;
-  EXPECT_EQ(s.err, path("syntax.json") +
-                       ":3:34: error: syntax error while parsing object key; unexpected '}'; expected string literal\n");
+  EXPECT_EQ(s.err,
+            path("syntax.json") +
+                ":3:34: error: syntax error while parsing object key; unexpected '}'; expected string literal\n");
   EXPECT_EQ(s.out, "");  // no table: the gate did not run
 
   spit(dir_ / "negative.json", R"({"metrics": {"acne_rate": {"abs": -0.005}}})");
@@ -270,8 +274,9 @@ TEST_F(GateCli, RenamedTimingNamesExit2NamingTheNewName) {
   const std::string bad = std::string(SHADOWLAB_SOURCE_DIR) + "/tests/bad_input/";
   CliRun baseline = gate(path("base.json") + " --baseline " + bad + "timing_renamed_results.json");
   EXPECT_EQ(baseline.code, 2) << baseline.out << baseline.err;
-  EXPECT_EQ(baseline.err, bad + "timing_renamed_results.json: /rows/1/timings/camera_ms: error: \"camera_ms\" was "
-                                "renamed; use \"camera_gpu_ms\" (timing names: compare/TIMINGS.md)\n");
+  EXPECT_EQ(baseline.err, bad +
+                              "timing_renamed_results.json: /rows/1/timings/camera_ms: error: \"camera_ms\" was "
+                              "renamed; use \"camera_gpu_ms\" (timing names: compare/TIMINGS.md)\n");
   EXPECT_EQ(baseline.out, "");
 
   CliRun current = gate(bad + "timing_renamed_results.json --baseline " + path("base.json"));
@@ -281,20 +286,23 @@ TEST_F(GateCli, RenamedTimingNamesExit2NamingTheNewName) {
   // In a stability.json, total_ms was the whole command.
   CliRun stability = gate(bad + "timing_renamed_stability.json --baseline " + bad + "timing_renamed_stability.json");
   EXPECT_EQ(stability.code, 2) << stability.out << stability.err;
-  EXPECT_EQ(stability.err, bad + "timing_renamed_stability.json: /timings/total_ms: error: \"total_ms\" was renamed; "
-                                 "use \"command_wall_ms\" (timing names: compare/TIMINGS.md)\n");
+  EXPECT_EQ(stability.err, bad +
+                               "timing_renamed_stability.json: /timings/total_ms: error: \"total_ms\" was renamed; "
+                               "use \"command_wall_ms\" (timing names: compare/TIMINGS.md)\n");
 
   CliRun tolerances = gate(path("base.json") + " --baseline " + path("base.json") + " --tolerances " + bad +
                            "timing_renamed_tolerances.json");
   EXPECT_EQ(tolerances.code, 2) << tolerances.out << tolerances.err;
-  EXPECT_EQ(tolerances.err, bad + "timing_renamed_tolerances.json: /metrics/total_ms: error: \"total_ms\" was "
-                                  "renamed; use \"config_wall_ms\" (timing names: compare/TIMINGS.md)\n");
+  EXPECT_EQ(tolerances.err, bad +
+                                "timing_renamed_tolerances.json: /metrics/total_ms: error: \"total_ms\" was "
+                                "renamed; use \"config_wall_ms\" (timing names: compare/TIMINGS.md)\n");
 
   CliRun asMetric = gate(path("base.json") + " --baseline " + path("base.json") + " --tolerances " + bad +
                          "timing_as_metric_tolerances.json");
   EXPECT_EQ(asMetric.code, 2) << asMetric.out << asMetric.err;
-  EXPECT_EQ(asMetric.err, bad + "timing_as_metric_tolerances.json: /metrics/config_wall_ms: error: \"config_wall_ms\" "
-                                "is a timing, not a metric; expected timings under \"timing\" (compare/GATE.md)\n");
+  EXPECT_EQ(asMetric.err, bad +
+                              "timing_as_metric_tolerances.json: /metrics/config_wall_ms: error: \"config_wall_ms\" "
+                              "is a timing, not a metric; expected timings under \"timing\" (compare/GATE.md)\n");
 }
 
 TEST_F(GateCli, NanExits2) {
@@ -321,7 +329,8 @@ TEST_F(GateCli, RepeatedRunsAreGatedByTheirMedianTiming) {
   };
   std::string runs = runWith("r1.json", 20.0) + " " + runWith("r2.json", 80.0) + " " + runWith("r3.json", 22.0);
   spit(dir_ / "strict.json", R"({"timing": {"mode": "fail", "max_ratio": 1.5}})");
-  CliRun slowAlone = gate(path("r2.json") + " --baseline " + path("base.json") + " --tolerances " + path("strict.json"));
+  CliRun slowAlone =
+      gate(path("r2.json") + " --baseline " + path("base.json") + " --tolerances " + path("strict.json"));
   EXPECT_EQ(slowAlone.code, 1) << slowAlone.out << slowAlone.err;
   CliRun median = gate(runs + " --baseline " + path("base.json") + " --tolerances " + path("strict.json"));
   EXPECT_EQ(median.code, 0) << median.out << median.err;
@@ -345,8 +354,7 @@ TEST_F(GateCli, UpdateBaselineCreatesThenRewritesOnPurpose) {
   EXPECT_EQ(gate(cur + " --baseline " + path("golden.json")).code, 1);
   CliRun update = gate(cur + " --baseline " + path("golden.json") + " --update-baseline");
   EXPECT_EQ(update.code, 0) << update.out << update.err;
-  EXPECT_NE(update.out.find("~ grazing | bias.slope=0 | sun: metric \"acne_rate\" 0.012 -> 0.031"),
-            std::string::npos)
+  EXPECT_NE(update.out.find("~ grazing | bias.slope=0 | sun: metric \"acne_rate\" 0.012 -> 0.031"), std::string::npos)
       << update.out;
   EXPECT_EQ(gate(cur + " --baseline " + path("golden.json")).code, 0);
 

@@ -51,10 +51,10 @@ class Golden : public ::testing::Test {
                                         ::testing::UnitTest::GetInstance()->current_test_info()->name());
     fs::remove_all(dir_);
     fs::create_directories(dir_);
-    for (const char* name : {"baseline.json", "tolerances.json", "default.sweep.json", "zero_bias.sweep.json",
-                             "pcf5.sweep.json"})
-      ASSERT_TRUE(fs::exists(kGolden / name)) << "golden file missing: " << (kGolden / name)
-                                              << " (regenerate with tests/golden/update.sh)";
+    for (const char* name :
+         {"baseline.json", "tolerances.json", "default.sweep.json", "zero_bias.sweep.json", "pcf5.sweep.json"})
+      ASSERT_TRUE(fs::exists(kGolden / name))
+          << "golden file missing: " << (kGolden / name) << " (regenerate with tests/golden/update.sh)";
   }
   void TearDown() override {
     if (!HasFailure()) fs::remove_all(dir_);
@@ -62,8 +62,8 @@ class Golden : public ::testing::Test {
 
   Cmd shadowlab(const std::string& args, const std::string& prefix = "") {
     Cmd r;
-    std::string cmd = prefix + std::string(SHADOWLAB_BINARY) + " " + args + " >" + (dir_ / "stdout.txt").string() + " 2>" +
-                      (dir_ / "stderr.txt").string();
+    std::string cmd = prefix + std::string(SHADOWLAB_BINARY) + " " + args + " >" + (dir_ / "stdout.txt").string() +
+                      " 2>" + (dir_ / "stderr.txt").string();
     int status = std::system(cmd.c_str());
     r.code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
     r.out = slurp(dir_ / "stdout.txt");
@@ -141,8 +141,8 @@ TEST_F(Golden, GoldenConfigurationsPassTheGateAndAMovedMetricFails) {
     }
   }
   std::ofstream(dir_ / "doctored.json") << golden.dump(2);
-  Cmd caught = shadowlab("gate " + currents + "--baseline " + (dir_ / "doctored.json").string() + " --tolerances " +
-                         tolerances);
+  Cmd caught =
+      shadowlab("gate " + currents + "--baseline " + (dir_ / "doctored.json").string() + " --tolerances " + tolerances);
   EXPECT_EQ(caught.code, 1) << caught.out << caught.err;
   EXPECT_NE(caught.err.find("shadowlab gate: error: grazing | bias.compare=0,bias.slope=0 | sun: metric \"acne_rate\" "
                             "is "),

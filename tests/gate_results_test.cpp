@@ -79,19 +79,22 @@ TEST_F(Results, ResultsJsonRowsKeepOrderAndPointers) {
 
 TEST_F(Results, MalformedFilesNameFileAndPlace) {
   std::string noSchema = write("a.json", R"({"scene": "a", "config": "default", "light": "sun", "metrics": {}})");
-  EXPECT_EQ(errorOf(noSchema), noSchema + ": error: missing \"schema\"; expected \"shadowlab.metrics/1\" "
-                                          "(metrics.json), \"shadowlab.results/1\" (results.json) or "
-                                          "\"shadowlab.stability/1\" (stability.json)");
+  EXPECT_EQ(errorOf(noSchema), noSchema +
+                                   ": error: missing \"schema\"; expected \"shadowlab.metrics/1\" "
+                                   "(metrics.json), \"shadowlab.results/1\" (results.json) or "
+                                   "\"shadowlab.stability/1\" (stability.json)");
   std::string badSchema = write("b.json", R"({"schema": "shadowlab.results/2", "rows": []})");
-  EXPECT_EQ(errorOf(badSchema), badSchema + ": /schema: error: got \"shadowlab.results/2\"; expected "
-                                            "\"shadowlab.metrics/1\", \"shadowlab.results/1\" or "
-                                            "\"shadowlab.stability/1\"");
+  EXPECT_EQ(errorOf(badSchema), badSchema +
+                                    ": /schema: error: got \"shadowlab.results/2\"; expected "
+                                    "\"shadowlab.metrics/1\", \"shadowlab.results/1\" or "
+                                    "\"shadowlab.stability/1\"");
   std::string noMetrics = write("c.json", R"({"schema": "shadowlab.results/1", "rows": [
       {"scene": "a", "config": "default", "light": "sun"}]})");
   EXPECT_EQ(errorOf(noMetrics), noMetrics + ": /rows/0: error: missing \"metrics\"; expected an object");
   std::string badTiming = write("d.json", R"({"schema": "shadowlab.metrics/1", "scene": "a", "config": "default",
       "light": "sun", "metrics": {}, "timings": {"config_wall_ms": "fast"}})");
-  EXPECT_EQ(errorOf(badTiming), badTiming + ": /timings/config_wall_ms: error: got a string; expected a number (milliseconds)");
+  EXPECT_EQ(errorOf(badTiming),
+            badTiming + ": /timings/config_wall_ms: error: got a string; expected a number (milliseconds)");
   std::string syntax = write("e.json", "{\"schema\": \"shadowlab.results/1\",\n \"rows\": [ 1 2 ]}");
   EXPECT_EQ(errorOf(syntax).rfind(syntax + ":2:14: error: syntax error while parsing array", 0), 0u) << errorOf(syntax);
   std::string missing = (dir_ / "absent.json").string();
@@ -117,17 +120,22 @@ TEST_F(Results, RenamedTimingNamesAreRefusedWithTheNewName) {
                                  "\" (timing names: compare/TIMINGS.md)");
   }
   std::string stability = metricsWith("stability.json", "total_ms", "shadowlab.stability/1");
-  EXPECT_EQ(errorOf(stability), stability + ": /timings/total_ms: error: \"total_ms\" was renamed; use "
-                                            "\"command_wall_ms\" (timing names: compare/TIMINGS.md)");
+  EXPECT_EQ(errorOf(stability), stability +
+                                    ": /timings/total_ms: error: \"total_ms\" was renamed; use "
+                                    "\"command_wall_ms\" (timing names: compare/TIMINGS.md)");
   // A sweep journal line goes through ResultRow::fromJson: an old journal is refused the same way.
-  nlohmann::json old = {{"scene", "a"}, {"config", "default"}, {"light", "sun"}, {"metrics", nlohmann::json::object()},
+  nlohmann::json old = {{"scene", "a"},
+                        {"config", "default"},
+                        {"light", "sun"},
+                        {"metrics", nlohmann::json::object()},
                         {"timings", {{"total_ms", 3.0}}}};
   try {
     ResultRow::fromJson(old, "rows.jsonl:4");
     ADD_FAILURE() << "no InputError";
   } catch (const InputError& e) {
-    EXPECT_STREQ(e.what(), "rows.jsonl:4: /timings/total_ms: error: \"total_ms\" was renamed; use \"config_wall_ms\" "
-                           "(timing names: compare/TIMINGS.md)");
+    EXPECT_STREQ(e.what(),
+                 "rows.jsonl:4: /timings/total_ms: error: \"total_ms\" was renamed; use \"config_wall_ms\" "
+                 "(timing names: compare/TIMINGS.md)");
   }
   // The current names load.
   std::string fine = metricsWith("fine.json", "config_wall_ms", "shadowlab.metrics/1");

@@ -43,9 +43,7 @@ std::string inputErrorOf(const std::function<void()>& f) {
   return "(no InputError)";
 }
 
-Tolerances tolerances(const std::string& text) {
-  return parseTolerances(parseJsonText(text, "tol.json"), "tol.json");
-}
+Tolerances tolerances(const std::string& text) { return parseTolerances(parseJsonText(text, "tol.json"), "tol.json"); }
 
 TEST(GateRules, LowerIsBetterFailsOnlyBeyondMaxOfAbsAndRel) {
   // allowed = max(0.005, 0.1 * 0.012) = 0.005: 0.017 is the edge, 0.0171 is over it.
@@ -101,7 +99,7 @@ TEST(GateRules, ListedMetricsUseTheirEntryOnlyUnlistedUseTheDefault) {
   MetricTolerance acne = t.forMetric("acne_rate");
   EXPECT_EQ(acne.direction, Direction::LowerIsBetter);  // built-in
   EXPECT_DOUBLE_EQ(acne.relTolerance, 0.2);
-  EXPECT_DOUBLE_EQ(acne.absTolerance, 0.0);  // left out of the entry: 0, not the default's 0.5
+  EXPECT_DOUBLE_EQ(acne.absTolerance, 0.0);         // left out of the entry: 0, not the default's 0.5
   MetricTolerance leak = t.forMetric("leak_rate");  // not listed: the default
   EXPECT_EQ(leak.direction, Direction::LowerIsBetter);
   EXPECT_DOUBLE_EQ(leak.absTolerance, 0.5);
@@ -161,8 +159,9 @@ TEST(GateRules, NestedMetricsAreComparedLeafByLeaf) {
 
 TEST(GateRules, MissingRowMissingMetricNanAndDuplicatesAreInputErrors) {
   ResultFile base = fileOf("base.json", {row("a", {{"acne_rate", 0.01}}), row("b", {{"acne_rate", 0.01}})});
-  std::string missingRow = inputErrorOf(
-      [&] { runGate(fileOf("cur.json", {row("a", {{"acne_rate", 0.01}})}), base, defaultTolerances()); });
+  std::string missingRow = inputErrorOf([&] {
+    runGate(fileOf("cur.json", {row("a", {{"acne_rate", 0.01}})}), base, defaultTolerances());
+  });
   EXPECT_EQ(missingRow,
             "base.json: /rows/1: error: row \"grazing | b | sun\" is in the baseline but missing from cur.json; "
             "expected every baseline row in the current results");
@@ -215,14 +214,19 @@ TEST(GateRules, RepeatedRunsGateTheMedianTiming) {
 TEST(GateRules, RepeatedRunsMustAgreeOnMetrics) {
   ResultFile a = fileOf("r1.json", {row("a", {{"acne_rate", 0.01}})});
   ResultFile b = fileOf("r2.json", {row("a", {{"acne_rate", 0.02}})});
-  EXPECT_EQ(inputErrorOf([&] { mergeResultFiles({a, b}); }),
+  EXPECT_EQ(inputErrorOf([&] {
+              mergeResultFiles({a, b});
+            }),
             "r2.json: /rows/0/metrics/acne_rate: error: row \"grazing | a | sun\" repeats the run in r1.json but "
             "metric \"acne_rate\" is 0.02 here and 0.01 there; expected repeated runs to agree (the pipeline is "
             "deterministic)");
   // Twice in one file is not a repeat but a malformed file.
   ResultFile dup = fileOf("r3.json", {row("a", {{"acne_rate", 0.01}}), row("a", {{"acne_rate", 0.01}})});
-  EXPECT_NE(inputErrorOf([&] { mergeResultFiles({a, dup}); }).find("r3.json: /rows/1: error: row \"grazing | a | sun\" "
-                                                                  "appears again (first at /rows/0)"),
+  EXPECT_NE(inputErrorOf([&] {
+              mergeResultFiles({a, dup});
+            })
+                .find("r3.json: /rows/1: error: row \"grazing | a | sun\" "
+                      "appears again (first at /rows/0)"),
             std::string::npos);
   // Distinct rows from several files are simply concatenated, each naming its own file.
   ResultFile c = fileOf("r4.json", {row("z", {{"acne_rate", 0.01}})});
@@ -234,7 +238,9 @@ TEST(GateRules, RepeatedRunsMustAgreeOnMetrics) {
 
 TEST(GateRules, EmptyBaselineIsAnInputError) {
   ResultFile empty = fileOf("base.json", {});
-  EXPECT_EQ(inputErrorOf([&] { runGate(fileOf("c", {row("a", {{"acne_rate", 0.01}})}), empty, defaultTolerances()); }),
+  EXPECT_EQ(inputErrorOf([&] {
+              runGate(fileOf("c", {row("a", {{"acne_rate", 0.01}})}), empty, defaultTolerances());
+            }),
             "base.json: /rows: error: the baseline has no rows; expected at least one (create it with "
             "--update-baseline)");
 }

@@ -34,8 +34,8 @@ class StabilityGolden : public ::testing::Test {
     fs::remove_all(dir_);
     fs::create_directories(dir_);
     for (const char* name : {"stability_baseline.json", "stability.args", "tolerances.json"})
-      ASSERT_TRUE(fs::exists(kGolden / name)) << "golden file missing: " << (kGolden / name)
-                                              << " (regenerate with tests/golden/update.sh)";
+      ASSERT_TRUE(fs::exists(kGolden / name))
+          << "golden file missing: " << (kGolden / name) << " (regenerate with tests/golden/update.sh)";
   }
   void TearDown() override {
     if (!HasFailure()) fs::remove_all(dir_);
@@ -67,7 +67,7 @@ TEST_F(StabilityGolden, GoldenStabilityRunPassesTheGateAndDoctoredBaselinesFail)
   const std::string tolerances = (kGolden / "tolerances.json").string();
 
   CliRun gate = shadowlab("gate " + current + " --baseline " + baseline + " --tolerances " + tolerances + " --json " +
-                       (dir_ / "gate.json").string());
+                          (dir_ / "gate.json").string());
   EXPECT_EQ(gate.code, 0) << "the golden stability gate failed: a change moved these metrics (if on purpose, run "
                              "tests/golden/update.sh and commit the reviewed baseline):\n"
                           << gate.err << gate.out;
@@ -78,7 +78,8 @@ TEST_F(StabilityGolden, GoldenStabilityRunPassesTheGateAndDoctoredBaselinesFail)
   std::set<std::string> checked;
   for (const auto& c : report["checks"])
     if (c["kind"] == "metric") checked.insert(c["metric"].get<std::string>());
-  for (const char* m : {"frames", "shimmer_rate", "error_rate_mean", "error_rate_max", "error_rate_std", "error_jump_max"})
+  for (const char* m :
+       {"frames", "shimmer_rate", "error_rate_mean", "error_rate_max", "error_rate_std", "error_jump_max"})
     EXPECT_TRUE(checked.count(m)) << m << " was not gated: " << report.dump();
 
   // The golden must show something to gate: unstabilized cascades shimmer.
@@ -94,8 +95,8 @@ TEST_F(StabilityGolden, GoldenStabilityRunPassesTheGateAndDoctoredBaselinesFail)
   better["metrics"]["shimmer_rate"] = shimmer / 2;
   better["metrics"]["error_jump_max"] = jump / 2;
   std::ofstream(dir_ / "better.json") << better.dump(2);
-  CliRun caught = shadowlab("gate " + current + " --baseline " + (dir_ / "better.json").string() + " --tolerances " +
-                         tolerances);
+  CliRun caught =
+      shadowlab("gate " + current + " --baseline " + (dir_ / "better.json").string() + " --tolerances " + tolerances);
   EXPECT_EQ(caught.code, 1) << caught.out << caught.err;
   const std::string row = golden["scene"].get<std::string>() + " | " + golden["config"].get<std::string>() + " | " +
                           golden["light"].get<std::string>();

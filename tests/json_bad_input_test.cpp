@@ -57,8 +57,8 @@ class JsonBadInput : public ::testing::Test {
 TEST_F(JsonBadInput, ToleranceFileWithAKeyTwice) {
   const std::string out = (dir_ / "gate.json").string();
   expectRejected("tolerances_duplicate_key.json", "gate '" + kGoodMetrics + "' --baseline '" + kGoodMetrics +
-                                                      "' --tolerances '" + kBadInput + "tolerances_duplicate_key.json' --json '" +
-                                                      out + "'");
+                                                      "' --tolerances '" + kBadInput +
+                                                      "tolerances_duplicate_key.json' --json '" + out + "'");
   EXPECT_FALSE(fs::exists(out)) << "nothing written on bad input";
 }
 
@@ -70,8 +70,8 @@ TEST_F(JsonBadInput, ResultsFileWithAKeyTwice) {
 TEST_F(JsonBadInput, MetricsBaselineWithAKeyTwice) {
   // The baseline side: --update-baseline must not rewrite it either.
   const std::string before = slurp(kBadInput + "metrics_duplicate_key.json");
-  expectRejected("metrics_duplicate_key.json",
-                 "gate '" + kGoodMetrics + "' --baseline '" + kBadInput + "metrics_duplicate_key.json' --update-baseline");
+  expectRejected("metrics_duplicate_key.json", "gate '" + kGoodMetrics + "' --baseline '" + kBadInput +
+                                                   "metrics_duplicate_key.json' --update-baseline");
   EXPECT_EQ(slurp(kBadInput + "metrics_duplicate_key.json"), before);
 }
 

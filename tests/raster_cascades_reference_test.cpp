@@ -44,10 +44,10 @@ TEST_F(CascadesVsReference, FourCascadesBeatOneMapOfTheSameTexelCountOnLongView)
   Frame rasOne = R->render(s, one), rasFour = R->render(s, four);
   Score a = score(ref, rasOne, light), b = score(ref, rasFour, light);
   double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-  std::printf("  long_view %dx%d (%zu px both see): 1 x 2048 sphere: error_rate %.5f (%zu px), m_p95 %.3f;"
-              " 4 x 1024 cascades: error_rate %.5f (%zu px), m_p95 %.3f  [%.1f s]\n",
-              s.camera.width, s.camera.height, a.both, a.errorRate, a.wrong, a.mP95, b.errorRate, b.wrong, b.mP95,
-              seconds);
+  std::printf(
+      "  long_view %dx%d (%zu px both see): 1 x 2048 sphere: error_rate %.5f (%zu px), m_p95 %.3f;"
+      " 4 x 1024 cascades: error_rate %.5f (%zu px), m_p95 %.3f  [%.1f s]\n",
+      s.camera.width, s.camera.height, a.both, a.errorRate, a.wrong, a.mP95, b.errorRate, b.wrong, b.mP95, seconds);
   ASSERT_GT(a.both, 10000u);
   EXPECT_LT(b.errorRate, a.errorRate);
   EXPECT_LT(b.mP95, a.mP95);
@@ -127,9 +127,10 @@ TEST_F(CascadesVsReference, CasterOutsideTheViewFrustumStillCastsIntoView) {
       m.fit = fit;
       m.cascadeStabilize = stabilize;
       Score sc = score(ref, R->render(s, m), "sun");
-      std::printf("  pole behind the camera, fit=%s stabilize=%d: reference shadow %zu px, shadowed by raster %zu,"
-                  " error_rate %.5f\n",
-                  toString(fit).c_str(), int(stabilize), sc.refShadow, sc.refShadowRasShadow, sc.errorRate);
+      std::printf(
+          "  pole behind the camera, fit=%s stabilize=%d: reference shadow %zu px, shadowed by raster %zu,"
+          " error_rate %.5f\n",
+          toString(fit).c_str(), int(stabilize), sc.refShadow, sc.refShadowRasShadow, sc.errorRate);
       ASSERT_GT(sc.refShadow, 500u) << "the pole's shadow must be in view";
       EXPECT_GE(double(sc.refShadowRasShadow), 0.97 * double(sc.refShadow)) << toString(fit);
       EXPECT_LT(sc.errorRate, 0.01) << toString(fit);

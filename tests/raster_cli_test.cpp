@@ -38,8 +38,8 @@ fs::path freshDir(const std::string& name) {
 TEST(RasterCli, WritesExrPngAndJson) {
   fs::path out = freshDir("ok");
   std::string log;
-  int code = run("raster sphere_on_plane --set map.size=1024 --set filter=pcf --set filter.size=5 -o " +
-                     out.string(), &log);
+  int code =
+      run("raster sphere_on_plane --set map.size=1024 --set filter=pcf --set filter.size=5 -o " + out.string(), &log);
   if (code == 3 && log.find("no Vulkan device") != std::string::npos)
     GTEST_SKIP() << "no Vulkan device found: test NOT run: " << log;
   ASSERT_EQ(code, 0) << log;
@@ -58,7 +58,8 @@ TEST(RasterCli, WritesExrPngAndJson) {
   // The render call's wall time spans both GPU passes; the camera pass contains the visibility buffer.
   EXPECT_GT(j["render_wall_ms"].get<double>(), j["shadow_gpu_ms"].get<double>() + j["camera_gpu_ms"].get<double>());
   EXPECT_GE(j["camera_gpu_ms"].get<double>(), j["visibility_gpu_ms"].get<double>());
-  for (const char* old : {"shadow_ms", "camera_ms", "camera_visibility_ms", "total_ms"}) EXPECT_FALSE(j.contains(old)) << old;
+  for (const char* old : {"shadow_ms", "camera_ms", "camera_visibility_ms", "total_ms"})
+    EXPECT_FALSE(j.contains(old)) << old;
   EXPECT_NE(j["device"].get<std::string>().find("llvmpipe"), std::string::npos) << j["device"];
 }
 

@@ -64,9 +64,10 @@ TEST_F(LispsmVsReference, LowerFootprintThanTightOnLongView) {
   const Method lispsm = fitted(Fit::Lispsm);
   Frame rasTight = R->render(s, fitted(Fit::Tight)), rasLispsm = R->render(s, lispsm);
   Score a = score(ref, rasTight, light), b = score(ref, rasLispsm, light);
-  std::printf("  long_view, map 1024, %zu px both see: error_rate tight %.5f, lispsm %.5f; m_p95 tight %.3f,"
-              " lispsm %.3f\n",
-              a.both, a.errorRate, b.errorRate, a.mP95, b.mP95);
+  std::printf(
+      "  long_view, map 1024, %zu px both see: error_rate tight %.5f, lispsm %.5f; m_p95 tight %.3f,"
+      " lispsm %.3f\n",
+      a.both, a.errorRate, b.errorRate, a.mP95, b.mP95);
   ASSERT_GT(a.both, 10000u);
   // Measured (lavapipe, 2 cores): tight m_p95 31.1, error_rate 0.0112 (mostly aliasing at the
   // near pole's shadow); lispsm m_p95 9.07, error_rate 0.0017.
@@ -111,7 +112,7 @@ TEST_F(LispsmVsReference, ViewAlongTheLightFallsBackToTight) {
     const char* light;     // direction of travel
     const char* position;  // camera
     const char* lookAt;
-    bool exact;            // exactly along the light: the same frame as tight
+    bool exact;  // exactly along the light: the same frame as tight
   } cases[] = {
       {"down_down", "[0, -1, 0]", "[0.5, 12, 0.25]", "[0.5, 0, 0.25]", true},
       {"down_up", "[0, 1, 0]", "[0.5, 12, 0.25]", "[0.5, 0, 0.25]", true},
@@ -121,7 +122,8 @@ TEST_F(LispsmVsReference, ViewAlongTheLightFallsBackToTight) {
   };
   for (const Case& c : cases) {
     std::string text = std::string(R"({
-  "camera": {"position": )") + c.position + R"(, "look_at": )" + c.lookAt +
+  "camera": {"position": )") +
+                       c.position + R"(, "look_at": )" + c.lookAt +
                        R"(, "up": [0, 0, -1], "vfov_deg": 50, "width": 320, "height": 180, "near": 0.1, "far": 100},
   "objects": [
     {"type": "plane", "name": "ground", "size": [20, 20]},
@@ -135,7 +137,8 @@ TEST_F(LispsmVsReference, ViewAlongTheLightFallsBackToTight) {
     Frame ft = R->render(s, fitted(Fit::Tight)), fl = R->render(s, fitted(Fit::Lispsm));
     expectAllFinite(fl, c.name);
     if (c.exact) {
-      for (size_t k = 0; k < ft.names.size(); ++k) EXPECT_EQ(ft.data[k], fl.get(ft.names[k])) << c.name << ": " << ft.names[k];
+      for (size_t k = 0; k < ft.names.size(); ++k)
+        EXPECT_EQ(ft.data[k], fl.get(ft.names[k])) << c.name << ": " << ft.names[k];
       continue;
     }
     Frame ref = renderReference(s, ReferenceOptions{});
@@ -175,9 +178,10 @@ TEST_F(LispsmVsReference, CasterOutsideTheViewFrustumStillCastsIntoView) {
   Frame ref = renderReference(s, ReferenceOptions{});
   Frame ft = R->render(s, fitted(Fit::Tight)), fl = R->render(s, fitted(Fit::Lispsm));
   Score a = score(ref, ft, "sun"), b = score(ref, fl, "sun");
-  std::printf("  pole behind the camera: reference shadow %zu px, shadowed by tight %zu, by lispsm %zu;"
-              " error_rate tight %.5f, lispsm %.5f\n",
-              b.refShadow, a.refShadowRasShadow, b.refShadowRasShadow, a.errorRate, b.errorRate);
+  std::printf(
+      "  pole behind the camera: reference shadow %zu px, shadowed by tight %zu, by lispsm %zu;"
+      " error_rate tight %.5f, lispsm %.5f\n",
+      b.refShadow, a.refShadowRasShadow, b.refShadowRasShadow, a.errorRate, b.errorRate);
   ASSERT_GT(b.refShadow, 300u) << "the pole's shadow must be in view";
   EXPECT_GE(double(b.refShadowRasShadow), 0.97 * double(b.refShadow));
   EXPECT_LT(b.errorRate, 0.01);

@@ -1,6 +1,6 @@
 // fit=lispsm's pieces without a GPU: the optimal n of Wimmer et al., the basis rotated onto the
-// view direction, the body (frustum n box), and the warped map's closed forms (unit cube over the body, w constant along
-// light rays, texel sizes, the orthographic limit).
+// view direction, the body (frustum n box), and the warped map's closed forms (unit cube over the body, w constant
+// along light rays, texel sizes, the orthographic limit).
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -90,7 +90,7 @@ TEST(RasterLispsm, ZeroWarpIsTheTightOrthographicFit) {
 }
 
 TEST(RasterLispsm, WarpKeepsTheBodyInTheUnitCubeAndDepthOrderAlongLightRays) {
-  const double rho = 2.0;  // n = 0.5 before a body 4 deep: w from 1 to 9
+  const double rho = 2.0;                  // n = 0.5 before a body 4 deep: w from 1 to 9
   for (double eyeX : {0.7, -2.0, 10.0}) {  // the eye above the body, on its edge, far beside it
     LispsmMap map = lispsmTexFromLight(kBodyMin, kBodyMax, eyeX, rho, 512);
     ASSERT_TRUE(allFinite(map.texFromLight));

@@ -205,8 +205,9 @@ TEST_F(RasterVsReference, ReverseGuardKeepsTheImageOffSurfacesBehindTheProjector
     coverageAgree += (refCoverage[i] > 0.5f) == (on.get(p + "coverage")[i] > 0.5f);
   }
   double agree = double(coverageAgree) / double(ref.pixelCount());
-  std::printf("  projector: reverse&covered guarded %zu, unguarded %zu, reference reverse %zu, coverage agreement %.5f\n",
-              reverseCovered, mirrored, refReverseCount, agree);
+  std::printf(
+      "  projector: reverse&covered guarded %zu, unguarded %zu, reference reverse %zu, coverage agreement %.5f\n",
+      reverseCovered, mirrored, refReverseCount, agree);
   EXPECT_EQ(reverseCovered, 0u);
   EXPECT_GT(mirrored, 1000u) << "without the guard the image must land on the wall behind the projector";
   EXPECT_GT(double(mirrored), 0.9 * double(refReverseCount));

@@ -109,7 +109,8 @@ TEST_F(RasterTest, FootprintMIsLloydsClosedFormOnTheFloor) {
     glm::dvec3 right = glm::normalize(glm::cross(forward, glm::dvec3(c.up))), up = glm::cross(right, forward);
     double t = std::tan(glm::radians(double(c.vfovDeg)) * 0.5), aspect = double(float(c.width) / float(c.height));
     glm::dvec3 dx = (2.0 / c.width * aspect * t) * right, dy = (-2.0 / c.height * t) * up;
-    glm::dvec3 a = glm::normalize(glm::cross(light, std::abs(light.x) < 0.9 ? glm::dvec3(1, 0, 0) : glm::dvec3(0, 1, 0)));
+    glm::dvec3 a =
+        glm::normalize(glm::cross(light, std::abs(light.x) < 0.9 ? glm::dvec3(1, 0, 0) : glm::dvec3(0, 1, 0)));
     glm::dvec3 b = glm::cross(light, a);
     double lo = 1e30, hi = 0;
     int checked = 0, wrong = 0;
@@ -472,8 +473,8 @@ TEST_F(RasterTest, EveryFilterFitAndLightIsValidationClean) {
         m.mapSize = 256;
         m.filter = filter.kind;
         m.fit = fit.kind;
-        const std::string what = std::string(filter.key) + " / " + fit.key + " / " +
-                                 kindKey(lightTypeKinds(), scene->lights[0].type);
+        const std::string what =
+            std::string(filter.key) + " / " + fit.key + " / " + kindKey(lightTypeKinds(), scene->lights[0].type);
         const Frame f = R->render(*scene, m);
         EXPECT_EQ(R->validationMessages(), 0) << what;
         for (size_t c = 0; c < f.names.size(); ++c)

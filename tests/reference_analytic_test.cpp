@@ -28,8 +28,8 @@ using namespace shadowlab;
 struct Expected {
   uint32_t object = 0;  // 0: the ray leaves the scene
   float vis = 0.0f;
-  int texel = -1;       // projector tests: the image texel expected (or -1)
-  bool skip = false;    // no exact answer here (e.g. the faceted sphere's terminator): never compared
+  int texel = -1;     // projector tests: the image texel expected (or -1)
+  bool skip = false;  // no exact answer here (e.g. the faceted sphere's terminator): never compared
   bool operator==(const Expected& o) const {
     return object == o.object && vis == o.vis && texel == o.texel && skip == o.skip;
   }
@@ -66,8 +66,7 @@ Comparison compareWithAnalytic(const Scene& scene, const Frame& frame, const std
       const Expected& center = grid[size_t(2 * j + 2) * gridW + (2 * i + 2)];
       bool uniform = true;
       for (int dy = 0; dy <= 4 && uniform; ++dy)
-        for (int dx = 0; dx <= 4 && uniform; ++dx)
-          uniform = grid[size_t(2 * j + dy) * gridW + (2 * i + dx)] == center;
+        for (int dx = 0; dx <= 4 && uniform; ++dx) uniform = grid[size_t(2 * j + dy) * gridW + (2 * i + dx)] == center;
       if (!uniform || center.skip) continue;
       const size_t pixel = size_t(j) * camera.width + i;
       ++result.compared;
@@ -75,8 +74,8 @@ Comparison compareWithAnalytic(const Scene& scene, const Frame& frame, const std
       std::string why;
       bool ok = uint32_t(objectId[pixel]) == center.object && (center.object == 0 || vis[pixel] == center.vis);
       if (!ok) {
-        why = "object " + std::to_string(objectId[pixel]) + " vis " + std::to_string(vis[pixel]) + "; expected object " +
-              std::to_string(center.object) + " vis " + std::to_string(center.vis);
+        why = "object " + std::to_string(objectId[pixel]) + " vis " + std::to_string(vis[pixel]) +
+              "; expected object " + std::to_string(center.object) + " vis " + std::to_string(center.vis);
       } else if (check) {
         ok = check(pixel, center, &why);
       }
@@ -221,8 +220,8 @@ struct SquareCaster {
 
 Scene squareScene(const SquareCaster& square) {
   Scene scene = topDownScene(400, 300);
-  scene.objects.push_back(makeQuad("square", kCasterId, glm::vec3(square.center), {float(square.half), 0, 0},
-                                   {0, 0, -float(square.half)}));
+  scene.objects.push_back(
+      makeQuad("square", kCasterId, glm::vec3(square.center), {float(square.half), 0, 0}, {0, 0, -float(square.half)}));
   return scene;
 }
 
@@ -391,8 +390,8 @@ TEST(ReferenceAnalytic, OneSidedQuadIsCulledFromTheBackForCameraAndLight) {
     oneSided.twoSided = false;
     scene.materials.push_back(oneSided);
     const SquareCaster square;
-    scene.objects.push_back(makeQuad("square", kCasterId, glm::vec3(square.center), {0.5f, 0, 0},
-                                     {0, 0, facingUp ? -0.5f : 0.5f}, 1));
+    scene.objects.push_back(
+        makeQuad("square", kCasterId, glm::vec3(square.center), {0.5f, 0, 0}, {0, 0, facingUp ? -0.5f : 0.5f}, 1));
     Light sun;
     sun.name = "sun";
     sun.direction = glm::normalize(glm::vec3(1.0f, -1.0f, 0.6f));
@@ -463,7 +462,8 @@ TEST(ReferenceAnalytic, ProjectorCoverageHandlesFrustumReverseProjectionAndOcclu
   projector.image.height = 4;
   projector.image.channels = 3;
   for (int y = 0; y < 4; ++y)
-    for (int x = 0; x < 5; ++x) projector.image.pixels.insert(projector.image.pixels.end(), {(x + 1) / 5.0f, (y + 1) / 4.0f, 0.5f});
+    for (int x = 0; x < 5; ++x)
+      projector.image.pixels.insert(projector.image.pixels.end(), {(x + 1) / 5.0f, (y + 1) / 4.0f, 0.5f});
   scene.projectors.push_back(projector);
   const glm::dvec3 X(projector.position);
   const double t = std::tan(glm::radians(20.0)), aspect = 1.25;
@@ -481,8 +481,8 @@ TEST(ReferenceAnalytic, ProjectorCoverageHandlesFrustumReverseProjectionAndOcclu
     const glm::dvec3 q = p + (X - p) * ((-2.0 - p.z) / (X.z - p.z));
     return std::fabs(q.x - 0.5) < 0.4 && std::fabs(q.y - 2.3) < 0.4;
   };
-  auto hitWall = [](const glm::dvec3& o, const glm::dvec3& d, double z, double halfX, double cy, double halfY)
-      -> std::optional<double> {
+  auto hitWall = [](const glm::dvec3& o, const glm::dvec3& d, double z, double halfX, double cy,
+                    double halfY) -> std::optional<double> {
     if (d.z == 0.0) return std::nullopt;
     const double tt = (z - o.z) / d.z;
     if (tt <= 0.0) return std::nullopt;
@@ -495,7 +495,8 @@ TEST(ReferenceAnalytic, ProjectorCoverageHandlesFrustumReverseProjectionAndOcclu
     Expected e;
     std::optional<double> best;
     uint32_t object = 0;
-    for (auto [id, tt] : {std::pair{kFrontId, hitWall(o, d, -5, 6, 2, 4)}, std::pair{kBackId, hitWall(o, d, 5, 6, 2, 4)}}) {
+    for (auto [id, tt] :
+         {std::pair{kFrontId, hitWall(o, d, -5, 6, 2, 4)}, std::pair{kBackId, hitWall(o, d, 5, 6, 2, 4)}}) {
       if (tt && (!best || *tt < *best)) best = tt, object = id;
     }
     if (d.z != 0.0) {
@@ -508,8 +509,8 @@ TEST(ReferenceAnalytic, ProjectorCoverageHandlesFrustumReverseProjectionAndOcclu
     e.object = object;
     const glm::dvec3 p = o + *best * d;
     const Projection pr = project(p);
-    const bool covered = pr.s > 0 && pr.s >= 0.1 && pr.s <= 50 && pr.u >= 0 && pr.u <= 1 && pr.v >= 0 && pr.v <= 1 &&
-                         !blocked(p);
+    const bool covered =
+        pr.s > 0 && pr.s >= 0.1 && pr.s <= 50 && pr.u >= 0 && pr.u <= 1 && pr.v >= 0 && pr.v <= 1 && !blocked(p);
     e.vis = covered ? 1.0f : 0.0f;
     if (covered) e.texel = int(std::floor(pr.v * 4)) * 5 + int(std::floor(pr.u * 5));
     return e;

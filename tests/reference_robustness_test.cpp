@@ -166,8 +166,7 @@ TEST(ReferenceRobustness, BitIdenticalForAnyThreadCount) {
   };
   for (const Case& c : {Case{"bunny", 1}, Case{"alpha_fence", 1}, Case{"projector", 1}, Case{"contact", 4}}) {
     SCOPED_TRACE(std::string(c.scene) + " spp " + std::to_string(c.spp));
-    const Scene scene =
-        loadScene(resolveScenePath(c.scene), {{"/camera/width", 480}, {"/camera/height", 270}});
+    const Scene scene = loadScene(resolveScenePath(c.scene), {{"/camera/width", 480}, {"/camera/height", 270}});
     std::vector<Frame> frames;
     for (int threads : {1, 2, 4, 4}) {
       ReferenceOptions options;
@@ -206,10 +205,23 @@ TEST(ReferenceRobustness, ChannelsMetadataAndHashes) {
   const Scene scene = loadScene(resolveScenePath("projector"), {{"/camera/width", 64}, {"/camera/height", 36}});
   ReferenceStats stats;
   const Frame frame = renderReference(scene, {}, &stats);
-  const std::vector<std::string> expected = {
-      "hit", "object_id", "prim_id", "P.x", "P.y", "P.z", "N.x", "N.y", "N.z",
-      "light.sun.vis", "light.sun.occluder_dist",
-      "proj.slide.coverage", "proj.slide.u", "proj.slide.v", "proj.slide.R", "proj.slide.G", "proj.slide.B"};
+  const std::vector<std::string> expected = {"hit",
+                                             "object_id",
+                                             "prim_id",
+                                             "P.x",
+                                             "P.y",
+                                             "P.z",
+                                             "N.x",
+                                             "N.y",
+                                             "N.z",
+                                             "light.sun.vis",
+                                             "light.sun.occluder_dist",
+                                             "proj.slide.coverage",
+                                             "proj.slide.u",
+                                             "proj.slide.v",
+                                             "proj.slide.R",
+                                             "proj.slide.G",
+                                             "proj.slide.B"};
   EXPECT_EQ(frame.names, expected);
   EXPECT_EQ(frame.meta["kind"], "reference");
   EXPECT_EQ(frame.meta["scene"], "projector");

@@ -60,16 +60,26 @@ int runCommand(const std::vector<std::string>& args, const std::string& outPath,
 
 struct PageCheck {
   int rc = 0;
-  std::string imagesOk;     // body data-images-ok
-  int imagesCount = -1;     // body data-images-count
+  std::string imagesOk;  // body data-images-ok
+  int imagesCount = -1;  // body data-images-count
   std::vector<std::string> consoleLines;
   std::string dom, log;
 };
 
 std::vector<std::string> chromiumArgs(const std::string& profile) {
-  return {kChromium, "--headless", "--no-sandbox", "--disable-gpu", "--disable-background-networking",
-          "--disable-component-update", "--disable-sync", "--no-first-run", "--disable-default-apps",
-          "--user-data-dir=" + profile, "--enable-logging=stderr", "--v=0", "--virtual-time-budget=10000"};
+  return {kChromium,
+          "--headless",
+          "--no-sandbox",
+          "--disable-gpu",
+          "--disable-background-networking",
+          "--disable-component-update",
+          "--disable-sync",
+          "--no-first-run",
+          "--disable-default-apps",
+          "--user-data-dir=" + profile,
+          "--enable-logging=stderr",
+          "--v=0",
+          "--virtual-time-budget=10000"};
 }
 
 PageCheck openInChromium(const std::string& html, const std::string& work) {
@@ -110,9 +120,10 @@ class FakeRunner : public SweepRunner {
   SweepRunOutput run(const Scene&, const Method& m, const std::string&, const std::string&) override {
     SweepRunOutput out;
     double e = (m.filter == Filter::None ? 0.02 : 0.01) + 0.001 * m.biasSlope + 1.0 / m.mapSize;
-    out.metrics = {{"error_rate", e}, {"acne_rate", e / 2}, {"leak_rate", e / 4}, {"aliasing_rate", e / 4},
-                   {"coverage_rate", 0.0}, {"m_median", 2.0}, {"m_p95", 5.0}, {"m_max", 40.0}};
-    out.timings = {{"shadow_gpu_ms", m.filter == Filter::None ? 5.0 : 6.0}, {"camera_gpu_ms", 10.0}, {"compare_ms", 1.0}};
+    out.metrics = {{"error_rate", e},      {"acne_rate", e / 2}, {"leak_rate", e / 4}, {"aliasing_rate", e / 4},
+                   {"coverage_rate", 0.0}, {"m_median", 2.0},    {"m_p95", 5.0},       {"m_max", 40.0}};
+    out.timings = {
+        {"shadow_gpu_ms", m.filter == Filter::None ? 5.0 : 6.0}, {"camera_gpu_ms", 10.0}, {"compare_ms", 1.0}};
     return out;
   }
   // A small picture stands in for reference | raster | errors when asked for one.
@@ -125,18 +136,21 @@ class FakeRunner : public SweepRunner {
 };
 
 TEST(ReportChromium, RealSweepReportLoadsEveryPictureWithoutConsoleErrors) {
-  if (!fs::exists(kChromium)) GTEST_SKIP() << "SKIPPED LOUDLY: " << kChromium << " is not installed (apt-get install chromium)";
+  if (!fs::exists(kChromium))
+    GTEST_SKIP() << "SKIPPED LOUDLY: " << kChromium << " is not installed (apt-get install chromium)";
   const std::string dir = tempDir("real");
   const std::string out = dir + "/sweep";
   // Two sizes x two biases at a quarter of the scene's pixels: every chart has its key.
-  int rc = runCommand({SHADOWLAB_BINARY, "sweep", "sphere_on_plane", "--grid", "map.size=256,1024", "--grid",
-                       "bias.slope=0,2", "--set", "scene:/camera/width=480", "--set", "scene:/camera/height=270", "-o",
-                       out, "--cache", dir + "/cache"},
-                      dir + "/sweep.out", dir + "/sweep.err");
+  int rc = runCommand(
+      {SHADOWLAB_BINARY, "sweep", "sphere_on_plane", "--grid", "map.size=256,1024", "--grid", "bias.slope=0,2", "--set",
+       "scene:/camera/width=480", "--set", "scene:/camera/height=270", "-o", out, "--cache", dir + "/cache"},
+      dir + "/sweep.out", dir + "/sweep.err");
   if (rc == 3) {
     // No Vulkan device: the browser check still runs, on the same grid through a fake runner.
-    std::fprintf(stderr, "report_chromium_test: NO VULKAN DEVICE (shadowlab exit 3), checking a report made with a "
-                         "fake runner instead:\n%s\n", slurp(dir + "/sweep.err").c_str());
+    std::fprintf(stderr,
+                 "report_chromium_test: NO VULKAN DEVICE (shadowlab exit 3), checking a report made with a "
+                 "fake runner instead:\n%s\n",
+                 slurp(dir + "/sweep.err").c_str());
     SweepSpec spec;
     spec.scenes = {"sphere_on_plane"};
     spec.grid = {parseGridArgument("map.size=256,1024"), parseGridArgument("bias.slope=0,2")};
@@ -215,10 +229,12 @@ TEST(ReportChromium, ChartsWhoseKeyIsNotSweptAreSkippedWithANote) {
   SweepSummary s = runSweep(plan, runner, o);
   ASSERT_EQ(s.reportHtml, o.outDir + "/report.html");
   const std::string html = slurp(s.reportHtml);
-  EXPECT_NE(html.find("skipped: map.size is not in the grid"), std::string::npos) << slurp(o.outDir + "/figures/charts.log");
+  EXPECT_NE(html.find("skipped: map.size is not in the grid"), std::string::npos)
+      << slurp(o.outDir + "/figures/charts.log");
   EXPECT_NE(html.find("skipped: no bias key"), std::string::npos);
   // The charts that need no particular key are made.
-  EXPECT_TRUE(fs::is_regular_file(o.outDir + "/figures/accuracy_vs_time.png")) << slurp(o.outDir + "/figures/charts.log");
+  EXPECT_TRUE(fs::is_regular_file(o.outDir + "/figures/accuracy_vs_time.png"))
+      << slurp(o.outDir + "/figures/charts.log");
   EXPECT_TRUE(fs::is_regular_file(o.outDir + "/figures/m_footprint.svg"));
   EXPECT_FALSE(fs::exists(o.outDir + "/figures/error_by_size.png"));
   // Pareto table: hw2x2 (16 ms, 1%) beats none (15 ms, 2%) only at the larger budget: both listed.

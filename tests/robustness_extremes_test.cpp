@@ -92,7 +92,8 @@ void expectFiniteFrame(const Frame& f, const std::string& what) {
 // it as null: both are caught), on failure naming its JSON pointer.
 void expectFiniteJson(const nlohmann::json& j, const std::string& what, const std::string& pointer = "") {
   if (j.is_null()) ADD_FAILURE() << what << ": " << pointer << " is null (a NaN written as JSON)";
-  if (j.is_number_float() && !std::isfinite(j.get<double>())) ADD_FAILURE() << what << ": " << pointer << " is " << j.get<double>();
+  if (j.is_number_float() && !std::isfinite(j.get<double>()))
+    ADD_FAILURE() << what << ": " << pointer << " is " << j.get<double>();
   if (j.is_array())
     for (size_t i = 0; i < j.size(); ++i) expectFiniteJson(j[i], what, pointer + "/" + std::to_string(i));
   if (j.is_object())
@@ -213,8 +214,9 @@ TEST_F(Extremes, CameraPathsThatLeaveTheScene) {
   REQUIRE_DEVICE();
   (void)R;
   fs::path dir = tempDir("leave");
-  const std::string common = "stability long_view --set scene:/camera/width=320 --set scene:/camera/height=180 --cache " +
-                             (dir / "cache").string();
+  const std::string common =
+      "stability long_view --set scene:/camera/width=320 --set scene:/camera/height=180 --cache " +
+      (dir / "cache").string();
   const std::vector<std::string> paths = {"--path dolly --frames 3 --distance 400",
                                           "--path dolly --frames 3 --distance -2000",
                                           "--path orbit --frames 3 --angle-deg 180"};
@@ -224,7 +226,8 @@ TEST_F(Extremes, CameraPathsThatLeaveTheScene) {
   for (const auto& path : paths)
     for (const auto& fit : fits) {
       const fs::path out = dir / ("out" + std::to_string(n++));
-      shadowlab::testing::CliRun r = shadowlab::testing::runShadowlab(common + " " + fit + " " + path + " -o " + out.string(), dir);
+      shadowlab::testing::CliRun r =
+          shadowlab::testing::runShadowlab(common + " " + fit + " " + path + " -o " + out.string(), dir);
       ASSERT_EQ(r.code, 0) << path << " " << fit << ":\n" << r.err;
       std::ifstream in(out / "stability.json");
       const nlohmann::json j = nlohmann::json::parse(in);

@@ -36,10 +36,9 @@ TEST(OutputFolders, UnusableOutputFolderExitsTwoBeforeAnyWork) {
   const fs::path dir = tempDir("proc");
   const std::string bad = "/proc/shadowlab_no_such_folder/out";
   const std::string cd = "cd '" + dir.string() + "' && ";
-  for (const std::string& command :
-       {"reference grazing" + kSmall, "raster grazing" + kSmall, "run grazing" + kSmall,
-        "stability grazing --path dolly --frames 2 --distance 0.1" + kSmall,
-        "sweep grazing --grid map.size=64" + kSmall}) {
+  for (const std::string& command : {"reference grazing" + kSmall, "raster grazing" + kSmall, "run grazing" + kSmall,
+                                     "stability grazing --path dolly --frames 2 --distance 0.1" + kSmall,
+                                     "sweep grazing --grid map.size=64" + kSmall}) {
     SCOPED_TRACE(command);
     CliRun r = runShadowlab(command + " -o " + bad, dir, cd);
     EXPECT_EQ(r.code, 2) << r.err;
@@ -76,9 +75,9 @@ TEST(OutputFolders, CompareChecksItsOutputBeforeReadingFrames) {
   CliRun ras = runShadowlab("raster grazing" + kSmall + " -o '" + (dir / "ras").string() + "'", dir);
   if (ras.code == 3) GTEST_SKIP() << "no Vulkan device (shadowlab exit 3): " << ras.err;
   ASSERT_EQ(ras.code, 0) << ras.err;
-  CliRun bad = runShadowlab("compare '" + (dir / "ref").string() + "' '" + (dir / "ras").string() +
-                                "' -o /proc/shadowlab_no_such_folder/cmp",
-                            dir);
+  CliRun bad = runShadowlab(
+      "compare '" + (dir / "ref").string() + "' '" + (dir / "ras").string() + "' -o /proc/shadowlab_no_such_folder/cmp",
+      dir);
   EXPECT_EQ(bad.code, 2) << bad.err;
   EXPECT_NE(bad.err.find("/proc/shadowlab_no_such_folder/cmp"), std::string::npos) << bad.err;
   CliRun good = runShadowlab(
@@ -92,9 +91,11 @@ TEST(OutputFolders, CompareChecksItsOutputBeforeReadingFrames) {
 // reference takes the scene: ones while refusing method keys, which do not change the truth.
 TEST(SetSyntax, RasterAndReferenceTakeSceneOverrides) {
   const fs::path dir = tempDir("set");
-  CliRun ras = runShadowlab("raster grazing --set scene:/camera/width=40 --set scene:/camera/height=30 "
-                            "--set filter=pcf -o '" + (dir / "ras").string() + "'",
-                            dir);
+  CliRun ras = runShadowlab(
+      "raster grazing --set scene:/camera/width=40 --set scene:/camera/height=30 "
+      "--set filter=pcf -o '" +
+          (dir / "ras").string() + "'",
+      dir);
   if (ras.code == 3) GTEST_SKIP() << "no Vulkan device (shadowlab exit 3): " << ras.err;
   ASSERT_EQ(ras.code, 0) << ras.err;
   const std::string rasterJson = slurp(dir / "ras" / "raster.json");
@@ -114,8 +115,8 @@ TEST(SetSyntax, RasterAndReferenceTakeSceneOverrides) {
   EXPECT_NE(method.err.find("filter=pcf"), std::string::npos) << method.err;
   EXPECT_FALSE(fs::exists(dir / "ref2"));
 
-  CliRun badKey = runShadowlab("raster grazing --set scene:/camera/no_such_key=3 -o '" + (dir / "ras2").string() + "'",
-                               dir);
+  CliRun badKey =
+      runShadowlab("raster grazing --set scene:/camera/no_such_key=3 -o '" + (dir / "ras2").string() + "'", dir);
   EXPECT_EQ(badKey.code, 2) << badKey.err;
   EXPECT_FALSE(fs::exists(dir / "ras2"));
 }
@@ -134,9 +135,8 @@ TEST(JobLimits, MaxMemoryRefusesJobsThatCannotFitBeforeAnyWork) {
     EXPECT_FALSE(fs::exists(dir / "out")) << "the refused job wrote its folder";
   }
   // the map alone: 16384^2 texels x 8 bytes = 2 GiB
-  CliRun map = runShadowlab("raster grazing" + kSmall + " --set map.size=16384 --max-memory 1 -o '" +
-                                (dir / "out").string() + "'",
-                            dir);
+  CliRun map = runShadowlab(
+      "raster grazing" + kSmall + " --set map.size=16384 --max-memory 1 -o '" + (dir / "out").string() + "'", dir);
   EXPECT_EQ(map.code, 2) << map.err;
   EXPECT_NE(map.err.find("map 16384^2 x 1 layer(s) 2.00 GiB"), std::string::npos) << map.err;
 
@@ -147,11 +147,12 @@ TEST(JobLimits, MaxMemoryRefusesJobsThatCannotFitBeforeAnyWork) {
 // The trace's progress line shows on a terminal only: `script` gives the command a pseudo-terminal.
 TEST(JobLimits, ProgressOnATerminalOnly) {
   const fs::path dir = tempDir("progress");
-  if (std::system("command -v script >/dev/null 2>&1") != 0) GTEST_SKIP() << "no `script` (util-linux) to make a terminal";
+  if (std::system("command -v script >/dev/null 2>&1") != 0)
+    GTEST_SKIP() << "no `script` (util-linux) to make a terminal";
   const std::string args = "reference grazing" + kSmall + " -o '" + (dir / "ref").string() + "'";
   const fs::path log = dir / "tty.txt";
-  const std::string cmd = "script -qec \"" + std::string(SHADOWLAB_BINARY) + " " + args + "\" /dev/null >'" +
-                          log.string() + "' 2>&1";
+  const std::string cmd =
+      "script -qec \"" + std::string(SHADOWLAB_BINARY) + " " + args + "\" /dev/null >'" + log.string() + "' 2>&1";
   ASSERT_EQ(std::system(cmd.c_str()), 0) << slurp(log);
   EXPECT_NE(slurp(log).find("reference: tracing 100%"), std::string::npos) << slurp(log);
   CliRun piped = runShadowlab(args, dir);
@@ -172,7 +173,8 @@ TEST(ProjectorOnly, RunAndCompareCompareTheProjector) {
                   "image": ")" + image + R"("}]
 })";
   const std::string scene = "'" + (dir / "slide.json").string() + "'";
-  CliRun run = runShadowlab("run " + scene + " --cache '" + (dir / "cache").string() + "' -o '" + (dir / "run").string() + "'", dir);
+  CliRun run = runShadowlab(
+      "run " + scene + " --cache '" + (dir / "cache").string() + "' -o '" + (dir / "run").string() + "'", dir);
   if (run.code == 3) GTEST_SKIP() << "no Vulkan device (shadowlab exit 3): " << run.err;
   ASSERT_EQ(run.code, 0) << run.err;
   EXPECT_NE(run.out.find("no light (projector-only scene); projector: coverage_iou"), std::string::npos) << run.out;
@@ -183,7 +185,8 @@ TEST(ProjectorOnly, RunAndCompareCompareTheProjector) {
   ASSERT_EQ(runShadowlab("reference " + scene + " -o '" + (dir / "ref").string() + "'", dir).code, 0);
   ASSERT_EQ(runShadowlab("raster " + scene + " -o '" + (dir / "ras").string() + "'", dir).code, 0);
   CliRun cmp = runShadowlab(
-      "compare '" + (dir / "ref").string() + "' '" + (dir / "ras").string() + "' -o '" + (dir / "cmp").string() + "'", dir);
+      "compare '" + (dir / "ref").string() + "' '" + (dir / "ras").string() + "' -o '" + (dir / "cmp").string() + "'",
+      dir);
   EXPECT_EQ(cmp.code, 0) << cmp.err;
   EXPECT_NE(cmp.out.find("no light (projector-only scene)"), std::string::npos) << cmp.out;
 }

@@ -32,9 +32,11 @@ RunResult run(const std::string& args) {
   static int counter = 0;
   fs::path dir = fs::temp_directory_path() / ("shadowlab_scenes_bad_input_test_" + std::to_string(::getpid()));
   fs::create_directories(dir);
-  fs::path out = dir / ("out" + std::to_string(counter) + ".txt"), err = dir / ("err" + std::to_string(counter) + ".txt");
+  fs::path out = dir / ("out" + std::to_string(counter) + ".txt"),
+           err = dir / ("err" + std::to_string(counter) + ".txt");
   ++counter;
-  std::string cmd = std::string("'") + SHADOWLAB_BINARY + "' " + args + " >'" + out.string() + "' 2>'" + err.string() + "'";
+  std::string cmd =
+      std::string("'") + SHADOWLAB_BINARY + "' " + args + " >'" + out.string() + "' 2>'" + err.string() + "'";
   int status = std::system(cmd.c_str());
   RunResult r;
   r.exitCode = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
@@ -48,7 +50,8 @@ RunResult run(const std::string& args) {
 std::vector<fs::path> badScenes() {
   std::vector<fs::path> files;
   for (const auto& e : fs::directory_iterator(std::string(SHADOWLAB_SOURCE_DIR) + "/tests/bad_input"))
-    if (e.path().filename().string().rfind("scene_", 0) == 0 && e.path().extension() == ".json") files.push_back(e.path());
+    if (e.path().filename().string().rfind("scene_", 0) == 0 && e.path().extension() == ".json")
+      files.push_back(e.path());
   std::sort(files.begin(), files.end());
   return files;
 }
@@ -77,12 +80,27 @@ TEST(ScenesBadInput, EveryCaseExitsTwoWithFileAndPlace) {
 TEST(ScenesBadInput, CorpusCoversTheRequiredCases) {
   std::set<std::string> names;
   for (const auto& f : badScenes()) names.insert(f.stem().string());
-  for (const char* required :
-       {"scene_syntax", "scene_unknown_key", "scene_unknown_object_type", "scene_missing_obj", "scene_missing_mtl",
-        "scene_missing_texture", "scene_missing_map_d", "scene_infinite", "scene_huge_scale", "scene_zero_size",
-        "scene_negative_radius", "scene_camera_look_at_position", "scene_camera_up_parallel",
-        "scene_zero_light_direction", "scene_resolution_too_big", "scene_resolution_zero", "scene_fov_180",
-        "scene_near_ge_far", "scene_no_light", "scene_obj_nan_vertex", "scene_obj_overflow_uv"})
+  for (const char* required : {"scene_syntax",
+                               "scene_unknown_key",
+                               "scene_unknown_object_type",
+                               "scene_missing_obj",
+                               "scene_missing_mtl",
+                               "scene_missing_texture",
+                               "scene_missing_map_d",
+                               "scene_infinite",
+                               "scene_huge_scale",
+                               "scene_zero_size",
+                               "scene_negative_radius",
+                               "scene_camera_look_at_position",
+                               "scene_camera_up_parallel",
+                               "scene_zero_light_direction",
+                               "scene_resolution_too_big",
+                               "scene_resolution_zero",
+                               "scene_fov_180",
+                               "scene_near_ge_far",
+                               "scene_no_light",
+                               "scene_obj_nan_vertex",
+                               "scene_obj_overflow_uv"})
     EXPECT_TRUE(names.count(required)) << required;
 }
 
@@ -92,8 +110,7 @@ TEST(ScenesCli, BundledScenesCheckAndList) {
   std::string expected;
   for (const auto& n : shadowlab::bundledSceneNames()) expected += n + "\n";
   EXPECT_EQ(names.out, expected);
-  EXPECT_EQ(names.out,
-            "sphere_on_plane\ngrazing\ncontact\nthin_wall\nalpha_fence\nprojector\nbunny\nlong_view\n");
+  EXPECT_EQ(names.out, "sphere_on_plane\ngrazing\ncontact\nthin_wall\nalpha_fence\nprojector\nbunny\nlong_view\n");
 
   RunResult list = run("scenes");
   EXPECT_EQ(list.exitCode, 0);

@@ -175,7 +175,8 @@ TEST(ScenesIo, WriteFileAtomicReadFileMakeDirs) {
     readFile((dir / "none.txt").string());
     FAIL();
   } catch (const InputError& e) {
-    EXPECT_EQ(std::string(e.what()).rfind((dir / "none.txt").string() + ": error: cannot open file", 0), 0u) << e.what();
+    EXPECT_EQ(std::string(e.what()).rfind((dir / "none.txt").string() + ": error: cannot open file", 0), 0u)
+        << e.what();
   }
   makeDirs((dir / "x" / "y" / "z").string());
   EXPECT_TRUE(fs::is_directory(dir / "x" / "y" / "z"));

@@ -41,7 +41,8 @@ nlohmann::json probe(const std::string& verb, const fs::path& file, const fs::pa
   const std::string cmd = std::string(kProbe) + " " + verb + " '" + file.string() + "' >'" +
                           (scratch / "probe.json").string() + "' 2>'" + (scratch / "probe.err").string() + "'";
   const int rc = std::system(cmd.c_str());
-  if (rc != 0) return {{"error", "probe exited " + std::to_string(rc) + ": " + shadowlab::testing::slurp(scratch / "probe.err")}};
+  if (rc != 0)
+    return {{"error", "probe exited " + std::to_string(rc) + ": " + shadowlab::testing::slurp(scratch / "probe.err")}};
   const std::string out = shadowlab::testing::slurp(scratch / "probe.json");
   return out.empty() ? nlohmann::json::object() : nlohmann::json::parse(out);  // "write" prints nothing
 }
@@ -67,10 +68,12 @@ void expectSameByName(const image_io::FloatImage& written, const nlohmann::json&
     for (size_t i = 0; i < pixels; ++i) {
       uint32_t bits;
       std::memcpy(&bits, &written.pixels[i * nc + wc], sizeof bits);
-      ASSERT_EQ(read.at("pixels")[i * nc + rc].get<uint32_t>(), bits) << who << " channel " << written.channels[wc] << " pixel " << i;
+      ASSERT_EQ(read.at("pixels")[i * nc + rc].get<uint32_t>(), bits)
+          << who << " channel " << written.channels[wc] << " pixel " << i;
     }
   }
-  for (const auto& [k, v] : written.text) EXPECT_EQ(read.at("text").value(k, std::string("(missing)")), v) << who << " " << k;
+  for (const auto& [k, v] : written.text)
+    EXPECT_EQ(read.at("text").value(k, std::string("(missing)")), v) << who << " " << k;
 }
 
 // A PNG texture as read: value * (1/255), colour associated with alpha as OpenImageIO does
@@ -78,7 +81,8 @@ void expectSameByName(const image_io::FloatImage& written, const nlohmann::json&
 void expectPngTexture(const nlohmann::json& read, int channels, const std::string& who) {
   ASSERT_EQ(read.at("error"), "") << who;
   ASSERT_EQ(read.at("channels").size(), size_t(channels)) << who;
-  const auto px = shadowlab::testing::probePng(shadowlab::testing::kProbePngWidth, shadowlab::testing::kProbePngHeight, channels);
+  const auto px =
+      shadowlab::testing::probePng(shadowlab::testing::kProbePngWidth, shadowlab::testing::kProbePngHeight, channels);
   for (size_t i = 0; i < px.size(); ++i) {
     unsigned v = px[i];
     if (channels == 4 && i % 4 != 3) v = v * px[i - i % 4 + 3] / 255;
@@ -92,15 +96,18 @@ void expectPngTexture(const nlohmann::json& read, int channels, const std::strin
 }  // namespace
 
 TEST(ImageIo, BothImplementationsReadWhatEitherWroteIdentically) {
-  if (!kProbe) GTEST_SKIP() << "SKIPPED LOUDLY: the other image_io implementation was not built (libopenexr-dev, "
-                               "libpng-dev and libopenimageio-dev are all needed; scripts/install-deps.sh installs them)";
+  if (!kProbe)
+    GTEST_SKIP() << "SKIPPED LOUDLY: the other image_io implementation was not built (libopenexr-dev, "
+                    "libpng-dev and libopenimageio-dev are all needed; scripts/install-deps.sh installs them)";
   const fs::path mine = freshDir("mine"), theirs = freshDir("theirs"), scratch = freshDir("scratch");
   // Ours writes the probe images...
   ASSERT_EQ(image_io::writeExr((mine / "probe.exr").string(), shadowlab::testing::probeExr()), "");
   for (int channels : {3, 4}) {
-    const auto px = shadowlab::testing::probePng(shadowlab::testing::kProbePngWidth, shadowlab::testing::kProbePngHeight, channels);
+    const auto px =
+        shadowlab::testing::probePng(shadowlab::testing::kProbePngWidth, shadowlab::testing::kProbePngHeight, channels);
     ASSERT_EQ(image_io::writePng((mine / (channels == 3 ? "probe_rgb.png" : "probe_rgba.png")).string(),
-                                 shadowlab::testing::kProbePngWidth, shadowlab::testing::kProbePngHeight, channels, px.data()),
+                                 shadowlab::testing::kProbePngWidth, shadowlab::testing::kProbePngHeight, channels,
+                                 px.data()),
               "");
   }
   // ... and so does the other implementation.

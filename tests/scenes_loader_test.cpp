@@ -44,7 +44,8 @@ const char* kMiniScene = R"({
   "lights": [%LIGHTS%] %EXTRA%
 })";
 
-std::string mini(const std::string& objects, const std::string& lights = R"({"type": "directional", "elevation_deg": 45})",
+std::string mini(const std::string& objects,
+                 const std::string& lights = R"({"type": "directional", "elevation_deg": 45})",
                  const std::string& extra = "") {
   std::string s = kMiniScene;
   s.replace(s.find("%OBJECTS%"), 9, objects);
@@ -95,7 +96,8 @@ TEST(ScenesLoader, EveryBundledSceneLoads) {
       EXPECT_TRUE(ids.insert(o.id).second) << "duplicate id " << o.id;
       EXPECT_EQ(o.triangleMaterial.size(), o.triangles.size());
       EXPECT_TRUE(o.uvs.empty() || o.uvs.size() == o.positions.size());
-      for (const auto& t : o.triangles) EXPECT_TRUE(t.x < o.positions.size() && t.y < o.positions.size() && t.z < o.positions.size());
+      for (const auto& t : o.triangles)
+        EXPECT_TRUE(t.x < o.positions.size() && t.y < o.positions.size() && t.z < o.positions.size());
       for (uint32_t m : o.triangleMaterial) EXPECT_LT(m, s.materials.size());
       for (const auto& p : o.positions) ASSERT_TRUE(std::isfinite(p.x) && std::isfinite(p.y) && std::isfinite(p.z));
     }
@@ -267,7 +269,8 @@ TEST(ScenesProjector, TexFromWorldAxisEdgesAndReverse) {
   EXPECT_NEAR(top.x / top.w, 0.5f, 1e-5f);
   glm::vec4 rightEdge = project(p.position + 5.0f * (p.direction + t * p.aspect * right));
   EXPECT_NEAR(rightEdge.x / rightEdge.w, 1.0f, 1e-5f);
-  glm::vec4 nearPt = project(p.position + p.nearPlane * p.direction), farPt = project(p.position + p.farPlane * p.direction);
+  glm::vec4 nearPt = project(p.position + p.nearPlane * p.direction),
+            farPt = project(p.position + p.farPlane * p.direction);
   EXPECT_NEAR(nearPt.z / nearPt.w, 0.0f, 1e-5f);
   EXPECT_NEAR(farPt.z / farPt.w, 1.0f, 1e-5f);
   // Behind the projector: w < 0, yet the divided coordinates land inside [0,1]^2 (mirrored).
@@ -311,9 +314,9 @@ TEST(ScenesAlpha, FenceTextureAndNearestRepeatLookup) {
   EXPECT_EQ(at(12.01f, 30.5f), 0.0f);
   // Repeat addressing: whole-number shifts in u and v change nothing, negatives wrap.
   EXPECT_EQ(sampleAlphaNearest(a, {5.5f / 64 + 3.0f, 30.5f / 64 - 2.0f}), 1.0f);
-  EXPECT_EQ(sampleAlphaNearest(a, {-0.0001f, 30.5f / 64}), 0.0f);  // column 63
+  EXPECT_EQ(sampleAlphaNearest(a, {-0.0001f, 30.5f / 64}), 0.0f);     // column 63
   EXPECT_EQ(sampleAlphaNearest(a, {-58.5f / 64, 30.5f / 64}), 1.0f);  // column 5
-  EXPECT_EQ(sampleAlphaNearest(a, {1.0f, 30.5f / 64}), 1.0f);  // u = 1 wraps to column 0
+  EXPECT_EQ(sampleAlphaNearest(a, {1.0f, 30.5f / 64}), 1.0f);         // u = 1 wraps to column 0
 }
 
 TEST(ScenesLights, DirectionalFromElevationAzimuthAndOthers) {
@@ -323,8 +326,9 @@ TEST(ScenesLights, DirectionalFromElevationAzimuthAndOthers) {
   EXPECT_EQ(s.findLight("moon"), nullptr);
   glm::vec3 expected = -toLight(50, -120);
   EXPECT_NEAR(glm::length(sun->direction - expected), 0.0f, 1e-6f);
-  Scene m = loadText(mini(R"({"type": "plane", "size": [4, 4]})",
-                          R"({"type": "spot", "name": "spot", "position": [0, 4, 0], "look_at": [0, 0, 0], "cone_deg": 50, "near": 0.2},
+  Scene m = loadText(mini(
+      R"({"type": "plane", "size": [4, 4]})",
+      R"({"type": "spot", "name": "spot", "position": [0, 4, 0], "look_at": [0, 0, 0], "cone_deg": 50, "near": 0.2},
                              {"type": "point", "name": "bulb", "position": [1, 2, 3]},
                              {"type": "directional", "name": "sky", "direction": [0, -2, 0]})"));
   ASSERT_EQ(m.lights.size(), 3u);
@@ -340,8 +344,9 @@ TEST(ScenesLights, DirectionalFromElevationAzimuthAndOthers) {
 TEST(ScenesLights, ProjectorOnlySceneIsValid) {
   fs::path dir = tempDir("projonly");
   fs::copy_file(bundledScenesDir() + "/projector_image.png", dir / "img.png");
-  std::string text = mini(R"({"type": "plane", "size": [4, 4]})", "",
-                          R"(, "projectors": [{"position": [0, 2, 2], "look_at": [0, 0, 0], "fov_deg": 30, "image": "img.png"}])");
+  std::string text =
+      mini(R"({"type": "plane", "size": [4, 4]})", "",
+           R"(, "projectors": [{"position": [0, 2, 2], "look_at": [0, 0, 0], "fov_deg": 30, "image": "img.png"}])");
   writeFileAtomic((dir / "p.json").string(), text);
   Scene s = loadScene((dir / "p.json").string());
   EXPECT_TRUE(s.lights.empty());
@@ -360,13 +365,25 @@ TEST(ScenesOverrides, ReplaceValuesBeforeResolving) {
   EXPECT_NE(rotated.hash, base.hash);
   Scene lifted = loadScene(path, {{"/objects/1/transform/translate/1", 1.5}});
   EXPECT_NEAR(lifted.boundsMax().y, 2.5f, 1e-3f);
-  EXPECT_EQ(errorOf([&] { loadScene(path, {{"/lights/5/elevation_deg", 10}}); }),
-            path + ": override /lights/5/elevation_deg: error: no such value in the scene; expected a pointer to an existing value");
-  EXPECT_EQ(errorOf([&] { loadScene(path, {{"/camera/width", 0}}); }),
-            path + ": /camera/width: error: got 0; expected an integer 1..16384 (the largest image every Vulkan device must support)");
-  EXPECT_NE(errorOf([&] { loadScene(path, {{"/camera/fovy", 30}}); }).find(path + ": /camera/fovy: error: unknown key \"fovy\""),
+  EXPECT_EQ(errorOf([&] {
+              loadScene(path, {{"/lights/5/elevation_deg", 10}});
+            }),
+            path +
+                ": override /lights/5/elevation_deg: error: no such value in the scene; expected a pointer to an "
+                "existing value");
+  EXPECT_EQ(errorOf([&] {
+              loadScene(path, {{"/camera/width", 0}});
+            }),
+            path +
+                ": /camera/width: error: got 0; expected an integer 1..16384 (the largest image every Vulkan device "
+                "must support)");
+  EXPECT_NE(errorOf([&] {
+              loadScene(path, {{"/camera/fovy", 30}});
+            }).find(path + ": /camera/fovy: error: unknown key \"fovy\""),
             std::string::npos);
-  EXPECT_NE(errorOf([&] { loadScene(path, {{"lights", 1}}); }).find("override lights: error: got \"lights\"; expected a JSON pointer"),
+  EXPECT_NE(errorOf([&] {
+              loadScene(path, {{"lights", 1}});
+            }).find("override lights: error: got \"lights\"; expected a JSON pointer"),
             std::string::npos);
 }
 
@@ -391,7 +408,8 @@ TEST(ScenesObj, MtlMaterialsAndMapD) {
   writeFileAtomic((dir / "leaf.obj").string(),
                   "mtllib leaf.mtl\nv 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nvt 0 0\nvt 1 0\nvt 1 1\nvt 0 1\n"
                   "usemtl leaf\nf 1/1 2/2 3/3\nusemtl bark\nf 1/1 3/3 4/4\n");
-  writeFileAtomic((dir / "leaf.mtl").string(), "newmtl leaf\nKd 0.1 0.7 0.2\nmap_d tex/leaf_alpha.png\nnewmtl bark\nKd 0.4 0.3 0.2\n");
+  writeFileAtomic((dir / "leaf.mtl").string(),
+                  "newmtl leaf\nKd 0.1 0.7 0.2\nmap_d tex/leaf_alpha.png\nnewmtl bark\nKd 0.4 0.3 0.2\n");
   fs::create_directories(dir / "tex");
   // 2x1 RGB picture: black (alpha 0) on the left, white (alpha 1) on the right.
   writeRgbPng((dir / "tex" / "leaf_alpha.png").string(), 2, 1, {0, 0, 0, 255, 255, 255});
@@ -415,9 +433,9 @@ TEST(ScenesObj, MtlMaterialsAndMapD) {
     }
   }
   // A scene material on an OBJ replaces its MTL materials.
-  writeFileAtomic((dir / "s2.json").string(),
-                  mini(R"({"type": "obj", "path": "leaf.obj", "material": "stone"})", R"({"type": "directional", "elevation_deg": 45})",
-                       R"(, "materials": {"stone": {"two_sided": false}})"));
+  writeFileAtomic((dir / "s2.json").string(), mini(R"({"type": "obj", "path": "leaf.obj", "material": "stone"})",
+                                                   R"({"type": "directional", "elevation_deg": 45})",
+                                                   R"(, "materials": {"stone": {"two_sided": false}})"));
   Scene s2 = loadScene((dir / "s2.json").string());
   EXPECT_EQ(s2.materials.size(), 2u);
   EXPECT_EQ(s2.objects[0].triangleMaterial, (std::vector<uint32_t>{1, 1}));
@@ -437,7 +455,9 @@ TEST(ScenesObj, SharedDirFromEnvironment) {
   EXPECT_EQ(s.triangleCount(), 1u);
   ::setenv("SHADOWLAB_SHARED_DIR", (dir / "nowhere").string().c_str(), 1);
   std::string err = errorOf([&] { loadScene((dir / "s.json").string()); });
-  EXPECT_NE(err.find("/objects/0/path: error: OBJ file " + (dir / "nowhere" / "tri.obj").string() + " not found"), std::string::npos) << err;
+  EXPECT_NE(err.find("/objects/0/path: error: OBJ file " + (dir / "nowhere" / "tri.obj").string() + " not found"),
+            std::string::npos)
+      << err;
   if (old) ::setenv("SHADOWLAB_SHARED_DIR", saved.c_str(), 1);
   else ::unsetenv("SHADOWLAB_SHARED_DIR");
 }
@@ -445,8 +465,9 @@ TEST(ScenesObj, SharedDirFromEnvironment) {
 TEST(ScenesLoader, HashCoversResolvedFiles) {
   // Same JSON, different texture content: different hash.
   fs::path dir = tempDir("hash");
-  std::string text = mini(R"({"type": "quad", "size": [1, 1], "material": "m"})", R"({"type": "directional", "elevation_deg": 45})",
-                          R"(, "materials": {"m": {"alpha_texture": "a.png"}})");
+  std::string text =
+      mini(R"({"type": "quad", "size": [1, 1], "material": "m"})", R"({"type": "directional", "elevation_deg": 45})",
+           R"(, "materials": {"m": {"alpha_texture": "a.png"}})");
   writeFileAtomic((dir / "s.json").string(), text);
   writeRgbPng((dir / "a.png").string(), 1, 1, {0, 0, 0});
   std::string h1 = loadScene((dir / "s.json").string()).hash;

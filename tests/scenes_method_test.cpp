@@ -51,11 +51,25 @@ nlohmann::json roundTripped(const Method& m) {
 }  // namespace
 
 TEST(ScenesMethod, KeysInDocumentationOrder) {
-  EXPECT_EQ(methodKeys(), (std::vector<std::string>{"map.size", "map.format", "cull", "fit", "cascades.count",
-                                                    "cascades.lambda", "cascades.blend", "cascades.stabilize", "lispsm.n_scale",
-                                                    "bias.constant", "bias.slope",
-                                                    "bias.clamp", "bias.compare", "bias.normal", "bias.receiver_plane",
-                                                    "filter", "filter.size", "filter.taps", "filter.radius",
+  EXPECT_EQ(methodKeys(), (std::vector<std::string>{"map.size",
+                                                    "map.format",
+                                                    "cull",
+                                                    "fit",
+                                                    "cascades.count",
+                                                    "cascades.lambda",
+                                                    "cascades.blend",
+                                                    "cascades.stabilize",
+                                                    "lispsm.n_scale",
+                                                    "bias.constant",
+                                                    "bias.slope",
+                                                    "bias.clamp",
+                                                    "bias.compare",
+                                                    "bias.normal",
+                                                    "bias.receiver_plane",
+                                                    "filter",
+                                                    "filter.size",
+                                                    "filter.taps",
+                                                    "filter.radius",
                                                     "projector.reverse_guard"}));
 }
 
@@ -124,9 +138,15 @@ TEST(ScenesMethod, JsonRoundTrip) {
 }
 
 TEST(ScenesMethod, TextErrorsAreExact) {
-  EXPECT_EQ(setError("map.size", "abc"), "--set: map.size: error: got \"abc\"; expected an integer 16..16384 (16384: the largest 2D image every Vulkan device must support, lavapipe's limit)");
-  EXPECT_EQ(setError("map.size", "8"), "--set: map.size: error: got \"8\"; expected an integer 16..16384 (16384: the largest 2D image every Vulkan device must support, lavapipe's limit)");
-  EXPECT_EQ(setError("map.size", "1024.5"), "--set: map.size: error: got \"1024.5\"; expected an integer 16..16384 (16384: the largest 2D image every Vulkan device must support, lavapipe's limit)");
+  EXPECT_EQ(setError("map.size", "abc"),
+            "--set: map.size: error: got \"abc\"; expected an integer 16..16384 (16384: the largest 2D image every "
+            "Vulkan device must support, lavapipe's limit)");
+  EXPECT_EQ(setError("map.size", "8"),
+            "--set: map.size: error: got \"8\"; expected an integer 16..16384 (16384: the largest 2D image every "
+            "Vulkan device must support, lavapipe's limit)");
+  EXPECT_EQ(setError("map.size", "1024.5"),
+            "--set: map.size: error: got \"1024.5\"; expected an integer 16..16384 (16384: the largest 2D image every "
+            "Vulkan device must support, lavapipe's limit)");
   EXPECT_EQ(setError("filter", "pcff"),
             "--set: filter: error: got \"pcff\"; expected one of none, hw2x2, bilinear4, pcf, poisson");
   EXPECT_EQ(setError("map.format", "d8"), "--set: map.format: error: got \"d8\"; expected one of d16, d24, d32f");
@@ -136,9 +156,11 @@ TEST(ScenesMethod, TextErrorsAreExact) {
   EXPECT_EQ(setError("filter.taps", "-1"), "--set: filter.taps: error: got \"-1\"; expected an integer 1..64");
   EXPECT_EQ(setError("filter.radius", "0"),
             "--set: filter.radius: error: got \"0\"; expected a number > 0 and <= 32 (map texels)");
-  EXPECT_EQ(setError("bias.normal", "-1"), "--set: bias.normal: error: got \"-1\"; expected a number 0..64 (map texels)");
-  EXPECT_NE(setError("nope", "1").find("--set: nope: error: unknown method key \"nope\"; expected one of name, map.size,"),
-            std::string::npos);
+  EXPECT_EQ(setError("bias.normal", "-1"),
+            "--set: bias.normal: error: got \"-1\"; expected a number 0..64 (map texels)");
+  EXPECT_NE(
+      setError("nope", "1").find("--set: nope: error: unknown method key \"nope\"; expected one of name, map.size,"),
+      std::string::npos);
   // NaN and infinity in every spelling strtod accepts.
   for (const char* v : {"nan", "NaN", "inf", "-inf", "infinity", "1e999", "0x1p3", ""})
     EXPECT_NE(setError("bias.slope", v).find("--set: bias.slope: error: got \""), std::string::npos) << v;
@@ -155,10 +177,12 @@ TEST(ScenesMethod, ValueThatIsNotUtf8IsAnInputError) {
 TEST(ScenesMethod, JsonErrors) {
   Method m;
   EXPECT_EQ(errorOf([&] { applyMethodJson(m, "map.size", "2048", "grid.json: /grid/map.size/1"); }),
-            "grid.json: /grid/map.size/1: map.size: error: got \"2048\"; expected an integer 16..16384 (16384: the largest 2D image every Vulkan device must support, lavapipe's limit)");
+            "grid.json: /grid/map.size/1: map.size: error: got \"2048\"; expected an integer 16..16384 (16384: the "
+            "largest 2D image every Vulkan device must support, lavapipe's limit)");
   EXPECT_EQ(errorOf([&] { applyMethodJson(m, "bias.slope", std::numeric_limits<double>::infinity(), "g"); }),
             "g: bias.slope: error: got inf (a number too large for a double); expected a finite number -1e6..1e6");
-  EXPECT_EQ(errorOf([&] { applyMethodJson(m, "cull", 3, "g"); }), "g: cull: error: got 3; expected one of back, front, none");
+  EXPECT_EQ(errorOf([&] { applyMethodJson(m, "cull", 3, "g"); }),
+            "g: cull: error: got 3; expected one of back, front, none");
   EXPECT_EQ(errorOf([&] { applyMethodJson(m, "bias.receiver_plane", 2, "g"); }),
             "g: bias.receiver_plane: error: got 2; expected true, false, 1 or 0");
   // An integral float is an integer; a fractional one is not.
@@ -170,7 +194,8 @@ TEST(ScenesMethod, JsonErrors) {
 TEST(ScenesMethod, ValidateCrossField) {
   Method m;
   m.filterSize = 4;
-  EXPECT_EQ(errorOf([&] { validateMethod(m, "x.json"); }), "x.json: filter.size: error: got 4; expected an odd integer 3..15");
+  EXPECT_EQ(errorOf([&] { validateMethod(m, "x.json"); }),
+            "x.json: filter.size: error: got 4; expected an odd integer 3..15");
   m.filterSize = 5;
   validateMethod(m, "x.json");
 }
@@ -201,7 +226,8 @@ TEST(ScenesMethodFile, BadInputsAreRejectedWithTheirMessage) {
     ASSERT_TRUE(std::regex_search(text, match, std::regex("// expect: ([^\n]*)"))) << name << " has no // expect: line";
     std::string msg = errorOf([&] { loadMethodFile(e.path().string()); });
     EXPECT_EQ(msg.rfind(e.path().string(), 0), 0u) << "the message must start with the file path: " << msg;
-    EXPECT_NE(msg.find(match[1].str()), std::string::npos) << name << "\n  got:      " << msg << "\n  expected: " << match[1];
+    EXPECT_NE(msg.find(match[1].str()), std::string::npos)
+        << name << "\n  got:      " << msg << "\n  expected: " << match[1];
   }
   EXPECT_GE(count, 8);
 }
@@ -233,12 +259,17 @@ TEST(ScenesMethod, CascadeKeys) {
   nlohmann::json j = roundTripped(m);
   EXPECT_EQ(j["fit"], "cascades");
   EXPECT_EQ(j["cascades.count"], 8);
-  EXPECT_EQ(setError("cascades.count", "0"), "--set: cascades.count: error: got \"0\"; expected an integer 1..8 (the resolve shader's 8 light layers, resolve_abi.h)");
-  EXPECT_EQ(setError("cascades.count", "9"), "--set: cascades.count: error: got \"9\"; expected an integer 1..8 (the resolve shader's 8 light layers, resolve_abi.h)");
+  EXPECT_EQ(setError("cascades.count", "0"),
+            "--set: cascades.count: error: got \"0\"; expected an integer 1..8 (the resolve shader's 8 light layers, "
+            "resolve_abi.h)");
+  EXPECT_EQ(setError("cascades.count", "9"),
+            "--set: cascades.count: error: got \"9\"; expected an integer 1..8 (the resolve shader's 8 light layers, "
+            "resolve_abi.h)");
   EXPECT_EQ(setError("cascades.lambda", "1.5"),
             "--set: cascades.lambda: error: got \"1.5\"; expected a number 0..1 (0 uniform, 1 logarithmic splits)");
-  EXPECT_EQ(setError("cascades.blend", "0.6"),
-            "--set: cascades.blend: error: got \"0.6\"; expected a number 0..0.5 (fraction of a cascade's depth range)");
+  EXPECT_EQ(
+      setError("cascades.blend", "0.6"),
+      "--set: cascades.blend: error: got \"0.6\"; expected a number 0..0.5 (fraction of a cascade's depth range)");
   EXPECT_EQ(setError("cascades.stabilize", "maybe"),
             "--set: cascades.stabilize: error: got \"maybe\"; expected true, false, 1 or 0");
   Method hand;
@@ -272,7 +303,8 @@ TEST(ScenesMethod, LispsmKeys) {
             "grid: lispsm.n_scale: error: got 0.0; " + expected);
   // A file: the JSON pointer names the key.
   fs::path file = tempFile("nscale.json", R"({"fit": "lispsm", "lispsm.n_scale": -0.5})");
-  EXPECT_EQ(errorOf([&] { loadMethodFile(file.string()); }), file.string() + ": /lispsm.n_scale: error: got -0.5; " + expected);
+  EXPECT_EQ(errorOf([&] { loadMethodFile(file.string()); }),
+            file.string() + ": /lispsm.n_scale: error: got -0.5; " + expected);
   fs::remove_all(file.parent_path());
   // A hand-built Method with a NaN scale is refused by the cross-field check.
   Method hand;

@@ -89,8 +89,9 @@ TEST(ScenePaths, KeyframeInterpolationIsPiecewiseLinearAtEqualSteps) {
   EXPECT_THROW(keyframePath(keys, 1), InputError);
   EXPECT_THROW(keyframePath({keys[0]}, 4), InputError);
   // Two keyframes swapping position and look_at: the halfway camera has no view direction.
-  const std::string e = inputErrorOf(
-      [] { keyframePath({keyCamera({0, 0, 1}, {0, 0, -1}), keyCamera({0, 0, -1}, {0, 0, 1})}, 3); });
+  const std::string e = inputErrorOf([] {
+    keyframePath({keyCamera({0, 0, 1}, {0, 0, -1}), keyCamera({0, 0, -1}, {0, 0, 1})}, 3);
+  });
   EXPECT_NE(e.find("frame 1 (between keyframes 0 and 1) is degenerate: its look_at is its position"), std::string::npos)
       << e;
 }
@@ -101,7 +102,8 @@ TEST(ScenePaths, BadPathsNameTheFileAndThePointer) {
     std::vector<SceneOverride> overrides;
     std::string message;
   } cases[] = {
-      {{{"/paths/walk/kind", "spiral"}}, "/paths/walk/kind: error: got \"spiral\"; expected one of dolly, orbit, keyframes"},
+      {{{"/paths/walk/kind", "spiral"}},
+       "/paths/walk/kind: error: got \"spiral\"; expected one of dolly, orbit, keyframes"},
       {{{"/paths/walk/frames", 1}}, "/paths/walk/frames: error: got 1; expected an integer 2..1024"},
       {{{"/paths/walk/frames", 0}}, "/paths/walk/frames: error: got 0; expected an integer 2..1024"},
       {{{"/paths/walk/frames", 2.5}}, "/paths/walk/frames: error: got 2.5; expected an integer 2..1024"},
@@ -115,9 +117,11 @@ TEST(ScenePaths, BadPathsNameTheFileAndThePointer) {
        "/paths/turn/cameras/1: error: keyframe 1 is degenerate: its up is parallel to the view direction"},
       {{{"/paths/turn/cameras", nlohmann::json::array()}},
        "/paths/turn/cameras: error: got an array of 0 values; expected an array of at least 2 cameras"},
-      {{{"/paths/walk/speed", 2}}, "/paths/walk/speed: error: unknown key \"speed\"; expected one of kind, frames, distance"},
+      {{{"/paths/walk/speed", 2}},
+       "/paths/walk/speed: error: unknown key \"speed\"; expected one of kind, frames, distance"},
       {{{"/paths/walk", 3}}, "/paths/walk: error: got 3; expected a camera path object with \"kind\""},
-      {{{"/paths", nlohmann::json::object()}}, "/paths: error: got an object; expected a non-empty object of named camera paths"},
+      {{{"/paths", nlohmann::json::object()}},
+       "/paths: error: got an object; expected a non-empty object of named camera paths"},
   };
   for (const Case& c : cases) {
     const std::string e = inputErrorOf([&] { loadScene(lv, c.overrides); });
@@ -131,8 +135,9 @@ TEST(ScenePaths, BadPathsNameTheFileAndThePointer) {
   std::ofstream(file) << R"({"camera": {"position": [0, 2, 5], "look_at": [0, 0, 0], "vfov_deg": 45, "width": 64,
     "height": 48}, "objects": [{"type": "plane", "size": [10, 10]}], "lights": [{"type": "directional",
     "elevation_deg": 45}], "paths": {"a walk": {"kind": "dolly", "distance": 1, "frames": 2}}})";
-  EXPECT_NE(inputErrorOf([&] { loadScene(file); })
-                .find(file + ": /paths/a walk: error: path name \"a walk\" has a character other than letters"),
+  EXPECT_NE(inputErrorOf([&] {
+              loadScene(file);
+            }).find(file + ": /paths/a walk: error: path name \"a walk\" has a character other than letters"),
             std::string::npos);
   fs::remove_all(dir);
 }

@@ -73,7 +73,7 @@ TEST(CameraPaths, DollyMovesAlongTheViewDirectionInEqualSteps) {
     EXPECT_FLOAT_EQ(p[size_t(k)].position.y, 2.0f);
     EXPECT_EQ(p[size_t(k)].width, c.width);
   }
-  EXPECT_EQ(p[0].hash(), c.hash());  // frame 0 is the start camera exactly
+  EXPECT_EQ(p[0].hash(), c.hash());                                 // frame 0 is the start camera exactly
   EXPECT_NEAR(dollyPath(c, -3.0f, 2)[1].position.z, 13.0f, 1e-5f);  // negative: backwards
   EXPECT_THROW(dollyPath(c, 1.0f, 1), InputError);
   Camera still = c;
@@ -183,8 +183,8 @@ TEST(ErrorStatistics, PlantedPerFrameRatesGiveExactStatisticsAndJump) {
 // On synthetic frames the jump is the difference of two frames' error rates from compareFrames.
 TEST(ErrorStatistics, CameraPathJumpIsTheLargestChangeOfErrorRate) {
   Frame ref = synthetic({1, 1, 1, 1}, {1, 1, 0, 0});
-  Frame right = synthetic({1, 1, 1, 1}, {1, 1, 0, 0});       // 0 of 4 wrong
-  Frame halfWrong = synthetic({1, 1, 1, 1}, {0, 1, 1, 0});   // 2 of 4 wrong
+  Frame right = synthetic({1, 1, 1, 1}, {1, 1, 0, 0});      // 0 of 4 wrong
+  Frame halfWrong = synthetic({1, 1, 1, 1}, {0, 1, 1, 0});  // 2 of 4 wrong
   StabilityMetrics s = measureStability(ref, {right, halfWrong, right, right});
   ASSERT_EQ(s.errorRatePerFrame.size(), 4u);
   EXPECT_EQ(s.errorRatePerFrame[1], 0.5);
@@ -325,10 +325,11 @@ TEST(Shimmer, StabilizedCascadesDoNotShimmerOnADollyAndUnstabilizedDo) {
     for (const Camera& fit : path) rasters.push_back(R->render(scene, m, "", nullptr, &fit));
     StabilityMetrics s = measureStability(ref, rasters);
     rate[stabilize] = s.shimmerRate;
-    std::printf("  long_view 480x270, 4 x 1024 cascades, dolly %.1f units / %d frames, stabilize %d: "
-                "shimmer_rate %.6g, error_rate mean %.5f max %.5f std %.5f, compared px %llu\n",
-                distanceWorld, frames, stabilize, s.shimmerRate, s.errorRateMean, s.errorRateMax, s.errorRateStd,
-                (unsigned long long)s.pixelsComparedPerPair[0]);
+    std::printf(
+        "  long_view 480x270, 4 x 1024 cascades, dolly %.1f units / %d frames, stabilize %d: "
+        "shimmer_rate %.6g, error_rate mean %.5f max %.5f std %.5f, compared px %llu\n",
+        distanceWorld, frames, stabilize, s.shimmerRate, s.errorRateMean, s.errorRateMax, s.errorRateStd,
+        (unsigned long long)s.pixelsComparedPerPair[0]);
     EXPECT_GT(s.pixelsComparedPerPair[0], 50000u);  // most of the image is compared
     EXPECT_TRUE(std::isfinite(s.errorRateStd));
   }
@@ -373,7 +374,8 @@ TEST(StabilityCli, RefusesBadInputsAndWritesNothing) {
       {"--light-path elevation_deg=60:10:5 --angle-deg 3", "--angle-deg: error: given with --light-path"},
       {"--light-path elevation_deg=60:10", "--light-path elevation_deg=60:10: error: got 2 field(s)"},
       {"--light-path elevation_deg=95:10:4", "an elevation outside -90..90 degrees"},
-      {"--light-path azimuth_deg=0:90:3 --light-path azimuth_deg=0:10:3", "--light-path azimuth_deg: error: given twice"},
+      {"--light-path azimuth_deg=0:90:3 --light-path azimuth_deg=0:10:3",
+       "--light-path azimuth_deg: error: given twice"},
       {"--light-path elevation_deg=60:10:5 --set scene:/lights/0/elevation_deg=30",
        "--set scene:/lights/0/elevation_deg: error: the light path moves /lights/0/elevation_deg"},
   };
@@ -395,8 +397,11 @@ TEST(StabilityCli, WritesStabilityJson) {
   fs::remove_all(dir);
   fs::create_directories(dir);
   const std::string out = (dir / "out").string();
-  CliRun r = runShadowlab("stability sphere_on_plane --set fit=cascades --set cascades.stabilize=true --path orbit "
-                       "--frames 3 --angle-deg 20 --cache " + (dir / "cache").string() + " -o " + out, dir);
+  CliRun r = runShadowlab(
+      "stability sphere_on_plane --set fit=cascades --set cascades.stabilize=true --path orbit "
+      "--frames 3 --angle-deg 20 --cache " +
+          (dir / "cache").string() + " -o " + out,
+      dir);
   ASSERT_EQ(r.code, 0) << r.err;
   std::ifstream in(out + "/stability.json");
   nlohmann::json j = nlohmann::json::parse(in);
@@ -435,13 +440,15 @@ TEST(StabilityCli, LightPathJumpsWhereAConstantBiasBreaksAndNotWithSlopeBias) {
   fs::path dir = fs::temp_directory_path() / ("shadowlab_stability_light_" + std::to_string(::getpid()));
   fs::remove_all(dir);
   fs::create_directories(dir);
-  const std::string common = "grazing --set scene:/camera/width=320 --set scene:/camera/height=180 "
-                             "--light-path elevation_deg=45:5:6";
+  const std::string common =
+      "grazing --set scene:/camera/width=320 --set scene:/camera/height=180 "
+      "--light-path elevation_deg=45:5:6";
   nlohmann::json constant = stabilityRun(common + " --set bias.slope=0", dir, "constant");
   nlohmann::json slope = stabilityRun(common + " --set bias.slope=2", dir, "slope");
   ASSERT_FALSE(constant.is_null() || slope.is_null());
   for (const nlohmann::json* j : {&constant, &slope}) {
-    std::printf("  grazing, sun 45 -> 5 deg in 6 frames, %s: error_rate per frame", (*j)["config"].get<std::string>().c_str());
+    std::printf("  grazing, sun 45 -> 5 deg in 6 frames, %s: error_rate per frame",
+                (*j)["config"].get<std::string>().c_str());
     for (const auto& f : (*j)["per_frame"]) std::printf(" %.4f", f["error_rate"].get<double>());
     std::printf("; error_jump_max %.5f\n", (*j)["error_jump_max"].get<double>());
     EXPECT_EQ((*j)["schema"], "shadowlab.stability/1");
@@ -451,8 +458,9 @@ TEST(StabilityCli, LightPathJumpsWhereAConstantBiasBreaksAndNotWithSlopeBias) {
     EXPECT_FALSE((*j).contains("shimmer_rate")) << "a moving light has no shimmer";
     EXPECT_EQ((*j)["per_frame"][2]["light"]["elevation_deg"], 29.0);
   }
-  EXPECT_EQ(constant["config"], "bias.slope=0,scene:/camera/height=180,scene:/camera/width=320 @ "
-                                "light_path=elevation_deg:45:5,frames=6");
+  EXPECT_EQ(constant["config"],
+            "bias.slope=0,scene:/camera/height=180,scene:/camera/width=320 @ "
+            "light_path=elevation_deg:45:5,frames=6");
   // Breaks inside the path: fine at 45 degrees, broken at 5.
   EXPECT_LT(constant["per_frame"][0]["error_rate"].get<double>(), 0.01);
   EXPECT_GT(constant["per_frame"][5]["error_rate"].get<double>(), 0.2);
@@ -468,8 +476,10 @@ TEST(StabilityCli, LightPathJumpsWhereAConstantBiasBreaksAndNotWithSlopeBias) {
   EXPECT_EQ(constant["error_jump_max"].get<double>(), jump);
 
   // Down to and below the horizon (10, 0, -10 degrees): every number stays finite.
-  nlohmann::json dusk = stabilityRun("grazing --set scene:/camera/width=320 --set scene:/camera/height=180 "
-                                     "--set fit=cascades --light-path elevation_deg=10:-10:3", dir, "dusk");
+  nlohmann::json dusk = stabilityRun(
+      "grazing --set scene:/camera/width=320 --set scene:/camera/height=180 "
+      "--set fit=cascades --light-path elevation_deg=10:-10:3",
+      dir, "dusk");
   ASSERT_FALSE(dusk.is_null());
   for (const auto& f : dusk["per_frame"]) EXPECT_TRUE(std::isfinite(f["error_rate"].get<double>())) << dusk.dump();
   for (const char* k : {"error_rate_mean", "error_rate_max", "error_rate_std", "error_jump_max"})
@@ -483,9 +493,10 @@ TEST(StabilityCli, ScenePathFromTheFile) {
   fs::path dir = fs::temp_directory_path() / ("shadowlab_stability_walk_" + std::to_string(::getpid()));
   fs::remove_all(dir);
   fs::create_directories(dir);
-  nlohmann::json j = stabilityRun("long_view --path walk --frames 3 --set fit=cascades --set scene:/camera/width=320 "
-                                  "--set scene:/camera/height=180",
-                                  dir, "walk");
+  nlohmann::json j = stabilityRun(
+      "long_view --path walk --frames 3 --set fit=cascades --set scene:/camera/width=320 "
+      "--set scene:/camera/height=180",
+      dir, "walk");
   ASSERT_FALSE(j.is_null());
   EXPECT_EQ(j["path"]["kind"], "dolly");
   EXPECT_EQ(j["path"]["name"], "walk");
@@ -497,7 +508,8 @@ TEST(StabilityCli, ScenePathFromTheFile) {
     for (int a = 0; a < 3; ++a)
       EXPECT_FLOAT_EQ(j["path"]["fit_cameras"][k]["position"][a].get<float>(), expected[k].position[a]) << k;
   EXPECT_EQ(j["config"], "fit=cascades,scene:/camera/height=180,scene:/camera/width=320 @ path=walk,frames=3");
-  for (const char* k : {"frames", "shimmer_rate", "error_rate_mean", "error_rate_max", "error_rate_std", "error_jump_max"})
+  for (const char* k :
+       {"frames", "shimmer_rate", "error_rate_mean", "error_rate_max", "error_rate_std", "error_jump_max"})
     EXPECT_TRUE(j["metrics"].contains(k)) << k;
   EXPECT_EQ(j["metrics"]["shimmer_rate"], j["shimmer_rate"]);
   fs::remove_all(dir);

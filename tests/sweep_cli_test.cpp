@@ -170,8 +170,8 @@ TEST(SweepCli, BadGridValuesExit2AndWriteNothing) {
 TEST(SweepCli, SmallSweepRowsMatchShadowlabRunExactly) {
   const std::string dir = tempDir("small");
   const std::string scene = smallScene(dir);
-  Child sweep = spawn(sweepArgs({scene, "--grid", "map.size=256,512", "--grid", "bias.slope=0,2", "-o",
-                                 dir + "/sweep", "--cache", dir + "/cache", "--no-report", "--keep-images"}),
+  Child sweep = spawn(sweepArgs({scene, "--grid", "map.size=256,512", "--grid", "bias.slope=0,2", "-o", dir + "/sweep",
+                                 "--cache", dir + "/cache", "--no-report", "--keep-images"}),
                       dir + "/sweep");
   int rc = waitFor(sweep);
   if (rc == 3) GTEST_SKIP() << "no Vulkan device (shadowlab exit 3): " << slurp(sweep.err);
@@ -190,8 +190,9 @@ TEST(SweepCli, SmallSweepRowsMatchShadowlabRunExactly) {
   // Columns of results.csv: identification, the method, every metric, every timing.
   std::string csv = slurp(dir + "/sweep/results.csv");
   std::string header = csv.substr(0, csv.find('\n'));
-  for (const char* col : {"scene", "config", "light", "map.size", "bias.slope", "error_rate", "acne_rate", "leak_rate",
-                          "aliasing_rate", "coverage_rate", "m_p95", "shadow_gpu_ms", "camera_gpu_ms", "compare_ms", "config_wall_ms"})
+  for (const char* col :
+       {"scene", "config", "light", "map.size", "bias.slope", "error_rate", "acne_rate", "leak_rate", "aliasing_rate",
+        "coverage_rate", "m_p95", "shadow_gpu_ms", "camera_gpu_ms", "compare_ms", "config_wall_ms"})
     EXPECT_NE(("," + header + ",").find(std::string(",") + col + ","), std::string::npos) << col << " in " << header;
   EXPECT_EQ(std::count(csv.begin(), csv.end(), '\n'), 5);
 
@@ -202,8 +203,8 @@ TEST(SweepCli, SmallSweepRowsMatchShadowlabRunExactly) {
     EXPECT_EQ(rows[i].scene, "sphere_on_plane");
     EXPECT_EQ(rows[i].light, "sun");
     const std::string runDir = dir + "/run" + std::to_string(i);
-    Child run = spawn({kBinary, "run", scene, "--set", "map.size=" + size, "--set", "bias.slope=" + slope,
-                       "-o", runDir, "--cache", dir + "/cache"},
+    Child run = spawn({kBinary, "run", scene, "--set", "map.size=" + size, "--set", "bias.slope=" + slope, "-o", runDir,
+                       "--cache", dir + "/cache"},
                       runDir);
     ASSERT_EQ(waitFor(run), 0) << slurp(run.err);
     auto single = loadResultRows(runDir + "/metrics.json");
@@ -211,8 +212,8 @@ TEST(SweepCli, SmallSweepRowsMatchShadowlabRunExactly) {
     EXPECT_EQ(single[0].config, config) << "run names the same configuration the same way";
     EXPECT_EQ(single[0].method, rows[i].method);
     // Every metric identical: same reference, same raster, same classification.
-    EXPECT_EQ(single[0].metrics, rows[i].metrics) << config << "\nrun:   " << single[0].metrics.dump()
-                                                  << "\nsweep: " << rows[i].metrics.dump();
+    EXPECT_EQ(single[0].metrics, rows[i].metrics)
+        << config << "\nrun:   " << single[0].metrics.dump() << "\nsweep: " << rows[i].metrics.dump();
   }
   // The bias must matter on this scene (else the comparison above proves little): slope 0 at 256
   // shows acne that slope 2 removes.
@@ -252,9 +253,9 @@ TEST(SweepCli, InterruptedAndKilledSweepResumesWithNothingLostOrRepeated) {
   const std::string out = dir + "/sweep";
   const std::string journal = out + "/rows.jsonl";
   // 40 configurations: slow enough to be caught midway.
-  std::vector<std::string> args = sweepArgs({smallScene(dir), "--grid", "map.size=64,128,256,512,1024",
-                                             "--grid", "bias.slope=0,0.25,0.5,1,1.5,2,3,4", "-o", out, "--cache",
-                                             dir + "/cache", "--no-report"});
+  std::vector<std::string> args =
+      sweepArgs({smallScene(dir), "--grid", "map.size=64,128,256,512,1024", "--grid",
+                 "bias.slope=0,0.25,0.5,1,1.5,2,3,4", "-o", out, "--cache", dir + "/cache", "--no-report"});
   const size_t total = 40;
 
   // 1. SIGINT after a few rows: a clean stop, exit 130, the rows so far kept.

@@ -129,8 +129,8 @@ TEST(FrontierFunction, SceneFailureKeyWalksTheDeclaredParameter) {
 TEST(FrontierFunction, HoldsBreaksAtFirstMissingAndNoSceneKey) {
   SweepPlan plan = grazingPlan({kElevation + "=60,30,8", "bias.slope=0,1,2"});
   auto rows = rowsOf(plan, [](const std::map<std::string, std::string>& v) -> nlohmann::json {
-    if (v.at("bias.slope") == "0") return 0.5;                     // broken everywhere
-    if (v.at("bias.slope") == "1") return 0.0;                     // holds everywhere
+    if (v.at("bias.slope") == "0") return 0.5;                                 // broken everywhere
+    if (v.at("bias.slope") == "1") return 0.0;                                 // holds everywhere
     return v.at(kElevation) == "30" ? nlohmann::json() : nlohmann::json(0.0);  // a missing metric
   });
   nlohmann::json fr = computeFrontiers(plan, rows, "error_rate", 0.01);
@@ -227,7 +227,8 @@ TEST(FrontierCli, BadFrontierFlagsExitTwoAndWriteNothing) {
   std::string dir = tempDir("bad");
   std::string out = dir + "/out";
   EXPECT_EQ(runBinary({kBinary, "sweep", "grazing", "--frontier-threshold", "abc", "-o", out}, dir + "/e1"), 2);
-  EXPECT_NE(slurp(dir + "/e1").find("--frontier-threshold: error: got \"abc\""), std::string::npos) << slurp(dir + "/e1");
+  EXPECT_NE(slurp(dir + "/e1").find("--frontier-threshold: error: got \"abc\""), std::string::npos)
+      << slurp(dir + "/e1");
   EXPECT_EQ(runBinary({kBinary, "sweep", "grazing", "--frontier-metric", "nope", "-o", out}, dir + "/e2"), 2);
   EXPECT_NE(slurp(dir + "/e2").find("--frontier-metric: error: unknown metric \"nope\""), std::string::npos)
       << slurp(dir + "/e2");
@@ -241,10 +242,11 @@ TEST(FrontierCli, GrazingElevationSweepFindsAcneFrontiersSlopeBiasHoldsLower) {
   std::string dir = tempDir("grazing");
   std::string out = dir + "/out";
   auto t0 = std::chrono::steady_clock::now();
-  int rc = runBinary({kBinary, "sweep", "grazing", "--grid", kElevation + "=60,30,15,8,4,2,1", "--grid",
-                      "bias.slope=0,0.25,2", "--set", "bias.compare=0.0005", "--set", "scene:/camera/width=480", "--set",
-                      "scene:/camera/height=270", "--frontier-metric", "acne_rate", "--cache", dir + "/cache", "-o", out},
-                     dir + "/err");
+  int rc =
+      runBinary({kBinary, "sweep", "grazing", "--grid", kElevation + "=60,30,15,8,4,2,1", "--grid",
+                 "bias.slope=0,0.25,2", "--set", "bias.compare=0.0005", "--set", "scene:/camera/width=480", "--set",
+                 "scene:/camera/height=270", "--frontier-metric", "acne_rate", "--cache", dir + "/cache", "-o", out},
+                dir + "/err");
   double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   ASSERT_EQ(rc, 0) << slurp(dir + "/err");
   std::printf("  sweep of 21 rows with report: %.1f s\n", seconds);

@@ -276,15 +276,17 @@ TEST(SweepPlan, SceneFailureKeyNeedsADeclaredFailureAndNoSecondNameForIt) {
   SweepSpec spec = specWithGrid({"scene:failure=30,20"});
   spec.scenes = {"grazing", plain};
   EXPECT_EQ(inputErrorOf([&] { planSweep(spec); }),
-            plain + ": error: the scene declares no \"failure\", so scene:failure names nothing in it; expected a scene "
-                    "with \"failure\" (scenes/FORMAT.md) or a JSON pointer: scene:/path/to/value");
+            plain +
+                ": error: the scene declares no \"failure\", so scene:failure names nothing in it; expected a scene "
+                "with \"failure\" (scenes/FORMAT.md) or a JSON pointer: scene:/path/to/value");
   // The same value under two names is ambiguous.
   SweepSpec twice = specWithGrid({"scene:failure=30,20"});
   twice.scenes = {"grazing"};
   twice.fixed.push_back(parseSetArgument("scene:/lights/0/elevation_deg=10"));
-  EXPECT_NE(inputErrorOf([&] { planSweep(twice); })
-                .find("scene:failure is /lights/0/elevation_deg in this scene, which scene:/lights/0/elevation_deg also "
-                      "sets; expected one of them"),
-            std::string::npos);
+  EXPECT_NE(
+      inputErrorOf([&] { planSweep(twice); })
+          .find("scene:failure is /lights/0/elevation_deg in this scene, which scene:/lights/0/elevation_deg also "
+                "sets; expected one of them"),
+      std::string::npos);
   fs::remove_all(dir);
 }

@@ -35,10 +35,16 @@ class FakeRunner : public SweepRunner {
     ++total;
     if (stopAfter && total == stopAfterRuns) stopAfter->store(true);  // as if Ctrl-C came during this run
     SweepRunOutput out;
-    out.metrics = {{"error_rate", fakeErrorRate(m)}, {"acne_rate", 0.0}, {"leak_rate", 0.001 * m.biasSlope},
-                   {"aliasing_rate", 1.0 / m.mapSize}, {"coverage_rate", 0.0}, {"m_median", 1.0},
-                   {"m_p95", 2.0}, {"m_max", 3.0}};
-    out.timings = {{"shadow_gpu_ms", m.mapSize / 100.0}, {"camera_gpu_ms", 1.0}, {"readback_ms", 0.5}, {"compare_ms", 0.25}};
+    out.metrics = {{"error_rate", fakeErrorRate(m)},
+                   {"acne_rate", 0.0},
+                   {"leak_rate", 0.001 * m.biasSlope},
+                   {"aliasing_rate", 1.0 / m.mapSize},
+                   {"coverage_rate", 0.0},
+                   {"m_median", 1.0},
+                   {"m_p95", 2.0},
+                   {"m_max", 3.0}};
+    out.timings = {
+        {"shadow_gpu_ms", m.mapSize / 100.0}, {"camera_gpu_ms", 1.0}, {"readback_ms", 0.5}, {"compare_ms", 0.25}};
     return out;
   }
   bool writeTriptych(const Scene&, const Method&, const std::string&, const std::string&) override { return false; }

@@ -43,9 +43,10 @@ TEST(RunsAnywhere, MainSweepNeedsNoSharedFolder) {
   const fs::path dir = freshDir("main");
   ASSERT_FALSE(fs::exists(dir / "no_such_shared_folder"));
   const std::string sweepFile = std::string(SHADOWLAB_SOURCE_DIR) + "/compare/report/default_sweep.json";
-  const auto r = shadowlab::testing::runShadowlab("sweep --sweep '" + sweepFile + "' " + kSmallGrid + " -o '" +
-                                                      (dir / "out").string() + "' --cache '" + (dir / "cache").string() + "'",
-                                                  dir, noSharedPrefix(dir));
+  const auto r =
+      shadowlab::testing::runShadowlab("sweep --sweep '" + sweepFile + "' " + kSmallGrid + " -o '" +
+                                           (dir / "out").string() + "' --cache '" + (dir / "cache").string() + "'",
+                                       dir, noSharedPrefix(dir));
   ASSERT_EQ(r.code, 0) << "stdout:\n" << r.out << "\nstderr:\n" << r.err;
   const nlohmann::json results = nlohmann::json::parse(readFile((dir / "out" / "results.json").string()));
   std::map<std::string, int> rowsPerScene;
@@ -67,10 +68,10 @@ TEST(RunsAnywhere, ASceneNamingASharedAssetFailsWithoutTheSharedFolder) {
   ASSERT_NE(at, std::string::npos) << "bunny.json no longer names assets/bunny.obj; update this control";
   text.replace(at, from.size(), "\"path\": \"${SHARED}/bunny.obj\"");
   { std::ofstream(dir / "bunny_shared.json") << text; }
-  const auto r = shadowlab::testing::runShadowlab("sweep '" + (dir / "bunny_shared.json").string() + "' " + kSmallGrid +
-                                                      " -o '" + (dir / "out").string() + "' --cache '" +
-                                                      (dir / "cache").string() + "'",
-                                                  dir, noSharedPrefix(dir));
+  const auto r =
+      shadowlab::testing::runShadowlab("sweep '" + (dir / "bunny_shared.json").string() + "' " + kSmallGrid + " -o '" +
+                                           (dir / "out").string() + "' --cache '" + (dir / "cache").string() + "'",
+                                       dir, noSharedPrefix(dir));
   EXPECT_EQ(r.code, 2) << "stdout:\n" << r.out << "\nstderr:\n" << r.err;
   EXPECT_NE(r.err.find("bunny.obj"), std::string::npos) << r.err;
   EXPECT_FALSE(fs::exists(dir / "out" / "results.json"));

@@ -86,7 +86,8 @@ TEST(SweepShardCli, ThreeShardsMergedEqualAnUnshardedRunInEveryMetric) {
   double slowest = 0;
   for (int i = 0; i < 3; ++i) {
     t0 = std::chrono::steady_clock::now();
-    auto r = runShadowlab("sweep " + kPlan + " --shard " + std::to_string(i) + "/3 -o '" + many.string() + "'" + cache, dir);
+    auto r =
+        runShadowlab("sweep " + kPlan + " --shard " + std::to_string(i) + "/3 -o '" + many.string() + "'" + cache, dir);
     slowest = std::max(slowest, seconds(t0));
     ASSERT_EQ(r.code, 0) << r.err;
     EXPECT_NE(r.out.find("shadowlab merge"), std::string::npos) << r.out;
@@ -98,13 +99,15 @@ TEST(SweepShardCli, ThreeShardsMergedEqualAnUnshardedRunInEveryMetric) {
   auto m = runShadowlab("merge '" + many.string() + "' --no-report" + cache, dir);
   const double merge = seconds(t0);
   ASSERT_EQ(m.code, 0) << m.err;
-  std::printf("timing: unsharded %.2f s; slowest of 3 shards %.2f s; merge %.2f s (shards run one after another here)\n",
-              unsharded, slowest, merge);
+  std::printf(
+      "timing: unsharded %.2f s; slowest of 3 shards %.2f s; merge %.2f s (shards run one after another here)\n",
+      unsharded, slowest, merge);
   expectSameMetrics(dir / "one" / "results.json", many / "results.json");
   EXPECT_EQ(loadResultRows((many / "results.json").string()).size(), 8u);
 
   // A doctored journal: shard 2 gains a copy of shard 0's first row with another error_rate.
-  const fs::path journal0 = many / "shards" / "0-of-3" / "rows.jsonl", journal2 = many / "shards" / "2-of-3" / "rows.jsonl";
+  const fs::path journal0 = many / "shards" / "0-of-3" / "rows.jsonl",
+                 journal2 = many / "shards" / "2-of-3" / "rows.jsonl";
   std::string first;
   {
     std::ifstream in(journal0);
@@ -132,8 +135,10 @@ TEST(SweepShardCli, ThreeShardsMergedEqualAnUnshardedRunInEveryMetric) {
 TEST(SweepShardCli, DamagedReferenceCacheEntriesAreTracedAgainWithIdenticalMetrics) {
   const fs::path dir = tempDir("cache");
   const fs::path cache = dir / "cache";
-  const std::string args = "sweep sphere_on_plane contact --grid map.size=256 --set scene:/camera/width=64 "
-                           "--set scene:/camera/height=48 --no-report --cache '" + cache.string() + "'";
+  const std::string args =
+      "sweep sphere_on_plane contact --grid map.size=256 --set scene:/camera/width=64 "
+      "--set scene:/camera/height=48 --no-report --cache '" +
+      cache.string() + "'";
   auto first = runShadowlab(args + " -o '" + (dir / "a").string() + "'", dir);
   ASSERT_EQ(first.code, 0) << first.err;
   std::vector<fs::path> entries;
@@ -166,24 +171,26 @@ TEST(SweepShardCli, SlurmScriptsRunAsAnArrayThenMergeToTheUnshardedMetrics) {
   const fs::path dir = tempDir("slurm");
   const std::string cache = " --cache '" + (dir / "cache").string() + "'";
   const fs::path gen = dir / "gen";
-  auto r = runShadowlab("sweep " + kPlan + " --slurm 3 --slurm-opt='--partition=debug --time=10' -o '" + gen.string() +
-                            "'" + cache,
-                        dir);
+  auto r = runShadowlab(
+      "sweep " + kPlan + " --slurm 3 --slurm-opt='--partition=debug --time=10' -o '" + gen.string() + "'" + cache, dir);
   ASSERT_EQ(r.code, 0) << r.err;
   EXPECT_FALSE(fs::exists(gen / "rows.jsonl")) << "--slurm runs nothing";
   EXPECT_FALSE(fs::exists(gen / "shards" / "0-of-3")) << "--slurm runs nothing";
-  const std::string sweep = readFile((gen / "sweep.sbatch").string()), merge = readFile((gen / "merge.sbatch").string());
-  for (const char* want : {"#!/bin/bash\n", "\n#SBATCH --array=0-2\n", "\n#SBATCH --partition=debug\n",
-                           "\n#SBATCH --time=10\n", " sweep 'sphere_on_plane' 'contact' --grid 'map.size=128,512' "
-                           "--grid 'bias.slope=0,2' --set 'scene:/camera/width=64' --set 'scene:/camera/height=48' ",
-                           " --shard \"$SLURM_ARRAY_TASK_ID/3\"\n"})
+  const std::string sweep = readFile((gen / "sweep.sbatch").string()),
+                    merge = readFile((gen / "merge.sbatch").string());
+  for (const char* want :
+       {"#!/bin/bash\n", "\n#SBATCH --array=0-2\n", "\n#SBATCH --partition=debug\n", "\n#SBATCH --time=10\n",
+        " sweep 'sphere_on_plane' 'contact' --grid 'map.size=128,512' "
+        "--grid 'bias.slope=0,2' --set 'scene:/camera/width=64' --set 'scene:/camera/height=48' ",
+        " --shard \"$SLURM_ARRAY_TASK_ID/3\"\n"})
     EXPECT_NE(sweep.find(want), std::string::npos) << "missing: " << want << "\n" << sweep;
   EXPECT_NE(sweep.find("-o '" + gen.string() + "'"), std::string::npos) << sweep;
   for (const char* want : {"#!/bin/bash\n", "\n#SBATCH --partition=debug\n", " merge '", " --no-report\n"})
     EXPECT_NE(merge.find(want), std::string::npos) << "missing: " << want << "\n" << merge;
   EXPECT_EQ(merge.find("--array"), std::string::npos) << merge;
   EXPECT_NE(r.out.find("sbatch --parsable '" + (gen / "sweep.sbatch").string() + "'"), std::string::npos) << r.out;
-  EXPECT_NE(r.out.find("sbatch --dependency=afterok:$jobid '" + (gen / "merge.sbatch").string() + "'"), std::string::npos)
+  EXPECT_NE(r.out.find("sbatch --dependency=afterok:$jobid '" + (gen / "merge.sbatch").string() + "'"),
+            std::string::npos)
       << r.out;
 
   // What Slurm would do: each array task with its SLURM_ARRAY_TASK_ID, then the merge.
@@ -192,7 +199,10 @@ TEST(SweepShardCli, SlurmScriptsRunAsAnArrayThenMergeToTheUnshardedMetrics) {
                             "' >'" + (dir / "task.log").string() + "' 2>&1";
     ASSERT_EQ(std::system(cmd.c_str()), 0) << readFile((dir / "task.log").string());
   }
-  ASSERT_EQ(std::system(("bash '" + (gen / "merge.sbatch").string() + "' >'" + (dir / "merge.log").string() + "' 2>&1").c_str()), 0)
+  ASSERT_EQ(
+      std::system(
+          ("bash '" + (gen / "merge.sbatch").string() + "' >'" + (dir / "merge.log").string() + "' 2>&1").c_str()),
+      0)
       << readFile((dir / "merge.log").string());
   auto one = runShadowlab("sweep " + kPlan + " -o '" + (dir / "one").string() + "'" + cache, dir);
   ASSERT_EQ(one.code, 0) << one.err;
@@ -231,8 +241,8 @@ TEST(SweepShardCli, SlurmSubmitRunsTheArrayThenTheMergeAfterIt) {
   }
   fs::permissions(dir / "bin" / "sbatch", fs::perms::owner_all);
   const fs::path out = dir / "out";
-  auto r = runShadowlab("sweep sphere_on_plane --grid map.size=128,256 --slurm 2 --submit -o '" + out.string() + "'", dir,
-                        "PATH='" + (dir / "bin").string() + "':\"$PATH\" ");
+  auto r = runShadowlab("sweep sphere_on_plane --grid map.size=128,256 --slurm 2 --submit -o '" + out.string() + "'",
+                        dir, "PATH='" + (dir / "bin").string() + "':\"$PATH\" ");
   ASSERT_EQ(r.code, 0) << r.err;
   std::ifstream in(calls);
   std::string first, second;

@@ -27,8 +27,13 @@ class FakeRunner : public SweepRunner {
     ++total;
     SweepRunOutput out;
     out.metrics = {{"error_rate", 1.0 / m.mapSize + 0.001 * m.biasSlope + (scene.name == "contact" ? 0.5 : 0.0)},
-                   {"acne_rate", 0.0}, {"leak_rate", 0.001 * m.biasSlope}, {"aliasing_rate", 1.0 / m.mapSize},
-                   {"coverage_rate", 0.0}, {"m_median", 1.0}, {"m_p95", 2.0}, {"m_max", 3.0}};
+                   {"acne_rate", 0.0},
+                   {"leak_rate", 0.001 * m.biasSlope},
+                   {"aliasing_rate", 1.0 / m.mapSize},
+                   {"coverage_rate", 0.0},
+                   {"m_median", 1.0},
+                   {"m_p95", 2.0},
+                   {"m_max", 3.0}};
     out.timings = {{"shadow_gpu_ms", m.mapSize / 100.0}, {"camera_gpu_ms", 1.0}};
     return out;
   }
@@ -107,9 +112,14 @@ TEST(SweepShard, ParsesIOverNAndRefusesTheRest) {
     }
   }
   EXPECT_NE(std::string([] {
-              try { parseShardArgument("3/3"); } catch (const InputError& e) { return std::string(e.what()); }
+              try {
+                parseShardArgument("3/3");
+              } catch (const InputError& e) {
+                return std::string(e.what());
+              }
               return std::string();
-            }()).find("0 <= I < N = 3"),
+            }())
+                .find("0 <= I < N = 3"),
             std::string::npos);
 }
 
@@ -133,8 +143,8 @@ TEST(SweepShard, EachShardRunsEveryNthJobIntoItsOwnFolder) {
     // Row k of shard i is job i + 5k of the plan.
     for (size_t k = 0; k < share; ++k) {
       auto j = nlohmann::json::parse(journal[k]);
-      EXPECT_EQ(j.at("row").at("scene").get<std::string>() + " | " + j.at("row").at("config").get<std::string>() + " | " +
-                    j.at("row").at("light").get<std::string>(),
+      EXPECT_EQ(j.at("row").at("scene").get<std::string>() + " | " + j.at("row").at("config").get<std::string>() +
+                    " | " + j.at("row").at("light").get<std::string>(),
                 p.jobs[i + 5 * k].key());
       EXPECT_EQ(j.at("shard"), std::to_string(i) + "/5");
     }
@@ -246,7 +256,8 @@ TEST(SweepShard, MergeRefusesShardsOfAnotherPlanOrAnotherN) {
   }
   std::string err = mergeError(p, dir);
   EXPECT_NE(err.find(shardDir(dir, {1, 2}) + "/shard.json"), std::string::npos) << err;
-  EXPECT_NE(err.find("plan " + planFingerprint(other) + " differs from plan " + planFingerprint(p)), std::string::npos) << err;
+  EXPECT_NE(err.find("plan " + planFingerprint(other) + " differs from plan " + planFingerprint(p)), std::string::npos)
+      << err;
   // A shard folder of one plan refuses to run another plan.
   FakeRunner r;
   try {
@@ -274,7 +285,8 @@ TEST(SweepShard, MergeRefusesADoctoredDuplicateRow) {
   // Shard 1's journal gains a copy of shard 0's first row with another error_rate.
   auto first = nlohmann::json::parse(lines(shardDir(dir, {0, 2}) + "/rows.jsonl").front());
   const std::string key = first.at("row").at("scene").get<std::string>() + " | " +
-                          first.at("row").at("config").get<std::string>() + " | " + first.at("row").at("light").get<std::string>();
+                          first.at("row").at("config").get<std::string>() + " | " +
+                          first.at("row").at("light").get<std::string>();
   first["row"]["metrics"]["error_rate"] = 0.999;
   const std::string journal = shardDir(dir, {1, 2}) + "/rows.jsonl";
   std::ofstream(journal, std::ios::app) << first.dump() << "\n";
@@ -285,7 +297,8 @@ TEST(SweepShard, MergeRefusesADoctoredDuplicateRow) {
   EXPECT_FALSE(fs::exists(dir + "/results.json"));
   // The same copy with the same metrics is harmless (e.g. a row re-run by hand).
   auto ls = lines(journal);
-  first["row"]["metrics"] = nlohmann::json::parse(lines(shardDir(dir, {0, 2}) + "/rows.jsonl").front())["row"]["metrics"];
+  first["row"]["metrics"] =
+      nlohmann::json::parse(lines(shardDir(dir, {0, 2}) + "/rows.jsonl").front())["row"]["metrics"];
   ls.back() = first.dump();
   writeLines(journal, ls);
   FakeRunner m;

@@ -13,9 +13,7 @@ namespace shadowlab::raster {
 
 namespace {
 
-glm::vec3 upFor(glm::vec3 dir) {
-  return std::abs(dir.y) > 0.99f ? glm::vec3(0, 0, 1) : glm::vec3(0, 1, 0);
-}
+glm::vec3 upFor(glm::vec3 dir) { return std::abs(dir.y) > 0.99f ? glm::vec3(0, 0, 1) : glm::vec3(0, 1, 0); }
 
 // View space (right-handed, looking down -z) -> tex, orthographic box.
 glm::mat4 texFromViewOrtho(float left, float right, float bottom, float top, float nearZ, float farZ) {
@@ -34,7 +32,7 @@ glm::mat4 texFromViewOrtho(float left, float right, float bottom, float top, flo
 glm::mat4 texFromViewPerspective(float fovRad, float nearZ, float farZ) {
   float k = 1.0f / std::tan(0.5f * fovRad);
   glm::mat4 m(0.0f);
-  m[0][0] = 0.5f * k;   // u*w = 0.5 k x + 0.5 w
+  m[0][0] = 0.5f * k;  // u*w = 0.5 k x + 0.5 w
   m[2][0] = -0.5f;
   m[1][1] = -0.5f * k;  // v*w = -0.5 k y + 0.5 w
   m[2][1] = -0.5f;
@@ -119,8 +117,8 @@ bool lispsmLayer(const Scene& scene, const Camera& camera, const glm::mat4& ligh
   if (clippedLo.x < clippedHi.x && clippedLo.y < clippedHi.y) lo = clippedLo, hi = clippedHi;
   glm::dvec2 pad = glm::max((hi - lo) * 1e-4, glm::dvec2(1e-5));
   glm::dvec3 bodyMin(lo - pad, sceneMin.z), bodyMax(hi + pad, sceneMax.z);
-  double inverseNear = lispsmInverseNear(std::max(zNear, 1e-4), std::max(zFar, zNear), basis.sinGamma,
-                                         method.lispsmNScale);
+  double inverseNear =
+      lispsmInverseNear(std::max(zNear, 1e-4), std::max(zFar, zNear), basis.sinGamma, method.lispsmNScale);
   if (!(inverseNear * (bodyMax.y - bodyMin.y) >= kLispsmMinWarp)) return false;
   double eyeX = (basis.lightFromWorld * glm::dvec4(glm::dvec3(camera.position), 1.0)).x;
   LispsmMap map = lispsmTexFromLight(bodyMin, bodyMax, eyeX, inverseNear, method.mapSize);
@@ -207,8 +205,8 @@ LightSpace fitLight(const Scene& scene, const Light& light, const Method& method
     glm::vec3 dir = glm::normalize(light.direction);
     float fov = glm::radians(std::clamp(light.coneDeg, 1e-3f, 179.0f));
     MapLayer layer;
-    layer.texFromWorld = texFromViewPerspective(fov, nearZ, farZ) *
-                         glm::lookAt(light.position, light.position + dir, upFor(dir));
+    layer.texFromWorld =
+        texFromViewPerspective(fov, nearZ, farZ) * glm::lookAt(light.position, light.position + dir, upFor(dir));
     layer.texelWorldPerW = 2.0f * std::tan(0.5f * fov) / float(mapSize);
     out.layers.push_back(layer);
     return out;

@@ -20,7 +20,7 @@ namespace shadowlab::raster {
 struct LightSpace {
   // directional: 1, or one per cascade (fit=cascades); spot: 1; point: 6 cube faces (+X -X +Y -Y +Z -Z)
   std::vector<MapLayer> layers;
-  bool depthClamp = false;       // directional: casters outside [near, far] still write the map
+  bool depthClamp = false;  // directional: casters outside [near, far] still write the map
   // fit=cascades: the split distances C_0..C_N (view depth, world units); empty otherwise.
   std::vector<float> cascadeSplitsView;
 };

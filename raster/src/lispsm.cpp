@@ -20,8 +20,12 @@ std::vector<glm::dvec3> viewBoxIntersection(const Camera& camera, glm::vec3 boxM
   glm::dmat4 viewFromWorld(camera.viewFromWorld());
   glm::dmat3 rotation(viewFromWorld);
   glm::dvec3 eye(camera.position);
-  std::vector<Plane> planes = {{{1, 0, tanX}, 0.0},   {{-1, 0, tanX}, 0.0},          {{0, 1, tanY}, 0.0},
-                               {{0, -1, tanY}, 0.0},  {{0, 0, 1}, -double(own.nearView)}, {{0, 0, -1}, double(own.farView)}};
+  std::vector<Plane> planes = {{{1, 0, tanX}, 0.0},
+                               {{-1, 0, tanX}, 0.0},
+                               {{0, 1, tanY}, 0.0},
+                               {{0, -1, tanY}, 0.0},
+                               {{0, 0, 1}, -double(own.nearView)},
+                               {{0, 0, -1}, double(own.farView)}};
   // Box face x_i <= hi_i (and -x_i <= -lo_i) in world: with p_world = R^T p_camera + eye,
   // (R e) . p_camera <= hi_i - e . eye.
   for (int i = 0; i < 3; ++i) {

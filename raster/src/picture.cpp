@@ -19,7 +19,9 @@ std::vector<uint8_t> rasterPicture(const Scene& scene, const Frame& frame) {
   const std::vector<float>& hit = frame.get("hit");
   const std::vector<float>& objectId = frame.get("object_id");
   const std::vector<float>& primId = frame.get("prim_id");
-  struct ProjectorPlanes { const std::vector<float> *coverage, *r, *g, *b; };
+  struct ProjectorPlanes {
+    const std::vector<float>*coverage, *r, *g, *b;
+  };
   std::vector<ProjectorPlanes> projectors;
   for (const Projector& p : scene.projectors) {
     std::string k = "proj." + p.name + ".";
@@ -48,8 +50,7 @@ std::vector<uint8_t> rasterPicture(const Scene& scene, const Frame& frame) {
       bool edge = (x + 1 < size_t(frame.width) && objectId[i + 1] != objectId[i]) ||
                   (y + 1 < size_t(frame.height) && objectId[i + size_t(frame.width)] != objectId[i]);
       if (edge) c *= 0.5f;
-      for (auto& p : projectors)
-        c += 0.6f * (*p.coverage)[i] * glm::vec3((*p.r)[i], (*p.g)[i], (*p.b)[i]);
+      for (auto& p : projectors) c += 0.6f * (*p.coverage)[i] * glm::vec3((*p.r)[i], (*p.g)[i], (*p.b)[i]);
     }
     rgb[3 * i] = toByte(c.r);
     rgb[3 * i + 1] = toByte(c.g);

@@ -108,7 +108,6 @@ constexpr uint32_t kBindingCount = uint32_t(std::size(kBindings));
 // Every binding is read by the fragment shaders (id.frag: 0..2, resolve.frag: all).
 constexpr VkShaderStageFlags kBindingStages = VK_SHADER_STAGE_FRAGMENT_BIT;
 
-
 }  // namespace
 
 // The id-writing pipelines of one frame: the plain writer and the one with material tests
@@ -174,15 +173,15 @@ struct Rasterizer::Impl {
   void ensureImages(int mapSize, VkFormat mapFormat, int layers, int width, int height);
   void writeDescriptors();
   Frame readback(const Scene& scene, const Light* light, int width, int height);
-  void record(VkCommandBuffer cmd, const std::vector<glm::mat4>& layerClip,
-              const IdPipelines& pipes, VkPipeline resolve, const Method& method,
-              const glm::mat4& cameraClip, int width, int height, bool drawVisibility);
+  void record(VkCommandBuffer cmd, const std::vector<glm::mat4>& layerClip, const IdPipelines& pipes,
+              VkPipeline resolve, const Method& method, const glm::mat4& cameraClip, int width, int height,
+              bool drawVisibility);
 
   // The camera's visibility buffer depends on the scene and the camera only, not on the method:
   // while both stay the same (a sweep over methods, a stability run with a fixed evaluation
   // camera) it is kept and not drawn again. Its GPU time, measured when it was drawn, stays part
   // of every frame's camera_gpu_ms.
-  std::string visibilityKey;  // empty: cameraIds holds nothing reusable
+  std::string visibilityKey;              // empty: cameraIds holds nothing reusable
   std::vector<std::vector<float>> spare;  // recycled channel planes (Rasterizer::recycle)
   double visibilityGpuMs = 0;
 };
@@ -304,20 +303,19 @@ VkPipeline Rasterizer::Impl::resolvePipeline(const ResolveKey& key) {
 void Rasterizer::Impl::ensureImages(int mapSize, VkFormat mapFormat, int layers, int width, int height) {
   const vk::Context& c = *context;
   if (mapDepth.width() != mapSize || mapDepth.format() != mapFormat || mapDepth.layers() != layers) {
-    mapDepth = vk::Image(c, mapSize, mapSize, layers, mapFormat,
-                         VK_IMAGE_USAGE_DEPTH_STENCIL_ATTACHMENT_BIT | VK_IMAGE_USAGE_SAMPLED_BIT,
-                         VK_IMAGE_ASPECT_DEPTH_BIT);
+    mapDepth =
+        vk::Image(c, mapSize, mapSize, layers, mapFormat,
+                  VK_IMAGE_USAGE_DEPTH_STENCIL_ATTACHMENT_BIT | VK_IMAGE_USAGE_SAMPLED_BIT, VK_IMAGE_ASPECT_DEPTH_BIT);
     mapIds = vk::Image(c, mapSize, mapSize, layers, kIdFormat,
-                       VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT | VK_IMAGE_USAGE_SAMPLED_BIT,
-                       VK_IMAGE_ASPECT_COLOR_BIT);
+                       VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT | VK_IMAGE_USAGE_SAMPLED_BIT, VK_IMAGE_ASPECT_COLOR_BIT);
   }
   if (cameraIds.width() != width || cameraIds.height() != height) {
-    cameraDepth = vk::Image(c, width, height, 1, kCameraDepthFormat,
-                            VK_IMAGE_USAGE_DEPTH_STENCIL_ATTACHMENT_BIT, VK_IMAGE_ASPECT_DEPTH_BIT);
+    cameraDepth = vk::Image(c, width, height, 1, kCameraDepthFormat, VK_IMAGE_USAGE_DEPTH_STENCIL_ATTACHMENT_BIT,
+                            VK_IMAGE_ASPECT_DEPTH_BIT);
     visibilityKey.clear();
-    cameraIds = vk::Image(c, width, height, 1, kIdFormat,
-                          VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT | VK_IMAGE_USAGE_SAMPLED_BIT,
-                          VK_IMAGE_ASPECT_COLOR_BIT, true);
+    cameraIds =
+        vk::Image(c, width, height, 1, kIdFormat, VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT | VK_IMAGE_USAGE_SAMPLED_BIT,
+                  VK_IMAGE_ASPECT_COLOR_BIT, true);
     for (int i = 0; i < kResolveAttachments; ++i)
       resolveOut[i] = vk::Image(c, width, height, 1, kResolveFormats[i], VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT,
                                 VK_IMAGE_ASPECT_COLOR_BIT, true);
@@ -345,7 +343,8 @@ void Rasterizer::Impl::writeDescriptors() {
       image(nearestSampler, mapDepth.arrayView(), VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL);
   resources[abi::kBindingMapShadow].image =
       image(compareSampler, mapDepth.arrayView(), VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL);
-  resources[abi::kBindingMapIds].image = image(nearestSampler, mapIds.arrayView(), VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL);
+  resources[abi::kBindingMapIds].image =
+      image(nearestSampler, mapIds.arrayView(), VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL);
   resources[abi::kBindingCameraIds].image = image(nearestSampler, cameraIds.layerView(0), VK_IMAGE_LAYOUT_GENERAL);
   resources[abi::kBindingTrianglePlanes].texelView = s.trianglePlanesView.get();
   resources[abi::kBindingProjectorTexels].buffer = &s.projectorTexels;
@@ -373,9 +372,9 @@ void Rasterizer::Impl::writeDescriptors() {
   vkUpdateDescriptorSets(context->device(), uint32_t(writes.size()), writes.data(), 0, nullptr);
 }
 
-void Rasterizer::Impl::record(VkCommandBuffer cmd, const std::vector<glm::mat4>& layerClip,
-                              const IdPipelines& pipes, VkPipeline resolve, const Method& method,
-                              const glm::mat4& cameraClip, int width, int height, bool drawVisibility) {
+void Rasterizer::Impl::record(VkCommandBuffer cmd, const std::vector<glm::mat4>& layerClip, const IdPipelines& pipes,
+                              VkPipeline resolve, const Method& method, const glm::mat4& cameraClip, int width,
+                              int height, bool drawVisibility) {
   const raster::SceneGpu& s = *scene;
   VkQueryPool pool = queries.get();
   vkCmdResetQueryPool(cmd, pool, 0, 4);
@@ -406,8 +405,8 @@ void Rasterizer::Impl::record(VkCommandBuffer cmd, const std::vector<glm::mat4>&
         if (p != bound) vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_GRAPHICS, p), bound = p;
         vkCmdSetCullMode(cmd, cull);
         DrawPush push{clip, d.objectIndex, d.triangleBase, 0, 0};
-        vkCmdPushConstants(cmd, pipelineLayout.get(), VK_SHADER_STAGE_VERTEX_BIT | VK_SHADER_STAGE_FRAGMENT_BIT,
-                           0, sizeof(push), &push);
+        vkCmdPushConstants(cmd, pipelineLayout.get(), VK_SHADER_STAGE_VERTEX_BIT | VK_SHADER_STAGE_FRAGMENT_BIT, 0,
+                           sizeof(push), &push);
         vkCmdDrawIndexed(cmd, d.indexCount, 1, d.firstIndex, d.vertexOffset, 0);
       }
   };
@@ -600,7 +599,7 @@ Frame Rasterizer::Impl::readback(const Scene& sc, const Light* light, int width,
           out[4][x] = b[4 * x];
           out[5][x] = b[4 * x + 1];
           idsOf(uint32_t(b[4 * x + 2]), out[6][x], out[7][x]);  // exact up to 2^24
-          const int packed = int(b[4 * x + 3]);                   // 2 * cascade + in_map
+          const int packed = int(b[4 * x + 3]);                 // 2 * cascade + in_map
           out[8][x] = float(packed & 1);
           out[9][x] = float(packed >> 1);
         }
@@ -649,38 +648,42 @@ const Light* Rasterizer::Impl::validate(const Scene& scene, const Method& method
     if (!light) {
       std::string names;
       for (auto& l : scene.lights) names += (names.empty() ? "" : ", ") + l.name;
-      throw InputError(formatError(where, "", "no light named \"" + lightName + "\"; expected one of: " +
-                                                  (names.empty() ? "(the scene has no lights)" : names)));
+      throw InputError(formatError(where, "",
+                                   "no light named \"" + lightName + "\"; expected one of: " +
+                                       (names.empty() ? "(the scene has no lights)" : names)));
     }
   }
   if (method.mapSize < 16 || method.mapSize > maxSize)
-    throw InputError(formatError("method", "map.size", "got " + std::to_string(method.mapSize) +
-                                                           "; expected 16.." + std::to_string(maxSize) +
-                                                           " (the device's largest image)"));
+    throw InputError(formatError("method", "map.size",
+                                 "got " + std::to_string(method.mapSize) + "; expected 16.." + std::to_string(maxSize) +
+                                     " (the device's largest image)"));
   if (method.filter == Filter::Pcf && (method.filterSize < 1 || method.filterSize % 2 == 0 || method.filterSize > 15))
-    throw InputError(formatError("method", "filter.size", "got " + std::to_string(method.filterSize) +
-                                                              "; expected an odd number 3..15"));
+    throw InputError(formatError("method", "filter.size",
+                                 "got " + std::to_string(method.filterSize) + "; expected an odd number 3..15"));
   if (method.filter == Filter::Poisson && (method.filterTaps < 1 || method.filterTaps > abi::kMaxTaps))
-    throw InputError(formatError("method", "filter.taps", "got " + std::to_string(method.filterTaps) +
-                                                              "; expected 1.." + std::to_string(abi::kMaxTaps)));
+    throw InputError(
+        formatError("method", "filter.taps",
+                    "got " + std::to_string(method.filterTaps) + "; expected 1.." + std::to_string(abi::kMaxTaps)));
   if (method.filter == Filter::Poisson && !(method.filterRadius > 0.0f && method.filterRadius <= 32.0f))
-    throw InputError(formatError("method", "filter.radius", "got " + std::to_string(method.filterRadius) +
-                                                                "; expected > 0 and <= 32 texels"));
+    throw InputError(formatError("method", "filter.radius",
+                                 "got " + std::to_string(method.filterRadius) + "; expected > 0 and <= 32 texels"));
   if (scene.projectors.size() > size_t(abi::kMaxProjectors))
-    throw InputError(formatError(where, "/projectors", "got " + std::to_string(scene.projectors.size()) +
-                                                           " projectors; the rasterizer renders at most " +
-                                                           std::to_string(abi::kMaxProjectors)));
+    throw InputError(formatError(where, "/projectors",
+                                 "got " + std::to_string(scene.projectors.size()) +
+                                     " projectors; the rasterizer renders at most " +
+                                     std::to_string(abi::kMaxProjectors)));
   const Camera& camera = scene.camera;
   if (camera.width < 1 || camera.height < 1 || camera.width > maxSize || camera.height > maxSize)
-    throw InputError(formatError(where, "/camera", "image size " + std::to_string(camera.width) + "x" +
-                                                       std::to_string(camera.height) + " is not renderable"));
+    throw InputError(formatError(
+        where, "/camera",
+        "image size " + std::to_string(camera.width) + "x" + std::to_string(camera.height) + " is not renderable"));
   VkFormatProperties fp;
   vkGetPhysicalDeviceFormatProperties(context->physical(), vkDepthFormat(method.mapFormat), &fp);
   VkFormatFeatureFlags need = VK_FORMAT_FEATURE_DEPTH_STENCIL_ATTACHMENT_BIT | VK_FORMAT_FEATURE_SAMPLED_IMAGE_BIT;
   if ((fp.optimalTilingFeatures & need) != need)
-    throw InputError(formatError("method", "map.format", "got " + toString(method.mapFormat) + ", which device " +
-                                                             context->deviceName() +
-                                                             " cannot render and sample; expected another format"));
+    throw InputError(formatError("method", "map.format",
+                                 "got " + toString(method.mapFormat) + ", which device " + context->deviceName() +
+                                     " cannot render and sample; expected another format"));
   return light;
 }
 
@@ -704,8 +707,7 @@ void Rasterizer::Impl::prepareTargets(const Scene& sc, const Method& method, con
   ensureImages(method.mapSize, vkDepthFormat(method.mapFormat), std::max(1, int(layers.layers.size())), camera.width,
                camera.height);
   const size_t channelCount = size_t(kProjectorChannels) * sc.projectors.size();
-  size_t outputBytes =
-      std::max<size_t>(1, channelCount * size_t(camera.width) * size_t(camera.height)) * sizeof(float);
+  size_t outputBytes = std::max<size_t>(1, channelCount * size_t(camera.width) * size_t(camera.height)) * sizeof(float);
   if (output.size() != outputBytes) output = vk::Buffer(*context, outputBytes, VK_BUFFER_USAGE_STORAGE_BUFFER_BIT);
   raster::updatePlanes(*scene, glm::dvec3(camera.position));
   writeDescriptors();
@@ -720,7 +722,7 @@ std::vector<raster::ProjectorTexels> Rasterizer::Impl::projectorTexels() const {
 
 // Pipelines: the id writers for the map's format and clamp, the resolve for its specialization.
 Rasterizer::Impl::FramePipelines Rasterizer::Impl::pipelinesFor(const Method& method, const raster::FrameLayers& layers,
-                                                                 const raster::ResolveSpecialization& spec) {
+                                                                const raster::ResolveSpecialization& spec) {
   VkFormat mapFormat = vkDepthFormat(method.mapFormat);
   bool depthClamp = layers.depthClamp;
   FramePipelines p;
@@ -792,8 +794,8 @@ nlohmann::json frameMeta(const Scene& scene, const Light* light, const Camera& f
 
 }  // namespace
 
-Frame Rasterizer::render(const Scene& scene, const Method& method, const std::string& lightName,
-                         RasterTimings* timings, const Camera* fitCamera) {
+Frame Rasterizer::render(const Scene& scene, const Method& method, const std::string& lightName, RasterTimings* timings,
+                         const Camera* fitCamera) {
   auto t0 = std::chrono::steady_clock::now();
   Impl& im = *impl_;
   const Light* light = im.validate(scene, method, lightName);

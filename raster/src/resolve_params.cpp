@@ -101,8 +101,8 @@ abi::Params packResolveParams(const Scene& scene, const Light* light, const Meth
     prm.rayX = glm::vec4(glm::vec3(dirAt(1, 0) - c), 0);
     prm.rayY = glm::vec4(glm::vec3(dirAt(0, 1) - c), 0);
   }
-  prm.bias = glm::vec4(method.biasCompare, method.biasNormal, method.biasReceiverPlane ? 1.0f : 0.0f,
-                       method.filterRadius);
+  prm.bias =
+      glm::vec4(method.biasCompare, method.biasNormal, method.biasReceiverPlane ? 1.0f : 0.0f, method.filterRadius);
   prm.depthBias = glm::vec4(method.biasConstant, method.biasSlope, method.biasClamp, depthResolution(method.mapFormat));
   prm.sizes = glm::ivec4(method.mapSize, frameLayers.lightLayers, projectorCount, method.filterSize);
   prm.sizes2 = glm::ivec4(width, height, method.filterTaps, method.projectorReverseGuard ? 1 : 0);

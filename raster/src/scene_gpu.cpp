@@ -122,8 +122,7 @@ SceneGpu uploadScene(const vk::Context& context, const Scene& scene, const std::
     } else {
       for (int y = 0; y < p.image.height; ++y)
         for (int x = 0; x < p.image.width; ++x)
-          for (int c = 0; c < 3; ++c)
-            projectorTexels.push_back(p.image.at(x, y, std::min(c, p.image.channels - 1)));
+          for (int c = 0; c < 3; ++c) projectorTexels.push_back(p.image.at(x, y, std::min(c, p.image.channels - 1)));
     }
     g.projectors.push_back(pi);
   }
@@ -135,9 +134,9 @@ SceneGpu uploadScene(const vk::Context& context, const Scene& scene, const std::
   size_t triangles = g.triangleVertices.size() / 3;
   size_t limit = std::min<size_t>((size_t(1) << 24) - 1, context.properties().limits.maxTexelBufferElements - 1);
   if (triangles > limit)
-    throw InputError(formatError(scene.path.empty() ? scene.name : scene.path, "/objects",
-                                 std::to_string(triangles) + " triangles; the rasterizer takes at most " +
-                                     std::to_string(limit)));
+    throw InputError(
+        formatError(scene.path.empty() ? scene.name : scene.path, "/objects",
+                    std::to_string(triangles) + " triangles; the rasterizer takes at most " + std::to_string(limit)));
   // Texel 0 is a placeholder plane for pixels without a hit (id 0); triangle t is texel t + 1.
   g.trianglePlanes = vk::Buffer(context, (triangles + 1) * sizeof(glm::vec4), VK_BUFFER_USAGE_UNIFORM_TEXEL_BUFFER_BIT);
   g.trianglePlanesView = makeView(context, g.trianglePlanes, VK_FORMAT_R32G32B32A32_SFLOAT);

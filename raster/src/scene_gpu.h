@@ -38,22 +38,22 @@ struct SceneGpu {
   std::string hash;
   std::vector<Draw> draws;
   std::vector<ProjectorImage> projectors;
-  std::vector<uint32_t> objectIds;            // Object::id by object index
-  std::vector<uint32_t> objectTriangleBase;   // first global triangle index by object index
-  std::vector<uint32_t> triangleObject;       // object index by global triangle index
-  vk::Buffer vertices;           // vec3 position + vec2 uv per vertex
-  vk::Buffer indices;            // uint32 local indices
-  // resolve: one RGBA32F texel per triangle (triangle t at texel t + 1, texel 0 a placeholder), its plane relative to the camera: (n, dot(n, v0 - o)),
-  // n the unit normal (v1 - v0) x (v2 - v0), o = planesOrigin (updatePlanes).
+  std::vector<uint32_t> objectIds;           // Object::id by object index
+  std::vector<uint32_t> objectTriangleBase;  // first global triangle index by object index
+  std::vector<uint32_t> triangleObject;      // object index by global triangle index
+  vk::Buffer vertices;                       // vec3 position + vec2 uv per vertex
+  vk::Buffer indices;                        // uint32 local indices
+  // resolve: one RGBA32F texel per triangle (triangle t at texel t + 1, texel 0 a placeholder), its plane relative to
+  // the camera: (n, dot(n, v0 - o)), n the unit normal (v1 - v0) x (v2 - v0), o = planesOrigin (updatePlanes).
   vk::Buffer trianglePlanes;
   vk::BufferView trianglePlanesView;
   glm::dvec3 planesOrigin{0.0};
   bool planesValid = false;
   std::vector<glm::vec3> triangleVertices;  // host: 3 per triangle, world space
-  vk::Buffer triangleMaterials;  // uint per triangle
-  vk::Buffer materials;          // MaterialGpu per material
-  vk::Buffer alphaTexels;        // all alpha textures, float
-  vk::Buffer projectorTexels;    // all projector images, RGB float
+  vk::Buffer triangleMaterials;             // uint per triangle
+  vk::Buffer materials;                     // MaterialGpu per material
+  vk::Buffer alphaTexels;                   // all alpha textures, float
+  vk::Buffer projectorTexels;               // all projector images, RGB float
 };
 
 SceneGpu uploadScene(const vk::Context& context, const Scene& scene, const std::string& hash);

@@ -49,8 +49,7 @@ void filterHits(const RTCFilterFunctionNArguments* args) {
     if (flags == 0) continue;
     if (flags & kOneSided) {
       const glm::vec3& normal = geometry->normals[prim];
-      const float along = normal.x * RTCRayN_dir_x(args->ray, n, i) +
-                          normal.y * RTCRayN_dir_y(args->ray, n, i) +
+      const float along = normal.x * RTCRayN_dir_x(args->ray, n, i) + normal.y * RTCRayN_dir_y(args->ray, n, i) +
                           normal.z * RTCRayN_dir_z(args->ray, n, i);
       // Camera rays see the front face when they travel against its normal. A shadow ray travels
       // from the receiver toward the light, so the light sees the occluder's front face when the
@@ -148,8 +147,7 @@ EmbreeScene::EmbreeScene(const Scene& scene) {
     data.flags.resize(triangleCount);
     for (size_t t = 0; t < triangleCount; ++t) {
       const glm::uvec3& tri = object.triangles[t];
-      if (tri.x >= object.positions.size() || tri.y >= object.positions.size() ||
-          tri.z >= object.positions.size()) {
+      if (tri.x >= object.positions.size() || tri.y >= object.positions.size() || tri.z >= object.positions.size()) {
         throw DriverError("reference: object \"" + object.name + "\" triangle " + std::to_string(t) +
                           " indexes past its " + std::to_string(object.positions.size()) + " positions");
       }
@@ -181,10 +179,10 @@ EmbreeScene::EmbreeScene(const Scene& scene) {
 
     RTCGeometry geometry = rtcNewGeometry(device_, RTC_GEOMETRY_TYPE_TRIANGLE);
     // Embree's own buffers (not shared ones): it pads them for its 16-byte vertex loads.
-    auto* vertices = static_cast<float*>(rtcSetNewGeometryBuffer(
-        geometry, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3, 3 * sizeof(float), object.positions.size()));
-    auto* indices = static_cast<unsigned*>(rtcSetNewGeometryBuffer(
-        geometry, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3, 3 * sizeof(unsigned), triangleCount));
+    auto* vertices = static_cast<float*>(rtcSetNewGeometryBuffer(geometry, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3,
+                                                                 3 * sizeof(float), object.positions.size()));
+    auto* indices = static_cast<unsigned*>(rtcSetNewGeometryBuffer(geometry, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3,
+                                                                   3 * sizeof(unsigned), triangleCount));
     check("rtcSetNewGeometryBuffer");
     if (!object.positions.empty()) {
       std::memcpy(vertices, object.positions.data(), object.positions.size() * 3 * sizeof(float));

@@ -24,11 +24,11 @@ enum TriangleFlags : uint8_t {
 
 // What the filter needs about one Object, reachable from Embree's geometry user pointer.
 struct GeometryData {
-  unsigned geomId = 0;                  // == index into Scene::objects
+  unsigned geomId = 0;  // == index into Scene::objects
   const Object* object = nullptr;
   const std::vector<Material>* materials = nullptr;
-  std::vector<glm::vec3> normals;       // per triangle, unit, cross(p1 - p0, p2 - p0) (CCW front)
-  std::vector<uint8_t> flags;           // per triangle, TriangleFlags
+  std::vector<glm::vec3> normals;  // per triangle, unit, cross(p1 - p0, p2 - p0) (CCW front)
+  std::vector<uint8_t> flags;      // per triangle, TriangleFlags
   bool castsShadow = true;
 };
 

@@ -9,12 +9,10 @@
 
 namespace shadowlab {
 
-
 std::string referenceHash(const Scene& scene, const ReferenceOptions& options) {
   // Version tag first: bump it whenever the reference's output changes for the same inputs
   // (channels, origin offset, sample pattern), so stale cache entries stop matching.
-  std::string key = "shadowlab.reference/1;scene=" + scene.hash +
-                    ";camera=" + scene.camera.hash() +
+  std::string key = "shadowlab.reference/1;scene=" + scene.hash + ";camera=" + scene.camera.hash() +
                     ";spp=" + std::to_string(options.spp);
   return hashHex(fnv1a64(key.data(), key.size()));
 }
@@ -70,7 +68,8 @@ std::vector<uint8_t> referencePicture(const Scene& scene, const Frame& frame) {
       const glm::vec3 position((*p[0])[i], (*p[1])[i], (*p[2])[i]);
       float direct = 0.0f;
       if (light) {
-        const glm::vec3 toLight = light->type == LightType::Directional ? -light->direction : light->position - position;
+        const glm::vec3 toLight =
+            light->type == LightType::Directional ? -light->direction : light->position - position;
         const float length = glm::length(toLight);
         const float lambert = length > 0.0f ? std::max(0.0f, glm::dot(normal, toLight / length)) : 0.0f;
         direct = lambert * (vis ? (*vis)[i] : 1.0f);

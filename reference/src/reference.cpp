@@ -28,8 +28,8 @@ using namespace reference_detail;
 static_assert(sizeof(glm::vec3) == 3 * sizeof(float), "positions are copied to Embree as packed float3");
 static_assert(sizeof(glm::uvec3) == 3 * sizeof(unsigned), "triangles are copied to Embree as packed uint3");
 
-constexpr int kTileSize = 16;              // pixels per tile side: the unit of parallel work
-constexpr int kBlockWidth = 4;             // a camera packet is a 4 x 2 pixel block
+constexpr int kTileSize = 16;   // pixels per tile side: the unit of parallel work
+constexpr int kBlockWidth = 4;  // a camera packet is a 4 x 2 pixel block
 constexpr int kBlockHeight = 2;
 static_assert(kBlockWidth * kBlockHeight == kLanes, "one camera packet per block");
 constexpr float kInf = std::numeric_limits<float>::infinity();
@@ -154,8 +154,8 @@ class Tracer {
 
   // Occlusion of the segments from each active lane's shadow origin along dir[lane] up to
   // tfar[lane]. With wantDistance, occluded lanes are traced again for the nearest occluder.
-  void traceShadow(const LaneHit* hits, const glm::vec3* dir, const float* tfar, const bool* active,
-                   bool wantDistance, bool* occluded, float* distance) {
+  void traceShadow(const LaneHit* hits, const glm::vec3* dir, const float* tfar, const bool* active, bool wantDistance,
+                   bool* occluded, float* distance) {
     RTCRay8 ray;
     alignas(32) int valid[kLanes];
     TraceContext& context = shadowContext_;
@@ -225,8 +225,7 @@ class Tracer {
 
   // Visibility (exactly 0 or 1) of one light at each hit lane; distance to the nearest occluder
   // (-1 where none; 0 where the visible side of the surface faces away from the light).
-  void evalLight(const PreparedLight& prepared, const LaneHit* hits, bool wantDistance, float* vis,
-                 float* distance) {
+  void evalLight(const PreparedLight& prepared, const LaneHit* hits, bool wantDistance, float* vis, float* distance) {
     const Light& light = *prepared.light;
     glm::vec3 dir[kLanes];
     float tfar[kLanes];
@@ -351,14 +350,16 @@ Frame renderReference(const Scene& scene, const ReferenceOptions& options, Refer
   const int width = scene.camera.width;
   const int height = scene.camera.height;
   if (width < 1 || height < 1) {
-    throw InputError(formatError(scene.path, "/camera", "resolution " + std::to_string(width) + "x" +
-                                                            std::to_string(height) + "; expected at least 1x1"));
+    throw InputError(
+        formatError(scene.path, "/camera",
+                    "resolution " + std::to_string(width) + "x" + std::to_string(height) + "; expected at least 1x1"));
   }
   {
     std::set<std::string> lightNames, projectorNames;
     for (const Light& light : scene.lights) {
       if (!lightNames.insert(light.name).second)
-        throw InputError(formatError(scene.path, "/lights", "two lights named \"" + light.name + "\"; expected unique names"));
+        throw InputError(
+            formatError(scene.path, "/lights", "two lights named \"" + light.name + "\"; expected unique names"));
     }
     for (const Projector& projector : scene.projectors) {
       if (!projectorNames.insert(projector.name).second)
@@ -421,16 +422,11 @@ Frame renderReference(const Scene& scene, const ReferenceOptions& options, Refer
   nlohmann::json lightNames = nlohmann::json::array(), projectorNames = nlohmann::json::array();
   for (const Light& light : scene.lights) lightNames.push_back(light.name);
   for (const Projector& projector : scene.projectors) projectorNames.push_back(projector.name);
-  frame.meta = {{"kind", "reference"},
-                {"scene", scene.name},
-                {"scene_hash", scene.hash},
-                {"camera_hash", scene.camera.hash()},
-                {"width", width},
-                {"height", height},
-                {"lights", lightNames},
-                {"projectors", projectorNames},
-                {"spp", options.spp},
-                {"reference_hash", referenceHash(scene, options)}};
+  frame.meta = {{"kind", "reference"},      {"scene", scene.name},
+                {"scene_hash", scene.hash}, {"camera_hash", scene.camera.hash()},
+                {"width", width},           {"height", height},
+                {"lights", lightNames},     {"projectors", projectorNames},
+                {"spp", options.spp},       {"reference_hash", referenceHash(scene, options)}};
 
   const int threads = options.threads > 0 ? options.threads : std::max(1, tbb::info::default_concurrency());
   // TBB caps its workers at the hardware concurrency; an explicit --threads above that (e.g. 4
@@ -495,7 +491,8 @@ Frame renderReference(const Scene& scene, const ReferenceOptions& options, Refer
             tracer.tracePrimary(px, py, active, 0.5f, 0.5f, center);
             for (size_t l = 0; l < lightCount; ++l)
               tracer.evalLight(lights[l], center, true, &centerVis[l * kLanes], &centerDist[l * kLanes]);
-            for (size_t p = 0; p < projectorCount; ++p) tracer.evalProjector(projectors[p], center, &centerProj[p * kLanes]);
+            for (size_t p = 0; p < projectorCount; ++p)
+              tracer.evalProjector(projectors[p], center, &centerProj[p * kLanes]);
 
             int sameObject[kLanes] = {};
             if (!pattern.empty()) {

@@ -47,8 +47,9 @@ std::vector<Camera> dollyPath(const Camera& start, float distanceWorld, int fram
   glm::vec3 view = start.lookAt - start.position;
   float len = glm::length(view);
   if (!(len > 0.0f) || !std::isfinite(distanceWorld))
-    throw InputError("dolly: error: the camera has no view direction (position == look_at) or the distance is "
-                     "not finite; expected a camera that looks somewhere and a finite distance");
+    throw InputError(
+        "dolly: error: the camera has no view direction (position == look_at) or the distance is "
+        "not finite; expected a camera that looks somewhere and a finite distance");
   glm::vec3 forward = view / len;
   std::vector<Camera> path;
   for (int k = 0; k < frames; ++k) {
@@ -67,8 +68,9 @@ std::vector<Camera> orbitPath(const Camera& start, float angleDeg, int frames) {
   requireFrames(frames, "orbit");
   float upLen = glm::length(start.up);
   if (!(upLen > 0.0f) || !std::isfinite(angleDeg))
-    throw InputError("orbit: error: the camera's up vector is zero or the angle is not finite; expected a "
-                     "non-zero up and a finite angle");
+    throw InputError(
+        "orbit: error: the camera's up vector is zero or the angle is not finite; expected a "
+        "non-zero up and a finite angle");
   glm::vec3 axis = start.up / upLen;
   std::vector<Camera> path;
   for (int k = 0; k < frames; ++k) {
@@ -95,9 +97,7 @@ std::vector<Camera> keyframePath(const std::vector<Camera>& keys, int frames) {
     const double f = t - double(i);
     const Camera& a = keys[i];
     const Camera& b = keys[i + 1];
-    auto mix = [f](glm::vec3 x, glm::vec3 y) {
-      return glm::vec3(glm::dvec3(x) + (glm::dvec3(y) - glm::dvec3(x)) * f);
-    };
+    auto mix = [f](glm::vec3 x, glm::vec3 y) { return glm::vec3(glm::dvec3(x) + (glm::dvec3(y) - glm::dvec3(x)) * f); };
     Camera c = a;
     c.position = f == 0.0 ? a.position : mix(a.position, b.position);
     c.lookAt = f == 0.0 ? a.lookAt : mix(a.lookAt, b.lookAt);

@@ -27,8 +27,8 @@ constexpr const char* kOrderAttribute = "shadowlab:channels";
 std::string tempImagePath(const std::string& path) {
   static std::atomic<unsigned> counter{0};
   fs::path p(path);
-  std::string name = "." + p.stem().string() + ".tmp" + std::to_string(::getpid()) + "_" +
-                     std::to_string(counter++) + p.extension().string();
+  std::string name = "." + p.stem().string() + ".tmp" + std::to_string(::getpid()) + "_" + std::to_string(counter++) +
+                     p.extension().string();
   return (p.parent_path() / name).string();
 }
 
@@ -86,19 +86,21 @@ std::vector<float>& Frame::get(const std::string& name) {
 
 void writeFrameExr(const Frame& frame, const std::string& path) {
   if (frame.width <= 0 || frame.height <= 0)
-    throw InputError(formatError(path, "", "cannot write an empty frame (" + std::to_string(frame.width) + "x" +
-                                               std::to_string(frame.height) + ")"));
+    throw InputError(formatError(
+        path, "",
+        "cannot write an empty frame (" + std::to_string(frame.width) + "x" + std::to_string(frame.height) + ")"));
   if (frame.names.empty()) throw InputError(formatError(path, "", "cannot write a frame with no channels"));
   if (frame.data.size() != frame.names.size())
-    throw DriverError(formatError(path, "", "frame has " + std::to_string(frame.names.size()) + " names but " +
-                                                std::to_string(frame.data.size()) + " planes"));
+    throw DriverError(formatError(path, "",
+                                  "frame has " + std::to_string(frame.names.size()) + " names but " +
+                                      std::to_string(frame.data.size()) + " planes"));
   const size_t pixels = frame.pixelCount();
   const size_t channels = frame.names.size();
   for (size_t c = 0; c < channels; ++c) {
     if (frame.data[c].size() != pixels)
-      throw DriverError(formatError(path, "", "channel " + frame.names[c] + " has " +
-                                                  std::to_string(frame.data[c].size()) + " values; expected " +
-                                                  std::to_string(pixels)));
+      throw DriverError(formatError(path, "",
+                                    "channel " + frame.names[c] + " has " + std::to_string(frame.data[c].size()) +
+                                        " values; expected " + std::to_string(pixels)));
     for (size_t k = 0; k < c; ++k)
       if (frame.names[k] == frame.names[c])
         throw DriverError(formatError(path, "", "duplicate channel " + frame.names[c]));
@@ -161,8 +163,9 @@ Frame readFrameExr(const std::string& path) {
 
 void writeRgbPng(const std::string& path, int width, int height, const std::vector<uint8_t>& rgb) {
   if (width <= 0 || height <= 0 || rgb.size() != size_t(width) * size_t(height) * 3)
-    throw DriverError(formatError(path, "", "picture is " + std::to_string(width) + "x" + std::to_string(height) +
-                                                " with " + std::to_string(rgb.size()) + " bytes; expected w*h*3"));
+    throw DriverError(formatError(path, "",
+                                  "picture is " + std::to_string(width) + "x" + std::to_string(height) + " with " +
+                                      std::to_string(rgb.size()) + " bytes; expected w*h*3"));
   writeImageAtomic(path, [&](const std::string& tmp) { return image_io::writePng(tmp, width, height, 3, rgb.data()); });
 }
 

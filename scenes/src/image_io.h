@@ -25,8 +25,8 @@ namespace shadowlab::image_io {
 struct FloatImage {
   int width = 0;
   int height = 0;
-  std::vector<std::string> channels;  // names, in the order of `pixels`
-  std::vector<float> pixels;          // interleaved: (y * width + x) * channels.size() + c, top row first
+  std::vector<std::string> channels;        // names, in the order of `pixels`
+  std::vector<float> pixels;                // interleaved: (y * width + x) * channels.size() + c, top row first
   std::map<std::string, std::string> text;  // string attributes (EXR header); empty for other formats
 };
 
@@ -40,8 +40,8 @@ std::string readExr(const std::string& path, FloatImage& image);
 // Writes an 8-bit PNG of `channels` (3 or 4) interleaved values per pixel.
 std::string writePng(const std::string& path, int width, int height, int channels, const uint8_t* pixels);
 // Reads a texture (PNG, EXR; OpenImageIO: any format it knows): gray, gray+alpha, RGB or RGBA
-// channels as stored (a palette PNG expands to RGB(A)). When a side is outside 1..maxSide only width and height are set (pixels stay
-// empty) so the caller can refuse the size before anything large is allocated.
+// channels as stored (a palette PNG expands to RGB(A)). When a side is outside 1..maxSide only width and height are set
+// (pixels stay empty) so the caller can refuse the size before anything large is allocated.
 std::string readTexture(const std::string& path, FloatImage& image, int maxSide);
 // "oiio" or "exr-png".
 const char* backendName();

@@ -48,8 +48,8 @@ bool iequals(const std::string& a, const char* b) {
 // then the rest in the file's (sorted) order. Checked against OpenImageIO 2.4 by
 // tests/scenes_image_io_test.cpp ("R r G B Y A a alpha AR Z depth visibility zz normal.x").
 int specialRank(const std::string& suffix) {
-  static const char* kSpecial[] = {"R",  "Red", "G",  "Green", "B",  "Blue", "Y",  "real", "imag", "A",
-                                   "Alpha", "AR", "RA", "AG",   "GA", "AB",   "BA", "Z",    "Depth", "Zback"};
+  static const char* kSpecial[] = {"R",     "Red", "G",  "Green", "B",  "Blue", "Y",  "real", "imag",  "A",
+                                   "Alpha", "AR",  "RA", "AG",    "GA", "AB",   "BA", "Z",    "Depth", "Zback"};
   for (size_t i = 0; i < sizeof kSpecial / sizeof kSpecial[0]; ++i)
     if (iequals(suffix, kSpecial[i])) return int(i);
   return int(sizeof kSpecial / sizeof kSpecial[0]);
@@ -80,7 +80,8 @@ std::string readExrFile(const std::string& path, FloatImage& image, int maxSide)
     image.pixels.clear();
     image.channels.clear();
     image.text.clear();
-    if (width <= 0 || height <= 0 || width > maxSide || height > maxSide) return maxSide == std::numeric_limits<int>::max() ? "empty image" : "";
+    if (width <= 0 || height <= 0 || width > maxSide || height > maxSide)
+      return maxSide == std::numeric_limits<int>::max() ? "empty image" : "";
     std::vector<std::string> names;
     for (auto it = header.channels().begin(); it != header.channels().end(); ++it) {
       if (it.channel().xSampling != 1 || it.channel().ySampling != 1)
@@ -101,7 +102,8 @@ std::string readExrFile(const std::string& path, FloatImage& image, int maxSide)
     file.setFrameBuffer(fb);
     file.readPixels(window.min.y, window.max.y);
     for (auto it = header.begin(); it != header.end(); ++it)
-      if (const auto* s = dynamic_cast<const Imf::StringAttribute*>(&it.attribute())) image.text[it.name()] = s->value();
+      if (const auto* s = dynamic_cast<const Imf::StringAttribute*>(&it.attribute()))
+        image.text[it.name()] = s->value();
   } catch (const std::exception& e) {
     return e.what();
   }

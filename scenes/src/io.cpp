@@ -24,8 +24,8 @@ namespace {
 std::string tempPathFor(const std::string& path) {
   static std::atomic<unsigned> counter{0};
   fs::path p(path);
-  std::string stem = "." + p.filename().string() + ".tmp" + std::to_string(::getpid()) + "_" +
-                     std::to_string(counter++);
+  std::string stem =
+      "." + p.filename().string() + ".tmp" + std::to_string(::getpid()) + "_" + std::to_string(counter++);
   return (p.parent_path() / stem).string();
 }
 
@@ -57,14 +57,11 @@ void writeFileAtomic(const std::string& path, const std::string& bytes) {
   }
 }
 
-void writeJsonAtomic(const std::string& path, const nlohmann::json& j) {
-  writeFileAtomic(path, j.dump(2) + "\n");
-}
+void writeJsonAtomic(const std::string& path, const nlohmann::json& j) { writeFileAtomic(path, j.dump(2) + "\n"); }
 
 std::string readFile(const std::string& path) {
   std::error_code ec;
-  if (fs::is_directory(path, ec))
-    throw InputError(formatError(path, "", "cannot open file: it is a folder"));
+  if (fs::is_directory(path, ec)) throw InputError(formatError(path, "", "cannot open file: it is a folder"));
   std::ifstream in(path, std::ios::binary);
   if (!in) throw InputError(formatError(path, "", std::string("cannot open file: ") + std::strerror(errno)));
   std::ostringstream ss;
@@ -78,7 +75,8 @@ void makeDirs(const std::string& dir) {
   std::error_code ec;
   fs::create_directories(dir, ec);
   if (ec || !fs::is_directory(dir))
-    throw InputError(formatError(dir, "", "cannot create folder: " + (ec ? ec.message() : std::string("not a folder"))));
+    throw InputError(
+        formatError(dir, "", "cannot create folder: " + (ec ? ec.message() : std::string("not a folder"))));
 }
 
 OutputFolder::OutputFolder(const std::string& dir, const std::string& flag) : dir_(dir) {
@@ -94,8 +92,9 @@ OutputFolder::OutputFolder(const std::string& dir, const std::string& flag) : di
   fs::create_directories(dir, ec);
   if (ec || !fs::is_directory(dir, ec)) {
     created_.clear();  // nothing of ours to remove
-    throw InputError(formatError(dir, "", "cannot create the output folder for " + flag + ": " +
-                                              (ec ? ec.message() : std::string("not a folder"))));
+    throw InputError(formatError(
+        dir, "",
+        "cannot create the output folder for " + flag + ": " + (ec ? ec.message() : std::string("not a folder"))));
   }
   const std::string probe = tempPathFor((fs::path(dir) / "probe").string());
   std::FILE* f = std::fopen(probe.c_str(), "wb");
@@ -105,8 +104,8 @@ OutputFolder::OutputFolder(const std::string& dir, const std::string& flag) : di
   std::remove(probe.c_str());
   if (!ok) {
     removeCreated();
-    throw InputError(formatError(dir, "", "cannot write into the output folder for " + flag + ": " +
-                                              std::strerror(err ? err : EIO)));
+    throw InputError(formatError(
+        dir, "", "cannot write into the output folder for " + flag + ": " + std::strerror(err ? err : EIO)));
   }
 }
 

@@ -31,17 +31,17 @@ namespace {
 template <class Json>
 struct PositionedDomParser : nlohmann::detail::json_sax_dom_parser<Json> {
   using Base = nlohmann::detail::json_sax_dom_parser<Json>;
+  using typename Base::number_float_t;
   using typename Base::number_integer_t;
   using typename Base::number_unsigned_t;
-  using typename Base::number_float_t;
   using typename Base::string_t;
   explicit PositionedDomParser(Json& result) : Base(result, /*allow_exceptions=*/false) {}
 
   // Where the parser is: one entry per open object or array, with the child being read.
   struct Open {
     bool array = false;
-    size_t count = 0;          // arrays: values begun so far
-    std::string key;           // objects: the current key
+    size_t count = 0;  // arrays: values begun so far
+    std::string key;   // objects: the current key
     std::set<std::string> keys;
   };
   std::vector<Open> open;
@@ -113,7 +113,7 @@ Json parseStrict(const std::string& text, const std::string& file) {
   Json result;
   PositionedDomParser<Json> sax(result);
   bool ok = Json::sax_parse(text, &sax, nlohmann::json::input_format_t::json, /*strict=*/true,
-                                      /*ignore_comments=*/true);
+                            /*ignore_comments=*/true);
   if (ok) return result;
   if (sax.duplicate) {
     throw InputError(file + ": " + childPointer(sax.duplicatePointer, sax.duplicateKey) + ": error: key " +
@@ -170,20 +170,17 @@ std::string describe(const nlohmann::json& j) {
       if (s.size() > 60) s = s.substr(0, 57) + "...";
       return nlohmann::json(s).dump(-1, ' ', false, nlohmann::json::error_handler_t::replace);
     }
-    case T::array:
-      return "an array of " + std::to_string(j.size()) + (j.size() == 1 ? " value" : " values");
-    case T::object:
-      return "an object";
-    case T::null:
-      return "null";
+    case T::array: return "an array of " + std::to_string(j.size()) + (j.size() == 1 ? " value" : " values");
+    case T::object: return "an object";
+    case T::null: return "null";
     case T::number_float: {
       double d = j.get<double>();
       if (std::isnan(d)) return "NaN";
-      if (std::isinf(d)) return d > 0 ? "inf (a number too large for a double)" : "-inf (a number too large for a double)";
+      if (std::isinf(d))
+        return d > 0 ? "inf (a number too large for a double)" : "-inf (a number too large for a double)";
       return j.dump();
     }
-    default:
-      return j.dump();
+    default: return j.dump();
   }
 }
 
@@ -191,9 +188,7 @@ std::string childPointer(const std::string& pointer, const std::string& key) {
   return (nlohmann::json::json_pointer(pointer) / key).to_string();
 }
 
-std::string childPointer(const std::string& pointer, size_t index) {
-  return pointer + "/" + std::to_string(index);
-}
+std::string childPointer(const std::string& pointer, size_t index) { return pointer + "/" + std::to_string(index); }
 
 std::string didYouMean(const std::string& got, const std::vector<std::string>& choices) {
   // Levenshtein distance; a typo is at most 2 edits and less than half the word.
@@ -229,7 +224,9 @@ namespace shadowlab {
 
 std::string describeJson(const nlohmann::json& v) { return detail::describe(v); }
 
-std::string dumpJson(const nlohmann::json& v) { return v.dump(-1, ' ', false, nlohmann::json::error_handler_t::replace); }
+std::string dumpJson(const nlohmann::json& v) {
+  return v.dump(-1, ' ', false, nlohmann::json::error_handler_t::replace);
+}
 
 nlohmann::json parseJsonText(const std::string& text, const std::string& file) {
   return detail::parseStrict<nlohmann::json>(text, file);

@@ -56,8 +56,9 @@ LightPathAxis parseLightPath(const std::string& text) {
   return a;
 }
 
-std::vector<SceneOverride> lightPathOverrides(const nlohmann::json& doc, const Scene& scene, const std::string& lightName,
-                                              const std::vector<LightPathAxis>& axes, int k) {
+std::vector<SceneOverride> lightPathOverrides(const nlohmann::json& doc, const Scene& scene,
+                                              const std::string& lightName, const std::vector<LightPathAxis>& axes,
+                                              int k) {
   if (axes.empty()) throw InputError("--light-path: error: no axis; expected KEY=FROM:TO:FRAMES");
   for (size_t i = 0; i < axes.size(); ++i)
     for (size_t j = i + 1; j < axes.size(); ++j) {
@@ -72,13 +73,15 @@ std::vector<SceneOverride> lightPathOverrides(const nlohmann::json& doc, const S
   for (size_t i = 0; i < scene.lights.size(); ++i)
     if (scene.lights[i].name == lightName) index = i;
   if (index == scene.lights.size())
-    throw InputError(formatError(scene.path, "/lights", "no light named \"" + lightName + "\"; expected the light to move"));
+    throw InputError(
+        formatError(scene.path, "/lights", "no light named \"" + lightName + "\"; expected the light to move"));
   const Light& light = scene.lights[index];
   const std::string ptr = "/lights/" + std::to_string(index);
   if (light.type != LightType::Directional)
-    throw InputError(formatError(scene.path, ptr, "light \"" + lightName +
-                                                      "\" is not directional; expected a directional light for "
-                                                      "--light-path (elevation_deg and azimuth_deg move a sun)"));
+    throw InputError(formatError(scene.path, ptr,
+                                 "light \"" + lightName +
+                                     "\" is not directional; expected a directional light for "
+                                     "--light-path (elevation_deg and azimuth_deg move a sun)"));
   const nlohmann::json* declared = nullptr;
   if (doc.is_object() && doc.contains("lights") && doc["lights"].is_array() && doc["lights"].size() > index)
     declared = &doc["lights"][index];

@@ -73,8 +73,9 @@ class Reader {
       if (std::find(allowed.begin(), allowed.end(), item.key()) != allowed.end()) continue;
       std::string list;
       for (const auto& a : allowed) list += (list.empty() ? "" : ", ") + a;
-      fail(detail::childPointer(n.ptr, item.key()),
-           "unknown key \"" + item.key() + "\"" + detail::didYouMean(item.key(), allowed) + "; expected one of " + list);
+      fail(
+          detail::childPointer(n.ptr, item.key()),
+          "unknown key \"" + item.key() + "\"" + detail::didYouMean(item.key(), allowed) + "; expected one of " + list);
     }
   }
 
@@ -112,9 +113,8 @@ class Reader {
     std::string what = "an integer " + std::to_string(lo) + ".." + std::to_string(hi) +
                        (why ? std::string(" (") + why + ")" : std::string());
     if (n.j->is_number_integer()) {
-      long long v = n.j->is_number_unsigned() && n.j->get<unsigned long long>() > (1ull << 62)
-                        ? hi + 1
-                        : n.j->get<long long>();
+      long long v =
+          n.j->is_number_unsigned() && n.j->get<unsigned long long>() > (1ull << 62) ? hi + 1 : n.j->get<long long>();
       if (v < lo || v > hi) expected(n, what);
       return v;
     }
@@ -132,7 +132,8 @@ class Reader {
     std::string what = std::to_string(count) + " (" + labels + ")";
     if (!n.j->is_array()) expected(n, "an array of " + what + " numbers");
     if (n.j->size() != count)
-      fail(n.ptr, "got " + std::to_string(n.j->size()) + (n.j->size() == 1 ? " number" : " numbers") + "; expected " + what);
+      fail(n.ptr,
+           "got " + std::to_string(n.j->size()) + (n.j->size() == 1 ? " number" : " numbers") + "; expected " + what);
     std::vector<double> out;
     for (size_t i = 0; i < count; ++i) out.push_back(number(at(n, i)));
     return out;
@@ -151,18 +152,25 @@ class Reader {
       float s = float(positive(n));
       return glm::vec2(s);
     }
-    if (!n.j->is_array()) expected(n, std::string(allowScalar ? "a positive number or " : "") + "an array of 2 positive numbers (" + labels + ")");
+    if (!n.j->is_array())
+      expected(n, std::string(allowScalar ? "a positive number or " : "") + "an array of 2 positive numbers (" +
+                      labels + ")");
     glm::vec2 v = vec2(n, labels);
     for (int i = 0; i < 2; ++i)
-      if (!(v[i] > 0)) fail(detail::childPointer(n.ptr, size_t(i)), "got " + detail::describe((*n.j)[i]) + "; expected a positive number");
+      if (!(v[i] > 0))
+        fail(detail::childPointer(n.ptr, size_t(i)),
+             "got " + detail::describe((*n.j)[i]) + "; expected a positive number");
     return v;
   }
   glm::vec3 positive3(const Node& n, const std::string& labels, bool allowScalar) const {
     if (allowScalar && n.j->is_number()) return glm::vec3(float(positive(n)));
-    if (!n.j->is_array()) expected(n, std::string(allowScalar ? "a positive number or " : "") + "an array of 3 positive numbers (" + labels + ")");
+    if (!n.j->is_array())
+      expected(n, std::string(allowScalar ? "a positive number or " : "") + "an array of 3 positive numbers (" +
+                      labels + ")");
     auto v = numbers(n, 3, labels);
     for (size_t i = 0; i < 3; ++i)
-      if (!(v[i] > 0)) fail(detail::childPointer(n.ptr, i), "got " + detail::describe((*n.j)[i]) + "; expected a positive number");
+      if (!(v[i] > 0))
+        fail(detail::childPointer(n.ptr, i), "got " + detail::describe((*n.j)[i]) + "; expected a positive number");
     return glm::vec3(float(v[0]), float(v[1]), float(v[2]));
   }
 
@@ -302,7 +310,9 @@ Mesh makeQuad(glm::vec2 size, glm::vec2 uvScale) {
 Mesh makeBox(glm::vec3 size) {
   Mesh m;
   glm::vec3 h = size * 0.5f;
-  auto face = [&](glm::vec3 c, glm::vec3 u, glm::vec3 v) { addQuad(m, c - u - v, c + u - v, c + u + v, c - u + v, true); };
+  auto face = [&](glm::vec3 c, glm::vec3 u, glm::vec3 v) {
+    addQuad(m, c - u - v, c + u - v, c + u + v, c - u + v, true);
+  };
   face({h.x, 0, 0}, {0, 0, -h.z}, {0, h.y, 0});
   face({-h.x, 0, 0}, {0, 0, h.z}, {0, h.y, 0});
   face({0, h.y, 0}, {h.x, 0, 0}, {0, 0, -h.z});
@@ -406,7 +416,8 @@ Mesh makeCylinder(double radius, double height, int segments) {
 Mesh loadObj(const Reader& r, const std::string& ptr, const std::string& objPath, const std::string& objectName,
              std::vector<Material>& materials, uint32_t fallbackMaterial, bool overrideMaterial) {
   std::error_code ec;
-  if (!fs::is_regular_file(objPath, ec)) r.fail(ptr, "OBJ file " + objPath + " not found; expected a Wavefront .obj file");
+  if (!fs::is_regular_file(objPath, ec))
+    r.fail(ptr, "OBJ file " + objPath + " not found; expected a Wavefront .obj file");
   fs::path objDir = fs::path(objPath).parent_path();
   // One pass over the lines before tinyobjloader reads them, for what it lets through silently:
   // it only warns about a missing MTL, and its number parser reads a token it cannot parse
@@ -465,7 +476,8 @@ Mesh loadObj(const Reader& r, const std::string& ptr, const std::string& objPath
       if (!finite(mat.albedo)) mat.albedo = glm::vec3(0.8f);
       if (!mtls[i].alpha_texname.empty()) {
         std::string tex = resolvePath(mtls[i].alpha_texname, objDir);
-        mat.alphaTexture = alphaOf(readImage(r, ptr, tex, "alpha texture (map_d of material \"" + mtls[i].name + "\")"));
+        mat.alphaTexture =
+            alphaOf(readImage(r, ptr, tex, "alpha texture (map_d of material \"" + mtls[i].name + "\")"));
         mat.hasAlpha = true;
       }
       materialIndex[i] = uint32_t(materials.size());
@@ -483,7 +495,8 @@ Mesh loadObj(const Reader& r, const std::string& ptr, const std::string& objPath
   auto vertex = [&](const tinyobj::index_t& idx) -> uint32_t {
     int vi = idx.vertex_index;
     int ti = anyUv ? idx.texcoord_index : -1;
-    if (vi < 0 || size_t(vi) * 3 + 2 >= attrib.vertices.size() + 0 || (ti >= 0 && size_t(ti) * 2 + 1 >= attrib.texcoords.size()))
+    if (vi < 0 || size_t(vi) * 3 + 2 >= attrib.vertices.size() + 0 ||
+        (ti >= 0 && size_t(ti) * 2 + 1 >= attrib.texcoords.size()))
       r.fail(ptr, "OBJ file " + objPath + " has a face index out of range");
     auto key = std::make_pair(vi, ti);
     auto it = vertexOf.find(key);
@@ -491,7 +504,9 @@ Mesh loadObj(const Reader& r, const std::string& ptr, const std::string& objPath
     uint32_t id = uint32_t(m.positions.size());
     m.positions.emplace_back(attrib.vertices[3 * vi], attrib.vertices[3 * vi + 1], attrib.vertices[3 * vi + 2]);
     // OBJ's v = 0 is the image's bottom row; ours is the top row.
-    if (anyUv) m.uvs.push_back(ti >= 0 ? glm::vec2(attrib.texcoords[2 * ti], 1.0f - attrib.texcoords[2 * ti + 1]) : glm::vec2(0));
+    if (anyUv)
+      m.uvs.push_back(ti >= 0 ? glm::vec2(attrib.texcoords[2 * ti], 1.0f - attrib.texcoords[2 * ti + 1])
+                              : glm::vec2(0));
     vertexOf.emplace(key, id);
     return id;
   };
@@ -500,10 +515,12 @@ Mesh loadObj(const Reader& r, const std::string& ptr, const std::string& objPath
     for (size_t f = 0; f < s.mesh.num_face_vertices.size(); ++f) {
       size_t n = s.mesh.num_face_vertices[f];
       if (n == 3) {
-        glm::uvec3 t(vertex(s.mesh.indices[offset]), vertex(s.mesh.indices[offset + 1]), vertex(s.mesh.indices[offset + 2]));
+        glm::uvec3 t(vertex(s.mesh.indices[offset]), vertex(s.mesh.indices[offset + 1]),
+                     vertex(s.mesh.indices[offset + 2]));
         m.triangles.push_back(t);
         int mid = f < s.mesh.material_ids.size() ? s.mesh.material_ids[f] : -1;
-        m.triangleMaterial.push_back(mid >= 0 && size_t(mid) < materialIndex.size() ? materialIndex[mid] : fallbackMaterial);
+        m.triangleMaterial.push_back(mid >= 0 && size_t(mid) < materialIndex.size() ? materialIndex[mid]
+                                                                                    : fallbackMaterial);
       }
       offset += n;
     }
@@ -564,8 +581,8 @@ void readCamera(const Reader& r, const Node& root, Camera& cam) {
     r.fail(r.child(c, "up").ptr, "got " + vecText(cam.up) + ", parallel to the view direction " +
                                      vecText(glm::normalize(view)) + "; expected an up vector not parallel to it");
   if (!(cam.nearPlane < cam.farPlane))
-    r.fail(r.child(c, "near").ptr, "got near " + numText(cam.nearPlane) + " >= far " + numText(cam.farPlane) +
-                                       "; expected near < far");
+    r.fail(r.child(c, "near").ptr,
+           "got near " + numText(cam.nearPlane) + " >= far " + numText(cam.farPlane) + "; expected near < far");
 }
 
 void readMaterials(const Reader& r, const Node& root, const fs::path& dir, std::vector<Material>& materials) {
@@ -583,11 +600,14 @@ void readMaterials(const Reader& r, const Node& root, const fs::path& dir, std::
     if (Node n = r.child(m, "two_sided")) mat.twoSided = r.boolean(n);
     if (Node n = r.child(m, "alpha_cutoff")) mat.alphaCutoff = float(r.range(n, 0, false, 1, false, "a number 0..1"));
     if (Node n = r.child(m, "albedo")) {
-      if (n.j->is_number()) mat.albedo = glm::vec3(float(r.range(n, 0, false, 1, false, "a number 0..1 or 3 numbers (r, g, b)")));
+      if (n.j->is_number())
+        mat.albedo = glm::vec3(float(r.range(n, 0, false, 1, false, "a number 0..1 or 3 numbers (r, g, b)")));
       else {
         mat.albedo = r.vec3(n);
         for (int k = 0; k < 3; ++k)
-          if (mat.albedo[k] < 0 || mat.albedo[k] > 1) r.fail(detail::childPointer(n.ptr, size_t(k)), "got " + detail::describe((*n.j)[k]) + "; expected a number 0..1");
+          if (mat.albedo[k] < 0 || mat.albedo[k] > 1)
+            r.fail(detail::childPointer(n.ptr, size_t(k)),
+                   "got " + detail::describe((*n.j)[k]) + "; expected a number 0..1");
       }
     }
     if (Node n = r.child(m, "alpha_texture")) {
@@ -630,13 +650,15 @@ void readObjects(const Reader& r, const Node& root, const fs::path& dir, Scene& 
       obj.name = r.string(n, "a non-empty name");
       checkName(r, n, obj.name);
     }
-    if (!names.insert(obj.name).second) r.fail(r.child(o, "name").ptr, "duplicate object name \"" + obj.name + "\"; expected a unique name");
+    if (!names.insert(obj.name).second)
+      r.fail(r.child(o, "name").ptr, "duplicate object name \"" + obj.name + "\"; expected a unique name");
     obj.id = uint32_t(i + 1);
     Node idNode = r.child(o, "id");
     if (idNode) obj.id = uint32_t(r.integer(idNode, 1, kMaxObjectId));
     if (idOwner.count(obj.id))
-      r.fail(idNode ? idNode.ptr : o.ptr, "object id " + std::to_string(obj.id) + " is already used by " + idOwner[obj.id] +
-                                             "; expected unique ids (the default id is the 1-based index)");
+      r.fail(idNode ? idNode.ptr : o.ptr, "object id " + std::to_string(obj.id) + " is already used by " +
+                                              idOwner[obj.id] +
+                                              "; expected unique ids (the default id is the 1-based index)");
     idOwner[obj.id] = "\"" + obj.name + "\" (" + o.ptr + ")";
     if (Node n = r.child(o, "casts_shadow")) obj.castsShadow = r.boolean(n);
 
@@ -662,9 +684,12 @@ void readObjects(const Reader& r, const Node& root, const fs::path& dir, Scene& 
       return n ? r.positive2(n, "u, v", true) : glm::vec2(1.0f);
     };
     Mesh mesh;
-    if (type == "plane") mesh = makePlane(r.positive2(r.require(o, "size", "2 positive numbers (sx, sz)"), "sx, sz", false), uvScaleOf());
-    else if (type == "quad") mesh = makeQuad(r.positive2(r.require(o, "size", "2 positive numbers (sx, sy)"), "sx, sy", false), uvScaleOf());
-    else if (type == "box") mesh = makeBox(r.positive3(r.require(o, "size", "3 positive numbers (x, y, z)"), "x, y, z", false));
+    if (type == "plane")
+      mesh = makePlane(r.positive2(r.require(o, "size", "2 positive numbers (sx, sz)"), "sx, sz", false), uvScaleOf());
+    else if (type == "quad")
+      mesh = makeQuad(r.positive2(r.require(o, "size", "2 positive numbers (sx, sy)"), "sx, sy", false), uvScaleOf());
+    else if (type == "box")
+      mesh = makeBox(r.positive3(r.require(o, "size", "3 positive numbers (x, y, z)"), "x, y, z", false));
     else if (type == "sphere") {
       double radius = r.positive(r.require(o, "radius", "a positive number"));
       int segments = 256, rings = 128;
@@ -687,7 +712,10 @@ void readObjects(const Reader& r, const Node& root, const fs::path& dir, Scene& 
     obj.positions.reserve(mesh.positions.size());
     for (const auto& p : mesh.positions) {
       glm::vec3 w = glm::vec3(xf * glm::vec4(p, 1.0f));
-      if (!finite(w)) r.fail(o.ptr, "the transformed geometry has a non-finite coordinate; expected finite positions (check the transform and sizes)");
+      if (!finite(w))
+        r.fail(o.ptr,
+               "the transformed geometry has a non-finite coordinate; expected finite positions (check the transform "
+               "and sizes)");
       obj.positions.push_back(w);
     }
     obj.uvs = std::move(mesh.uvs);
@@ -696,12 +724,14 @@ void readObjects(const Reader& r, const Node& root, const fs::path& dir, Scene& 
                                                          : std::move(mesh.triangleMaterial);
     for (size_t t = 0; t < obj.triangles.size(); ++t)
       if (scene.materials[obj.triangleMaterial[t]].hasAlpha && obj.uvs.empty())
-        r.fail(matNode ? matNode.ptr : o.ptr, "material \"" + scene.materials[obj.triangleMaterial[t]].name +
-                                                  "\" has an alpha texture but a " + type + " has no uv coordinates; expected a plane, quad, box or an OBJ with vt");
+        r.fail(matNode ? matNode.ptr : o.ptr,
+               "material \"" + scene.materials[obj.triangleMaterial[t]].name + "\" has an alpha texture but a " + type +
+                   " has no uv coordinates; expected a plane, quad, box or an OBJ with vt");
     sceneTriangles += obj.triangles.size();
     if (sceneTriangles > kMaxSceneTriangles)
-      r.fail(o.ptr, "the scene reaches " + std::to_string(sceneTriangles) + " triangles with this object; expected at most " +
-                        std::to_string(kMaxSceneTriangles) + " (triangle ids travel through float channels, exact below 2^24)");
+      r.fail(o.ptr, "the scene reaches " + std::to_string(sceneTriangles) +
+                        " triangles with this object; expected at most " + std::to_string(kMaxSceneTriangles) +
+                        " (triangle ids travel through float channels, exact below 2^24)");
     scene.objects.push_back(std::move(obj));
   }
 }
@@ -721,15 +751,9 @@ void readLights(const Reader& r, const Node& root, Scene& scene) {
     Light light;
     light.type = kind->kind;
     switch (light.type) {  // the keys each type takes
-      case LightType::Directional:
-        r.keys(l, {"type", "name", "direction", "elevation_deg", "azimuth_deg"});
-        break;
-      case LightType::Spot:
-        r.keys(l, {"type", "name", "position", "direction", "look_at", "cone_deg", "near"});
-        break;
-      case LightType::Point:
-        r.keys(l, {"type", "name", "position", "near"});
-        break;
+      case LightType::Directional: r.keys(l, {"type", "name", "direction", "elevation_deg", "azimuth_deg"}); break;
+      case LightType::Spot: r.keys(l, {"type", "name", "position", "direction", "look_at", "cone_deg", "near"}); break;
+      case LightType::Point: r.keys(l, {"type", "name", "position", "near"}); break;
     }
     light.name = type == "directional" ? "sun" : type;
     if (ls.j->size() > 1) light.name += std::to_string(i + 1);
@@ -738,7 +762,8 @@ void readLights(const Reader& r, const Node& root, Scene& scene) {
       checkName(r, n, light.name);
     }
     if (!names.insert(light.name).second)
-      r.fail(r.child(l, "name").ptr, "duplicate light name \"" + light.name + "\"; expected a unique name (it names output channels)");
+      r.fail(r.child(l, "name").ptr,
+             "duplicate light name \"" + light.name + "\"; expected a unique name (it names output channels)");
 
     if (light.type == LightType::Directional) {
       Node d = r.child(l, "direction"), e = r.child(l, "elevation_deg"), a = r.child(l, "azimuth_deg");
@@ -746,7 +771,10 @@ void readLights(const Reader& r, const Node& root, Scene& scene) {
       if (d) {
         light.direction = direction(r, d);
       } else {
-        if (!e) r.fail(l.ptr, "missing key \"direction\" (or \"elevation_deg\" and \"azimuth_deg\"); expected the light's direction");
+        if (!e)
+          r.fail(
+              l.ptr,
+              "missing key \"direction\" (or \"elevation_deg\" and \"azimuth_deg\"); expected the light's direction");
         double elev = r.range(e, -90, false, 90, false, "an elevation in degrees -90..90");
         double azim = a ? r.number(a) : 0.0;
         double er = elev * kPi / 180.0, ar = azim * kPi / 180.0;
@@ -792,7 +820,8 @@ void readProjectors(const Reader& r, const Node& root, const fs::path& dir, Scen
       checkName(r, n, proj.name);
     }
     if (!names.insert(proj.name).second)
-      r.fail(r.child(p, "name").ptr, "duplicate projector name \"" + proj.name + "\"; expected a unique name (it names output channels)");
+      r.fail(r.child(p, "name").ptr,
+             "duplicate projector name \"" + proj.name + "\"; expected a unique name (it names output channels)");
     proj.position = r.vec3(r.require(p, "position", "3 numbers (x, y, z)"));
     Node d = r.child(p, "direction"), at = r.child(p, "look_at");
     if (d && at) r.fail(d.ptr, "both direction and look_at given; expected one of them");
@@ -808,19 +837,21 @@ void readProjectors(const Reader& r, const Node& root, const fs::path& dir, Scen
     Node upNode = r.child(p, "up");
     if (upNode) proj.up = direction(r, upNode);
     if (glm::length(glm::cross(proj.direction, proj.up)) < 1e-4f)
-      r.fail(upNode ? upNode.ptr : dirNode.ptr, "up " + vecText(proj.up) + " is parallel to the direction " + vecText(proj.direction) +
+      r.fail(upNode ? upNode.ptr : dirNode.ptr, "up " + vecText(proj.up) + " is parallel to the direction " +
+                                                    vecText(proj.direction) +
                                                     "; expected an up vector not parallel to it");
     proj.fovDeg = float(r.range(r.require(p, "fov_deg", "a vertical field of view in degrees"), 0, true, 180, true,
                                 "a field of view in degrees, 0 < fov_deg < 180"));
     if (Node n = r.child(p, "near")) proj.nearPlane = float(r.positive(n));
     if (Node n = r.child(p, "far")) proj.farPlane = float(r.positive(n));
     if (!(proj.nearPlane < proj.farPlane))
-      r.fail(r.child(p, "near").ptr, "got near " + numText(proj.nearPlane) + " >= far " + numText(proj.farPlane) +
-                                         "; expected near < far");
+      r.fail(r.child(p, "near").ptr,
+             "got near " + numText(proj.nearPlane) + " >= far " + numText(proj.farPlane) + "; expected near < far");
     Node img = r.require(p, "image", "a path to an image");
     proj.image = rgbOf(readImage(r, img.ptr, resolvePath(r.string(img, "a path to an image"), dir), "projector image"));
     proj.aspect = float(proj.image.width) / float(proj.image.height);
-    if (Node n = r.child(p, "aspect")) proj.aspect = float(r.range(n, 0, true, 1e4, false, "a positive aspect ratio (width / height)"));
+    if (Node n = r.child(p, "aspect"))
+      proj.aspect = float(r.range(n, 0, true, 1e4, false, "a positive aspect ratio (width / height)"));
     scene.projectors.push_back(std::move(proj));
   }
 }
@@ -833,8 +864,12 @@ void readFailure(const Reader& r, const Node& root, Scene& scene) {
   scene.failurePointer = r.string(p, "a JSON pointer into this scene file");
   try {
     json::json_pointer ptr(scene.failurePointer);
-    if (!root.j->contains(ptr)) r.fail(p.ptr, "got \"" + scene.failurePointer + "\", which is not in this scene; expected a pointer to a value in it");
-    if (!(*root.j)[ptr].is_number()) r.fail(p.ptr, "got \"" + scene.failurePointer + "\", which points at " + detail::describe((*root.j)[ptr]) + "; expected a pointer to a number");
+    if (!root.j->contains(ptr))
+      r.fail(p.ptr,
+             "got \"" + scene.failurePointer + "\", which is not in this scene; expected a pointer to a value in it");
+    if (!(*root.j)[ptr].is_number())
+      r.fail(p.ptr, "got \"" + scene.failurePointer + "\", which points at " + detail::describe((*root.j)[ptr]) +
+                        "; expected a pointer to a number");
   } catch (const json::exception& e) {
     r.fail(p.ptr, "got \"" + scene.failurePointer + "\"; expected a JSON pointer like /lights/0/elevation_deg");
   }
@@ -858,8 +893,9 @@ void readPaths(const Reader& r, const Node& root, Scene& scene) {
     // The name is given on the command line (--path NAME): the same characters as light names.
     for (char c : path.name)
       if (!(std::isalnum(static_cast<unsigned char>(c)) || c == '_' || c == '-'))
-        r.fail(p.ptr, "path name \"" + path.name + "\" has a character other than letters, digits, '_' and '-'; "
-                      "expected a name usable as --path NAME");
+        r.fail(p.ptr, "path name \"" + path.name +
+                          "\" has a character other than letters, digits, '_' and '-'; "
+                          "expected a name usable as --path NAME");
     // dolly and orbit are the generated paths' names: a scene path of that name would hide them.
     if (path.name == "dolly" || path.name == "orbit")
       r.fail(p.ptr, "path name \"" + path.name + "\" is reserved for the generated paths; expected another name");
@@ -873,8 +909,8 @@ void readPaths(const Reader& r, const Node& root, Scene& scene) {
     } else if (k == "orbit") {
       r.keys(p, {"kind", "frames", "angle_deg"});
       path.kind = CameraPathKind::Orbit;
-      path.angleDeg = float(r.range(r.require(p, "angle_deg", "the total rotation in degrees"), -360, false, 360,
-                                    false, "an angle in degrees -360..360"));
+      path.angleDeg = float(r.range(r.require(p, "angle_deg", "the total rotation in degrees"), -360, false, 360, false,
+                                    "an angle in degrees -360..360"));
     } else if (k == "keyframes") {
       r.keys(p, {"kind", "frames", "cameras"});
       path.kind = CameraPathKind::Keyframes;
@@ -890,8 +926,9 @@ void readPaths(const Reader& r, const Node& root, Scene& scene) {
         cam.up = glm::vec3(0, 1, 0);
         if (Node u = r.child(c, "up")) cam.up = direction(r, u);
         const std::string problem = pathCameraProblem(cam);
-        if (!problem.empty()) r.fail(c.ptr, "keyframe " + std::to_string(i) + " is degenerate: " + problem +
-                                                "; expected a camera that looks somewhere");
+        if (!problem.empty())
+          r.fail(c.ptr, "keyframe " + std::to_string(i) + " is degenerate: " + problem +
+                            "; expected a camera that looks somewhere");
         path.keyframes.push_back(cam);
       }
       path.frames = int(path.keyframes.size());
@@ -900,8 +937,9 @@ void readPaths(const Reader& r, const Node& root, Scene& scene) {
     }
     if (Node f = r.child(p, "frames")) path.frames = int(r.integer(f, 2, kMaxPathFrames));
     else if (path.kind != CameraPathKind::Keyframes) r.fail(p.ptr, "missing key \"frames\"; expected " + frameRange);
-    if (path.frames > kMaxPathFrames) r.fail(p.ptr, "got " + std::to_string(path.frames) + " keyframes; expected at most " +
-                                                       std::to_string(kMaxPathFrames));
+    if (path.frames > kMaxPathFrames)
+      r.fail(p.ptr,
+             "got " + std::to_string(path.frames) + " keyframes; expected at most " + std::to_string(kMaxPathFrames));
     try {
       (void)expandCameraPath(scene.camera, path);
     } catch (const InputError& e) {
@@ -955,9 +993,12 @@ void applyOverrides(const Reader& r, json& doc, const std::vector<SceneOverride>
     try {
       ptr = json::json_pointer(o.pointer);
     } catch (const json::exception&) {
-      throw InputError(formatError(r.file(), place, "got \"" + o.pointer + "\"; expected a JSON pointer like /lights/0/elevation_deg"));
+      throw InputError(formatError(r.file(), place,
+                                   "got \"" + o.pointer + "\"; expected a JSON pointer like /lights/0/elevation_deg"));
     }
-    if (ptr.empty()) throw InputError(formatError(r.file(), place, "cannot replace the whole document; expected a pointer to a value"));
+    if (ptr.empty())
+      throw InputError(
+          formatError(r.file(), place, "cannot replace the whole document; expected a pointer to a value"));
     // The value must exist, or be a new key of an existing object (validated like any key).
     bool exists = false;
     try {
@@ -973,7 +1014,8 @@ void applyOverrides(const Reader& r, json& doc, const std::vector<SceneOverride>
       parentIsObject = false;
     }
     if (!exists && !parentIsObject)
-      throw InputError(formatError(r.file(), place, "no such value in the scene; expected a pointer to an existing value"));
+      throw InputError(
+          formatError(r.file(), place, "no such value in the scene; expected a pointer to an existing value"));
     doc[ptr] = o.value;
   }
 }
@@ -992,13 +1034,15 @@ void checkComputed(const Reader& r, const Scene& s) {
   bool ok = finiteMatrix(c.viewFromWorld()) && finiteMatrix(c.clipFromView());
   for (glm::vec2 px : {glm::vec2(0), glm::vec2(float(c.width), float(c.height)), glm::vec2(0, float(c.height))})
     ok = ok && finite(c.rayDirection(px.x, px.y));
-  if (!ok) r.fail("/camera", "the camera's matrices or rays are not finite; expected a camera with moderate coordinates");
+  if (!ok)
+    r.fail("/camera", "the camera's matrices or rays are not finite; expected a camera with moderate coordinates");
   for (size_t i = 0; i < s.lights.size(); ++i)
     if (!finite(s.lights[i].direction) || !finite(s.lights[i].position))
       r.fail("/lights/" + std::to_string(i), "the light's direction or position is not finite; expected finite values");
   for (size_t i = 0; i < s.projectors.size(); ++i)
     if (!finiteMatrix(s.projectors[i].texFromWorld()))
-      r.fail("/projectors/" + std::to_string(i), "the projective texture matrix is not finite; expected moderate coordinates");
+      r.fail("/projectors/" + std::to_string(i),
+             "the projective texture matrix is not finite; expected moderate coordinates");
 }
 
 std::string envOr(const char* name, const std::string& fallback) {
@@ -1057,7 +1101,7 @@ std::string sharedAssetsDir() {
 }
 
 std::vector<std::string> bundledSceneNames() {
-  static const std::vector<std::string> kOrder = {"sphere_on_plane", "grazing",  "contact", "thin_wall",
+  static const std::vector<std::string> kOrder = {"sphere_on_plane", "grazing",   "contact", "thin_wall",
                                                   "alpha_fence",     "projector", "bunny",   "long_view"};
   std::vector<std::string> found;
   std::error_code ec;

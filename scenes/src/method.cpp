@@ -192,7 +192,8 @@ const std::vector<std::pair<std::string, Setter>>& setters() {
       {"map.format", [](Method& m, const Value& v, const Where& w) { m.mapFormat = enumOf(v, w, kFormats); }},
       {"cull", [](Method& m, const Value& v, const Where& w) { m.cull = enumOf(v, w, kCulls); }},
       {"fit", [](Method& m, const Value& v, const Where& w) { m.fit = enumOf(v, w, kFits); }},
-      {"cascades.count", [](Method& m, const Value& v, const Where& w) { m.cascadeCount = intIn(v, w, 1, 8, kCascadeWhy); }},
+      {"cascades.count",
+       [](Method& m, const Value& v, const Where& w) { m.cascadeCount = intIn(v, w, 1, 8, kCascadeWhy); }},
       {"cascades.lambda",
        [](Method& m, const Value& v, const Where& w) {
          m.cascadeLambda = floatIn(v, w, 0.0, 1.0, false, "a number 0..1 (0 uniform, 1 logarithmic splits)");
@@ -226,8 +227,7 @@ const std::vector<std::pair<std::string, Setter>>& setters() {
        [](Method& m, const Value& v, const Where& w) {
          m.biasNormal = floatIn(v, w, 0.0, 64.0, false, "a number 0..64 (map texels)");
        }},
-      {"bias.receiver_plane",
-       [](Method& m, const Value& v, const Where& w) { m.biasReceiverPlane = boolOf(v, w); }},
+      {"bias.receiver_plane", [](Method& m, const Value& v, const Where& w) { m.biasReceiverPlane = boolOf(v, w); }},
       {"filter", [](Method& m, const Value& v, const Where& w) { m.filter = enumOf(v, w, kFilters); }},
       {"filter.size", [](Method& m, const Value& v, const Where& w) { m.filterSize = intIn(v, w, 3, 15); }},
       {"filter.taps", [](Method& m, const Value& v, const Where& w) { m.filterTaps = intIn(v, w, 1, 64); }},
@@ -261,8 +261,9 @@ void apply(Method& m, const std::string& key, const Value& v, const Where& w) {
     }
   std::vector<std::string> all = methodKeys();
   all.push_back("name");
-  throw InputError(formatError(w.file, w.place, "unknown method key \"" + key + "\"" + detail::didYouMean(key, all) +
-                                                    "; expected one of " + keyList()));
+  throw InputError(formatError(
+      w.file, w.place,
+      "unknown method key \"" + key + "\"" + detail::didYouMean(key, all) + "; expected one of " + keyList()));
 }
 
 // Cross-field and range rules on a whole Method (a hand-built Method skips the setters).
@@ -278,8 +279,11 @@ void crossCheck(const Method& m, const std::string& file, const std::string& pre
   if (m.filterTaps < 1 || m.filterTaps > 64) bad("filter.taps", std::to_string(m.filterTaps), "an integer 1..64");
   if (!(m.filterRadius > 0.0f && m.filterRadius <= 32.0f))
     bad("filter.radius", nlohmann::json(m.filterRadius).dump(), "a number > 0 and <= 32 (map texels)");
-  for (auto [key, v] : {std::pair<const char*, float>{"bias.constant", m.biasConstant}, {"bias.slope", m.biasSlope},
-                        {"bias.clamp", m.biasClamp}, {"bias.compare", m.biasCompare}, {"bias.normal", m.biasNormal}})
+  for (auto [key, v] : {std::pair<const char*, float>{"bias.constant", m.biasConstant},
+                        {"bias.slope", m.biasSlope},
+                        {"bias.clamp", m.biasClamp},
+                        {"bias.compare", m.biasCompare},
+                        {"bias.normal", m.biasNormal}})
     if (!std::isfinite(v)) bad(key, nlohmann::json(double(v)).dump(), "a finite number");
   if (m.cascadeCount < 1 || m.cascadeCount > 8)
     bad("cascades.count", std::to_string(m.cascadeCount), "an integer 1..8");

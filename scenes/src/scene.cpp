@@ -100,8 +100,7 @@ glm::vec3 Camera::rayDirection(float x, float y) const {
 }
 
 std::string Camera::hash() const {
-  float floats[10] = {position.x, position.y, position.z, lookAt.x, lookAt.y,
-                      lookAt.z,   up.x,       up.y,       up.z,     vfovDeg};
+  float floats[10] = {position.x, position.y, position.z, lookAt.x, lookAt.y, lookAt.z, up.x, up.y, up.z, vfovDeg};
   int32_t ints[2] = {width, height};
   unsigned char bytes[sizeof(floats) + sizeof(ints)];
   std::memcpy(bytes, floats, sizeof(floats));

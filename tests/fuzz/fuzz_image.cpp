@@ -8,12 +8,15 @@
 using namespace shadowlab;
 
 extern "C" int LLVMFuzzerInitialize(int*, char***) {
-  fuzz::writeFile("m.obj", "mtllib m.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0 0\nvt 1 0\nvt 0 1\nusemtl a\nf 1/1 2/2 3/3\n");
+  fuzz::writeFile("m.obj",
+                  "mtllib m.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0 0\nvt 1 0\nvt 0 1\nusemtl a\nf 1/1 2/2 3/3\n");
   fuzz::writeFile("m.mtl", "newmtl a\nmap_d image.png\n");
-  fuzz::writeFile("projector.json", R"({"camera": {"position": [0, 2, 5], "look_at": [0, 0, 0], "vfov_deg": 45, "width": 8, "height": 6},
+  fuzz::writeFile("projector.json",
+                  R"({"camera": {"position": [0, 2, 5], "look_at": [0, 0, 0], "vfov_deg": 45, "width": 8, "height": 6},
   "objects": [{"type": "plane", "size": [4, 4]}],
   "projectors": [{"name": "p", "position": [0, 3, 3], "look_at": [0, 0, 0], "fov_deg": 40, "image": "image.png"}]})");
-  fuzz::writeFile("alpha.json", R"({"camera": {"position": [0, 2, 5], "look_at": [0, 0, 0], "vfov_deg": 45, "width": 8, "height": 6},
+  fuzz::writeFile("alpha.json",
+                  R"({"camera": {"position": [0, 2, 5], "look_at": [0, 0, 0], "vfov_deg": 45, "width": 8, "height": 6},
   "objects": [{"type": "obj", "path": "m.obj"}],
   "lights": [{"type": "directional", "elevation_deg": 45}]})");
   std::filesystem::copy_file(std::filesystem::path(SHADOWLAB_SOURCE_DIR) / "scenes/data/fence_alpha.png",

@@ -10,7 +10,8 @@ using namespace shadowlab;
 extern "C" int LLVMFuzzerInitialize(int*, char***) {
   const std::filesystem::path data = std::filesystem::path(SHADOWLAB_SOURCE_DIR) / "scenes/data";
   std::filesystem::create_directories(fuzz::workDir() / "assets");
-  fuzz::writeFile("assets/tri.obj", "mtllib tri.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0 0\nvt 1 0\nvt 0 1\nusemtl leaf\nf 1/1 2/2 3/3\n");
+  fuzz::writeFile("assets/tri.obj",
+                  "mtllib tri.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0 0\nvt 1 0\nvt 0 1\nusemtl leaf\nf 1/1 2/2 3/3\n");
   fuzz::writeFile("assets/tri.mtl", "newmtl leaf\nKd 0.5 0.5 0.5\nmap_d alpha.png\n");
   std::filesystem::copy_file(data / "fence_alpha.png", fuzz::workDir() / "assets/alpha.png");
   std::filesystem::copy_file(data / "projector_image.png", fuzz::workDir() / "projector_image.png");

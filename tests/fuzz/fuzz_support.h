@@ -22,7 +22,10 @@ inline const std::filesystem::path& workDir() {
   static const std::filesystem::path dir = [] {
     std::string tmpl = (std::filesystem::temp_directory_path() / "shadowlab_fuzz_XXXXXX").string();
     if (!::mkdtemp(tmpl.data())) std::abort();
-    std::atexit([] { std::error_code ec; std::filesystem::remove_all(workDir(), ec); });
+    std::atexit([] {
+      std::error_code ec;
+      std::filesystem::remove_all(workDir(), ec);
+    });
     return std::filesystem::path(tmpl);
   }();
   return dir;
@@ -50,7 +53,8 @@ inline std::vector<std::string> split(const uint8_t* data, size_t size, const st
 inline std::vector<std::string> lines(const std::string& text) {
   std::vector<std::string> out;
   size_t start = 0;
-  for (size_t at; (at = text.find('\n', start)) != std::string::npos; start = at + 1) out.push_back(text.substr(start, at - start));
+  for (size_t at; (at = text.find('\n', start)) != std::string::npos; start = at + 1)
+    out.push_back(text.substr(start, at - start));
   if (start < text.size()) out.push_back(text.substr(start));
   return out;
 }

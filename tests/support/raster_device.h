@@ -41,7 +41,7 @@ class ValidatedRasterTest : public ::testing::Test {
 }  // namespace shadowlab::testing
 
 #define REQUIRE_DEVICE()                                               \
-  ::shadowlab::Rasterizer* R = ::shadowlab::testing::rasterizer();    \
+  ::shadowlab::Rasterizer* R = ::shadowlab::testing::rasterizer();     \
   if (!R) {                                                            \
     GTEST_SKIP() << "no Vulkan device (lavapipe) found: test NOT run"; \
   }

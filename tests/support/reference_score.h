@@ -14,15 +14,15 @@
 namespace shadowlab::testing {
 
 struct Score {
-  size_t both = 0;         // pixels where both renderers see the same object
-  size_t wrong = 0;        // ... and disagree on lit (vis >= 0.5) vs shadowed
-  size_t refLit = 0;       // ... the reference says lit
-  size_t litShadowed = 0;  // ... lit in the reference, shadowed by the raster: acne-like
-  size_t refShadow = 0;    // ... the reference says shadowed
-  size_t shadowLit = 0;    // ... shadowed in the reference, lit by the raster: leak-like
+  size_t both = 0;                // pixels where both renderers see the same object
+  size_t wrong = 0;               // ... and disagree on lit (vis >= 0.5) vs shadowed
+  size_t refLit = 0;              // ... the reference says lit
+  size_t litShadowed = 0;         // ... lit in the reference, shadowed by the raster: acne-like
+  size_t refShadow = 0;           // ... the reference says shadowed
+  size_t shadowLit = 0;           // ... shadowed in the reference, lit by the raster: leak-like
   size_t refShadowRasShadow = 0;  // ... shadowed in both
   double errorRate = 0;
-  double mP95 = 0;      // 95th percentile (nearest rank) of light.L.m over `both`, pixels per texel
+  double mP95 = 0;  // 95th percentile (nearest rank) of light.L.m over `both`, pixels per texel
 };
 
 inline Score score(const Frame& ref, const Frame& ras, const std::string& light) {

@@ -429,7 +429,7 @@ void resolveCandidates(uint8_t* klass, const uint8_t* decision, const float* mPl
     rowReach[size_t(y)] = reachRow;
   });
   const bool anyBoundary = std::find(rowHasBoundary.begin(), rowHasBoundary.end(), 1) != rowHasBoundary.end();
-  int reach = 0;  // the largest row reach: caps g
+  int reach = 0;                           // the largest row reach: caps g
   std::vector<std::pair<int, int>> bands;  // [y0, y1) row intervals to scan
   for (int y = 0; y < height; ++y) {
     const int r = rowReach[size_t(y)];
@@ -539,7 +539,8 @@ void resolveCandidates(uint8_t* klass, const uint8_t* decision, const float* mPl
 // Per-cascade metrics; after pass 2, so `klass` holds every pixel's final class. Cascade indices
 // come from a float channel: anything not an integer 0..7 (NaN included) is read as the nearest
 // valid index.
-std::vector<CascadeMetrics> cascadeMetrics(const uint8_t* klass, const uint8_t* decision, const Channels& ch, size_t n) {
+std::vector<CascadeMetrics> cascadeMetrics(const uint8_t* klass, const uint8_t* decision, const Channels& ch,
+                                           size_t n) {
   constexpr int kMaxCascades = 8;
   int cascadeCount = ch.cascadeCount;
   std::vector<uint64_t> pixels(kMaxCascades, 0), errors(kMaxCascades, 0);
@@ -576,8 +577,8 @@ std::vector<CascadeMetrics> cascadeMetrics(const uint8_t* klass, const uint8_t* 
 // a selection among the values of those bins. Nearest rank: the value at sorted index
 // ceil(p * N) - 1. Sets out.mMedian and out.mP95.
 void setFootprintQuantiles(Metrics& out, const std::vector<uint64_t>& high, uint64_t compared,
-                           const std::vector<BlockSums>& sums, const uint8_t* decision, const float* mPlane,
-                           int width, size_t n) {
+                           const std::vector<BlockSums>& sums, const uint8_t* decision, const float* mPlane, int width,
+                           size_t n) {
   const double ps[2] = {0.5, 0.95};
   uint64_t rank[2];
   uint32_t bin[2];
@@ -642,7 +643,8 @@ std::string resolveCompareLight(const Frame& reference, const Frame& raster, con
   if (!firstName(reference, "projectors").empty()) return "";
   for (const auto& n : reference.names)
     if (n.compare(0, 5, "proj.") == 0) return "";
-  throw InputError(both(options) + ": error: nothing to compare: no \"light.NAME.vis\" channel, no light named in "
+  throw InputError(both(options) +
+                   ": error: nothing to compare: no \"light.NAME.vis\" channel, no light named in "
                    "the metadata and no projector; expected a frame rendered with at least one light or projector");
 }
 

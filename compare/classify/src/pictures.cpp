@@ -61,7 +61,8 @@ struct Canvas {
   }
   void fillRect(int x0, int y0, int w, int h, const uint8_t c[3]) {
     for (int y = std::max(0, y0); y < std::min(height, y0 + h); ++y)
-      for (int x = std::max(0, x0); x < std::min(width, x0 + w); ++x) std::copy(c, c + 3, &rgb[(size_t(y) * width + x) * 3]);
+      for (int x = std::max(0, x0); x < std::min(width, x0 + w); ++x)
+        std::copy(c, c + 3, &rgb[(size_t(y) * width + x) * 3]);
   }
   // Draws text with its top-left at (x, y), each font pixel scale x scale. Clipped at the edges.
   void text(int x, int y, const std::string& s, int scale, const uint8_t c[3]) {
@@ -79,7 +80,8 @@ struct Canvas {
       if (y0 + y < 0 || y0 + y >= height) continue;
       for (int x = 0; x < w; ++x) {
         if (x0 + x < 0 || x0 + x >= width) continue;
-        std::copy(&src[(size_t(y) * w + x) * 3], &src[(size_t(y) * w + x) * 3] + 3, &rgb[(size_t(y0 + y) * width + x0 + x) * 3]);
+        std::copy(&src[(size_t(y) * w + x) * 3], &src[(size_t(y) * w + x) * 3] + 3,
+                  &rgb[(size_t(y0 + y) * width + x0 + x) * 3]);
       }
     }
   }
@@ -252,14 +254,13 @@ std::vector<uint8_t> visibilityPicture(const Frame& f, const std::string& light)
 
 }  // namespace
 
-void writeTriptychPng(const std::string& path, const Frame& reference, const Frame& raster,
-                      const Classification& c) {
+void writeTriptychPng(const std::string& path, const Frame& reference, const Frame& raster, const Classification& c) {
   const int w = c.width, h = c.height;
   if (reference.width != w || reference.height != h || raster.width != w || raster.height != h) {
-    throw InputError(path + ": error: triptych of frames with different sizes (" + std::to_string(reference.width) + "x" +
-                     std::to_string(reference.height) + ", " + std::to_string(raster.width) + "x" +
-                     std::to_string(raster.height) + ", classification " + std::to_string(w) + "x" +
-                     std::to_string(h) + "); expected one size");
+    throw InputError(path + ": error: triptych of frames with different sizes (" + std::to_string(reference.width) +
+                     "x" + std::to_string(reference.height) + ", " + std::to_string(raster.width) + "x" +
+                     std::to_string(raster.height) + ", classification " + std::to_string(w) + "x" + std::to_string(h) +
+                     "); expected one size");
   }
   CompareOptions none;
   std::string light;

@@ -65,8 +65,8 @@ std::optional<Direction> parseDirection(const std::string& s) {
 
 ToleranceSpec parseSpec(const nlohmann::json& j, const std::string& file, const std::string& pointer) {
   if (!j.is_object())
-    throw InputError(formatError(file, pointer, "got " + jsonTypeName(j) +
-                                                    "; expected an object with \"direction\", \"abs\", \"rel\""));
+    throw InputError(formatError(
+        file, pointer, "got " + jsonTypeName(j) + "; expected an object with \"direction\", \"abs\", \"rel\""));
   ToleranceSpec spec;
   for (auto it = j.begin(); it != j.end(); ++it) {
     std::string place = pointer + "/" + jsonPointerToken(it.key());
@@ -74,9 +74,10 @@ ToleranceSpec parseSpec(const nlohmann::json& j, const std::string& file, const 
     if (it.key() == "direction") {
       auto d = v.is_string() ? parseDirection(v.get<std::string>()) : std::nullopt;
       if (!d)
-        throw InputError(formatError(file, place, "got " + describeJson(v) +
-                                                      "; expected \"lower_is_better\", \"higher_is_better\", "
-                                                      "\"equal\" or \"ignore\""));
+        throw InputError(formatError(file, place,
+                                     "got " + describeJson(v) +
+                                         "; expected \"lower_is_better\", \"higher_is_better\", "
+                                         "\"equal\" or \"ignore\""));
       spec.direction = d;
     } else if (it.key() == "abs" || it.key() == "rel") {
       if (!v.is_number())
@@ -86,8 +87,8 @@ ToleranceSpec parseSpec(const nlohmann::json& j, const std::string& file, const 
         throw InputError(formatError(file, place, "got " + describeJson(v) + "; expected a number >= 0 (a tolerance)"));
       (it.key() == "abs" ? spec.absTolerance : spec.relTolerance) = x;
     } else {
-      throw InputError(formatError(file, place, "unknown key \"" + it.key() +
-                                                    "\"; expected \"direction\", \"abs\" or \"rel\""));
+      throw InputError(
+          formatError(file, place, "unknown key \"" + it.key() + "\"; expected \"direction\", \"abs\" or \"rel\""));
     }
   }
   return spec;
@@ -105,9 +106,10 @@ TimingTolerance parseTiming(const nlohmann::json& j, const std::string& file) {
     return t;
   }
   if (!j.is_object())
-    throw InputError(formatError(file, "/timing", "got " + jsonTypeName(j) +
-                                                      "; expected \"report\", \"fail\" or an object "
-                                                      "{\"mode\", \"max_ratio\", \"min_ms\"}"));
+    throw InputError(formatError(file, "/timing",
+                                 "got " + jsonTypeName(j) +
+                                     "; expected \"report\", \"fail\" or an object "
+                                     "{\"mode\", \"max_ratio\", \"min_ms\"}"));
   for (auto it = j.begin(); it != j.end(); ++it) {
     std::string place = "/timing/" + jsonPointerToken(it.key());
     const nlohmann::json& v = it.value();
@@ -115,16 +117,17 @@ TimingTolerance parseTiming(const nlohmann::json& j, const std::string& file) {
       t.mode = mode(v, place);
     } else if (it.key() == "max_ratio") {
       if (!v.is_number() || !(v.get<double>() >= 1.0))
-        throw InputError(formatError(file, place, "got " + describeJson(v) +
-                                                      "; expected a number >= 1 (current/baseline time)"));
+        throw InputError(
+            formatError(file, place, "got " + describeJson(v) + "; expected a number >= 1 (current/baseline time)"));
       t.maxRatio = v.get<double>();
     } else if (it.key() == "min_ms") {
       if (!v.is_number() || !(v.get<double>() >= 0.0))
-        throw InputError(formatError(file, place, "got " + describeJson(v) + "; expected a number >= 0 (milliseconds)"));
+        throw InputError(
+            formatError(file, place, "got " + describeJson(v) + "; expected a number >= 0 (milliseconds)"));
       t.minMs = v.get<double>();
     } else {
-      throw InputError(formatError(file, place, "unknown key \"" + it.key() +
-                                                    "\"; expected \"mode\", \"max_ratio\" or \"min_ms\""));
+      throw InputError(
+          formatError(file, place, "unknown key \"" + it.key() + "\"; expected \"mode\", \"max_ratio\" or \"min_ms\""));
     }
   }
   return t;
@@ -148,8 +151,7 @@ void throwProblems(const std::vector<std::string>& problems) {
   std::string message;
   size_t shown = std::min<size_t>(problems.size(), 20);
   for (size_t i = 0; i < shown; ++i) message += (i ? "\n" : "") + problems[i];
-  if (problems.size() > shown)
-    message += "\n(" + std::to_string(problems.size() - shown) + " more problems not shown)";
+  if (problems.size() > shown) message += "\n(" + std::to_string(problems.size() - shown) + " more problems not shown)";
   throw InputError(message);
 }
 
@@ -294,8 +296,8 @@ Tolerances parseTolerances(const nlohmann::json& j, const std::string& file) {
     std::string place = "/" + jsonPointerToken(key);
     if (key == "schema") {
       if (it.value() != kTolerancesSchema)
-        throw InputError(formatError(file, place, "got " + describeJson(it.value()) + "; expected \"" +
-                                                      kTolerancesSchema + "\""));
+        throw InputError(
+            formatError(file, place, "got " + describeJson(it.value()) + "; expected \"" + kTolerancesSchema + "\""));
     } else if (key == "default") {
       ToleranceSpec spec = parseSpec(it.value(), file, place);
       if (spec.direction) t.fallback.direction = spec.direction;
@@ -303,8 +305,8 @@ Tolerances parseTolerances(const nlohmann::json& j, const std::string& file) {
       if (spec.relTolerance) t.fallback.relTolerance = spec.relTolerance;
     } else if (key == "metrics") {
       if (!it.value().is_object())
-        throw InputError(formatError(file, place, "got " + jsonTypeName(it.value()) +
-                                                      "; expected an object of metric name -> tolerance"));
+        throw InputError(formatError(
+            file, place, "got " + jsonTypeName(it.value()) + "; expected an object of metric name -> tolerance"));
       for (auto m = it.value().begin(); m != it.value().end(); ++m) {
         const std::string mplace = place + "/" + jsonPointerToken(m.key());
         // A timing listed as a metric would never be checked (timings follow "timing"): say so
@@ -312,30 +314,29 @@ Tolerances parseTolerances(const nlohmann::json& j, const std::string& file) {
         if (const char* renamed = timing::renamedTiming(m.key(), timing::TimingSource::ResultRow))
           throw InputError(formatError(file, mplace, timing::renamedTimingMessage(m.key(), renamed)));
         if (timing::isTimingName(m.key()))
-          throw InputError(formatError(file, mplace, "\"" + m.key() + "\" is a timing, not a metric; expected "
-                                                     "timings under \"timing\" (compare/GATE.md)"));
+          throw InputError(formatError(file, mplace,
+                                       "\"" + m.key() +
+                                           "\" is a timing, not a metric; expected "
+                                           "timings under \"timing\" (compare/GATE.md)"));
         t.metrics[m.key()] = parseSpec(m.value(), file, mplace);
       }
     } else if (key == "timing") {
       t.timing = parseTiming(it.value(), file);
     } else {
-      throw InputError(formatError(file, place, "unknown key \"" + key +
-                                                    "\"; expected \"schema\", \"default\", \"metrics\" or \"timing\""));
+      throw InputError(formatError(
+          file, place, "unknown key \"" + key + "\"; expected \"schema\", \"default\", \"metrics\" or \"timing\""));
     }
   }
   return t;
 }
 
-Tolerances loadTolerances(const std::string& path) {
-  return parseTolerances(readJsonFile(path), path);
-}
+Tolerances loadTolerances(const std::string& path) { return parseTolerances(readJsonFile(path), path); }
 
 std::string GateResult::summary() const {
   std::ostringstream s;
   s << (passed() ? "PASS" : "FAIL") << ": " << regressions << (regressions == 1 ? " regression" : " regressions")
-    << ", " << improvements << " improved, " << passes << " within tolerance, " << reported
-    << " reported only; " << rowsCompared << (rowsCompared == 1 ? " row" : " rows") << " compared, " << rowsNew
-    << " new";
+    << ", " << improvements << " improved, " << passes << " within tolerance, " << reported << " reported only; "
+    << rowsCompared << (rowsCompared == 1 ? " row" : " rows") << " compared, " << rowsNew << " new";
   return s.str();
 }
 
@@ -424,8 +425,7 @@ GateResult runGate(const ResultFile& current, const ResultFile& baseline, const 
         std::string allowedText = formatNumber(allowed);
         // The table shows a rounding-only tolerance (the built-in 1e-9 relative) as 0, not as
         // "+4.76802e-14"; messages keep the exact number.
-        const std::string shown =
-            tol.absTolerance == 0 && tol.relTolerance <= 1e-6 ? std::string("0") : allowedText;
+        const std::string shown = tol.absTolerance == 0 && tol.relTolerance <= 1e-6 ? std::string("0") : allowedText;
         auto [cs, bs] = formatPair(cd, bd);
         switch (tol.direction) {
           case Direction::LowerIsBetter:
@@ -508,8 +508,8 @@ GateResult runGate(const ResultFile& current, const ResultFile& baseline, const 
           char maxText[32];
           std::snprintf(maxText, sizeof maxText, "%.2fx", tolerances.timing.maxRatio);
           std::string median = c.samples > 1 ? " (median of " + std::to_string(c.samples) + " runs)" : "";
-          c.message = base.key() + ": timing \"" + name + "\" is " + formatNumber(cms) + " ms" + median + ", " + ratioText +
-                      " the baseline " + formatNumber(bms) + " ms, above the limit " + maxText;
+          c.message = base.key() + ": timing \"" + name + "\" is " + formatNumber(cms) + " ms" + median + ", " +
+                      ratioText + " the baseline " + formatNumber(bms) + " ms, above the limit " + maxText;
         }
       }
       result.checks.push_back(std::move(c));
@@ -590,15 +590,16 @@ nlohmann::json gateToJson(const GateResult& result, const ResultFile& current, c
   j["current"] = current.path;
   j["baseline"] = baseline.path;
   j["tolerances"] = tolerances.origin;
-  j["counts"] = {{"regressions", result.regressions}, {"improvements", result.improvements},
-                 {"passes", result.passes},           {"reported", result.reported},
-                 {"rows_compared", result.rowsCompared}, {"rows_new", result.rowsNew}};
+  j["counts"] = {
+      {"regressions", result.regressions}, {"improvements", result.improvements},  {"passes", result.passes},
+      {"reported", result.reported},       {"rows_compared", result.rowsCompared}, {"rows_new", result.rowsNew}};
   nlohmann::json checks = nlohmann::json::array();
   for (const GateCheck& c : result.checks) {
-    nlohmann::json k = {{"row", c.rowKey},       {"scene", c.scene},         {"config", c.config},
-                        {"light", c.light},      {"kind", c.kind},           {"metric", c.metric},
-                        {"baseline", c.baseline}, {"current", c.current},    {"tolerance", c.tolerance},
-                        {"verdict", toString(c.verdict)}};
+    nlohmann::json k = {{"row", c.rowKey},          {"scene", c.scene},
+                        {"config", c.config},       {"light", c.light},
+                        {"kind", c.kind},           {"metric", c.metric},
+                        {"baseline", c.baseline},   {"current", c.current},
+                        {"tolerance", c.tolerance}, {"verdict", toString(c.verdict)}};
     if (c.kind == "timing") k["samples"] = c.samples;
     if (!c.message.empty()) k["message"] = c.message;
     checks.push_back(std::move(k));
@@ -634,7 +635,7 @@ std::string gateToJunitXml(const GateResult& result) {
       if (c->verdict == Verdict::Regressed) {
         x << "\n      <failure message=\"" << escapeMarkup(c->message) << "\" type=\"regression\">"
           << escapeMarkup("baseline " + formatValue(c->baseline) + ", current " + formatValue(c->current) +
-                       ", tolerance " + c->tolerance)
+                          ", tolerance " + c->tolerance)
           << "</failure>\n    ";
       } else if (c->verdict != Verdict::Pass) {
         std::string note = toString(c->verdict) + ": baseline " +
@@ -654,7 +655,7 @@ ResultFile mergeResultFiles(const std::vector<ResultFile>& files) {
   if (files.size() == 1) return files.front();
   ResultFile merged;
   merged.schema = "shadowlab.results/1";
-  std::map<std::string, size_t> index;                          // row key -> merged row
+  std::map<std::string, size_t> index;                              // row key -> merged row
   std::vector<std::map<std::string, std::vector<double>>> samples;  // merged row -> timing -> runs
   for (const ResultFile& f : files) {
     checkDuplicates(f);
@@ -680,7 +681,8 @@ ResultFile mergeResultFiles(const std::vector<ResultFile>& files) {
           if (other == a.end() || other->second != value)
             throw InputError(formatError(f.pathOf(i), metricPointer(f.pointers[i], "metrics", name),
                                          "row \"" + row.key() + "\" repeats the run in " + merged.rowPaths[m] +
-                                             " but metric \"" + name + "\" is " + formatValue(value) + " here and " + was +
+                                             " but metric \"" + name + "\" is " + formatValue(value) + " here and " +
+                                             was +
                                              " there; expected repeated runs to agree (the pipeline is "
                                              "deterministic)"));
         }
@@ -745,7 +747,8 @@ std::vector<std::string> describeBaselineUpdate(const ResultFile& current, const
       }
     }
     for (auto& [name, bv] : bm)
-      if (!cm.count(name)) lines.push_back("~ " + r.key() + ": metric \"" + name + "\" removed (was " + formatValue(bv) + ")");
+      if (!cm.count(name))
+        lines.push_back("~ " + r.key() + ": metric \"" + name + "\" removed (was " + formatValue(bv) + ")");
     if (b->second->method != r.method) lines.push_back("~ " + r.key() + ": method changed");
   }
   for (auto& r : baseline.rows)

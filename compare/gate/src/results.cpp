@@ -29,15 +29,15 @@ ResultRow rowFromJson(const nlohmann::json& j, const std::string& file, const st
   auto text = [&](const char* key, std::string& out) {
     auto it = j.find(key);
     if (it == j.end()) fail(pointer, std::string("missing \"") + key + "\"; expected a string");
-    if (!it->is_string())
-      fail(pointer + "/" + key, "got " + jsonTypeName(*it) + "; expected a string");
+    if (!it->is_string()) fail(pointer + "/" + key, "got " + jsonTypeName(*it) + "; expected a string");
     out = it->get<std::string>();
   };
   text("scene", row.scene);
   text("config", row.config);
   text("light", row.light);
   if (row.scene.empty()) fail(pointer + "/scene", "got an empty string; expected the scene name");
-  if (row.config.empty()) fail(pointer + "/config", "got an empty string; expected a config (\"default\" when nothing was swept)");
+  if (row.config.empty())
+    fail(pointer + "/config", "got an empty string; expected a config (\"default\" when nothing was swept)");
   auto object = [&](const char* key, nlohmann::json& out, bool required) {
     auto it = j.find(key);
     if (it == j.end()) {
@@ -89,17 +89,19 @@ ResultFile loadResultFile(const std::string& path) {
     throw InputError(formatError(path, "", "got " + jsonTypeName(doc) + "; expected an object with \"schema\""));
   auto schema = doc.find("schema");
   if (schema == doc.end())
-    throw InputError(formatError(path, "", std::string("missing \"schema\"; expected \"") + kMetricsSchema +
-                                                "\" (metrics.json), \"" + kResultsSchema + "\" (results.json) or \"" +
-                                                kStabilitySchema + "\" (stability.json)"));
+    throw InputError(formatError(path, "",
+                                 std::string("missing \"schema\"; expected \"") + kMetricsSchema +
+                                     "\" (metrics.json), \"" + kResultsSchema + "\" (results.json) or \"" +
+                                     kStabilitySchema + "\" (stability.json)"));
   if (!schema->is_string() || (*schema != kMetricsSchema && *schema != kResultsSchema && *schema != kStabilitySchema))
-    throw InputError(formatError(path, "/schema", "got " + schema->dump() + "; expected \"" + kMetricsSchema +
-                                                      "\", \"" + kResultsSchema + "\" or \"" + kStabilitySchema + "\""));
+    throw InputError(formatError(path, "/schema",
+                                 "got " + schema->dump() + "; expected \"" + kMetricsSchema + "\", \"" +
+                                     kResultsSchema + "\" or \"" + kStabilitySchema + "\""));
   file.schema = schema->get<std::string>();
   if (file.schema == kMetricsSchema || file.schema == kStabilitySchema) {
-    file.rows.push_back(rowFromJson(doc, path, "",
-                                    file.schema == kStabilitySchema ? timing::TimingSource::StabilityRow
-                                                                    : timing::TimingSource::ResultRow));
+    file.rows.push_back(rowFromJson(
+        doc, path, "",
+        file.schema == kStabilitySchema ? timing::TimingSource::StabilityRow : timing::TimingSource::ResultRow));
     file.pointers.push_back("");
     return file;
   }

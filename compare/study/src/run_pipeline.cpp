@@ -45,8 +45,8 @@ RunResult runPipeline(const Scene& scene, const Method& method, Rasterizer& rast
   if (!light.empty() && !scene.findLight(light)) {
     std::string names;
     for (const auto& l : scene.lights) names += (names.empty() ? "" : ", ") + l.name;
-    throw InputError(scene.path + ": error: no light named \"" + light + "\"; expected one of: " +
-                     (names.empty() ? "(the scene has no lights)" : names));
+    throw InputError(scene.path + ": error: no light named \"" + light +
+                     "\"; expected one of: " + (names.empty() ? "(the scene has no lights)" : names));
   }
   RunResult r;
   const auto r0 = std::chrono::steady_clock::now();

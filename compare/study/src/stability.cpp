@@ -12,8 +12,7 @@ namespace shadowlab {
 namespace {
 
 const float* plane(const Frame& f, const std::string& name, const char* which) {
-  if (!f.has(name))
-    throw InputError(std::string("stability: error: the ") + which + " frame has no channel " + name);
+  if (!f.has(name)) throw InputError(std::string("stability: error: the ") + which + " frame has no channel " + name);
   const std::vector<float>& p = f.get(name);
   if (p.size() != f.pixelCount())
     throw InputError(std::string("stability: error: channel ") + name + " of the " + which +
@@ -23,8 +22,8 @@ const float* plane(const Frame& f, const std::string& name, const char* which) {
 
 }  // namespace
 
-double decisionFlipRate(const Frame& reference, const Frame& rasterA, const Frame& rasterB,
-                        const std::string& light, uint64_t* pixelsCompared) {
+double decisionFlipRate(const Frame& reference, const Frame& rasterA, const Frame& rasterB, const std::string& light,
+                        uint64_t* pixelsCompared) {
   if (reference.width != rasterA.width || reference.height != rasterA.height || rasterA.width != rasterB.width ||
       rasterA.height != rasterB.height)
     throw InputError("stability: error: frame sizes differ; expected every frame from the same camera");

@@ -57,8 +57,8 @@ std::string shortName(const std::string& key) {
 
 }  // namespace
 
-nlohmann::json computeFrontiers(const SweepPlan& plan, const std::vector<ResultRow>& rows,
-                                const std::string& metric, double threshold) {
+nlohmann::json computeFrontiers(const SweepPlan& plan, const std::vector<ResultRow>& rows, const std::string& metric,
+                                double threshold) {
   nlohmann::json out = nlohmann::json::array();
   const std::string prefix = kSceneKeyPrefix;
   // Axes with a single value are constants: they name no frontier and are left out of labels.

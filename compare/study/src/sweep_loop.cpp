@@ -32,9 +32,7 @@ namespace {
 namespace fs = std::filesystem;
 using Clock = std::chrono::steady_clock;
 
-double secondsSince(Clock::time_point t0) {
-  return std::chrono::duration<double>(Clock::now() - t0).count();
-}
+double secondsSince(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
 
 std::string joinPath(const std::string& dir, const std::string& name) {
   if (dir.empty()) return name;
@@ -46,8 +44,8 @@ std::string joinPath(const std::string& dir, const std::string& name) {
 std::string slug(const std::string& text) {
   std::string out;
   for (char c : text) {
-    bool ok = (c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z') || (c >= '0' && c <= '9') || c == '.' ||
-              c == '-' || c == '_' || c == '=' || c == ',';
+    bool ok = (c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z') || (c >= '0' && c <= '9') || c == '.' || c == '-' ||
+              c == '_' || c == '=' || c == ',';
     out += ok ? c : '_';
   }
   return out.empty() ? "default" : out;
@@ -57,7 +55,7 @@ struct StoredRow {
   ResultRow row;
   std::string sceneHash;
   double configWallSeconds = 0;  // config_wall_ms / 1000, kept beside the row in the journal
-  std::string device;  // SweepRunner::deviceName() that measured the timings; "" in journals of older builds
+  std::string device;            // SweepRunner::deviceName() that measured the timings; "" in journals of older builds
 };
 
 // Reads rows.jsonl; drops (and truncates away) a torn last line. A damaged line before the last
@@ -86,8 +84,8 @@ std::map<std::string, StoredRow> readJournal(const std::string& path, bool repai
     // The journal is this program's own output, so a damaged line is named, not dissected:
     // nlohmann's exception text never reaches the user.
     std::string problem;
-    const nlohmann::json j = complete ? nlohmann::json::parse(line, nullptr, /*allow_exceptions=*/false)
-                                      : nlohmann::json();
+    const nlohmann::json j =
+        complete ? nlohmann::json::parse(line, nullptr, /*allow_exceptions=*/false) : nlohmann::json();
     if (!complete) {
       problem = "no newline";
     } else if (j.is_discarded()) {
@@ -111,9 +109,10 @@ std::map<std::string, StoredRow> readJournal(const std::string& path, bool repai
     }
     // A torn last line (the process died while appending it) is dropped below.
     if (!problem.empty() && !last)
-      throw InputError(formatError(path + ":" + std::to_string(lineNo), "",
-                                   "damaged row (" + problem +
-                                       "); expected one JSON row per line. Delete the line or the file to run it again"));
+      throw InputError(
+          formatError(path + ":" + std::to_string(lineNo), "",
+                      "damaged row (" + problem +
+                          "); expected one JSON row per line. Delete the line or the file to run it again"));
     pos = next;
   }
   if (repair && goodEnd < text.size()) {
@@ -129,7 +128,8 @@ class Journal {
  public:
   explicit Journal(const std::string& path) : path_(path) {
     fd_ = ::open(path.c_str(), O_WRONLY | O_CREAT | O_APPEND | O_CLOEXEC, 0644);
-    if (fd_ < 0) throw InputError(formatError(path, "", std::string("cannot open for appending: ") + std::strerror(errno)));
+    if (fd_ < 0)
+      throw InputError(formatError(path, "", std::string("cannot open for appending: ") + std::strerror(errno)));
   }
   ~Journal() {
     if (fd_ >= 0) ::close(fd_);
@@ -168,7 +168,8 @@ class FolderLock {
     if (::flock(fd_, LOCK_EX | LOCK_NB) != 0) {
       ::close(fd_);
       fd_ = -1;
-      throw InputError(formatError(dir, "", "another sweep is writing into this folder; expected one sweep per output folder"));
+      throw InputError(
+          formatError(dir, "", "another sweep is writing into this folder; expected one sweep per output folder"));
     }
   }
   ~FolderLock() {
@@ -367,8 +368,7 @@ SweepSummary runSweep(const SweepPlan& plan, SweepRunner& runner, const SweepOpt
   const auto t0 = Clock::now();
   SweepSummary summary;
   const SweepShard& shard = options.shard;
-  if (shard.active() && shard.index >= shard.count)
-    throw InputError("--shard: error: I >= N; expected 0 <= I < N");
+  if (shard.active() && shard.index >= shard.count) throw InputError("--shard: error: I >= N; expected 0 <= I < N");
   for (size_t i = 0; i < plan.jobs.size(); ++i) summary.configurations += shard.owns(i) ? 1 : 0;
   if (options.outDir.empty()) throw InputError("shadowlab sweep: error: no output folder; expected -o DIR");
   // Device limits are input errors too: found before the output folder exists.
@@ -387,17 +387,15 @@ SweepSummary runSweep(const SweepPlan& plan, SweepRunner& runner, const SweepOpt
       const nlohmann::json old = nlohmann::json::parse(readFile(metaPath), nullptr, false);
       const std::string oldFp = old.is_object() ? old.value("plan_fingerprint", std::string()) : std::string();
       if (oldFp != fingerprint)
-        throw InputError(formatError(metaPath, "", "this shard folder holds plan " + (oldFp.empty() ? "(unreadable)" : oldFp) +
-                                                       " but this sweep is plan " + fingerprint +
-                                                       "; expected the same sweep arguments and inputs (or another -o)"));
+        throw InputError(formatError(metaPath, "",
+                                     "this shard folder holds plan " + (oldFp.empty() ? "(unreadable)" : oldFp) +
+                                         " but this sweep is plan " + fingerprint +
+                                         "; expected the same sweep arguments and inputs (or another -o)"));
     } else {
-      nlohmann::json meta = {{"schema", "shadowlab.shard/1"},
-                             {"plan_fingerprint", fingerprint},
-                             {"shard_index", shard.index},
-                             {"shard_count", shard.count},
-                             {"rows_planned", summary.configurations},
-                             {"plan_rows", plan.jobs.size()},
-                             {"spec", sweepSpecToJson(plan)}};
+      nlohmann::json meta = {
+          {"schema", "shadowlab.shard/1"}, {"plan_fingerprint", fingerprint},        {"shard_index", shard.index},
+          {"shard_count", shard.count},    {"rows_planned", summary.configurations}, {"plan_rows", plan.jobs.size()},
+          {"spec", sweepSpecToJson(plan)}};
       writeJsonAtomic(metaPath, meta);
     }
   }
@@ -428,11 +426,14 @@ SweepSummary runSweep(const SweepPlan& plan, SweepRunner& runner, const SweepOpt
           "row \"" + job.key() + "\" was measured on device \"" +
               (it->second.device.empty() ? std::string("(not recorded: an older shadowlab)") : it->second.device) +
               "\" but this sweep runs on \"" + device +
-              "\"; expected one device per output folder (use another -o folder, or --device naming the first device)"));
+              "\"; expected one device per output folder (use another -o folder, or --device naming the first "
+              "device)"));
     have[i] = &it->second;
     ++summary.resumed;
   }
-  if (log) log << "pid " << pid << " begin: " << summary.configurations << " rows planned, " << summary.resumed << " already done\n";
+  if (log)
+    log << "pid " << pid << " begin: " << summary.configurations << " rows planned, " << summary.resumed
+        << " already done\n";
   if (options.progress && summary.resumed > 0)
     std::fprintf(options.progress, "sweep: resuming: %zu of %zu rows are already in %s\n", summary.resumed,
                  summary.configurations, journalPath.c_str());
@@ -471,8 +472,11 @@ SweepSummary runSweep(const SweepPlan& plan, SweepRunner& runner, const SweepOpt
     s.sceneHash = scene.hash;
     s.configWallSeconds = seconds;
     s.device = device;
-    nlohmann::json line = {{"scene_hash", s.sceneHash}, {"config_wall_seconds", seconds}, {"pid", pid},
-                           {"device", device}, {"row", s.row.toJson()}};
+    nlohmann::json line = {{"scene_hash", s.sceneHash},
+                           {"config_wall_seconds", seconds},
+                           {"pid", pid},
+                           {"device", device},
+                           {"row", s.row.toJson()}};
     if (shard.active()) line["shard"] = std::to_string(shard.index) + "/" + std::to_string(shard.count);
     journal.append(line.dump(), /*sync=*/true);
     if (log) log << "pid " << pid << " done " << job.key() << " " << seconds << " s\n" << std::flush;
@@ -533,8 +537,9 @@ SweepSummary mergeSweepShards(const SweepPlan& plan, SweepRunner& runner, const 
     if (!meta.is_object() || !meta.value("plan_fingerprint", nlohmann::json()).is_string() ||
         !meta.value("shard_index", nlohmann::json()).is_number_unsigned() ||
         !meta.value("shard_count", nlohmann::json()).is_number_unsigned()) {
-      problems.push_back(formatError(sh.meta, "", "missing or damaged shard description; expected the shard.json "
-                                                  "`shadowlab sweep --shard I/N` writes"));
+      problems.push_back(formatError(sh.meta, "",
+                                     "missing or damaged shard description; expected the shard.json "
+                                     "`shadowlab sweep --shard I/N` writes"));
       continue;
     }
     sh.index = meta.at("shard_index").get<size_t>();
@@ -549,14 +554,16 @@ SweepSummary mergeSweepShards(const SweepPlan& plan, SweepRunner& runner, const 
     shards.push_back(sh);
   }
   if (shards.empty() && problems.empty())
-    throw InputError(formatError(shardsDir.string(), "", "no shard folders; expected the output of "
-                                                         "`shadowlab sweep ... --shard I/N -o " + options.outDir + "`"));
+    throw InputError(formatError(shardsDir.string(), "",
+                                 "no shard folders; expected the output of "
+                                 "`shadowlab sweep ... --shard I/N -o " +
+                                     options.outDir + "`"));
   const size_t count = shards.empty() ? 0 : shards.front().count;
   for (const auto& sh : shards)
     if (sh.count != count)
-      problems.push_back(formatError(sh.meta, "/shard_count", "N is " + std::to_string(sh.count) + " but " +
-                                                                  shards.front().meta + " has N = " + std::to_string(count) +
-                                                                  "; expected every shard of one sweep to share N"));
+      problems.push_back(formatError(sh.meta, "/shard_count",
+                                     "N is " + std::to_string(sh.count) + " but " + shards.front().meta + " has N = " +
+                                         std::to_string(count) + "; expected every shard of one sweep to share N"));
   if (!problems.empty()) {
     std::string all;
     for (const auto& p : problems) all += (all.empty() ? "" : "\n") + p;
@@ -565,10 +572,11 @@ SweepSummary mergeSweepShards(const SweepPlan& plan, SweepRunner& runner, const 
   std::vector<const Shard*> byIndex(count, nullptr);
   for (const auto& sh : shards) {
     if (sh.index >= count || byIndex[sh.index])
-      problems.push_back(formatError(sh.meta, "/shard_index", "shard " + std::to_string(sh.index) + " of " +
-                                                                  std::to_string(count) +
-                                                                  (sh.index >= count ? " is out of range" : " appears twice (also " + byIndex[sh.index]->meta + ")") +
-                                                                  "; expected one folder per shard I < N"));
+      problems.push_back(formatError(
+          sh.meta, "/shard_index",
+          "shard " + std::to_string(sh.index) + " of " + std::to_string(count) +
+              (sh.index >= count ? " is out of range" : " appears twice (also " + byIndex[sh.index]->meta + ")") +
+              "; expected one folder per shard I < N"));
     else byIndex[sh.index] = &sh;
   }
   if (!problems.empty()) {
@@ -580,11 +588,11 @@ SweepSummary mergeSweepShards(const SweepPlan& plan, SweepRunner& runner, const 
   for (size_t i = 0; i < count; ++i)
     if (!byIndex[i]) missing += (missing.empty() ? "" : ", ") + std::to_string(i);
   if (!missing.empty())
-    throw InputError(formatError(shardsDir.string(), "", "missing shard(s) " + missing + " of " + std::to_string(count) +
-                                                             "; expected one folder I-of-" + std::to_string(count) +
-                                                             " for every I in 0.." + std::to_string(count - 1) +
-                                                             " (run `shadowlab sweep ... --shard I/" +
-                                                             std::to_string(count) + "` for each)"));
+    throw InputError(formatError(shardsDir.string(), "",
+                                 "missing shard(s) " + missing + " of " + std::to_string(count) +
+                                     "; expected one folder I-of-" + std::to_string(count) + " for every I in 0.." +
+                                     std::to_string(count - 1) + " (run `shadowlab sweep ... --shard I/" +
+                                     std::to_string(count) + "` for each)"));
 
   // Rows: each must belong to the plan (same scene content and method); a configuration held by
   // two journals must agree in every metric.
@@ -604,27 +612,30 @@ SweepSummary mergeSweepShards(const SweepPlan& plan, SweepRunner& runner, const 
       auto j = jobOf.find(key);
       if (j == jobOf.end() || row.sceneHash != plan.variants[plan.jobs[j->second].variantIndex].hash ||
           row.row.method != methodJson[plan.jobs[j->second].configIndex]) {
-        problems.push_back(formatError(path, "", "row \"" + key + "\" is not a row of plan " + fingerprint +
-                                                     " (unknown configuration, or another scene content or method)"));
+        problems.push_back(formatError(path, "",
+                                       "row \"" + key + "\" is not a row of plan " + fingerprint +
+                                           " (unknown configuration, or another scene content or method)"));
         continue;
       }
       const size_t i = j->second;
       if (i % count == si) ++own;
       if (have[i]) {
         if (have[i]->row.metrics != row.row.metrics)
-          problems.push_back(formatError(path, "", "row \"" + key + "\" is also in " + haveFrom[i] +
-                                                       " with different metrics; expected one result per configuration"));
+          problems.push_back(formatError(path, "",
+                                         "row \"" + key + "\" is also in " + haveFrom[i] +
+                                             " with different metrics; expected one result per configuration"));
         if (i % count != si) continue;  // the owner's row is the one kept
       }
       have[i] = &row;
       haveFrom[i] = path;
     }
     if (own < share)
-      problems.push_back(formatError(path, "", "shard " + std::to_string(si) + "/" + std::to_string(count) +
-                                                   " is incomplete: " + std::to_string(own) + " of its " +
-                                                   std::to_string(share) + " rows; expected it finished (run the "
-                                                   "same `shadowlab sweep ... --shard " + std::to_string(si) + "/" +
-                                                   std::to_string(count) + "` again to complete it)"));
+      problems.push_back(formatError(path, "",
+                                     "shard " + std::to_string(si) + "/" + std::to_string(count) +
+                                         " is incomplete: " + std::to_string(own) + " of its " + std::to_string(share) +
+                                         " rows; expected it finished (run the "
+                                         "same `shadowlab sweep ... --shard " +
+                                         std::to_string(si) + "/" + std::to_string(count) + "` again to complete it)"));
   }
   // One time axis never holds two devices (as runSweep refuses to resume across devices).
   std::string device;
@@ -635,9 +646,10 @@ SweepSummary mergeSweepShards(const SweepPlan& plan, SweepRunner& runner, const 
       device = have[i]->device;
       deviceFrom = haveFrom[i];
     } else if (have[i]->device != device) {
-      problems.push_back(formatError(haveFrom[i], "", "rows measured on device \"" + have[i]->device + "\" but " +
-                                                          deviceFrom + " has rows of \"" + device +
-                                                          "\"; expected every shard on one device (--device)"));
+      problems.push_back(formatError(haveFrom[i], "",
+                                     "rows measured on device \"" + have[i]->device + "\" but " + deviceFrom +
+                                         " has rows of \"" + device +
+                                         "\"; expected every shard on one device (--device)"));
       break;
     }
   }
@@ -647,7 +659,8 @@ SweepSummary mergeSweepShards(const SweepPlan& plan, SweepRunner& runner, const 
     throw InputError(all);
   }
   for (size_t i = 0; i < have.size(); ++i)
-    if (!have[i]) throw DriverError("shadowlab merge: error: row " + plan.jobs[i].key() + " not found after the checks");
+    if (!have[i])
+      throw DriverError("shadowlab merge: error: row " + plan.jobs[i].key() + " not found after the checks");
 
   makeDirs(options.outDir);
   FolderLock lock(options.outDir);

@@ -54,13 +54,15 @@ void checkKey(const std::string& key, const std::string& origin) {
       (void)p;
       return;
     } catch (const std::exception&) {
-      throw InputError(formatError(origin, "", "scene key \"" + key +
-                                                   "\" has no valid JSON pointer; expected scene:/path/to/value, "
-                                                   "e.g. scene:/lights/0/elevation_deg, or scene:failure"));
+      throw InputError(formatError(origin, "",
+                                   "scene key \"" + key +
+                                       "\" has no valid JSON pointer; expected scene:/path/to/value, "
+                                       "e.g. scene:/lights/0/elevation_deg, or scene:failure"));
     }
   }
-  throw InputError(formatError(origin, "", "unknown key \"" + key + "\"; expected one of " +
-                                               joinKeys(methodKeys()) + ", scene:/json/pointer or scene:failure"));
+  throw InputError(formatError(origin, "",
+                               "unknown key \"" + key + "\"; expected one of " + joinKeys(methodKeys()) +
+                                   ", scene:/json/pointer or scene:failure"));
 }
 
 void applyValue(Method& m, const std::string& key, const nlohmann::json& value, const std::string& origin) {
@@ -136,8 +138,9 @@ SweepAxis parseGridArgument(const std::string& text) {
     std::string item = trim(list.substr(start, comma == std::string::npos ? std::string::npos : comma - start));
     ++index;
     if (item.empty())
-      throw InputError(formatError(origin, "", "value " + std::to_string(index) + " of \"" + axis.key +
-                                                   "\" is empty; expected a comma-separated list without gaps"));
+      throw InputError(formatError(origin, "",
+                                   "value " + std::to_string(index) + " of \"" + axis.key +
+                                       "\" is empty; expected a comma-separated list without gaps"));
     axis.values.push_back(item);
     axis.valueOrigins.push_back(origin);
     if (comma == std::string::npos) break;
@@ -166,7 +169,8 @@ void loadSweepFile(const std::string& path, SweepSpec& spec) {
   auto fail = [&](const std::string& pointer, const std::string& what) {
     throw InputError(formatError(path, pointer, what));
   };
-  if (!doc.is_object()) fail("", "got " + jsonTypeName(doc) + "; expected an object { \"scenes\", \"grid\", \"set\", ... }");
+  if (!doc.is_object())
+    fail("", "got " + jsonTypeName(doc) + "; expected an object { \"scenes\", \"grid\", \"set\", ... }");
   const std::string baseDir = dirOf(path);
   for (auto it = doc.begin(); it != doc.end(); ++it) {
     const std::string& k = it.key();
@@ -221,7 +225,8 @@ void loadSweepFile(const std::string& path, SweepSpec& spec) {
         spec.fixed.push_back({s.key(), nlohmann::json::parse(s.value().dump()), path + ": " + sptr});
       }
     } else if (k == "method") {
-      if (!v.is_string() || v.get<std::string>().empty()) fail(ptr, "got " + jsonTypeName(v) + "; expected a method file path");
+      if (!v.is_string() || v.get<std::string>().empty())
+        fail(ptr, "got " + jsonTypeName(v) + "; expected a method file path");
       std::string m = v.get<std::string>();
       spec.methodFile = m[0] == '/' ? m : baseDir + m;
     } else if (k == "light") {
@@ -237,7 +242,8 @@ void loadSweepFile(const std::string& path, SweepSpec& spec) {
     } else if (k == "description" || k == "$schema") {
       if (!v.is_string()) fail(ptr, "got " + jsonTypeName(v) + "; expected a string");
     } else {
-      fail(ptr, "unknown key \"" + k + "\"; expected one of scenes, grid, set, method, light, spp, keep_images, description");
+      fail(ptr, "unknown key \"" + k +
+                    "\"; expected one of scenes, grid, set, method, light, spp, keep_images, description");
     }
   }
 }
@@ -245,12 +251,14 @@ void loadSweepFile(const std::string& path, SweepSpec& spec) {
 SweepPlan planSweep(const SweepSpec& spec) {
   SweepPlan plan;
   plan.spec = spec;
-  if (spec.spp < 1) throw InputError(formatError("--spp", "", "got " + std::to_string(spec.spp) + "; expected 1 or more"));
+  if (spec.spp < 1)
+    throw InputError(formatError("--spp", "", "got " + std::to_string(spec.spp) + "; expected 1 or more"));
   // Frontier settings: NaN or a negative threshold would make every comparison meaningless.
   if (!std::isfinite(spec.frontierThreshold) || spec.frontierThreshold < 0) {
     char b[64];
     std::snprintf(b, sizeof b, "%g", spec.frontierThreshold);
-    throw InputError(formatError("--frontier-threshold", "", std::string("got ") + b + "; expected a number >= 0 (a rate, e.g. 0.01)"));
+    throw InputError(formatError("--frontier-threshold", "",
+                                 std::string("got ") + b + "; expected a number >= 0 (a rate, e.g. 0.01)"));
   }
   {
     // The metric names a compared frame always has (Metrics::toJson of an empty comparison).
@@ -259,7 +267,8 @@ SweepPlan planSweep(const SweepSpec& spec) {
     for (auto it = known.begin(); it != known.end(); ++it)
       if (it.value().is_number()) names += (names.empty() ? "" : ", ") + it.key();
     if (!known.contains(spec.frontierMetric) || !known[spec.frontierMetric].is_number())
-      throw InputError(formatError("--frontier-metric", "", "unknown metric \"" + spec.frontierMetric + "\"; expected one of " + names));
+      throw InputError(formatError("--frontier-metric", "",
+                                   "unknown metric \"" + spec.frontierMetric + "\"; expected one of " + names));
   }
 
   // Base method: file, then fixed settings.
@@ -286,11 +295,14 @@ SweepPlan planSweep(const SweepSpec& spec) {
   for (const auto& axis : spec.grid) {
     checkKey(axis.key, axis.origin);
     if (axis.values.empty())
-      throw InputError(formatError(axis.origin, "", "empty list of values for \"" + axis.key + "\"; expected at least one"));
+      throw InputError(
+          formatError(axis.origin, "", "empty list of values for \"" + axis.key + "\"; expected at least one"));
     if (!axisKeys.insert(axis.key).second)
-      throw InputError(formatError(axis.origin, "", "\"" + axis.key + "\" is swept twice; expected each key in one --grid"));
+      throw InputError(
+          formatError(axis.origin, "", "\"" + axis.key + "\" is swept twice; expected each key in one --grid"));
     if (fixedKeys.count(axis.key))
-      throw InputError(formatError(axis.origin, "", "\"" + axis.key + "\" is both swept and fixed by --set; expected one of them"));
+      throw InputError(
+          formatError(axis.origin, "", "\"" + axis.key + "\" is both swept and fixed by --set; expected one of them"));
     std::vector<Point> points;
     std::set<std::string> seen;
     for (size_t i = 0; i < axis.values.size(); ++i) {
@@ -307,8 +319,8 @@ SweepPlan planSweep(const SweepSpec& spec) {
         p.text = methodValueText(probe, axis.key);
       }
       if (!seen.insert(p.text).second)
-        throw InputError(formatError(origin, "", "value \"" + p.text + "\" of \"" + axis.key +
-                                                     "\" appears twice; expected distinct values"));
+        throw InputError(formatError(
+            origin, "", "value \"" + p.text + "\" of \"" + axis.key + "\" appears twice; expected distinct values"));
       points.push_back(std::move(p));
     }
     axisPoints.push_back(std::move(points));
@@ -318,9 +330,11 @@ SweepPlan planSweep(const SweepSpec& spec) {
   for (const auto& pts : axisPoints) {
     total *= pts.size();
     if (total > kMaxConfigurations)
-      throw InputError(formatError("shadowlab sweep", "", "the grid has more than " + std::to_string(kMaxConfigurations) +
-                                                             " configurations; expected a smaller grid (the plan, its journal and results.json are held in "
-                                                             "memory, and at ~0.1-0.2 s a row 100000 rows are hours on one machine)"));
+      throw InputError(formatError(
+          "shadowlab sweep", "",
+          "the grid has more than " + std::to_string(kMaxConfigurations) +
+              " configurations; expected a smaller grid (the plan, its journal and results.json are held in "
+              "memory, and at ~0.1-0.2 s a row 100000 rows are hours on one machine)"));
   }
 
   // Expand: the last axis varies fastest (odometer order).
@@ -351,15 +365,17 @@ SweepPlan planSweep(const SweepSpec& spec) {
   std::vector<std::string> requested = spec.scenes;
   if (requested.empty()) requested = bundledSceneNames();
   if (requested.empty())
-    throw InputError(formatError("shadowlab sweep", "", "no scenes given and no bundled scenes found in " + bundledScenesDir()));
+    throw InputError(
+        formatError("shadowlab sweep", "", "no scenes given and no bundled scenes found in " + bundledScenesDir()));
   std::set<std::string> seenPaths;
   for (const auto& s : requested) {
     std::string p = resolveScenePath(s);
     if (!seenPaths.insert(p).second)
-      throw InputError(formatError("shadowlab sweep", "", "scene \"" + s + "\" is given twice; expected each scene once"));
+      throw InputError(
+          formatError("shadowlab sweep", "", "scene \"" + s + "\" is given twice; expected each scene once"));
     plan.scenePaths.push_back(p);
   }
-  std::map<std::string, size_t> variantOf;  // scene index + overrides -> variant
+  std::map<std::string, size_t> variantOf;                              // scene index + overrides -> variant
   const std::string failurePointer = scenePointerOf(kSceneFailureKey);  // "failure"
   bool usesFailure = false;
   for (const auto& c : plan.configs)
@@ -372,10 +388,11 @@ SweepPlan planSweep(const SweepSpec& spec) {
     if (usesFailure) {
       declared = loadScene(plan.scenePaths[si]).failurePointer;
       if (declared.empty())
-        throw InputError(formatError(plan.scenePaths[si], "", std::string("the scene declares no \"failure\", so ") +
-                                                                 kSceneFailureKey + " names nothing in it; expected a "
-                                                                 "scene with \"failure\" (scenes/FORMAT.md) or a "
-                                                                 "JSON pointer: scene:/path/to/value"));
+        throw InputError(formatError(plan.scenePaths[si], "",
+                                     std::string("the scene declares no \"failure\", so ") + kSceneFailureKey +
+                                         " names nothing in it; expected a "
+                                         "scene with \"failure\" (scenes/FORMAT.md) or a "
+                                         "JSON pointer: scene:/path/to/value"));
     }
     for (size_t ci = 0; ci < plan.configs.size(); ++ci) {
       const SweepConfig& c = plan.configs[ci];
@@ -385,9 +402,10 @@ SweepPlan planSweep(const SweepSpec& spec) {
           o.pointer = declared;
           for (const auto& other : c.sceneOverrides)
             if (other.pointer == declared)
-              throw InputError(formatError(plan.scenePaths[si], "", std::string(kSceneFailureKey) + " is " + declared +
-                                                                       " in this scene, which scene:" + declared +
-                                                                       " also sets; expected one of them"));
+              throw InputError(formatError(plan.scenePaths[si], "",
+                                           std::string(kSceneFailureKey) + " is " + declared +
+                                               " in this scene, which scene:" + declared +
+                                               " also sets; expected one of them"));
         }
       std::string vkey = std::to_string(si);
       for (const auto& o : overrides) vkey += "\n" + o.pointer + "=" + dumpJson(o.value);
@@ -402,19 +420,22 @@ SweepPlan planSweep(const SweepSpec& spec) {
       }
       const Scene& scene = plan.variants[vi];
       if (scene.lights.empty())
-        throw InputError(formatError(plan.scenePaths[si], "/lights", "the scene has no light; expected at least one to compare"));
+        throw InputError(
+            formatError(plan.scenePaths[si], "/lights", "the scene has no light; expected at least one to compare"));
       if (sceneName.empty()) {
         sceneName = scene.name;
         for (const auto& other : plan.sceneNames)
           if (other == sceneName)
-            throw InputError(formatError(plan.scenePaths[si], "", "two scenes are named \"" + sceneName +
-                                                                     "\"; expected distinct file names (rows are matched by name)"));
+            throw InputError(formatError(
+                plan.scenePaths[si], "",
+                "two scenes are named \"" + sceneName + "\"; expected distinct file names (rows are matched by name)"));
       }
       if (!spec.light.empty() && !scene.findLight(spec.light)) {
         std::vector<std::string> names;
         for (const auto& l : scene.lights) names.push_back(l.name);
-        throw InputError(formatError(plan.scenePaths[si], "", "no light named \"" + spec.light + "\"; expected one of " +
-                                                                 (names.empty() ? std::string("(none)") : joinKeys(names))));
+        throw InputError(formatError(plan.scenePaths[si], "",
+                                     "no light named \"" + spec.light + "\"; expected one of " +
+                                         (names.empty() ? std::string("(none)") : joinKeys(names))));
       }
       light = scene.lightOrDefault(spec.light);
       SweepJob job;

@@ -59,7 +59,8 @@ std::string valueText(const nlohmann::json& v) {
 }
 
 // Flattens nested objects into dotted names (a later metric may hold per-cascade objects).
-void flatten(const nlohmann::json& j, const std::string& prefix, std::vector<std::pair<std::string, nlohmann::json>>& out) {
+void flatten(const nlohmann::json& j, const std::string& prefix,
+             std::vector<std::pair<std::string, nlohmann::json>>& out) {
   for (auto it = j.begin(); it != j.end(); ++it) {
     std::string name = prefix.empty() ? it.key() : prefix + "." + it.key();
     if (it.value().is_object()) flatten(it.value(), name, out);
@@ -339,7 +340,8 @@ std::vector<std::string> writeSweepReport(const SweepPlan& plan, const std::vect
         std::string abs = joinPath(options.outDir, rel);
         fs::remove(abs, ec);
         try {
-          if (runner.writeTriptych(plan.variants[job.variantIndex], plan.configs[job.configIndex].method, job.light, abs) &&
+          if (runner.writeTriptych(plan.variants[job.variantIndex], plan.configs[job.configIndex].method, job.light,
+                                   abs) &&
               fs::is_regular_file(abs, ec))
             p.file = rel;
         } catch (const std::exception& e) {
@@ -374,9 +376,8 @@ std::vector<std::string> writeSweepReport(const SweepPlan& plan, const std::vect
     << "<meta name=\"viewport\" content=\"width=device-width, initial-scale=1\">\n"
     << "<title>shadowlab sweep: " << escapeMarkup(std::to_string(plan.sceneNames.size())) << " scene(s) x "
     << plan.configs.size() << " configuration(s)</title>\n<style>" << kStyle << "</style>\n</head>\n<body>\n";
-  h << "<h1>shadowlab sweep report</h1>\n<p class=\"muted\">" << rows.size() << " rows: "
-    << plan.sceneNames.size() << " scene(s) &times; " << plan.configs.size() << " configuration(s). Generated "
-    << stamp << ".</p>\n";
+  h << "<h1>shadowlab sweep report</h1>\n<p class=\"muted\">" << rows.size() << " rows: " << plan.sceneNames.size()
+    << " scene(s) &times; " << plan.configs.size() << " configuration(s). Generated " << stamp << ".</p>\n";
 
   // Run facts.
   const nlohmann::json machine = results.value("machine", nlohmann::json::object());
@@ -386,21 +387,23 @@ std::vector<std::string> writeSweepReport(const SweepPlan& plan, const std::vect
     h << "<tr><th class=\"t\">" << escapeMarkup(k) << "</th><td class=\"t\">" << v << "</td></tr>\n";
   };
   fact("machine", escapeMarkup(machine.value("cpu", std::string("?")) + ", " +
-                       std::to_string(machine.value("hardware_threads", 0)) + " threads, " +
-                       machine.value("os", std::string("?"))));
-  if (runInfo.contains("device") && runInfo["device"].is_string()) fact("raster device", escapeMarkup(runInfo["device"].get<std::string>()));
+                               std::to_string(machine.value("hardware_threads", 0)) + " threads, " +
+                               machine.value("os", std::string("?"))));
+  if (runInfo.contains("device") && runInfo["device"].is_string())
+    fact("raster device", escapeMarkup(runInfo["device"].get<std::string>()));
   if (runInfo.contains("reference_cache") && runInfo["reference_cache"].is_string())
     fact("reference cache", escapeMarkup(runInfo["reference_cache"].get<std::string>()) + " (" +
                                 std::to_string(runInfo.value("references_traced", 0)) + " traced, " +
                                 std::to_string(runInfo.value("references_loaded", 0)) + " loaded)");
-  fact("rows run / resumed", std::to_string(results.value("rows_run", 0)) + " / " +
-                                 std::to_string(results.value("rows_resumed", 0)));
+  fact("rows run / resumed",
+       std::to_string(results.value("rows_run", 0)) + " / " + std::to_string(results.value("rows_resumed", 0)));
   const double sweepSeconds = results.value("loop_wall_seconds", 0.0);
   const size_t ran = results.value("rows_run", size_t(0));
   fact("configuration loop", fmt(sweepSeconds, "%.2f") + " s" +
                                  (ran ? " (" + fmt(sweepSeconds / double(ran) * 1000.0, "%.1f") + " ms per row)" : ""));
-  fact("outputs", "<a href=\"results.json\">results.json</a>, <a href=\"results.csv\">results.csv</a>, "
-                  "<a href=\"rows.jsonl\">rows.jsonl</a>, <a href=\"classes.json\">classes.json</a>");
+  fact("outputs",
+       "<a href=\"results.json\">results.json</a>, <a href=\"results.csv\">results.csv</a>, "
+       "<a href=\"rows.jsonl\">rows.jsonl</a>, <a href=\"classes.json\">classes.json</a>");
   h << "</table>\n";
 
   // Scenes.
@@ -416,9 +419,10 @@ std::vector<std::string> writeSweepReport(const SweepPlan& plan, const std::vect
         break;
       }
     if (!scene) continue;
-    h << "<tr><td class=\"t\">" << escapeMarkup(plan.sceneNames[s]) << "</td><td class=\"t\">" << escapeMarkup(plan.scenePaths[s])
-      << "</td><td>" << scene->triangleCount() << "</td><td>" << scene->camera.width << "&times;" << scene->camera.height
-      << "</td><td class=\"t\">" << escapeMarkup(light) << "</td><td class=\"t\">" << escapeMarkup(scene->hash) << "</td></tr>\n";
+    h << "<tr><td class=\"t\">" << escapeMarkup(plan.sceneNames[s]) << "</td><td class=\"t\">"
+      << escapeMarkup(plan.scenePaths[s]) << "</td><td>" << scene->triangleCount() << "</td><td>" << scene->camera.width
+      << "&times;" << scene->camera.height << "</td><td class=\"t\">" << escapeMarkup(light) << "</td><td class=\"t\">"
+      << escapeMarkup(scene->hash) << "</td></tr>\n";
   }
   h << "</table>\n";
 
@@ -431,16 +435,18 @@ std::vector<std::string> writeSweepReport(const SweepPlan& plan, const std::vect
     const nlohmann::json grid = results.value("sweep", nlohmann::json::object()).value("grid", nlohmann::json::array());
     for (const auto& axis : grid) {
       std::string values;
-      for (const auto& v : axis.value("values", nlohmann::json::array())) values += (values.empty() ? "" : ", ") + valueText(v);
-      h << "<tr><td class=\"t\">" << escapeMarkup(axis.value("key", std::string())) << "</td><td class=\"t\">" << escapeMarkup(values)
-        << "</td></tr>\n";
+      for (const auto& v : axis.value("values", nlohmann::json::array()))
+        values += (values.empty() ? "" : ", ") + valueText(v);
+      h << "<tr><td class=\"t\">" << escapeMarkup(axis.value("key", std::string())) << "</td><td class=\"t\">"
+        << escapeMarkup(values) << "</td></tr>\n";
     }
     h << "</table>\n";
   }
   if (!plan.spec.fixed.empty() || !plan.spec.methodFile.empty()) {
     h << "<p>Fixed for every configuration:";
     if (!plan.spec.methodFile.empty()) h << " method file <code>" << escapeMarkup(plan.spec.methodFile) << "</code>";
-    for (const auto& s : plan.spec.fixed) h << " <code>" << escapeMarkup(s.key + "=" + canonicalValueText(s.value)) << "</code>";
+    for (const auto& s : plan.spec.fixed)
+      h << " <code>" << escapeMarkup(s.key + "=" + canonicalValueText(s.value)) << "</code>";
     h << "</p>\n";
   }
   h << "<p class=\"muted\">Every other method key keeps its default (raster/METHODS.md). Each row's full method is in "
@@ -448,7 +454,8 @@ std::vector<std::string> writeSweepReport(const SweepPlan& plan, const std::vect
 
   // Summary: the Pareto front per scene.
   h << "<h2>Best configurations per scene</h2>\n<p>For each scene, the configurations on the Pareto front of raster "
-       "time (<code>shadow_gpu_ms</code> + <code>camera_gpu_ms</code>) against <code>error_rate</code>: each row is the lowest error "
+       "time (<code>shadow_gpu_ms</code> + <code>camera_gpu_ms</code>) against <code>error_rate</code>: each row is "
+       "the lowest error "
        "reachable within its time budget; every configuration not listed is slower, less accurate, or both.</p>\n";
   for (const auto& name : plan.sceneNames) {
     auto front = paretoFront(rows, name);
@@ -457,12 +464,13 @@ std::vector<std::string> writeSweepReport(const SweepPlan& plan, const std::vect
       h << "<p class=\"note\">No row with an error rate.</p>\n";
       continue;
     }
-    h << "<table>\n<tr><th>time budget (shadow_gpu_ms + camera_gpu_ms)</th><th class=\"t\">configuration</th><th>error_rate</th>"
+    h << "<table>\n<tr><th>time budget (shadow_gpu_ms + camera_gpu_ms)</th><th "
+         "class=\"t\">configuration</th><th>error_rate</th>"
       << headerCells(errorRateMetrics()) << "<th>m_p95 (px)</th><th>compare_ms</th></tr>\n";
     for (size_t i : front) {
       const ResultRow& r = rows[i];
-      h << "<tr><td>&le; " << fmt(rasterMs(r), "%.2f") << "</td><td class=\"t\">" << escapeMarkup(r.config) << "</td><td>"
-        << pct(num(r.metrics, "error_rate")) << "</td>";
+      h << "<tr><td>&le; " << fmt(rasterMs(r), "%.2f") << "</td><td class=\"t\">" << escapeMarkup(r.config)
+        << "</td><td>" << pct(num(r.metrics, "error_rate")) << "</td>";
       for (const char* k : errorRateMetrics()) h << "<td>" << pct(num(r.metrics, k)) << "</td>";
       h << "<td>" << fmt(num(r.metrics, "m_p95")) << "</td><td>" << fmt(num(r.timings, "compare_ms"), "%.1f")
         << "</td></tr>\n";
@@ -473,20 +481,24 @@ std::vector<std::string> writeSweepReport(const SweepPlan& plan, const std::vect
   // Failure frontiers (only when a scene: parameter is swept).
   const nlohmann::json frontiers = results.value("frontiers", nlohmann::json::array());
   if (frontiers.is_array() && !frontiers.empty()) {
-    const nlohmann::json fr = results.value("sweep", nlohmann::json::object()).value("frontier", nlohmann::json::object());
+    const nlohmann::json fr =
+        results.value("sweep", nlohmann::json::object()).value("frontier", nlohmann::json::object());
     h << "<h2>Failure frontiers</h2>\n<p>For each scene parameter swept with <code>scene:</code> and each method "
          "configuration, the values walked from easy to hard (the direction of the scene's declared "
          "<code>failure</code> values; the grid's order for other parameters) and the first value where <code>"
       << escapeMarkup(fr.value("metric", std::string("error_rate"))) << "</code> exceeds "
-      << pct(fr.value("threshold", 0.01)) << ".</p>\n<table>\n<tr><th class=\"t\">scene</th><th class=\"t\">parameter</th>"
+      << pct(fr.value("threshold", 0.01))
+      << ".</p>\n<table>\n<tr><th class=\"t\">scene</th><th class=\"t\">parameter</th>"
          "<th class=\"t\">method</th><th>holds to</th><th>breaks at</th><th class=\"t\">frontier</th></tr>\n";
     for (const auto& f : frontiers) {
-      auto val = [](const nlohmann::json& v) { return v.is_null() ? std::string("&ndash;") : escapeMarkup(canonicalValueText(v)); };
+      auto val = [](const nlohmann::json& v) {
+        return v.is_null() ? std::string("&ndash;") : escapeMarkup(canonicalValueText(v));
+      };
       h << "<tr><td class=\"t\">" << escapeMarkup(f.value("scene", std::string())) << "</td><td class=\"t\">"
-        << escapeMarkup(f.value("parameter", std::string())) << "</td><td class=\"t\">" << escapeMarkup(f.value("method", std::string()))
-        << "</td><td>" << val(f.value("holds_to", nlohmann::json())) << "</td><td>"
-        << val(f.value("breaks_at", nlohmann::json())) << "</td><td class=\"t\">" << escapeMarkup(f.value("sentence", std::string()))
-        << "</td></tr>\n";
+        << escapeMarkup(f.value("parameter", std::string())) << "</td><td class=\"t\">"
+        << escapeMarkup(f.value("method", std::string())) << "</td><td>" << val(f.value("holds_to", nlohmann::json()))
+        << "</td><td>" << val(f.value("breaks_at", nlohmann::json())) << "</td><td class=\"t\">"
+        << escapeMarkup(f.value("sentence", std::string())) << "</td></tr>\n";
     }
     h << "</table>\n";
   }
@@ -498,19 +510,22 @@ std::vector<std::string> writeSweepReport(const SweepPlan& plan, const std::vect
   if (manifest.is_object()) {
     for (const auto& c : manifest.value("charts", nlohmann::json::array())) {
       const std::string png = c.value("png", std::string());
-      h << "<figure id=\"" << escapeMarkup(c.value("id", std::string())) << "\">\n<h3>" << escapeMarkup(c.value("title", std::string()))
-        << "</h3>\n<img src=\"" << escapeMarkup(png) << "\" alt=\"" << escapeMarkup(c.value("title", std::string())) << "\">\n<figcaption>"
+      h << "<figure id=\"" << escapeMarkup(c.value("id", std::string())) << "\">\n<h3>"
+        << escapeMarkup(c.value("title", std::string())) << "</h3>\n<img src=\"" << escapeMarkup(png) << "\" alt=\""
+        << escapeMarkup(c.value("title", std::string())) << "\">\n<figcaption>"
         << escapeMarkup(c.value("caption", std::string()));
       std::string links;
       for (const char* kind : {"pdf", "svg"}) {
         std::string f = c.value(kind, std::string());
-        if (!f.empty()) links += std::string(links.empty() ? "" : ", ") + "<a href=\"" + escapeMarkup(f) + "\">" + kind + "</a>";
+        if (!f.empty())
+          links += std::string(links.empty() ? "" : ", ") + "<a href=\"" + escapeMarkup(f) + "\">" + kind + "</a>";
       }
       if (!links.empty()) h << " For papers: " << links << ".";
       h << "</figcaption>\n</figure>\n";
     }
     for (const auto& s : manifest.value("skipped", nlohmann::json::array())) {
-      std::string text = "Chart \"" + s.value("title", std::string()) + "\" skipped: " + s.value("reason", std::string());
+      std::string text =
+          "Chart \"" + s.value("title", std::string()) + "\" skipped: " + s.value("reason", std::string());
       notes.push_back(text);
       h << "<p class=\"note\">" << escapeMarkup(text) << "</p>\n";
     }
@@ -530,14 +545,15 @@ std::vector<std::string> writeSweepReport(const SweepPlan& plan, const std::vect
         h << "<p class=\"note\">No triptych: this sweep's runner makes no pictures, or rendering it failed (see the "
              "notes).</p>\n";
       } else {
-        h << "<img src=\"" << escapeMarkup(p.file) << "\" alt=\"" << escapeMarkup(name + " " + p.label + " triptych") << "\">\n";
+        h << "<img src=\"" << escapeMarkup(p.file) << "\" alt=\"" << escapeMarkup(name + " " + p.label + " triptych")
+          << "\">\n";
       }
       std::string byClass;
       for (const PixelClassInfo& c : kPixelClasses)
         if (c.error && c.rateMetric)
           byClass += (byClass.empty() ? "" : ", ") + std::string(c.key) + " " + pct(num(r.metrics, c.rateMetric));
-      h << "<figcaption>error_rate " << pct(num(r.metrics, "error_rate")) << " (" << escapeMarkup(byClass) << "); raster "
-        << fmt(rasterMs(r), "%.2f") << " ms.</figcaption>\n</figure>\n";
+      h << "<figcaption>error_rate " << pct(num(r.metrics, "error_rate")) << " (" << escapeMarkup(byClass)
+        << "); raster " << fmt(rasterMs(r), "%.2f") << " ms.</figcaption>\n</figure>\n";
     }
   }
 
@@ -548,8 +564,8 @@ std::vector<std::string> writeSweepReport(const SweepPlan& plan, const std::vect
     << "<th>m_median</th><th>m_p95</th>"
        "<th>m_max</th><th>shadow_gpu_ms</th><th>camera_gpu_ms</th><th>compare_ms</th><th>config_wall_ms</th></tr>\n";
   for (const auto& r : rows) {
-    h << "<tr><td class=\"t\">" << escapeMarkup(r.scene) << "</td><td class=\"t\">" << escapeMarkup(r.config) << "</td><td class=\"t\">"
-      << escapeMarkup(r.light) << "</td>";
+    h << "<tr><td class=\"t\">" << escapeMarkup(r.scene) << "</td><td class=\"t\">" << escapeMarkup(r.config)
+      << "</td><td class=\"t\">" << escapeMarkup(r.light) << "</td>";
     h << "<td>" << pct(num(r.metrics, "error_rate")) << "</td>";
     for (const char* k : errorRateMetrics()) h << "<td>" << pct(num(r.metrics, k)) << "</td>";
     for (const char* k : {"m_median", "m_p95", "m_max"}) h << "<td>" << fmt(num(r.metrics, k)) << "</td>";

@@ -21,9 +21,7 @@ namespace {
 
 using Clock = std::chrono::steady_clock;
 
-double msSince(Clock::time_point t0) {
-  return std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
-}
+double msSince(Clock::time_point t0) { return std::chrono::duration<double, std::milli>(Clock::now() - t0).count(); }
 
 class PipelineRunner final : public SweepRunner {
  public:
@@ -74,9 +72,10 @@ class PipelineRunner final : public SweepRunner {
   void checkMethod(const Method& method, const std::string& origin) override {
     const int maxSize = rasterizer().maxMapSize();
     if (method.mapSize > maxSize)
-      throw InputError(formatError(origin, "map.size", "got " + std::to_string(method.mapSize) + "; expected at most " +
-                                                           std::to_string(maxSize) + " (the largest image " +
-                                                           rasterizer().deviceName() + " allows)"));
+      throw InputError(formatError(origin, "map.size",
+                                   "got " + std::to_string(method.mapSize) + "; expected at most " +
+                                       std::to_string(maxSize) + " (the largest image " + rasterizer().deviceName() +
+                                       " allows)"));
   }
 
   std::string deviceName() override { return rasterizer().deviceName(); }

@@ -40,11 +40,11 @@ SweepShard parseShardArgument(const std::string& text) {
   if (slash == std::string::npos || !parseCount(text.substr(0, slash), s.index) ||
       !parseCount(text.substr(slash + 1), s.count))
     throw InputError(formatError(where, "", "got \"" + text + "\"; expected I/N with integers 0 <= I < N (e.g. 0/4)"));
-  if (s.count < 1)
-    throw InputError(formatError(where, "", "N is 0; expected at least 1 shard"));
+  if (s.count < 1) throw InputError(formatError(where, "", "N is 0; expected at least 1 shard"));
   if (s.index >= s.count)
-    throw InputError(formatError(where, "", "I is " + std::to_string(s.index) + "; expected 0 <= I < N = " +
-                                                std::to_string(s.count) + " (shards are numbered from 0)"));
+    throw InputError(formatError(where, "",
+                                 "I is " + std::to_string(s.index) + "; expected 0 <= I < N = " +
+                                     std::to_string(s.count) + " (shards are numbered from 0)"));
   return s;
 }
 
@@ -56,7 +56,8 @@ std::string shardDir(const std::string& outDir, const SweepShard& shard) {
 std::string planFingerprint(const SweepPlan& plan) {
   nlohmann::json jobs = nlohmann::json::array();
   for (const auto& job : plan.jobs)
-    jobs.push_back({job.key(), plan.variants[job.variantIndex].hash, methodToJson(plan.configs[job.configIndex].method)});
+    jobs.push_back(
+        {job.key(), plan.variants[job.variantIndex].hash, methodToJson(plan.configs[job.configIndex].method)});
   nlohmann::json fp = {{"jobs", jobs},
                        {"spp", plan.spec.spp},
                        {"light", plan.spec.light},
@@ -112,8 +113,9 @@ SweepSpec sweepSpecFromJson(const nlohmann::json& j, const std::string& origin) 
     spec.frontierThreshold = j.at("frontier_threshold").get<double>();
     return spec;
   } catch (const nlohmann::json::exception&) {
-    throw InputError(formatError(origin, "/spec", "damaged sweep description; expected the \"spec\" a sharded "
-                                                  "sweep writes (run the shard again)"));
+    throw InputError(formatError(origin, "/spec",
+                                 "damaged sweep description; expected the \"spec\" a sharded "
+                                 "sweep writes (run the shard again)"));
   }
 }
 
@@ -125,8 +127,10 @@ SweepSpec loadShardedSpec(const std::string& outDir) {
     for (const auto& e : fs::directory_iterator(shards, ec))
       if (fs::is_regular_file(e.path() / "shard.json", ec)) found.push_back((e.path() / "shard.json").string());
   if (found.empty())
-    throw InputError(formatError(shards.string(), "", "no shard folder with a shard.json; expected the output of "
-                                                      "`shadowlab sweep ... --shard I/N -o " + outDir + "`"));
+    throw InputError(formatError(shards.string(), "",
+                                 "no shard folder with a shard.json; expected the output of "
+                                 "`shadowlab sweep ... --shard I/N -o " +
+                                     outDir + "`"));
   std::sort(found.begin(), found.end());
   const nlohmann::json j = nlohmann::json::parse(readFile(found.front()), nullptr, /*allow_exceptions=*/false);
   if (j.is_discarded() || !j.is_object() || !j.contains("spec"))

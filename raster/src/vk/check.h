@@ -18,10 +18,8 @@ bool injectedFailure(const char* expression);
 
 }  // namespace shadowlab::vk
 
-#define VK_CHECK(expr)                                                              \
-  do {                                                                              \
-    VkResult vkCheckResult_ =                                                       \
-        ::shadowlab::vk::injectedFailure(#expr) ? VK_ERROR_DEVICE_LOST : (expr);    \
-    if (vkCheckResult_ != VK_SUCCESS)                                               \
-      ::shadowlab::vk::throwVkError(#expr, vkCheckResult_, __FILE__, __LINE__);     \
+#define VK_CHECK(expr)                                                                                          \
+  do {                                                                                                          \
+    VkResult vkCheckResult_ = ::shadowlab::vk::injectedFailure(#expr) ? VK_ERROR_DEVICE_LOST : (expr);          \
+    if (vkCheckResult_ != VK_SUCCESS) ::shadowlab::vk::throwVkError(#expr, vkCheckResult_, __FILE__, __LINE__); \
   } while (0)

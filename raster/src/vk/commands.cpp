@@ -47,12 +47,13 @@ void Commands::submitAndWait() {
   // Bounded: a hung or lost GPU must end as a driver error (exit 3), never as a process that
   // waits forever. The largest jobs the limits allow take seconds on lavapipe.
   const VkResult waited = injectedFailure("vkWaitForFences")
-                               ? VK_ERROR_DEVICE_LOST
-                               : vkWaitForFences(context_.device(), 1, &fence, VK_TRUE, kSubmitTimeoutNs);
+                              ? VK_ERROR_DEVICE_LOST
+                              : vkWaitForFences(context_.device(), 1, &fence, VK_TRUE, kSubmitTimeoutNs);
   if (waited == VK_TIMEOUT) {
     context_.markHung();  // nothing may wait on this device again (see Context::hung)
     throw DriverError("vkWaitForFences: error: the device did not finish the submitted passes within " +
-                      std::to_string(kSubmitTimeoutNs / 1000000000ull) + " s; expected a working device (a hung or lost GPU?)");
+                      std::to_string(kSubmitTimeoutNs / 1000000000ull) +
+                      " s; expected a working device (a hung or lost GPU?)");
   }
   if (waited != VK_SUCCESS) throwVkError("vkWaitForFences(...)", waited, __FILE__, __LINE__);
 }

@@ -12,8 +12,8 @@ class Commands {
   Commands(const Commands&) = delete;
   Commands& operator=(const Commands&) = delete;
 
-  VkCommandBuffer begin();     // resets and begins recording
-  void submitAndWait();        // ends, submits, waits for completion
+  VkCommandBuffer begin();  // resets and begins recording
+  void submitAndWait();     // ends, submits, waits for completion
 
  private:
   const Context& context_;

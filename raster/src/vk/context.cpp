@@ -36,8 +36,7 @@ static void keepLoadedLibrariesMapped() {}
 const char* resultName(VkResult r) {
   switch (r) {
 #define SHADOWLAB_RESULT(x) \
-  case x:                   \
-    return #x;
+  case x: return #x;
     SHADOWLAB_RESULT(VK_SUCCESS)
     SHADOWLAB_RESULT(VK_NOT_READY)
     SHADOWLAB_RESULT(VK_TIMEOUT)
@@ -57,8 +56,7 @@ const char* resultName(VkResult r) {
     SHADOWLAB_RESULT(VK_ERROR_OUT_OF_POOL_MEMORY)
     SHADOWLAB_RESULT(VK_ERROR_UNKNOWN)
 #undef SHADOWLAB_RESULT
-    default:
-      return "VK_RESULT_UNKNOWN_CODE";
+    default: return "VK_RESULT_UNKNOWN_CODE";
   }
 }
 
@@ -71,18 +69,16 @@ bool injectedFailure(const char* expression) {
 }
 
 void throwVkError(const char* expression, VkResult result, const char* file, int line) {
-  throw DriverError(std::string(file) + ":" + std::to_string(line) + ": error: " + expression +
-                    " returned " + resultName(result) + " (" + std::to_string(int(result)) + ")");
+  throw DriverError(std::string(file) + ":" + std::to_string(line) + ": error: " + expression + " returned " +
+                    resultName(result) + " (" + std::to_string(int(result)) + ")");
 }
 
 namespace {
 
 VKAPI_ATTR VkBool32 VKAPI_CALL onValidationMessage(VkDebugUtilsMessageSeverityFlagBitsEXT severity,
                                                    VkDebugUtilsMessageTypeFlagsEXT,
-                                                   const VkDebugUtilsMessengerCallbackDataEXT* data,
-                                                   void* user) {
-  if (severity & (VK_DEBUG_UTILS_MESSAGE_SEVERITY_WARNING_BIT_EXT |
-                  VK_DEBUG_UTILS_MESSAGE_SEVERITY_ERROR_BIT_EXT)) {
+                                                   const VkDebugUtilsMessengerCallbackDataEXT* data, void* user) {
+  if (severity & (VK_DEBUG_UTILS_MESSAGE_SEVERITY_WARNING_BIT_EXT | VK_DEBUG_UTILS_MESSAGE_SEVERITY_ERROR_BIT_EXT)) {
     static_cast<std::atomic<int>*>(user)->fetch_add(1);
     // Tests require zero messages; printing them is what makes a failure actionable.
     std::fprintf(stderr, "shadowlab: vulkan validation: %s\n", data->pMessage);
@@ -190,8 +186,8 @@ Context::Context(const ContextOptions& options) {
     supported.pNext = &supported13;
     vkGetPhysicalDeviceFeatures2(physical_, &supported);
     const VkPhysicalDeviceFeatures& f = supported.features;
-    if (!f.depthBiasClamp || !f.depthClamp || !f.geometryShader || !f.fragmentStoresAndAtomics || !supported13.dynamicRendering ||
-        !supported13.synchronization2 || !supported13.maintenance4)
+    if (!f.depthBiasClamp || !f.depthClamp || !f.geometryShader || !f.fragmentStoresAndAtomics ||
+        !supported13.dynamicRendering || !supported13.synchronization2 || !supported13.maintenance4)
       throw DriverError(std::string("device ") + properties_.deviceName +
                         " lacks one of the features shadowlab needs: depthBiasClamp, depthClamp, "
                         "geometryShader, fragmentStoresAndAtomics, dynamicRendering, synchronization2, maintenance4");
@@ -201,9 +197,9 @@ Context::Context(const ContextOptions& options) {
     features13.maintenance4 = VK_TRUE;  // glslang's SPIR-V 1.6 declares the workgroup size by LocalSizeId
     VkPhysicalDeviceFeatures2 features{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_FEATURES_2};
     features.pNext = &features13;
-    features.features.depthBiasClamp = VK_TRUE;  // a nonzero bias.clamp is illegal without it
-    features.features.depthClamp = VK_TRUE;      // directional maps keep casters behind the near plane
-    features.features.geometryShader = VK_TRUE;  // gl_PrimitiveID in a fragment shader requires it
+    features.features.depthBiasClamp = VK_TRUE;            // a nonzero bias.clamp is illegal without it
+    features.features.depthClamp = VK_TRUE;                // directional maps keep casters behind the near plane
+    features.features.geometryShader = VK_TRUE;            // gl_PrimitiveID in a fragment shader requires it
     features.features.fragmentStoresAndAtomics = VK_TRUE;  // the resolve pass writes a storage buffer
 
     float priority = 1.0f;
@@ -269,8 +265,7 @@ void Context::adviseHugePages(void* mapped, VkDeviceSize size) const {
   if (end > begin) madvise(reinterpret_cast<void*>(begin), end - begin, MADV_HUGEPAGE);
 }
 
-uint32_t Context::memoryType(uint32_t typeBits, VkMemoryPropertyFlags required,
-                             VkMemoryPropertyFlags preferred) const {
+uint32_t Context::memoryType(uint32_t typeBits, VkMemoryPropertyFlags required, VkMemoryPropertyFlags preferred) const {
   for (int pass = 0; pass < 2; ++pass) {
     VkMemoryPropertyFlags want = pass == 0 ? (required | preferred) : required;
     for (uint32_t i = 0; i < memory_.memoryTypeCount; ++i)

@@ -37,8 +37,7 @@ class Context {
   bool validationEnabled() const { return messenger_ != VK_NULL_HANDLE; }
 
   // First memory type allowed by `typeBits` having all of `required` (and preferring `preferred`).
-  uint32_t memoryType(uint32_t typeBits, VkMemoryPropertyFlags required,
-                      VkMemoryPropertyFlags preferred = 0) const;
+  uint32_t memoryType(uint32_t typeBits, VkMemoryPropertyFlags required, VkMemoryPropertyFlags preferred = 0) const;
   // The one place memory is allocated: `requirements.size` bytes of memoryType(...)'s type;
   // `typeIndex` (optional) receives the type chosen.
   Memory allocate(const VkMemoryRequirements& requirements, VkMemoryPropertyFlags required,

@@ -5,8 +5,8 @@
 
 namespace shadowlab::vk {
 
-Image::Image(const Context& context, int width, int height, int layers, VkFormat format,
-             VkImageUsageFlags usage, VkImageAspectFlags aspect, bool hostReadable)
+Image::Image(const Context& context, int width, int height, int layers, VkFormat format, VkImageUsageFlags usage,
+             VkImageAspectFlags aspect, bool hostReadable)
     : width_(width), height_(height), layers_(layers), format_(format), aspect_(aspect) {
   VkDevice device = context.device();
   if (hostReadable) {
@@ -82,8 +82,8 @@ void Image::invalidate(const Context& context) const {
 }
 
 void transition(VkCommandBuffer cmd, const Image& image, VkImageLayout from, VkImageLayout to,
-                VkPipelineStageFlags2 srcStage, VkAccessFlags2 srcAccess,
-                VkPipelineStageFlags2 dstStage, VkAccessFlags2 dstAccess) {
+                VkPipelineStageFlags2 srcStage, VkAccessFlags2 srcAccess, VkPipelineStageFlags2 dstStage,
+                VkAccessFlags2 dstAccess) {
   VkImageMemoryBarrier2 b{VK_STRUCTURE_TYPE_IMAGE_MEMORY_BARRIER_2};
   b.srcStageMask = srcStage;
   b.srcAccessMask = srcAccess;

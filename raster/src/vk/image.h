@@ -14,8 +14,8 @@ class Image {
   // hostReadable: linear tiling in host-visible memory, mapped (one layer): the CPU reads the
   // texels in place at mapped() + y * rowPitch(), no copy to a buffer first. Throws DriverError
   // when the device cannot render to such an image.
-  Image(const Context& context, int width, int height, int layers, VkFormat format,
-        VkImageUsageFlags usage, VkImageAspectFlags aspect, bool hostReadable = false);
+  Image(const Context& context, int width, int height, int layers, VkFormat format, VkImageUsageFlags usage,
+        VkImageAspectFlags aspect, bool hostReadable = false);
   Image(Image&&) noexcept = default;
   Image& operator=(Image&&) noexcept = default;
 
@@ -48,7 +48,7 @@ class Image {
 
 // One image layout transition (synchronization2), whole image.
 void transition(VkCommandBuffer cmd, const Image& image, VkImageLayout from, VkImageLayout to,
-                VkPipelineStageFlags2 srcStage, VkAccessFlags2 srcAccess,
-                VkPipelineStageFlags2 dstStage, VkAccessFlags2 dstAccess);
+                VkPipelineStageFlags2 srcStage, VkAccessFlags2 srcAccess, VkPipelineStageFlags2 dstStage,
+                VkAccessFlags2 dstAccess);
 
 }  // namespace shadowlab::vk

@@ -56,8 +56,8 @@ PipelineHandle createGraphicsPipeline(const Context& context, const GraphicsPipe
   depth.depthCompareOp = VK_COMPARE_OP_LESS;
   std::vector<VkPipelineColorBlendAttachmentState> blends(desc.colorFormats.size());
   for (auto& b : blends)
-    b.colorWriteMask = VK_COLOR_COMPONENT_R_BIT | VK_COLOR_COMPONENT_G_BIT |
-                       VK_COLOR_COMPONENT_B_BIT | VK_COLOR_COMPONENT_A_BIT;
+    b.colorWriteMask =
+        VK_COLOR_COMPONENT_R_BIT | VK_COLOR_COMPONENT_G_BIT | VK_COLOR_COMPONENT_B_BIT | VK_COLOR_COMPONENT_A_BIT;
   VkPipelineColorBlendStateCreateInfo blend{VK_STRUCTURE_TYPE_PIPELINE_COLOR_BLEND_STATE_CREATE_INFO};
   blend.attachmentCount = uint32_t(blends.size());
   blend.pAttachments = blends.data();

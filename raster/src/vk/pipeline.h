@@ -21,9 +21,9 @@ struct GraphicsPipelineDesc {
   std::vector<VkFormat> colorFormats;
   VkFormat depthFormat = VK_FORMAT_UNDEFINED;
   VkFrontFace frontFace = VK_FRONT_FACE_COUNTER_CLOCKWISE;
-  bool depthClamp = false;  // keeps casters outside [near, far] in the map (directional lights)
-  bool depthBias = false;   // depth bias values come from vkCmdSetDepthBias
-  bool depthTest = true;    // less-than test and write (false: no depth attachment)
+  bool depthClamp = false;                       // keeps casters outside [near, far] in the map (directional lights)
+  bool depthBias = false;                        // depth bias values come from vkCmdSetDepthBias
+  bool depthTest = true;                         // less-than test and write (false: no depth attachment)
   std::vector<uint32_t> fragmentSpecialization;  // 32-bit constants 0..n-1 of the fragment shader
 };
 

@@ -23,8 +23,8 @@ struct RasterTimings {
   // keeps it and adds the time it took when it was drawn (visibilityGpuMs). camera_gpu_ms.
   double cameraGpuMs = 0;
   double visibilityGpuMs = 0;  // visibility_gpu_ms: the camera pass's first part, the visibility buffer
-  double readbackMs = 0;  // readback_ms: CPU wall time to copy the outputs back into the Frame
-  double renderWallMs = 0;  // render_wall_ms: CPU wall time of render() (names: compare/TIMINGS.md)
+  double readbackMs = 0;       // readback_ms: CPU wall time to copy the outputs back into the Frame
+  double renderWallMs = 0;     // render_wall_ms: CPU wall time of render() (names: compare/TIMINGS.md)
 };
 
 class Rasterizer {

@@ -4,7 +4,8 @@
 // both: resolve.frag's parameter block, the descriptor bindings of the one descriptor set, the
 // specialization constant ids and the codes the shader switches on (kinds.h's filters and light
 // types). glslang reads it through GL_GOOGLE_include_directive (raster/CMakeLists.txt passes the
-// include directories), C++ as shadowlab/raster/resolve_abi.h. The C++ side checks the block's std140 layout with static_asserts below.
+// include directories), C++ as shadowlab/raster/resolve_abi.h. The C++ side checks the block's std140 layout with
+// static_asserts below.
 #include "shadowlab/scenes/kinds.h"
 
 #ifdef __cplusplus
@@ -25,7 +26,7 @@ using ivec4 = glm::ivec4;
 SHADOWLAB_CONST(int, kMaxLayers, 16)  // 8 light layers (cascades; a cube: 6) + 8 projectors
 SHADOWLAB_CONST(int, kMaxLightLayers, 8)
 SHADOWLAB_CONST(int, kMaxProjectors, 8)
-SHADOWLAB_CONST(int, kMaxTaps, 64)          // the Poisson disc's points
+SHADOWLAB_CONST(int, kMaxTaps, 64)           // the Poisson disc's points
 SHADOWLAB_CONST(int, kProjectorChannels, 5)  // coverage, R, G, B, reverse
 
 // The codes kFilter and kLightType take: kFilter<Name>, kLight<Name> from kinds.h's rows, and
@@ -51,18 +52,18 @@ SHADOWLAB_CONST(int, kSpecCount, 7)
 // The descriptor set (set 0), one row per binding: X(Name, binding, kind). The kinds name
 // Vulkan descriptor types (rasterizer.cpp maps them); the set layout, the pool and the writes
 // are built from these rows. id.frag reads bindings 0..2 for its material tests.
-#define SHADOWLAB_RESOLVE_BINDINGS(X)                                                       \
-  X(TriangleMaterials, 0, StorageBuffer)  /* per triangle: its material index */           \
-  X(Materials, 1, StorageBuffer)          /* MaterialGpu per material */                   \
-  X(AlphaTexels, 2, StorageBuffer)        /* alpha textures, concatenated */               \
-  X(Params, 3, UniformBuffer)             /* Params below */                               \
-  X(MapDepth, 4, CombinedImageSampler)    /* map depths, NEAREST */                        \
-  X(MapShadow, 5, CombinedImageSampler)   /* map depths, LINEAR, compare LESS_OR_EQUAL */  \
-  X(MapIds, 6, CombinedImageSampler)      /* map ids (global triangle + 1) */              \
-  X(CameraIds, 7, CombinedImageSampler)   /* the camera's visibility buffer */             \
+#define SHADOWLAB_RESOLVE_BINDINGS(X)                                                      \
+  X(TriangleMaterials, 0, StorageBuffer)   /* per triangle: its material index */          \
+  X(Materials, 1, StorageBuffer)           /* MaterialGpu per material */                  \
+  X(AlphaTexels, 2, StorageBuffer)         /* alpha textures, concatenated */              \
+  X(Params, 3, UniformBuffer)              /* Params below */                              \
+  X(MapDepth, 4, CombinedImageSampler)     /* map depths, NEAREST */                       \
+  X(MapShadow, 5, CombinedImageSampler)    /* map depths, LINEAR, compare LESS_OR_EQUAL */ \
+  X(MapIds, 6, CombinedImageSampler)       /* map ids (global triangle + 1) */             \
+  X(CameraIds, 7, CombinedImageSampler)    /* the camera's visibility buffer */            \
   X(TrianglePlanes, 8, UniformTexelBuffer) /* per triangle: its plane */                   \
-  X(ProjectorTexels, 9, StorageBuffer)    /* projector images, RGB floats */               \
-  X(OutPlanes, 10, StorageBuffer)         /* the projector channels, one plane each */
+  X(ProjectorTexels, 9, StorageBuffer)     /* projector images, RGB floats */              \
+  X(OutPlanes, 10, StorageBuffer)          /* the projector channels, one plane each */
 #define SHADOWLAB_ABI_BINDING(name, binding, kind) SHADOWLAB_CONST(int, kBinding##name, binding)
 SHADOWLAB_RESOLVE_BINDINGS(SHADOWLAB_ABI_BINDING)
 #undef SHADOWLAB_ABI_BINDING
@@ -94,11 +95,12 @@ SHADOWLAB_BLOCK(Params) {
   ivec4 projector[kMaxProjectors];    // x first texel in projectorTexels, y width, z height, w layer
   vec4 poisson[kMaxTaps];             // xy: unit-disc offsets
   vec4 projectorPos[kMaxProjectors];  // xyz: world position
-  vec4 cascadeView;    // xyz fit camera forward (unit, world), w cascade count (0: not cascaded)
-  vec4 cascadeFar[2];  // C_1..C_8: far view depth of cascade 0..7, world units
-  vec4 cascadeInfo;    // x blend band (fraction of a cascade's depth range), y C_0,
-                       // z fit-camera view depth of the evaluation camera's origin
-} SHADOWLAB_BLOCK_END(P);
+  vec4 cascadeView;                   // xyz fit camera forward (unit, world), w cascade count (0: not cascaded)
+  vec4 cascadeFar[2];                 // C_1..C_8: far view depth of cascade 0..7, world units
+  vec4 cascadeInfo;                   // x blend band (fraction of a cascade's depth range), y C_0,
+                                      // z fit-camera view depth of the evaluation camera's origin
+}
+SHADOWLAB_BLOCK_END(P);
 #endif
 
 #ifdef __cplusplus

@@ -23,7 +23,7 @@ double referenceFrameBytes(const Scene& scene);
 
 struct ReferenceStats {
   uint64_t primaryRays = 0;
-  uint64_t shadowRays = 0;  // occlusion rays to lights and projectors
+  uint64_t shadowRays = 0;    // occlusion rays to lights and projectors
   double traceSeconds = 0.0;  // trace_seconds: wall time of the trace (scene build excluded)
   double buildSeconds = 0.0;  // build_seconds: Embree device + BVH
   double mraysPerS() const { return traceSeconds > 0 ? (primaryRays + shadowRays) / traceSeconds * 1e-6 : 0.0; }

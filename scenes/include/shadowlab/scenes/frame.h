@@ -51,8 +51,8 @@ namespace shadowlab {
 struct Frame {
   int width = 0;
   int height = 0;
-  std::vector<std::string> names;          // channel names, in insertion order
-  std::vector<std::vector<float>> data;    // one width*height plane per name
+  std::vector<std::string> names;        // channel names, in insertion order
+  std::vector<std::vector<float>> data;  // one width*height plane per name
   nlohmann::json meta = nlohmann::json::object();
 
   bool has(const std::string& name) const;

@@ -13,24 +13,24 @@
 // raster/METHODS.md documents it.
 
 // filter: how the map comparisons around the lookup are combined into light.L.vis.
-#define SHADOWLAB_FILTERS(X)                                                                     \
-  X(None, 0, "none", "the texel under the lookup, one comparison")                               \
-  X(Hw2x2, 1, "hw2x2", "the sampler's 2x2 comparisons, blended bilinearly by the hardware")      \
-  X(Bilinear4, 2, "bilinear4", "2x2 comparisons blended bilinearly in the shader")               \
-  X(Pcf, 3, "pcf", "the mean of filter.size x filter.size comparisons around the lookup texel")  \
+#define SHADOWLAB_FILTERS(X)                                                                    \
+  X(None, 0, "none", "the texel under the lookup, one comparison")                              \
+  X(Hw2x2, 1, "hw2x2", "the sampler's 2x2 comparisons, blended bilinearly by the hardware")     \
+  X(Bilinear4, 2, "bilinear4", "2x2 comparisons blended bilinearly in the shader")              \
+  X(Pcf, 3, "pcf", "the mean of filter.size x filter.size comparisons around the lookup texel") \
   X(Poisson, 4, "poisson", "the mean of filter.taps comparisons on a disc of filter.radius texels")
 
 // fit: how a directional light's orthographic map is fitted (spot and point lights ignore it).
-#define SHADOWLAB_FITS(X)                                                                          \
-  X(Sphere, 0, "sphere", "the scene's bounding sphere")                                            \
-  X(Tight, 1, "tight", "the fit camera's view frustum intersected with the scene")                 \
-  X(Cascades, 2, "cascades", "one tight crop per slice of the view depth (cascades.*)")            \
+#define SHADOWLAB_FITS(X)                                                               \
+  X(Sphere, 0, "sphere", "the scene's bounding sphere")                                 \
+  X(Tight, 1, "tight", "the fit camera's view frustum intersected with the scene")      \
+  X(Cascades, 2, "cascades", "one tight crop per slice of the view depth (cascades.*)") \
   X(Lispsm, 3, "lispsm", "the tight body under a light-space perspective warp (lispsm.n_scale)")
 
 // A scene light's "type".
-#define SHADOWLAB_LIGHT_TYPES(X)                                                    \
-  X(Directional, 0, "directional", "parallel rays along direction, one 2D map")     \
-  X(Spot, 1, "spot", "a cone from position along direction, one perspective map")   \
+#define SHADOWLAB_LIGHT_TYPES(X)                                                  \
+  X(Directional, 0, "directional", "parallel rays along direction, one 2D map")   \
+  X(Spot, 1, "spot", "a cone from position along direction, one perspective map") \
   X(Point, 2, "point", "all directions from position, a cube map of six faces")
 
 #ifdef __cplusplus

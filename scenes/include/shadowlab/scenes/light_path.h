@@ -17,7 +17,7 @@ namespace shadowlab {
 struct LightPathAxis {
   std::string key;  // "elevation_deg" or "azimuth_deg" (scenes/FORMAT.md, lights)
   double from = 0, to = 0;
-  int frames = 0;   // 2..kMaxPathFrames
+  int frames = 0;  // 2..kMaxPathFrames
   double value(int k) const { return from + (to - from) * double(k) / double(frames - 1); }
 };
 // Parses "KEY=FROM:TO:FRAMES". InputError "--light-path TEXT: error: ..." on anything else: an
@@ -31,7 +31,7 @@ LightPathAxis parseLightPath(const std::string& text);
 // (the angle not moved keeps its value). `sceneDocument`: the scene file as parsed (to see how
 // the light is declared).
 std::vector<SceneOverride> lightPathOverrides(const nlohmann::json& sceneDocument, const Scene& scene,
-                                              const std::string& lightName,
-                                              const std::vector<LightPathAxis>& axes, int k);
+                                              const std::string& lightName, const std::vector<LightPathAxis>& axes,
+                                              int k);
 
 }  // namespace shadowlab

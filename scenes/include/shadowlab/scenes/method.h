@@ -25,30 +25,30 @@ const std::vector<KindInfo<Filter>>& filterKinds();
 
 struct Method {
   std::string name = "default";
-  int mapSize = 2048;                    // map.size: texels per side, 16..16384 (and the device limit)
+  int mapSize = 2048;                        // map.size: texels per side, 16..16384 (and the device limit)
   DepthFormat mapFormat = DepthFormat::D24;  // map.format: d16 | d24 | d32f
-  CullMode cull = CullMode::None;        // cull: back | front | none (shadow pass; none: open quads cast from both sides)
-  Fit fit = Fit::Sphere;                 // fit: kinds.h's SHADOWLAB_FITS
+  CullMode cull = CullMode::None;  // cull: back | front | none (shadow pass; none: open quads cast from both sides)
+  Fit fit = Fit::Sphere;           // fit: kinds.h's SHADOWLAB_FITS
   // Cascaded shadow maps (fit=cascades, directional lights): the view depth range is split by the
   // practical scheme into cascadeCount slices, one map layer (map.size squared) each.
-  int cascadeCount = 4;                  // cascades.count: 1..8 slices
-  float cascadeLambda = 0.75f;           // cascades.lambda: 0 uniform .. 1 logarithmic splits
-  float cascadeBlend = 0.0f;             // cascades.blend: blend band, fraction of a cascade's depth range, 0..0.5
-  bool cascadeStabilize = false;         // cascades.stabilize: constant-size crops snapped to whole texels
+  int cascadeCount = 4;           // cascades.count: 1..8 slices
+  float cascadeLambda = 0.75f;    // cascades.lambda: 0 uniform .. 1 logarithmic splits
+  float cascadeBlend = 0.0f;      // cascades.blend: blend band, fraction of a cascade's depth range, 0..0.5
+  bool cascadeStabilize = false;  // cascades.stabilize: constant-size crops snapped to whole texels
   // Light-space perspective shadow maps (fit=lispsm, directional lights): the warp's projection
   // center lies lispsmNScale * n_opt before the body's near face (larger: closer to uniform).
-  float lispsmNScale = 1.0f;             // lispsm.n_scale: > 0, <= 1e6
-  float biasConstant = 0.0f;             // bias.constant: Vulkan depthBiasConstantFactor (units of r)
-  float biasSlope = 1.5f;                // bias.slope: Vulkan depthBiasSlopeFactor
-  float biasClamp = 0.0f;                // bias.clamp: Vulkan depthBiasClamp (0 = no clamp)
-  float biasCompare = 0.0005f;           // bias.compare: added in the comparison, normalized depth
-  float biasNormal = 0.0f;               // bias.normal: normal-offset of the lookup, in map texels
-  bool biasReceiverPlane = false;        // bias.receiver_plane: receiver-plane depth bias per tap
-  Filter filter = Filter::None;          // filter: kinds.h's SHADOWLAB_FILTERS
-  int filterSize = 3;                    // filter.size: pcf grid N (odd, 3..15)
-  int filterTaps = 16;                   // filter.taps: poisson taps (1..64)
-  float filterRadius = 1.5f;             // filter.radius: poisson radius in texels (> 0, <= 32)
-  bool projectorReverseGuard = true;     // projector.reverse_guard: only project where w >= 0
+  float lispsmNScale = 1.0f;          // lispsm.n_scale: > 0, <= 1e6
+  float biasConstant = 0.0f;          // bias.constant: Vulkan depthBiasConstantFactor (units of r)
+  float biasSlope = 1.5f;             // bias.slope: Vulkan depthBiasSlopeFactor
+  float biasClamp = 0.0f;             // bias.clamp: Vulkan depthBiasClamp (0 = no clamp)
+  float biasCompare = 0.0005f;        // bias.compare: added in the comparison, normalized depth
+  float biasNormal = 0.0f;            // bias.normal: normal-offset of the lookup, in map texels
+  bool biasReceiverPlane = false;     // bias.receiver_plane: receiver-plane depth bias per tap
+  Filter filter = Filter::None;       // filter: kinds.h's SHADOWLAB_FILTERS
+  int filterSize = 3;                 // filter.size: pcf grid N (odd, 3..15)
+  int filterTaps = 16;                // filter.taps: poisson taps (1..64)
+  float filterRadius = 1.5f;          // filter.radius: poisson radius in texels (> 0, <= 32)
+  bool projectorReverseGuard = true;  // projector.reverse_guard: only project where w >= 0
 };
 
 // All keys, in documentation order ("name" excluded).
@@ -58,11 +58,9 @@ const std::vector<std::string>& methodKeys();
 Method loadMethodFile(const std::string& path);
 // Applies one key=value (value as text, e.g. "pcf", "4096", "true"). `origin` names where it came
 // from for the error message (e.g. "--set" or "sweep.json: /grid/map.size/2").
-void applyMethodSetting(Method& m, const std::string& key, const std::string& value,
-                        const std::string& origin);
+void applyMethodSetting(Method& m, const std::string& key, const std::string& value, const std::string& origin);
 // Applies a JSON value (number, string or bool) for one key; same validation.
-void applyMethodJson(Method& m, const std::string& key, const nlohmann::json& value,
-                     const std::string& origin);
+void applyMethodJson(Method& m, const std::string& key, const nlohmann::json& value, const std::string& origin);
 // Flat JSON with every key (and "name"); round-trips through applyMethodJson.
 nlohmann::json methodToJson(const Method& m);
 // Checks cross-field rules (e.g. odd pcf size); throws InputError prefixed by origin.

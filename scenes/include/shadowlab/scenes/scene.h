@@ -41,10 +41,10 @@ float sampleAlphaNearest(const Image& alpha, glm::vec2 uv);
 
 struct Object {
   std::string name;
-  uint32_t id = 0;                       // stable object id, >= 1 (0 means "nothing")
-  std::vector<glm::vec3> positions;      // world space
-  std::vector<glm::vec2> uvs;            // empty, or one per position
-  std::vector<glm::uvec3> triangles;     // indices into positions; triangle index = primitive id
+  uint32_t id = 0;                         // stable object id, >= 1 (0 means "nothing")
+  std::vector<glm::vec3> positions;        // world space
+  std::vector<glm::vec2> uvs;              // empty, or one per position
+  std::vector<glm::uvec3> triangles;       // indices into positions; triangle index = primitive id
   std::vector<uint32_t> triangleMaterial;  // one per triangle, index into Scene::materials
   bool castsShadow = true;
 };
@@ -85,8 +85,8 @@ struct Camera {
   float vfovDeg = 45.0f;
   int width = 640;
   int height = 480;
-  float nearPlane = 0.01f;   // rasterizer only
-  float farPlane = 1000.0f;  // rasterizer only
+  float nearPlane = 0.01f;          // rasterizer only
+  float farPlane = 1000.0f;         // rasterizer only
   glm::mat4 viewFromWorld() const;  // right-handed look-at, camera looks down -z
   // Vulkan clip space (y down, depth 0..1), so pixel (i, j) centers match rayDirection(i, j).
   glm::mat4 clipFromView() const;
@@ -106,17 +106,17 @@ enum class CameraPathKind { Dolly, Orbit, Keyframes };
 struct CameraPath {
   std::string name;
   CameraPathKind kind = CameraPathKind::Dolly;
-  int frames = 0;               // 2..kMaxPathFrames
-  float distanceWorld = 0.0f;   // dolly: total travel along the view direction, world units
-  float angleDeg = 0.0f;        // orbit: total rotation about look_at, degrees
+  int frames = 0;                 // 2..kMaxPathFrames
+  float distanceWorld = 0.0f;     // dolly: total travel along the view direction, world units
+  float angleDeg = 0.0f;          // orbit: total rotation about look_at, degrees
   std::vector<Camera> keyframes;  // keyframes: >= 2 cameras (the scene camera's other fields)
 };
 std::string toString(CameraPathKind kind);  // "dolly", "orbit", "keyframes"
 
 struct Scene {
-  std::string path;       // the scene file as given
-  std::string name;       // file stem, e.g. "sphere_on_plane"
-  std::string hash;       // 16 hex digits over the resolved content (JSON + geometry + textures)
+  std::string path;  // the scene file as given
+  std::string name;  // file stem, e.g. "sphere_on_plane"
+  std::string hash;  // 16 hex digits over the resolved content (JSON + geometry + textures)
   Camera camera;
   std::vector<Material> materials;  // index 0 is the default material
   std::vector<Object> objects;
@@ -127,7 +127,6 @@ struct Scene {
   std::string failurePointer;
   std::vector<double> failureValues;
   std::vector<CameraPath> paths;  // "paths" in the file, sorted by name
-
 
   // World-space axis-aligned bounds of all objects.
   glm::vec3 boundsMin() const;

@@ -24,23 +24,22 @@
 #include <cstddef>
 #include <cstdint>
 
-#define SHADOWLAB_PIXEL_CLASSES(X)                                                                          \
-  X(Correct, 2, "correct", "correct", false, nullptr, nullptr, Lower, 0xBEBEBE, 0x555555,                    \
-    "both renderers decide the same (lit or shadowed)")                                                      \
-  X(Acne, 3, "acne", "acne", true, "acne", "acne_rate", Lower, 0xEB2323, 0xEB2323,                           \
-    "lit in truth, shadowed by the receiver's own texel in the map (bias too small)")                       \
-  X(Leak, 4, "leak", "leak", true, "leak", "leak_rate", Lower, 0x1E78FF, 0x1E78FF,                           \
-    "shadowed in truth, lit because the bias let the occluder through (peter panning)")                     \
-  X(Aliasing, 5, "aliasing", "aliasing", true, "aliasing", "aliasing_rate", Lower, 0xFFD700, 0xFFD700,       \
-    "a disagreement within boundaryTexels map texels of a true shadow boundary (map too coarse)")           \
-  X(Coverage, 6, "coverage", "coverage", true, "coverage", "coverage_rate", Lower, 0x28C846, 0x28C846,       \
-    "the point lies outside the light's map: the renderer's policy decided, not a depth test")             \
-  X(Other, 7, "other", "other", true, "other", "other_rate", Lower, 0xFF00FF, 0xFF00FF,                      \
-    "any other disagreement: rare; a large value is a finding to look at in errors.png")                    \
-  X(GeometryMismatch, 1, "geometry_mismatch", "geometry mismatch", false, "geometry_mismatch", nullptr,      \
-    Lower, 0x965F2D, 0x965F2D, "the renderers see different surfaces (or one sees none): counted, not scored") \
-  X(NotCompared, 0, "not_compared", "", false, nullptr, nullptr, Lower, 0x121428, 0x121428,                  \
-    "background in both frames")
+#define SHADOWLAB_PIXEL_CLASSES(X)                                                                             \
+  X(Correct, 2, "correct", "correct", false, nullptr, nullptr, Lower, 0xBEBEBE, 0x555555,                      \
+    "both renderers decide the same (lit or shadowed)")                                                        \
+  X(Acne, 3, "acne", "acne", true, "acne", "acne_rate", Lower, 0xEB2323, 0xEB2323,                             \
+    "lit in truth, shadowed by the receiver's own texel in the map (bias too small)")                          \
+  X(Leak, 4, "leak", "leak", true, "leak", "leak_rate", Lower, 0x1E78FF, 0x1E78FF,                             \
+    "shadowed in truth, lit because the bias let the occluder through (peter panning)")                        \
+  X(Aliasing, 5, "aliasing", "aliasing", true, "aliasing", "aliasing_rate", Lower, 0xFFD700, 0xFFD700,         \
+    "a disagreement within boundaryTexels map texels of a true shadow boundary (map too coarse)")              \
+  X(Coverage, 6, "coverage", "coverage", true, "coverage", "coverage_rate", Lower, 0x28C846, 0x28C846,         \
+    "the point lies outside the light's map: the renderer's policy decided, not a depth test")                 \
+  X(Other, 7, "other", "other", true, "other", "other_rate", Lower, 0xFF00FF, 0xFF00FF,                        \
+    "any other disagreement: rare; a large value is a finding to look at in errors.png")                       \
+  X(GeometryMismatch, 1, "geometry_mismatch", "geometry mismatch", false, "geometry_mismatch", nullptr, Lower, \
+    0x965F2D, 0x965F2D, "the renderers see different surfaces (or one sees none): counted, not scored")        \
+  X(NotCompared, 0, "not_compared", "", false, nullptr, nullptr, Lower, 0x121428, 0x121428, "background in both frames")
 
 namespace shadowlab {
 
@@ -56,7 +55,7 @@ enum class MetricBetter : uint8_t { Lower, Higher };
 struct PixelClassInfo {
   PixelClass cls;
   const char* key;
-  const char* label;        // "" for a class the legend does not show
+  const char* label;  // "" for a class the legend does not show
   bool error;
   const char* countMetric;  // nullptr: no count metric
   const char* rateMetric;   // nullptr: no rate metric

@@ -17,18 +17,18 @@ namespace shadowlab {
 // decides; compareFrames reads the evidence after it only where the two decisions disagree. A
 // missing evidence channel proves nothing (its `has` flag false).
 struct PixelEvidence {
-  bool referenceHit = false, rasterHit = false;   // `hit` >= 0.5
-  float referenceObject = 0, rasterObject = 0;    // `object_id`
-  float referenceVis = 0, rasterVis = 0;          // `light.L.vis`, raw (clamped to [0, 1] when decided, NaN as 0)
+  bool referenceHit = false, rasterHit = false;  // `hit` >= 0.5
+  float referenceObject = 0, rasterObject = 0;   // `object_id`
+  float referenceVis = 0, rasterVis = 0;         // `light.L.vis`, raw (clamped to [0, 1] when decided, NaN as 0)
 
   bool hasInMap = false;
-  float inMap = 1;                                // raster `light.L.in_map`; < 0.5: outside the map
+  float inMap = 1;  // raster `light.L.in_map`; < 0.5: outside the map
   bool hasOccluderId = false;
-  float occluderId = 0;                           // raster `light.L.occluder_id`: who wrote the map texel
-  bool hasDepths = false;                         // all three below (map depth units)
+  float occluderId = 0;                                  // raster `light.L.occluder_id`: who wrote the map texel
+  bool hasDepths = false;                                // all three below (map depth units)
   float receiverDepth = 0, mapDepth = 0, biasDepth = 0;  // raster `receiver_depth`, `map_depth`, `bias_depth`
-  bool hasOccluderDistance = false;               // both below (world units)
-  float referenceOccluderDist = 0, biasWorld = 0;  // reference `occluder_dist`, raster `bias_world`
+  bool hasOccluderDistance = false;                      // both below (world units)
+  float referenceOccluderDist = 0, biasWorld = 0;        // reference `occluder_dist`, raster `bias_world`
   // The disagreement lies within boundaryTexels * m pixels of a reference shadow boundary. Known
   // only after the boundary distance transform (compareFrames' second pass).
   bool withinBoundaryBand = false;

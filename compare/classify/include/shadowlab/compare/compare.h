@@ -28,11 +28,11 @@ struct CompareOptions {
 
 // Metrics of the compared pixels whose raster lookup used one cascade (raster `light.L.cascade`).
 struct CascadeMetrics {
-  int index = 0;           // cascade, 0-based
-  uint64_t pixels = 0;     // compared pixels of this cascade (the denominator)
-  uint64_t errors = 0;     // of them, pixels of an error class
-  double errorRate = 0;    // errors / pixels, 0 when pixels = 0
-  double mP95 = 0;         // nearest-rank 95th percentile of m over these pixels, 0 when none
+  int index = 0;         // cascade, 0-based
+  uint64_t pixels = 0;   // compared pixels of this cascade (the denominator)
+  uint64_t errors = 0;   // of them, pixels of an error class
+  double errorRate = 0;  // errors / pixels, 0 when pixels = 0
+  double mP95 = 0;       // nearest-rank 95th percentile of m over these pixels, 0 when none
 };
 
 struct Metrics {
@@ -107,7 +107,6 @@ Metrics compareFrames(const Frame& reference, const Frame& raster, const Compare
 std::vector<uint8_t> errorsPicture(const Classification& c, int* outWidth, int* outHeight,
                                    const Frame* outlines = nullptr);
 void writeErrorsPng(const std::string& path, const Classification& c, const Frame* outlines = nullptr);
-void writeTriptychPng(const std::string& path, const Frame& reference, const Frame& raster,
-                      const Classification& c);
+void writeTriptychPng(const std::string& path, const Frame& reference, const Frame& raster, const Classification& c);
 
 }  // namespace shadowlab

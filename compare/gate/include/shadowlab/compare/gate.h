@@ -63,7 +63,7 @@ struct ToleranceSpec {
 };
 
 struct Tolerances {
-  std::string origin = "built-in defaults";  // the file they came from
+  std::string origin = "built-in defaults";      // the file they came from
   std::map<std::string, ToleranceSpec> metrics;  // "metrics": per metric name
   ToleranceSpec fallback;                        // "default"
   TimingTolerance timing;                        // "timing"
@@ -88,16 +88,16 @@ enum class Verdict { Regressed, New, Improved, Pass, Reported };
 std::string toString(Verdict v);
 
 struct GateCheck {
-  std::string rowKey;        // "scene | config | light"
+  std::string rowKey;  // "scene | config | light"
   std::string scene, config, light;
-  std::string metric;        // metric name, or timing name for kind "timing"
-  std::string kind;          // "metric" | "timing" | "row"
-  nlohmann::json baseline;   // the values as found (number, string, bool)
+  std::string metric;       // metric name, or timing name for kind "timing"
+  std::string kind;         // "metric" | "timing" | "row"
+  nlohmann::json baseline;  // the values as found (number, string, bool)
   nlohmann::json current;
-  std::string tolerance;     // printable: "+0.005", "-0.01", "+/-50", "<= 1.50x", "report"
-  int samples = 1;           // timings: how many current runs the value is the median of
+  std::string tolerance;  // printable: "+0.005", "-0.01", "+/-50", "<= 1.50x", "report"
+  int samples = 1;        // timings: how many current runs the value is the median of
   Verdict verdict = Verdict::Pass;
-  std::string message;       // for regressions: the one-line error (without "shadowlab gate: error: ")
+  std::string message;  // for regressions: the one-line error (without "shadowlab gate: error: ")
 };
 
 struct GateResult {

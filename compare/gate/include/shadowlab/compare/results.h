@@ -38,7 +38,7 @@ void writeMetricsJson(const std::string& path, const ResultRow& row);  // atomic
 // A loaded metrics.json or results.json with what the gate needs to name places in it.
 struct ResultFile {
   std::string path;
-  std::string schema;                 // "shadowlab.metrics/1" or "shadowlab.results/1"
+  std::string schema;  // "shadowlab.metrics/1" or "shadowlab.results/1"
   std::vector<ResultRow> rows;
   std::vector<std::string> pointers;  // JSON pointer of each row in the file ("" or "/rows/3")
   std::vector<std::string> rowPaths;  // the file of each row when merged from several; else empty

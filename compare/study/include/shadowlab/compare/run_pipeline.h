@@ -32,14 +32,13 @@ struct RunResult {
   Classification classification;
   Metrics metrics;
   RasterTimings timings;
-  double compareMs = 0;    // compare_ms: CPU wall time of compareFrames
-  double referenceMs = 0;  // reference_ms: CPU wall time to trace the reference or read it from the cache
-  bool referenceTraced = false;  // false: the reference came from the cache
+  double compareMs = 0;           // compare_ms: CPU wall time of compareFrames
+  double referenceMs = 0;         // reference_ms: CPU wall time to trace the reference or read it from the cache
+  bool referenceTraced = false;   // false: the reference came from the cache
   ReferenceStats referenceStats;  // filled only when traced
 };
 
-RunResult runPipeline(const Scene& scene, const Method& method, Rasterizer& rasterizer,
-                      ReferenceCache& cache, const std::string& light = "",
-                      const ReferenceOptions& referenceOptions = {});
+RunResult runPipeline(const Scene& scene, const Method& method, Rasterizer& rasterizer, ReferenceCache& cache,
+                      const std::string& light = "", const ReferenceOptions& referenceOptions = {});
 
 }  // namespace shadowlab

@@ -61,8 +61,8 @@ void setErrorStatistics(StabilityMetrics& s, const std::vector<double>& errorRat
 // The flip fraction of one pair of raster frames against the reference (see flipRatePerPair).
 // `light`: the light channel (light.LIGHT.vis). Throws InputError on size mismatch or missing
 // channels. `pixelsCompared` (optional) receives the denominator.
-double decisionFlipRate(const Frame& reference, const Frame& rasterA, const Frame& rasterB,
-                        const std::string& light, uint64_t* pixelsCompared = nullptr);
+double decisionFlipRate(const Frame& reference, const Frame& rasterA, const Frame& rasterB, const std::string& light,
+                        uint64_t* pixelsCompared = nullptr);
 
 // All metrics of a raster sequence rendered from the reference's camera. Needs >= 2 frames;
 // throws InputError otherwise or on frames compareFrames rejects.

@@ -37,8 +37,8 @@ inline constexpr const char* kSceneFailureKey = "scene:failure";
 
 struct SweepAxis {
   std::string key;
-  std::vector<nlohmann::json> values;  // text from the command line, typed values from a sweep file
-  std::string origin;                  // where it came from, for messages: "--grid map.size=..."
+  std::vector<nlohmann::json> values;     // text from the command line, typed values from a sweep file
+  std::string origin;                     // where it came from, for messages: "--grid map.size=..."
   std::vector<std::string> valueOrigins;  // one per value ("sweep.json: /grid/map.size/2")
 };
 
@@ -49,13 +49,13 @@ struct SweepSetting {
 };
 
 struct SweepSpec {
-  std::vector<std::string> scenes;     // bundled names or paths; empty = every bundled scene
-  std::vector<SweepAxis> grid;         // in the order given; the last axis varies fastest
-  std::vector<SweepSetting> fixed;     // --set / "set": applied to every configuration, before the grid
-  std::string methodFile;              // optional base method file (--method / "method")
-  std::string light;                   // empty: each scene's first light
-  int spp = 1;                         // reference samples per pixel
-  bool keepImages = false;             // write raster.exr + errors.png per configuration
+  std::vector<std::string> scenes;  // bundled names or paths; empty = every bundled scene
+  std::vector<SweepAxis> grid;      // in the order given; the last axis varies fastest
+  std::vector<SweepSetting> fixed;  // --set / "set": applied to every configuration, before the grid
+  std::string methodFile;           // optional base method file (--method / "method")
+  std::string light;                // empty: each scene's first light
+  int spp = 1;                      // reference samples per pixel
+  bool keepImages = false;          // write raster.exr + errors.png per configuration
   // Failure frontiers (sweep_frontier.h): the metric walked along swept scene: parameters and the
   // rate above which a configuration counts as broken. Checked by planSweep.
   std::string frontierMetric = "error_rate";
@@ -93,22 +93,22 @@ struct SweepConfig {
 };
 
 struct SweepJob {
-  size_t sceneIndex = 0;   // into SweepPlan::scenePaths
-  size_t configIndex = 0;  // into SweepPlan::configs
-  size_t variantIndex = 0; // into SweepPlan::variants: the scene as loaded for this point
-  std::string light;       // resolved light name
-  std::string key() const; // ResultRow::key() of its row
+  size_t sceneIndex = 0;    // into SweepPlan::scenePaths
+  size_t configIndex = 0;   // into SweepPlan::configs
+  size_t variantIndex = 0;  // into SweepPlan::variants: the scene as loaded for this point
+  std::string light;        // resolved light name
+  std::string key() const;  // ResultRow::key() of its row
   std::string sceneName;
   std::string config;
 };
 
 struct SweepPlan {
   SweepSpec spec;
-  std::vector<std::string> scenePaths;        // resolved, one per requested scene
+  std::vector<std::string> scenePaths;  // resolved, one per requested scene
   std::vector<std::string> sceneNames;
-  std::vector<SweepConfig> configs;           // the expanded grid (same for every scene)
-  std::vector<Scene> variants;                // each scene under each distinct set of scene: values
-  std::vector<SweepJob> jobs;                 // scene-major, then configuration in grid order
+  std::vector<SweepConfig> configs;  // the expanded grid (same for every scene)
+  std::vector<Scene> variants;       // each scene under each distinct set of scene: values
+  std::vector<SweepJob> jobs;        // scene-major, then configuration in grid order
 };
 
 // Validates everything (keys, every value of every axis, cross-field rules of every configuration,
@@ -118,7 +118,8 @@ SweepPlan planSweep(const SweepSpec& spec);
 // What one configuration produced (the renderer-independent part of a ResultRow).
 struct SweepRunOutput {
   nlohmann::json metrics = nlohmann::json::object();  // Metrics::toJson()
-  nlohmann::json timings = nlohmann::json::object();  // shadow_gpu_ms, camera_gpu_ms, readback_ms, render_wall_ms, compare_ms
+  nlohmann::json timings =
+      nlohmann::json::object();  // shadow_gpu_ms, camera_gpu_ms, readback_ms, render_wall_ms, compare_ms
 };
 
 class SweepRunner {
@@ -199,11 +200,11 @@ struct SweepOptions {
 };
 
 struct SweepSummary {
-  size_t configurations = 0;  // rows planned
-  size_t resumed = 0;         // rows found in rows.jsonl and not run again
-  size_t ran = 0;             // rows run by this call
-  bool interrupted = false;   // stopped by options.stop; outputs not regenerated
-  double commandWallSeconds = 0;  // command_wall_seconds: this runSweep call, report included
+  size_t configurations = 0;                        // rows planned
+  size_t resumed = 0;                               // rows found in rows.jsonl and not run again
+  size_t ran = 0;                                   // rows run by this call
+  bool interrupted = false;                         // stopped by options.stop; outputs not regenerated
+  double commandWallSeconds = 0;                    // command_wall_seconds: this runSweep call, report included
   std::string resultsJson, resultsCsv, reportHtml;  // empty when not written
   std::vector<std::string> notes;                   // e.g. charts skipped or failed
 };
@@ -212,8 +213,8 @@ struct SweepSummary {
 // (created), appending each finished row durably to outDir/rows.jsonl (one write + fdatasync per
 // row); rows already there for the same scene content and method are not
 // run again; a torn last line is dropped. A row to resume that was measured on another device
-// than runner.deviceName() is an InputError naming both devices (nothing is run or rewritten). At the end writes results.json, results.csv, figures/
-// and report.html. Log of starts/finishes: outDir/sweep.log.
+// than runner.deviceName() is an InputError naming both devices (nothing is run or rewritten). At the end writes
+// results.json, results.csv, figures/ and report.html. Log of starts/finishes: outDir/sweep.log.
 SweepSummary runSweep(const SweepPlan& plan, SweepRunner& runner, const SweepOptions& options);
 
 // Gathers every shard journal under options.outDir/shards into options.outDir/results.json,

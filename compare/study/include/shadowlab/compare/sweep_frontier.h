@@ -13,9 +13,9 @@
 namespace shadowlab {
 
 struct Frontier {
-  bool holds = true;        // no value exceeds the threshold
-  size_t breakIndex = 0;    // when !holds: the first index whose metric > threshold
-  bool recovers = false;    // when !holds: a later value is back at or under the threshold (non-monotone)
+  bool holds = true;      // no value exceeds the threshold
+  size_t breakIndex = 0;  // when !holds: the first index whose metric > threshold
+  bool recovers = false;  // when !holds: a later value is back at or under the threshold (non-monotone)
 };
 
 // `metrics` are in walking order (easy to hard) and finite. A value breaks when it is strictly
@@ -27,7 +27,7 @@ Frontier findFrontier(const std::vector<double>& metrics, double threshold);
 // pointer, from the declaration's first value towards its last (scenes/FORMAT.md: easy to hard),
 // numerically; otherwise the grid's order. Rows whose metric is missing or not finite are left out
 // of the walk (listed in "missing").
-nlohmann::json computeFrontiers(const SweepPlan& plan, const std::vector<ResultRow>& rows,
-                                const std::string& metric, double threshold);
+nlohmann::json computeFrontiers(const SweepPlan& plan, const std::vector<ResultRow>& rows, const std::string& metric,
+                                double threshold);
 
 }  // namespace shadowlab
