@@ -628,6 +628,13 @@ void readObjects(const Reader& r, const Node& root, const fs::path& dir, Scene& 
   std::map<uint32_t, std::string> idOwner;
   std::set<std::string> names;
   uint64_t sceneTriangles = 0;
+  // The scene's triangle budget, checked before a procedural mesh is built (its count is known from
+  // its parameters: two maximal spheres would otherwise be built first) and after every object.
+  auto checkTriangles = [&](const Node& o, uint64_t total) {
+    if (total > kMaxSceneTriangles)
+      r.fail(o.ptr, "the scene reaches " + std::to_string(total) + " triangles with this object; expected at most " +
+                        std::to_string(kMaxSceneTriangles) + " (triangle ids travel through float channels, exact below 2^24)");
+  };
   for (size_t i = 0; i < os.j->size(); ++i) {
     Node o = r.at(os, i);
     if (!o.j->is_object()) r.expected(o, "an object");
@@ -695,6 +702,7 @@ void readObjects(const Reader& r, const Node& root, const fs::path& dir, Scene& 
       int segments = 256, rings = 128;
       if (Node n = r.child(o, "segments")) segments = int(r.integer(n, 3, 4096));
       if (Node n = r.child(o, "rings")) rings = int(r.integer(n, 2, 2048));
+      checkTriangles(o, sceneTriangles + 2ull * uint64_t(segments) * uint64_t(rings - 1));  // makeSphere's count
       mesh = makeSphere(radius, segments, rings);
     } else if (type == "cylinder") {
       double radius = r.positive(r.require(o, "radius", "a positive number"));
@@ -728,10 +736,7 @@ void readObjects(const Reader& r, const Node& root, const fs::path& dir, Scene& 
                "material \"" + scene.materials[obj.triangleMaterial[t]].name + "\" has an alpha texture but a " + type +
                    " has no uv coordinates; expected a plane, quad, box or an OBJ with vt");
     sceneTriangles += obj.triangles.size();
-    if (sceneTriangles > kMaxSceneTriangles)
-      r.fail(o.ptr, "the scene reaches " + std::to_string(sceneTriangles) +
-                        " triangles with this object; expected at most " + std::to_string(kMaxSceneTriangles) +
-                        " (triangle ids travel through float channels, exact below 2^24)");
+    checkTriangles(o, sceneTriangles);
     scene.objects.push_back(std::move(obj));
   }
 }
