@@ -488,6 +488,11 @@ SweepSummary runSweep(const SweepPlan& plan, SweepRunner& runner, const SweepOpt
   }
   progress.end();
   const double loopSeconds = secondsSince(loop0);
+  if (!options.writeResults && !shard.active()) {
+    summary.rows.resize(plan.jobs.size());
+    for (size_t i = 0; i < plan.jobs.size(); ++i)
+      if (have[i]) summary.rows[i] = have[i]->row;
+  }
   if (summary.interrupted) {
     if (log) log << "pid " << pid << " interrupted after " << summary.ran << " rows\n";
     summary.commandWallSeconds = secondsSince(t0);
@@ -500,7 +505,8 @@ SweepSummary runSweep(const SweepPlan& plan, SweepRunner& runner, const SweepOpt
     return summary;
   }
 
-  writeSweepOutputs(plan, have, runner, options, loopSeconds, t0, nlohmann::json::object(), summary);
+  if (options.writeResults)
+    writeSweepOutputs(plan, have, runner, options, loopSeconds, t0, nlohmann::json::object(), summary);
   summary.commandWallSeconds = secondsSince(t0);
   if (log) log << "pid " << pid << " end: " << summary.ran << " rows run, " << summary.commandWallSeconds << " s\n";
   return summary;

@@ -6,6 +6,7 @@
 // (SweepCli.SmallSweepRowsMatchShadowlabRunExactly in tests/sweep_cli_test.cpp checks the numbers
 // against `shadowlab run`).
 #include <chrono>
+#include <list>
 #include <memory>
 
 #include "shadowlab/compare/compare.h"
@@ -25,7 +26,8 @@ double msSince(Clock::time_point t0) { return std::chrono::duration<double, std:
 
 class PipelineRunner final : public SweepRunner {
  public:
-  PipelineRunner(const std::string& cacheDir, int spp, const std::string& device) : cache_(cacheDir) {
+  PipelineRunner(const std::string& cacheDir, int spp, const std::string& device, size_t keepReferences)
+      : cache_(cacheDir), keep_(keepReferences < 1 ? 1 : keepReferences) {
     referenceOptions_.spp = spp;
     deviceOptions_.device = device;
   }
@@ -97,37 +99,41 @@ class PipelineRunner final : public SweepRunner {
     return *rasterizer_;
   }
 
-  // Only the current scene's reference is held: a 1080p reference frame with all its channels is
-  // well over 100 MB, and the plan visits scenes one after another.
+  // Only the last `keep_` scenes' references are held (1 for a sweep): a 1080p reference frame
+  // with all its channels is well over 100 MB, and the plan visits scenes one after another.
+  // shadowlab tune alternates scenes per configuration and keeps one per scene.
   const Frame& referenceFor(const Scene& scene) {
     const std::string hash = referenceHash(scene, referenceOptions_);
-    if (hash != currentHash_) {
-      current_ = Frame();
-      currentHash_.clear();
-      const auto t0 = Clock::now();
-      bool traced = false;
-      current_ = cache_.get(scene, referenceOptions_, &traced);
-      referenceWallSeconds_ += msSince(t0) / 1000.0;
-      (traced ? traced_ : loaded_) += 1;
-      currentHash_ = hash;
-    }
-    return current_;
+    for (auto it = held_.begin(); it != held_.end(); ++it)
+      if (it->first == hash) {
+        held_.splice(held_.begin(), held_, it);  // most recently used first
+        return held_.front().second;
+      }
+    while (!held_.empty() && held_.size() >= keep_) held_.pop_back();  // free before reading the next one
+    const auto t0 = Clock::now();
+    bool traced = false;
+    Frame frame = cache_.get(scene, referenceOptions_, &traced);
+    referenceWallSeconds_ += msSince(t0) / 1000.0;
+    (traced ? traced_ : loaded_) += 1;
+    held_.emplace_front(hash, std::move(frame));
+    return held_.front().second;
   }
 
   ReferenceCache cache_;
   ReferenceOptions referenceOptions_;
   RasterDeviceOptions deviceOptions_;
   std::unique_ptr<Rasterizer> rasterizer_;
-  std::string currentHash_;
-  Frame current_;
+  size_t keep_ = 1;
+  std::list<std::pair<std::string, Frame>> held_;  // reference hash -> frame, most recently used first
   int traced_ = 0, loaded_ = 0;
   double referenceWallSeconds_ = 0;
 };
 
 }  // namespace
 
-std::unique_ptr<SweepRunner> makePipelineRunner(const std::string& cacheDir, int spp, const std::string& device) {
-  return std::make_unique<PipelineRunner>(cacheDir, spp, device);
+std::unique_ptr<SweepRunner> makePipelineRunner(const std::string& cacheDir, int spp, const std::string& device,
+                                                size_t keepReferences) {
+  return std::make_unique<PipelineRunner>(cacheDir, spp, device, keepReferences);
 }
 
 }  // namespace shadowlab

@@ -148,8 +148,11 @@ class SweepRunner {
 
 // Production runner: references from a ReferenceCache in `cacheDir` (traced once per scene and
 // camera, kept in memory for the sweep), one Rasterizer (created on first use, on the Vulkan device
-// whose name contains `device`; empty = lavapipe), compareFrames.
-std::unique_ptr<SweepRunner> makePipelineRunner(const std::string& cacheDir, int spp, const std::string& device = "");
+// whose name contains `device`; empty = lavapipe), compareFrames. `keepReferences`: how many scenes'
+// reference frames stay in memory (a sweep visits scenes one after another and needs 1; shadowlab
+// tune evaluates each configuration on every scene in turn and keeps one per scene).
+std::unique_ptr<SweepRunner> makePipelineRunner(const std::string& cacheDir, int spp, const std::string& device = "",
+                                                size_t keepReferences = 1);
 
 // The cache folder a sweep into `outDir` uses when none is given: $SHADOWLAB_CACHE, else
 // <parent of outDir>/.shadowlab-cache, so sweeps side by side share their references.
@@ -193,7 +196,10 @@ struct SweepOptions {
   bool progressBar = false;
   // Set (e.g. by a SIGINT handler) to stop after the configuration in progress.
   const std::atomic<bool>* stop = nullptr;
-  bool writeReport = true;   // charts + report.html (results.csv/json are always written)
+  // false: only run and journal the rows (shadowlab tune evaluates a few rows at a time and writes
+  // results.json, results.csv and the report once, at its end): no results files, no report.
+  bool writeResults = true;
+  bool writeReport = true;   // charts + report.html (results.csv/json are always written when writeResults)
   bool triptychs = true;     // render the best and worst configuration of each scene again
   std::string reportScript;  // chart script; empty: no charts (a note in the report). See defaultReportScript.
   std::string python;        // empty: $SHADOWLAB_PYTHON, else /usr/bin/python3
@@ -207,6 +213,9 @@ struct SweepSummary {
   double commandWallSeconds = 0;                    // command_wall_seconds: this runSweep call, report included
   std::string resultsJson, resultsCsv, reportHtml;  // empty when not written
   std::vector<std::string> notes;                   // e.g. charts skipped or failed
+  // With SweepOptions::writeResults off (and no shard): each job's row, run or resumed, in plan
+  // order; a job left unrun by an interruption has an empty `scene`.
+  std::vector<ResultRow> rows;
 };
 
 // Checks every configuration with runner.checkMethod, then runs the plan into options.outDir
