@@ -1,0 +1,335 @@
+// `shadowlab tune`: arguments -> a validated TunePlan. Every input error surfaces here, before
+// runTune creates a file (the CLI promises "nothing written" on exit 2).
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <map>
+#include <set>
+
+#include "shadowlab/compare/compare.h"
+#include "shadowlab/compare/tune.h"
+#include "shadowlab/scenes/error.h"
+
+namespace shadowlab {
+namespace {
+
+std::string trim(const std::string& s) {
+  size_t b = s.find_first_not_of(" \t\r\n");
+  if (b == std::string::npos) return "";
+  size_t e = s.find_last_not_of(" \t\r\n");
+  return s.substr(b, e - b + 1);
+}
+
+std::vector<std::string> splitList(const std::string& text, char sep) {
+  std::vector<std::string> out;
+  size_t start = 0;
+  while (true) {
+    size_t at = text.find(sep, start);
+    out.push_back(trim(text.substr(start, at == std::string::npos ? std::string::npos : at - start)));
+    if (at == std::string::npos) break;
+    start = at + 1;
+  }
+  return out;
+}
+
+std::string joined(const std::vector<std::string>& v, const char* sep = ", ") {
+  std::string out;
+  for (size_t i = 0; i < v.size(); ++i) out += (i ? sep : "") + v[i];
+  return out;
+}
+
+std::string tunableList() {
+  std::vector<std::string> keys;
+  for (const auto& k : tunableKeys()) keys.push_back(k.key);
+  return joined(keys);
+}
+
+const TunableKey* findTunable(const std::string& key) {
+  for (const auto& k : tunableKeys())
+    if (key == k.key) return &k;
+  return nullptr;
+}
+
+// A finite number from the whole of `text`, else nullopt.
+bool parseNumber(const std::string& text, double& out) {
+  const std::string t = trim(text);
+  if (t.empty()) return false;
+  char* end = nullptr;
+  out = std::strtod(t.c_str(), &end);
+  return end && *end == '\0' && std::isfinite(out);
+}
+
+// The canonical text of `value` for `key`, as a row's config writes it (the resolved method's value).
+std::string canonicalFor(const Method& base, const std::string& key, const std::string& value,
+                         const std::string& origin) {
+  Method probe = base;
+  applyMethodSetting(probe, key, value, origin);
+  const nlohmann::json j = methodToJson(probe);
+  return canonicalValueText(j.at(key));
+}
+
+std::string numberText(double v) {
+  char b[64];
+  std::snprintf(b, sizeof b, "%.9g", v);
+  return b;
+}
+
+// The candidate values of one key from its range text ("lo:hi[:n]" or "v1,v2,...").
+std::vector<std::string> expandRange(const TunableKey& info, const Method& base, const std::string& range,
+                                     const std::string& origin) {
+  auto fail = [&](const std::string& what) { throw InputError(formatError(origin, "", what)); };
+  const std::string key = info.key;
+  std::vector<std::string> raw;
+  const bool integerKey = key == "map.size" || key == "filter.size" || key == "filter.taps";
+  if (range.find(':') != std::string::npos) {
+    if (info.role == TuneRole::Categorical && !integerKey)
+      fail("\"" + key + "\" takes a list of values (v1,v2,...), not a range lo:hi");
+    const auto parts = splitList(range, ':');
+    double lo = 0, hi = 0, n = 16;
+    const bool counted = parts.size() == 3;
+    if (parts.size() < 2 || parts.size() > 3 || !parseNumber(parts[0], lo) || !parseNumber(parts[1], hi) ||
+        (counted && !parseNumber(parts[2], n)))
+      fail("got \"" + range + "\"; expected lo:hi" + std::string(info.role == TuneRole::Bias ? "[:intervals]" : "") +
+           " with finite numbers");
+    if (!(lo <= hi)) fail("empty range " + range + " (lo > hi); expected lo <= hi");
+    if (info.role == TuneRole::Bias) {
+      if (counted && (n != std::floor(n) || n < 1 || n > 64))
+        fail("got " + parts[2] + " intervals; expected an integer 1..64");
+      if (lo == hi) fail("empty range " + range + " (lo = hi); expected lo < hi");
+      for (int i = 0; i <= int(n); ++i) raw.push_back(numberText(lo + (hi - lo) * i / n));
+    } else if (key == "filter.size") {
+      if (counted) fail("got \"" + range + "\"; expected lo:hi (the odd sizes between)");
+      for (long v = long(std::ceil(lo)); v <= long(std::floor(hi)) && raw.size() < 64; ++v)
+        if (v % 2 == 1) raw.push_back(std::to_string(v));
+    } else {  // map.size, filter.taps: the powers of two between
+      if (counted) fail("got \"" + range + "\"; expected lo:hi (the powers of two between)");
+      for (double v = 1; v <= hi && v <= 1e9; v *= 2)
+        if (v >= lo) raw.push_back(std::to_string(long(v)));
+    }
+    if (raw.empty())
+      fail("empty range " + range + ": no " + std::string(key == "filter.size" ? "odd number" : "power of two") +
+           " between; expected at least one");
+  } else {
+    raw = splitList(range, ',');
+    for (size_t i = 0; i < raw.size(); ++i)
+      if (raw[i].empty())
+        fail("value " + std::to_string(i + 1) + " is empty; expected a comma-separated list without gaps");
+  }
+  // Each value through the method parser (ranges and types), in canonical form, distinct.
+  std::vector<std::string> values;
+  std::set<std::string> seen;
+  for (const auto& r : raw) {
+    std::string v = canonicalFor(base, key, r, origin);
+    if (!seen.insert(v).second) fail("value \"" + v + "\" appears twice; expected distinct values");
+    values.push_back(v);
+  }
+  if (info.role != TuneRole::Categorical || integerKey) {
+    std::vector<std::pair<double, std::string>> sorted;
+    for (const auto& v : values) sorted.emplace_back(std::strtod(v.c_str(), nullptr), v);
+    std::stable_sort(sorted.begin(), sorted.end(), [](const auto& a, const auto& b) { return a.first < b.first; });
+    values.clear();
+    for (const auto& [d, v] : sorted) values.push_back(v);
+  }
+  return values;
+}
+
+std::string defaultRangeOf(const TunableKey& k) {
+  std::vector<std::string> names;
+  if (std::string(k.key) == "filter")
+    for (const auto& f : filterKinds()) names.push_back(f.key);
+  else if (std::string(k.key) == "fit")
+    for (const auto& f : fitKinds()) names.push_back(f.key);
+  return names.empty() ? std::string(k.defaultRange) : joined(names, ",");
+}
+
+}  // namespace
+
+const std::vector<TunableKey>& tunableKeys() {
+  // Sorted by key. filter and fit take every kind of kinds.h (defaultRangeOf).
+  static const std::vector<TunableKey> keys = {
+      {"bias.compare", TuneRole::Bias, "0:0.004:16", ""},
+      {"bias.constant", TuneRole::Bias, "0:200000:16", ""},
+      {"bias.normal", TuneRole::Bias, "0:4:16", ""},
+      {"bias.slope", TuneRole::Bias, "0:4:16", ""},
+      {"filter", TuneRole::Categorical, "", ""},
+      {"filter.size", TuneRole::Categorical, "3:7", "filter=pcf"},
+      {"filter.taps", TuneRole::Categorical, "8:32", "filter=poisson"},
+      {"fit", TuneRole::Categorical, "", ""},
+      {"map.format", TuneRole::Categorical, "d16,d24,d32f", ""},
+      {"map.size", TuneRole::Monotone, "256:4096", ""},
+  };
+  return keys;
+}
+
+const char* defaultTuneKeys() { return "bias.slope,filter,map.size"; }
+
+double parseTuneNumber(const std::string& flag, const std::string& text) {
+  double v = 0;
+  const bool rate = flag == "--max-error";
+  if (!parseNumber(text, v) || v < 0 || (rate && v > 1) || (!rate && v == 0))
+    throw InputError(flag + ": error: got \"" + text + "\"; expected " +
+                     (rate ? "a rate from 0 to 1 (e.g. 0.002: 0.2 % of the compared pixels)"
+                           : "a time in milliseconds > 0 (the cost model's estimate, compare/TUNE.md)"));
+  return v;
+}
+
+std::pair<std::string, double> parseTuneMax(const std::string& text) {
+  const std::string origin = "--max " + text;
+  const size_t eq = text.find('=');
+  if (eq == std::string::npos) throw InputError(formatError(origin, "", "no '=' found; expected metric=rate"));
+  const std::string key = trim(text.substr(0, eq)), value = trim(text.substr(eq + 1));
+  const nlohmann::json known = Metrics().toJson();
+  std::vector<std::string> rates;
+  for (auto it = known.begin(); it != known.end(); ++it)
+    if (it.key().size() > 5 && it.key().substr(it.key().size() - 5) == "_rate" && it.key() != "error_rate")
+      rates.push_back(it.key());
+  if (std::find(rates.begin(), rates.end(), key) == rates.end())
+    throw InputError(formatError(
+        origin, "", "unknown rate \"" + key + "\"; expected one of " + joined(rates) + " (error_rate is --max-error)"));
+  double v = 0;
+  if (!parseNumber(value, v) || v < 0 || v > 1)
+    throw InputError(formatError(origin, "", "got \"" + value + "\"; expected a rate from 0 to 1"));
+  return {key, v};
+}
+
+TunePlan planTune(const TuneSpec& spec) {
+  TunePlan plan;
+  plan.spec = spec;
+  // The target: exactly one of the two.
+  const bool hasError = !std::isnan(spec.maxError), hasBudget = !std::isnan(spec.budgetMs);
+  if (hasError == hasBudget)
+    throw InputError(std::string("--max-error/--budget-ms: error: ") + (hasError ? "both given" : "neither given") +
+                     "; expected one of them (the accuracy target, or the time budget)");
+  if (hasError && (!std::isfinite(spec.maxError) || spec.maxError < 0 || spec.maxError > 1))
+    throw InputError("--max-error: error: got " + numberText(spec.maxError) + "; expected a rate from 0 to 1");
+  if (hasBudget && (!std::isfinite(spec.budgetMs) || spec.budgetMs <= 0))
+    throw InputError("--budget-ms: error: got " + numberText(spec.budgetMs) + "; expected a time in ms > 0");
+  if (hasBudget && !spec.maxRates.empty())
+    throw InputError("--max: error: given with --budget-ms; expected --max with --max-error (rates are targets)");
+  std::set<std::string> maxKeys;
+  for (const auto& [k, v] : spec.maxRates) {
+    if (!maxKeys.insert(k).second) throw InputError("--max " + k + ": error: given twice; expected each rate once");
+    if (!std::isfinite(v) || v < 0 || v > 1)
+      throw InputError("--max " + k + ": error: got " + numberText(v) + "; expected a rate from 0 to 1");
+  }
+
+  // The scenes, the base method and the fixed values: planned like a sweep with nothing swept.
+  SweepSpec sweep;
+  sweep.scenes = spec.scenes;
+  sweep.fixed = spec.fixed;
+  sweep.methodFile = spec.methodFile;
+  sweep.light = spec.light;
+  sweep.spp = spec.spp;
+  std::set<std::string> fixedKeys;
+  for (const auto& f : spec.fixed) fixedKeys.insert(f.key);
+  // Keys.
+  std::vector<std::string> keys = spec.keys;
+  if (keys.empty()) keys = splitList(defaultTuneKeys(), ',');
+  std::set<std::string> tuned;
+  for (const auto& k : keys) {
+    const std::string origin = "--keys " + k;
+    if (k.empty()) throw InputError("--keys: error: an empty key; expected a comma-separated list without gaps");
+    if (!findTunable(k)) {
+      const auto& all = methodKeys();
+      const bool methodKey = std::find(all.begin(), all.end(), k) != all.end();
+      throw InputError(formatError(
+          origin, "",
+          (methodKey ? "\"" + k + "\" cannot be tuned (set it with --fixed)" : "unknown key \"" + k + "\"") +
+              "; expected one of " + tunableList()));
+    }
+    if (!tuned.insert(k).second) throw InputError(formatError(origin, "", "\"" + k + "\" given twice"));
+    if (fixedKeys.count(k))
+      throw InputError(formatError(origin, "", "\"" + k + "\" is both tuned and fixed by --fixed; expected one"));
+  }
+  const SweepPlan fixedPlan = planSweep(sweep);  // scenes, fixed values, method file, light: InputError
+  plan.base = fixedPlan.configs.at(0).method;
+  plan.sweep = fixedPlan;
+
+  // Ranges.
+  std::map<std::string, std::pair<std::string, std::string>> ranges;  // key -> (text, origin)
+  for (const auto& r : spec.ranges) {
+    const std::string origin = "--range " + r;
+    const size_t eq = r.find('=');
+    if (eq == std::string::npos) throw InputError(formatError(origin, "", "no '=' found; expected key=lo:hi"));
+    const std::string key = trim(r.substr(0, eq)), text = trim(r.substr(eq + 1));
+    if (!tuned.count(key))
+      throw InputError(formatError(origin, "",
+                                   "\"" + key + "\" is not a tuned key; expected one of --keys (" +
+                                       joined(std::vector<std::string>(tuned.begin(), tuned.end())) + ")"));
+    if (text.empty()) throw InputError(formatError(origin, "", "empty range; expected lo:hi or v1,v2,..."));
+    if (!ranges.emplace(key, std::make_pair(text, origin)).second)
+      throw InputError(formatError(origin, "", "a second range for \"" + key + "\"; expected one"));
+  }
+  for (const auto& k : tunableKeys()) {
+    if (!tuned.count(k.key)) continue;
+    TuneKey t;
+    t.key = k.key;
+    t.role = k.role;
+    auto found = ranges.find(k.key);
+    const std::string range = found != ranges.end() ? found->second.first : defaultRangeOf(k);
+    t.origin = found != ranges.end() ? found->second.second : "default range " + range;
+    t.values = expandRange(k, plan.base, range, t.origin);
+    const std::string only = k.onlyWith;
+    if (!only.empty()) {
+      t.onlyWithKey = only.substr(0, only.find('='));
+      t.onlyWithValue = only.substr(only.find('=') + 1);
+      // It must be able to matter: its controlling key tuned over that value, or fixed to it.
+      const bool controlTuned = tuned.count(t.onlyWithKey) > 0;
+      const std::string baseValue = canonicalValueText(methodToJson(plan.base).at(t.onlyWithKey));
+      if (!controlTuned && baseValue != t.onlyWithValue)
+        throw InputError(formatError("--keys " + t.key, "",
+                                     "\"" + t.key + "\" matters only with " + only + " but " + t.onlyWithKey + " is " +
+                                         baseValue + "; expected --fixed " + only + " or " + t.onlyWithKey +
+                                         " among --keys"));
+    }
+    plan.keys.push_back(std::move(t));
+  }
+  for (const auto& t : plan.keys)
+    if (!t.onlyWithKey.empty())
+      for (const auto& c : plan.keys)
+        if (c.key == t.onlyWithKey && std::find(c.values.begin(), c.values.end(), t.onlyWithValue) == c.values.end())
+          throw InputError(formatError(c.origin, "",
+                                       "\"" + t.key + "\" is tuned but " + c.key + " never takes " + t.onlyWithValue +
+                                           "; expected " + t.onlyWithValue + " among its values"));
+
+  // Cross-field rules on every categorical combination (the biases and sizes are checked one by
+  // one above); the dense grid's size on the way.
+  std::vector<const TuneKey*> categorical;
+  size_t others = 1;
+  for (const auto& t : plan.keys) {
+    if (t.role == TuneRole::Categorical) categorical.push_back(&t);
+    else others *= t.values.size();
+  }
+  std::vector<size_t> idx(categorical.size(), 0);
+  std::set<std::string> combos;
+  while (true) {
+    Method m = plan.base;
+    std::string text;
+    for (size_t i = 0; i < categorical.size(); ++i)
+      applyMethodSetting(m, categorical[i]->key, categorical[i]->values[idx[i]], categorical[i]->origin);
+    // A key that does not matter here (filter.size without pcf) is held at its first value.
+    for (size_t i = 0; i < categorical.size(); ++i) {
+      const TuneKey& t = *categorical[i];
+      std::string v = t.values[idx[i]];
+      if (!t.onlyWithKey.empty() && canonicalValueText(methodToJson(m).at(t.onlyWithKey)) != t.onlyWithValue)
+        v = t.values[0];
+      text += t.key + "=" + v + ",";
+    }
+    validateMethod(m, "shadowlab tune: configuration " + text);
+    combos.insert(text);
+    bool done = true;
+    for (size_t a = categorical.size(); a-- > 0;) {
+      if (++idx[a] < categorical[a]->values.size()) {
+        done = false;
+        break;
+      }
+      idx[a] = 0;
+    }
+    if (done) break;
+  }
+  plan.gridConfigurations = combos.size() * others;
+  return plan;
+}
+
+}  // namespace shadowlab
