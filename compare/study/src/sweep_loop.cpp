@@ -356,6 +356,13 @@ void writeSweepOutputs(const SweepPlan& plan, const std::vector<const StoredRow*
 
 }  // namespace
 
+std::map<std::string, SweepJournalRow> readSweepJournal(const std::string& path) {
+  std::map<std::string, SweepJournalRow> out;
+  for (auto& [key, s] : readJournal(path, /*repair=*/false))
+    out[key] = SweepJournalRow{std::move(s.row), std::move(s.sceneHash), s.configWallSeconds, std::move(s.device)};
+  return out;
+}
+
 std::string defaultSweepCacheDir(const std::string& outDir) {
   const char* env = std::getenv("SHADOWLAB_CACHE");
   if (env && *env) return env;

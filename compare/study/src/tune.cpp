@@ -41,6 +41,7 @@ class Engine {
   Engine(TunePlan& plan, SweepRunner& runner, const TuneOptions& options, TuneResult& result)
       : plan_(plan), runner_(runner), options_(options), result_(result) {
     sceneJobs_ = plan.sweep.jobs;  // one per scene: its variant and light
+    journal_ = readSweepJournal((fs::path(options.outDir) / "rows.jsonl").string());
     baseConfig_ = plan.sweep.configs.at(0);
     for (size_t k = 0; k < plan.keys.size(); ++k) {
       if (plan.keys[k].role == TuneRole::Monotone) sizeKey_ = long(k);
@@ -165,6 +166,29 @@ class Engine {
       if (!ev.rows.count(s)) missing.push_back(s);
     }
     if (missing.empty()) return;
+    // Rows an earlier run (or a sweep of the same configurations) left in the journal, read once
+    // at the start: runSweep would find them too, but reads the whole journal on every call.
+    const nlohmann::json methodJson = methodToJson(ev.method);
+    for (auto it = missing.begin(); it != missing.end();) {
+      const SweepJob& job = sceneJobs_[*it];
+      ResultRow probe;
+      probe.scene = job.sceneName;
+      probe.config = ev.config;
+      probe.light = job.light;
+      auto found = journal_.find(probe.key());
+      if (found != journal_.end() && found->second.sceneHash == plan_.sweep.variants[job.variantIndex].hash &&
+          found->second.row.method == methodJson && found->second.device == device()) {
+        ev.rows[*it] = found->second.row;
+        ++result_.rowsResumed;
+        it = missing.erase(it);
+      } else {
+        ++it;
+      }
+    }
+    if (missing.empty()) {
+      progressLine(e, scenes, false);
+      return;
+    }
     SweepConfig config = baseConfig_;
     config.config = ev.config;
     config.values = ev.values;
@@ -190,6 +214,11 @@ class Engine {
     result_.rowsResumed += summary.resumed;
     runNow_ += summary.ran;
     if (summary.interrupted) throw Interrupted{};
+    progressLine(e, scenes, summary.ran > 0);
+  }
+
+  void progressLine(size_t e, const std::vector<size_t>& scenes, bool ran) {
+    const TuneEvaluation& ev = result_.evaluations[e];
     if (options_.progress) {
       const Score sc = score(e, scenes);
       double worst = 0;
@@ -203,9 +232,17 @@ class Engine {
       }
       std::fprintf(options_.progress, "tune: %s: worst error_rate %.3g (%s), estimated %.2f ms%s%s\n",
                    ev.config.c_str(), worst, worstScene.c_str(), tuneCost(ev, scenes).first,
-                   sc.feasible ? ", meets the target" : "", summary.ran == 0 ? " (from rows.jsonl)" : "");
+                   sc.feasible ? ", meets the target" : "", ran ? "" : " (from rows.jsonl)");
       std::fflush(options_.progress);
     }
+  }
+
+  const std::string& device() {
+    if (!deviceKnown_) {
+      device_ = runner_.deviceName();
+      deviceKnown_ = true;
+    }
+    return device_;
   }
 
   Score score(size_t e, const std::vector<size_t>& scenes) {
@@ -442,6 +479,9 @@ class Engine {
   std::vector<Point> points_;
   std::set<std::pair<size_t, size_t>> asked_;
   size_t runNow_ = 0;
+  std::map<std::string, SweepJournalRow> journal_;
+  std::string device_;
+  bool deviceKnown_ = false;
 };
 
 // The dense grid of the plan's keys and values through the sweep loop (same journal: the rows the

@@ -14,6 +14,7 @@
 // interruption and grid logic without renderers.
 #include <atomic>
 #include <cstdio>
+#include <map>
 #include <memory>
 #include <string>
 #include <utility>
@@ -225,6 +226,19 @@ struct SweepSummary {
 // than runner.deviceName() is an InputError naming both devices (nothing is run or rewritten). At the end writes
 // results.json, results.csv, figures/ and report.html. Log of starts/finishes: outDir/sweep.log.
 SweepSummary runSweep(const SweepPlan& plan, SweepRunner& runner, const SweepOptions& options);
+
+// One line of a sweep journal (DIR/rows.jsonl), as runSweep stores it.
+struct SweepJournalRow {
+  ResultRow row;
+  std::string sceneHash;  // the scene's content hash when the row was run
+  double configWallSeconds = 0;
+  std::string device;  // SweepRunner::deviceName() that measured its timings
+};
+// The rows of a journal by ResultRow::key() (a later line for the same key wins); none when the
+// file does not exist. A torn last line is ignored (not truncated); a damaged earlier line is an
+// InputError naming the file and line. runSweep resumes a row only for the same scene hash,
+// resolved method and device; a caller that reuses rows must check the same.
+std::map<std::string, SweepJournalRow> readSweepJournal(const std::string& path);
 
 // Gathers every shard journal under options.outDir/shards into options.outDir/results.json,
 // results.csv and the report, exactly as an unsharded runSweep of `plan` would. InputError (nothing
