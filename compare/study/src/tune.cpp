@@ -78,7 +78,9 @@ class Engine {
     if (chosen) {
       c.evaluation = long(evaluation(*chosen));
     } else {
-      // The best found: the lowest objective among configurations run on every scene of the scope.
+      // The best found: the lowest objective among configurations run on every scene of the scope
+      // (looking at rows other searches ran does not count them as this search's).
+      const auto asked = asked_;
       double bestObj = std::numeric_limits<double>::infinity();
       for (size_t e = 0; e < result_.evaluations.size(); ++e) {
         if (!hasRows(e, scenes)) continue;
@@ -88,6 +90,7 @@ class Engine {
           c.evaluation = long(e);
         }
       }
+      asked_ = asked;
     }
     if (c.evaluation >= 0) {
       const TuneEvaluation& e = result_.evaluations[size_t(c.evaluation)];

@@ -224,6 +224,7 @@ struct Chart {
   std::optional<double> markX, hLine;
   std::optional<std::pair<double, double>> markPoint;
   bool logY = true;
+  bool logX = false;
 };
 
 std::string svgChart(const Chart& c) {
@@ -231,17 +232,18 @@ std::string svgChart(const Chart& c) {
   constexpr double kFloor = 1e-5;  // rates of 0 drawn here on the log axis
   double x0 = std::numeric_limits<double>::infinity(), x1 = -x0, y0 = x0, y1 = -x0;
   auto ty = [&](double y) { return c.logY ? std::log10(std::max(y, kFloor)) : y; };
+  auto tx = [&](double x) { return c.logX ? std::log10(std::max(x, 1e-6)) : x; };
   for (const auto& s : c.series)
     for (const auto& [x, y] : s.points) {
       if (!std::isfinite(x) || !std::isfinite(y)) continue;
-      x0 = std::min(x0, x), x1 = std::max(x1, x), y0 = std::min(y0, ty(y)), y1 = std::max(y1, ty(y));
+      x0 = std::min(x0, tx(x)), x1 = std::max(x1, tx(x)), y0 = std::min(y0, ty(y)), y1 = std::max(y1, ty(y));
     }
   if (c.hLine) y0 = std::min(y0, ty(*c.hLine)), y1 = std::max(y1, ty(*c.hLine));
   if (!std::isfinite(x0)) return "<p>(no points)</p>\n";
   if (x1 - x0 < 1e-12) x0 -= 0.5, x1 += 0.5;
   if (c.logY) y0 = std::floor(y0), y1 = std::ceil(y1);
   if (y1 - y0 < 1e-12) y0 -= 0.5, y1 += 0.5;
-  auto px = [&](double x) { return L + (x - x0) / (x1 - x0) * (W - L - R); };
+  auto px = [&](double x) { return L + (tx(x) - x0) / (x1 - x0) * (W - L - R); };
   auto py = [&](double y) { return H - B - (ty(y) - y0) / (y1 - y0) * (H - T - B); };
   std::ostringstream o;
   o << "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"" << W << "\" height=\"" << H << "\" viewBox=\"0 0 " << W
@@ -250,7 +252,7 @@ std::string svgChart(const Chart& c) {
   o << "<rect x=\"" << L << "\" y=\"" << T << "\" width=\"" << W - L - R << "\" height=\"" << H - T - B
     << "\" fill=\"none\" stroke=\"#999\"/>\n";
   for (int i = 0; i <= 4; ++i) {
-    const double x = x0 + (x1 - x0) * i / 4;
+    const double t = x0 + (x1 - x0) * i / 4, x = c.logX ? std::pow(10.0, t) : t;
     o << "<text x=\"" << px(x) << "\" y=\"" << H - B + 15 << "\" text-anchor=\"middle\">" << fmt("%.4g", x)
       << "</text>\n";
   }
@@ -380,7 +382,8 @@ std::string tuneHtml(const TunePlan& plan, const TuneResult& r,
   {
     Chart c;
     c.title = "cost against accuracy: every configuration evaluated on every scene";
-    c.xLabel = "estimated ms (cost model, largest over the scenes)";
+    c.xLabel = "estimated ms (cost model, largest over the scenes; log)";
+    c.logX = true;
     c.yLabel = "worst error_rate (log)";
     if (target) c.hLine = plan.spec.maxError;
     Series ok{"meets the target", "#2a2", {}, false, false}, bad{"misses it", "#999", {}, false, false};
@@ -551,8 +554,9 @@ void writeTuneOutputs(TunePlan& plan, SweepRunner& runner, const TuneOptions& op
     nlohmann::json scenes = nlohmann::json::object();
     for (const auto& [s, row] : e.rows) {
       nlohmann::json sj = {{"cost", e.cost[s].toJson()}};
-      for (const char* m : {"error_rate", "acne_rate", "leak_rate", "aliasing_rate", "coverage_rate", "other_rate"})
-        if (row.metrics.contains(m)) sj[m] = row.metrics[m];
+      if (row.metrics.contains("error_rate")) sj["error_rate"] = row.metrics["error_rate"];
+      for (const auto& c : kPixelClasses)  // each error class's rate (classes.h)
+        if (c.error && c.rateMetric && row.metrics.contains(c.rateMetric)) sj[c.rateMetric] = row.metrics[c.rateMetric];
       for (const char* t : {"shadow_gpu_ms", "camera_gpu_ms"})
         if (row.timings.contains(t)) sj[t] = row.timings[t];
       scenes[plan.sweep.sceneNames[s]] = sj;

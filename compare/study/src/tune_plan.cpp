@@ -7,7 +7,7 @@
 #include <map>
 #include <set>
 
-#include "shadowlab/compare/compare.h"
+#include "shadowlab/compare/classes.h"
 #include "shadowlab/compare/tune.h"
 #include "shadowlab/scenes/error.h"
 
@@ -179,11 +179,9 @@ std::pair<std::string, double> parseTuneMax(const std::string& text) {
   const size_t eq = text.find('=');
   if (eq == std::string::npos) throw InputError(formatError(origin, "", "no '=' found; expected metric=rate"));
   const std::string key = trim(text.substr(0, eq)), value = trim(text.substr(eq + 1));
-  const nlohmann::json known = Metrics().toJson();
-  std::vector<std::string> rates;
-  for (auto it = known.begin(); it != known.end(); ++it)
-    if (it.key().size() > 5 && it.key().substr(it.key().size() - 5) == "_rate" && it.key() != "error_rate")
-      rates.push_back(it.key());
+  std::vector<std::string> rates;  // the error classes' rates (classes.h)
+  for (const auto& c : kPixelClasses)
+    if (c.error && c.rateMetric) rates.push_back(c.rateMetric);
   if (std::find(rates.begin(), rates.end(), key) == rates.end())
     throw InputError(formatError(
         origin, "", "unknown rate \"" + key + "\"; expected one of " + joined(rates) + " (error_rate is --max-error)"));
