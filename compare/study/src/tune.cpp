@@ -235,7 +235,8 @@ class Engine {
       }
       std::fprintf(options_.progress, "tune: %s: worst error_rate %.3g (%s), estimated %.2f ms%s%s\n",
                    ev.config.c_str(), worst, worstScene.c_str(), tuneCost(ev, scenes).first,
-                   sc.feasible ? ", meets the target" : "", ran ? "" : " (from rows.jsonl)");
+                   sc.feasible ? (std::isnan(plan_.spec.maxError) ? ", within the budget" : ", meets the target") : "",
+                   ran ? "" : " (from rows.jsonl)");
       std::fflush(options_.progress);
     }
   }
