@@ -38,8 +38,10 @@ constexpr float kInf = std::numeric_limits<float>::infinity();
 // among the hit point and its triangle's vertices: 2^-17, i.e. 128 times float's half-ulp (2^-24).
 // Embree's robust triangle test works on vertex coordinates relative to the ray origin, so its
 // rounding (and the rounding of the barycentric hit point) scale with those magnitudes; 128x
-// keeps the origin on the right side of every coplanar neighbour triangle. The own triangle is
-// excluded by identity in the filter, so the offset does not have to beat it.
+// keeps the origin on the light's side of the own triangle and of every coplanar neighbour: the
+// own plane lies behind the origin, at t = -offset / cos(angle to the normal), which Embree's
+// rounding (a few ulps of those magnitudes) cannot bring to t > 0. No filter rule by identity is
+// needed, so opaque geometry is traced without a filter callback.
 constexpr float kOriginOffsetScale = 1.0f / 131072.0f;
 
 struct LaneHit {
@@ -178,8 +180,6 @@ class Tracer {
       ray.mask[lane] = ~0u;
       ray.id[lane] = unsigned(lane);
       ray.flags[lane] = 0;
-      context.ignoreGeom[lane] = active[lane] ? hits[lane].geom : RTC_INVALID_GEOMETRY_ID;
-      context.ignorePrim[lane] = active[lane] ? hits[lane].prim : RTC_INVALID_GEOMETRY_ID;
       if (active[lane]) ++count;
     }
     if (count == 0) return;
@@ -318,7 +318,7 @@ class Tracer {
   uint64_t shadowRays = 0;
 
  private:
-  TraceContext shadowContext_{RayKind::Shadow};  // lanes' ignore ids are rewritten per packet
+  TraceContext shadowContext_{RayKind::Shadow};
   const Scene& scene_;
   const EmbreeScene& embree_;
 };
