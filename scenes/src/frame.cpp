@@ -110,8 +110,13 @@ void writeFrameExr(const Frame& frame, const std::string& path) {
   image.height = frame.height;
   image.channels = frame.names;
   image.pixels.resize(pixels * channels);
-  for (size_t c = 0; c < channels; ++c)
-    for (size_t i = 0; i < pixels; ++i) image.pixels[i * channels + c] = frame.data[c][i];
+  // Pixel by pixel, all channels at once: the interleaved buffer is written once, front to back
+  // (channel by channel, each of its cache lines was written `channels` times, strided).
+  std::vector<const float*> planes(channels);
+  for (size_t c = 0; c < channels; ++c) planes[c] = frame.data[c].data();
+  float* out = image.pixels.data();
+  for (size_t i = 0; i < pixels; ++i)
+    for (size_t c = 0; c < channels; ++c) *out++ = planes[c][i];
   image.text[kMetaAttribute] = frame.meta.dump();
   image.text[kOrderAttribute] = nlohmann::json(frame.names).dump();
   writeImageAtomic(path, [&](const std::string& tmp) { return image_io::writeExr(tmp, image); });

@@ -10,9 +10,10 @@ std::string writeExr(const std::string& path, const FloatImage& image) {
   spec.channelnames = image.channels;
   spec.alpha_channel = -1;  // no channel is alpha or depth: nothing gets associated or reordered
   spec.z_channel = -1;
-  // zip at level 1: still lossless, and at 1080p (16 channels) it writes in 0.34 s against 0.48 s for
-  // the default level with about the same size (9 MB); "none" is faster still but 10x larger (91 MB).
-  spec.attribute("compression", "zip:1");
+  // ZIPS (one scanline per block) at zlib level 1: lossless. A 1080p reference (11 float channels)
+  // takes 0.31 CPU s against 0.38 s for "zip:1" (16 scanlines per block) and 0.5 s for the default
+  // level, the same size (9.2 MB); "rle" 0.2 to 0.27 s but 35 MB, "none" 0.07 s but 91 MB.
+  spec.attribute("compression", "zips:1");
   for (const auto& [name, value] : image.text) spec.attribute(name, value);
   auto out = OIIO::ImageOutput::create(path);
   if (!out) return OIIO::geterror();
