@@ -109,14 +109,8 @@ void writeFrameExr(const Frame& frame, const std::string& path) {
   image.width = frame.width;
   image.height = frame.height;
   image.channels = frame.names;
-  image.pixels.resize(pixels * channels);
-  // Pixel by pixel, all channels at once: the interleaved buffer is written once, front to back
-  // (channel by channel, each of its cache lines was written `channels` times, strided).
-  std::vector<const float*> planes(channels);
-  for (size_t c = 0; c < channels; ++c) planes[c] = frame.data[c].data();
-  float* out = image.pixels.data();
-  for (size_t i = 0; i < pixels; ++i)
-    for (size_t c = 0; c < channels; ++c) *out++ = planes[c][i];
+  // The planes go to the writer as they are: no interleaved copy of the whole frame.
+  for (size_t c = 0; c < channels; ++c) image.planes.push_back(frame.data[c].data());
   image.text[kMetaAttribute] = frame.meta.dump();
   image.text[kOrderAttribute] = nlohmann::json(frame.names).dump();
   writeImageAtomic(path, [&](const std::string& tmp) { return image_io::writeExr(tmp, image); });

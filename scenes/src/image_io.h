@@ -26,8 +26,11 @@ namespace shadowlab::image_io {
 struct FloatImage {
   int width = 0;
   int height = 0;
-  std::vector<std::string> channels;        // names, in the order of `pixels`
-  std::vector<float> pixels;                // interleaved: (y * width + x) * channels.size() + c, top row first
+  std::vector<std::string> channels;  // names, in the order of `pixels`
+  std::vector<float> pixels;          // interleaved: (y * width + x) * channels.size() + c, top row first
+  // writeExr only: when not empty, channel c's values are planes[c][y * width + x] (one plane per
+  // channel, e.g. a Frame's) and `pixels` is not used: no full interleaved copy is made.
+  std::vector<const float*> planes;
   std::map<std::string, std::string> text;  // string attributes (EXR header); empty for other formats
 };
 

@@ -238,6 +238,11 @@ std::string writeExr(const std::string& path, const FloatImage& image) {
     char* base = reinterpret_cast<char*>(const_cast<float*>(image.pixels.data()));
     for (size_t c = 0; c < nc; ++c) {
       header.channels().insert(image.channels[c], Imf::Channel(Imf::FLOAT));
+      if (!image.planes.empty()) {  // planar input: each slice reads its plane directly
+        char* plane = reinterpret_cast<char*>(const_cast<float*>(image.planes[c]));
+        fb.insert(image.channels[c], Imf::Slice(Imf::FLOAT, plane, sizeof(float), size_t(image.width) * sizeof(float)));
+        continue;
+      }
       fb.insert(image.channels[c], Imf::Slice(Imf::FLOAT, base + c * sizeof(float), nc * sizeof(float),
                                               size_t(image.width) * nc * sizeof(float)));
     }

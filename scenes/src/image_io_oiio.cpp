@@ -1,6 +1,8 @@
 // image_io.h through OpenImageIO (SHADOWLAB_IMAGE_IO=oiio, the default).
 #include <OpenImageIO/imageio.h>
 
+#include <algorithm>
+
 #include "image_io.h"
 
 namespace shadowlab::image_io {
@@ -18,7 +20,24 @@ std::string writeExr(const std::string& path, const FloatImage& image) {
   auto out = OIIO::ImageOutput::create(path);
   if (!out) return OIIO::geterror();
   if (!out->open(path, spec)) return out->geterror();
-  if (!out->write_image(OIIO::TypeDesc::FLOAT, image.pixels.data())) {
+  bool ok = true;
+  if (image.planes.empty()) {
+    ok = out->write_image(OIIO::TypeDesc::FLOAT, image.pixels.data());
+  } else {
+    // Planar input: interleaved a band of scanlines at a time (OpenEXR compresses a band's blocks
+    // in parallel), so no copy of the whole image is made.
+    const size_t channels = image.channels.size(), width = size_t(image.width);
+    constexpr int kBand = 64;
+    std::vector<float> band(size_t(kBand) * width * channels);
+    for (int y0 = 0; y0 < image.height && ok; y0 += kBand) {
+      const int y1 = std::min(image.height, y0 + kBand);
+      float* dst = band.data();
+      for (size_t i = size_t(y0) * width; i < size_t(y1) * width; ++i)
+        for (size_t c = 0; c < channels; ++c) *dst++ = image.planes[c][i];
+      ok = out->write_scanlines(y0, y1, 0, OIIO::TypeDesc::FLOAT, band.data());
+    }
+  }
+  if (!ok) {
     std::string e = out->geterror();
     out->close();
     return e;
