@@ -102,6 +102,8 @@ TEST(ImageIo, BothImplementationsReadWhatEitherWroteIdentically) {
   const fs::path mine = freshDir("mine"), theirs = freshDir("theirs"), scratch = freshDir("scratch");
   // Ours writes the probe images...
   ASSERT_EQ(image_io::writeExr((mine / "probe.exr").string(), shadowlab::testing::probeExr()), "");
+  std::vector<std::vector<float>> planes;
+  ASSERT_EQ(image_io::writeExr((mine / "probe_planar.exr").string(), shadowlab::testing::probeExrPlanar(planes)), "");
   for (int channels : {3, 4}) {
     const auto px =
         shadowlab::testing::probePng(shadowlab::testing::kProbePngWidth, shadowlab::testing::kProbePngHeight, channels);
@@ -116,13 +118,18 @@ TEST(ImageIo, BothImplementationsReadWhatEitherWroteIdentically) {
 
   for (const fs::path& dir : {mine, theirs}) {
     const std::string from = dir == mine ? std::string(image_io::backendName()) + " wrote" : "the other wrote";
-    const nlohmann::json a = ours("exr", dir / "probe.exr"), b = probe("exr", dir / "probe.exr", scratch);
-    expectSameByName(shadowlab::testing::probeExr(), a, std::string(image_io::backendName()) + " read, " + from);
-    expectSameByName(shadowlab::testing::probeExr(), b, b.value("backend", "?") + " read, " + from);
-    nlohmann::json bSame = b;
-    bSame.erase("backend");
-    // Same channel order too (OpenImageIO's), not only the same values by name.
-    EXPECT_EQ(a, bSame) << from << "\n" << a.at("channels").dump() << "\n" << bSame.at("channels").dump();
+    // probe_planar.exr: the same image written from planes (FloatImage::planes), as frames are.
+    for (const char* file : {"probe.exr", "probe_planar.exr"}) {
+      const nlohmann::json a = ours("exr", dir / file), b = probe("exr", dir / file, scratch);
+      const std::string what = std::string(file) + ", ";
+      expectSameByName(shadowlab::testing::probeExr(), a,
+                       what + std::string(image_io::backendName()) + " read, " + from);
+      expectSameByName(shadowlab::testing::probeExr(), b, what + b.value("backend", "?") + " read, " + from);
+      nlohmann::json bSame = b;
+      bSame.erase("backend");
+      // Same channel order too (OpenImageIO's), not only the same values by name.
+      EXPECT_EQ(a, bSame) << what << from << "\n" << a.at("channels").dump() << "\n" << bSame.at("channels").dump();
+    }
     for (int channels : {3, 4}) {
       const fs::path png = dir / (channels == 3 ? "probe_rgb.png" : "probe_rgba.png");
       const nlohmann::json ta = ours("texture", png), tb = probe("texture", png, scratch);

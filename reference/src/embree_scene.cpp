@@ -20,31 +20,21 @@ const char* errorName(RTCError code) {
   return "RTC_ERROR_?";
 }
 
-// Embree calls this for every candidate hit on every geometry (intersect and occluded, packets
-// and single rays alike), before it accepts the hit. Setting valid[i] = 0 rejects the hit and
-// traversal goes on, exactly as if the triangle were not there for that ray.
+// Embree calls this for every candidate hit on a geometry that has it (intersect and occluded,
+// packets and single rays alike), before it accepts the hit. Setting valid[i] = 0 rejects the hit
+// and traversal goes on, exactly as if the triangle were not there for that ray. Shadow rays need
+// no rule against their own triangle: their origin is offset off the surface (reference.cpp).
 void filterHits(const RTCFilterFunctionNArguments* args) {
   const auto* geometry = static_cast<const GeometryData*>(args->geometryUserPtr);
   const auto* context = reinterpret_cast<const TraceContext*>(args->context);
   const unsigned n = args->N;
   for (unsigned i = 0; i < n; ++i) {
     if (args->valid[i] != -1) continue;
-    const unsigned prim = RTCHitN_primID(args->hit, n, i);
-    if (context->kind == RayKind::Shadow) {
-      if (!geometry->castsShadow) {
-        args->valid[i] = 0;
-        continue;
-      }
-      // A planar triangle cannot occlude a point on itself: the hit can only be the ray's own
-      // start point found again through rounding (self-intersection). Rejecting it by identity
-      // needs no epsilon, so it cannot hide a real occluder.
-      const unsigned lane = RTCRayN_id(args->ray, n, i);
-      if (lane < unsigned(kLanes) && context->ignoreGeom[lane] == geometry->geomId &&
-          context->ignorePrim[lane] == prim) {
-        args->valid[i] = 0;
-        continue;
-      }
+    if (context->kind == RayKind::Shadow && !geometry->castsShadow) {
+      args->valid[i] = 0;
+      continue;
     }
+    const unsigned prim = RTCHitN_primID(args->hit, n, i);
     const uint8_t flags = geometry->flags[prim];
     if (flags == 0) continue;
     if (flags & kOneSided) {
@@ -80,10 +70,6 @@ TraceContext::TraceContext(RayKind k) : kind(k) {
   // Camera packets are 4x2 pixel blocks and shadow packets start from neighbouring points toward
   // one light: coherent in both cases.
   rtc.flags = RTC_INTERSECT_CONTEXT_FLAG_COHERENT;
-  for (int lane = 0; lane < kLanes; ++lane) {
-    ignoreGeom[lane] = RTC_INVALID_GEOMETRY_ID;
-    ignorePrim[lane] = RTC_INVALID_GEOMETRY_ID;
-  }
 }
 
 void EmbreeScene::errorCallback(void* self, RTCError code, const char* message) {
@@ -175,6 +161,7 @@ EmbreeScene::EmbreeScene(const Scene& scene) {
         flags |= kAlpha;
       }
       data.flags[t] = flags;
+      if (flags) data.anyFlags = true;
     }
 
     RTCGeometry geometry = rtcNewGeometry(device_, RTC_GEOMETRY_TYPE_TRIANGLE);
@@ -189,10 +176,14 @@ EmbreeScene::EmbreeScene(const Scene& scene) {
     }
     if (triangleCount) std::memcpy(indices, object.triangles.data(), triangleCount * 3 * sizeof(unsigned));
     rtcSetGeometryUserData(geometry, &data);
-    // Every geometry gets the filter: the same-primitive rule applies to all of them, and Embree
-    // only calls it on candidate hits, which are few per ray.
-    rtcSetGeometryIntersectFilterFunction(geometry, &filterHits);
-    rtcSetGeometryOccludedFilterFunction(geometry, &filterHits);
+    // The filter only where a rule applies, per geometry: one-sided or alpha-tested triangles
+    // (camera and shadow rays), or an object that casts no shadow (shadow rays: the occluded
+    // queries and the closest-hit pass for occluder_dist, which uses rtcIntersect8). Opaque,
+    // two-sided, shadow-casting geometry has none, so Embree accepts its hits without a callback.
+    if (data.anyFlags || !data.castsShadow) {
+      rtcSetGeometryIntersectFilterFunction(geometry, &filterHits);
+      rtcSetGeometryOccludedFilterFunction(geometry, &filterHits);
+    }
     rtcCommitGeometry(geometry);
     rtcAttachGeometryByID(scene_, geometry, unsigned(index));
     rtcReleaseGeometry(geometry);

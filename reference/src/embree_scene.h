@@ -1,7 +1,8 @@
 #pragma once
 // Private to reference/: the Embree device and scene for one shadowlab::Scene, and the filter
 // function that gives Embree the harness's rules (alpha cutoff, one-sided materials, objects that
-// cast no shadow, and a shadow ray never hitting the primitive it starts on).
+// cast no shadow). Only geometries that need one of those rules get the filter: an opaque,
+// two-sided, shadow-casting object is traced at Embree's bare speed.
 #include <cstdint>
 #include <mutex>
 #include <string>
@@ -30,18 +31,16 @@ struct GeometryData {
   std::vector<glm::vec3> normals;  // per triangle, unit, cross(p1 - p0, p2 - p0) (CCW front)
   std::vector<uint8_t> flags;      // per triangle, TriangleFlags
   bool castsShadow = true;
+  bool anyFlags = false;  // some triangle has TriangleFlags: camera and shadow rays need the filter
 };
 
 enum class RayKind : uint8_t { Camera, Shadow };
 
 // Extended intersect context: Embree passes this pointer to the filter (the RTCIntersectContext
-// must be the first member). Rays carry their lane index (0..7) in ray.id so the filter can find
-// the primitive that lane started on.
+// must be the first member), which needs to know whether a camera or a shadow ray hit.
 struct TraceContext {
   RTCIntersectContext rtc;
   RayKind kind = RayKind::Camera;
-  unsigned ignoreGeom[kLanes];
-  unsigned ignorePrim[kLanes];
 
   explicit TraceContext(RayKind k);
 };

@@ -7,14 +7,17 @@
 #include <mutex>
 #include <chrono>
 #include <cmath>
+#include <cstring>
 #include <limits>
 #include <set>
 
+#include <sys/resource.h>
 #include <tbb/blocked_range.h>
 #include <tbb/global_control.h>
 #include <tbb/info.h>
 #include <tbb/parallel_for.h>
 #include <tbb/task_arena.h>
+#include <xmmintrin.h>
 
 #include "embree_scene.h"
 #include "shadowlab/scenes/error.h"
@@ -38,8 +41,10 @@ constexpr float kInf = std::numeric_limits<float>::infinity();
 // among the hit point and its triangle's vertices: 2^-17, i.e. 128 times float's half-ulp (2^-24).
 // Embree's robust triangle test works on vertex coordinates relative to the ray origin, so its
 // rounding (and the rounding of the barycentric hit point) scale with those magnitudes; 128x
-// keeps the origin on the right side of every coplanar neighbour triangle. The own triangle is
-// excluded by identity in the filter, so the offset does not have to beat it.
+// keeps the origin on the light's side of the own triangle and of every coplanar neighbour: the
+// own plane lies behind the origin, at t = -offset / cos(angle to the normal), which Embree's
+// rounding (a few ulps of those magnitudes) cannot bring to t > 0. No filter rule by identity is
+// needed, so opaque geometry is traced without a filter callback.
 constexpr float kOriginOffsetScale = 1.0f / 131072.0f;
 
 struct LaneHit {
@@ -93,11 +98,9 @@ std::vector<glm::vec2> samplePattern(int spp) {
   return pattern;
 }
 
-float maxAbs(const glm::vec3& p) { return std::max(std::fabs(p.x), std::max(std::fabs(p.y), std::fabs(p.z))); }
-
 class Tracer {
  public:
-  Tracer(const Scene& scene, const EmbreeScene& embree) : scene_(scene), embree_(embree) {}
+  Tracer(const Scene& scene, const EmbreeScene& embree) : scene_(scene), embree_(embree), rays_(scene.camera) {}
 
   // Camera rays through (px + dx, py + dy) for the active lanes.
   void tracePrimary(const int* px, const int* py, const bool* active, float dx, float dy, LaneHit* hits) {
@@ -107,7 +110,7 @@ class Tracer {
     for (int lane = 0; lane < kLanes; ++lane) {
       hits[lane] = LaneHit{};
       valid[lane] = active[lane] ? -1 : 0;
-      const glm::vec3 dir = active[lane] ? camera.rayDirection(px[lane] + dx, py[lane] + dy) : glm::vec3(0, 0, 1);
+      const glm::vec3 dir = active[lane] ? rays_.direction(px[lane] + dx, py[lane] + dy) : glm::vec3(0, 0, 1);
       rayHit.ray.org_x[lane] = camera.position.x;
       rayHit.ray.org_y[lane] = camera.position.y;
       rayHit.ray.org_z[lane] = camera.position.z;
@@ -146,8 +149,7 @@ class Tracer {
       }
       const glm::vec3 dir(rayHit.ray.dir_x[lane], rayHit.ray.dir_y[lane], rayHit.ray.dir_z[lane]);
       h.normal = glm::dot(normal, dir) > 0.0f ? -normal : normal;
-      const float magnitude = std::max(std::max(maxAbs(h.position), maxAbs(p0)), std::max(maxAbs(p1), maxAbs(p2)));
-      h.offset = kOriginOffsetScale * magnitude;
+      h.offset = shadowOriginOffset(h.position, p0, p1, p2);
       h.origin = h.position + h.normal * h.offset;
     }
   }
@@ -178,8 +180,6 @@ class Tracer {
       ray.mask[lane] = ~0u;
       ray.id[lane] = unsigned(lane);
       ray.flags[lane] = 0;
-      context.ignoreGeom[lane] = active[lane] ? hits[lane].geom : RTC_INVALID_GEOMETRY_ID;
-      context.ignorePrim[lane] = active[lane] ? hits[lane].prim : RTC_INVALID_GEOMETRY_ID;
       if (active[lane]) ++count;
     }
     if (count == 0) return;
@@ -318,11 +318,14 @@ class Tracer {
   uint64_t shadowRays = 0;
 
  private:
-  TraceContext shadowContext_{RayKind::Shadow};  // lanes' ignore ids are rewritten per packet
+  TraceContext shadowContext_{RayKind::Shadow};
   const Scene& scene_;
   const EmbreeScene& embree_;
+  const CameraRays rays_;  // Camera::rayDirection, bit for bit
 };
 
+// The output channels, one pointer each, in the frame's channel order (renderReference adds them in
+// this order): base[c] is channel c's first value.
 struct Planes {
   float* hit;
   float* objectId;
@@ -331,9 +334,63 @@ struct Planes {
   float* n[3];
   std::vector<float*> vis, occluderDist;
   std::vector<float*> coverage, u, v, rgb[3];
+
+  Planes(float* const* base, size_t lightCount, size_t projectorCount)
+      : vis(lightCount), occluderDist(lightCount), coverage(projectorCount), u(projectorCount), v(projectorCount) {
+    size_t index = 0;
+    hit = base[index++];
+    objectId = base[index++];
+    primId = base[index++];
+    for (int a = 0; a < 3; ++a) p[a] = base[index++];
+    for (int a = 0; a < 3; ++a) n[a] = base[index++];
+    for (size_t l = 0; l < lightCount; ++l) {
+      vis[l] = base[index++];
+      occluderDist[l] = base[index++];
+    }
+    for (size_t q = 0; q < projectorCount; ++q) {
+      coverage[q] = base[index++];
+      u[q] = base[index++];
+      v[q] = base[index++];
+      for (int c = 0; c < 3; ++c) rgb[c].push_back(base[index++]);
+    }
+  }
 };
 
+constexpr int kTilePixels = kTileSize * kTileSize;
+
+// A tile's values are written to a small buffer first (kTileSize x kTileSize floats per channel,
+// in cache), then copied to the frame's planes row by row. A full row of a 16-pixel tile is 64
+// bytes, a cache line: where the plane row is 16-byte aligned it is copied with streaming stores,
+// which write whole lines without first reading them from memory (half the memory traffic of
+// writing each pixel into the planes directly, which made those writes most of the reference's
+// cost beyond Embree's). The caller fences (_mm_sfence) before the frame is read.
+void copyTileRows(const float* tile, float* plane, int width, int x0, int y0, int x1, int y1) {
+  const int count = x1 - x0;
+  for (int y = y0; y < y1; ++y) {
+    const float* src = tile + (y - y0) * kTileSize;
+    float* dst = plane + size_t(y) * size_t(width) + size_t(x0);
+    if (count % 4 == 0 && reinterpret_cast<uintptr_t>(dst) % 16 == 0) {
+      for (int x = 0; x < count; x += 4) _mm_stream_ps(dst + x, _mm_loadu_ps(src + x));
+    } else {
+      std::memcpy(dst, src, size_t(count) * sizeof(float));
+    }
+  }
+}
+
 }  // namespace
+
+// Process CPU seconds so far (user + system, all threads).
+static double processCpuSeconds() {
+  rusage usage{};
+  getrusage(RUSAGE_SELF, &usage);
+  return double(usage.ru_utime.tv_sec + usage.ru_stime.tv_sec) +
+         1e-6 * double(usage.ru_utime.tv_usec + usage.ru_stime.tv_usec);
+}
+
+float shadowOriginOffset(const glm::vec3& position, const glm::vec3& p0, const glm::vec3& p1, const glm::vec3& p2) {
+  auto maxAbs = [](const glm::vec3& p) { return std::max(std::fabs(p.x), std::max(std::fabs(p.y), std::fabs(p.z))); };
+  return kOriginOffsetScale * std::max(std::max(maxAbs(position), maxAbs(p0)), std::max(maxAbs(p1), maxAbs(p2)));
+}
 
 double referenceFrameBytes(const Scene& scene) {
   const double channels = 9.0 + 2.0 * double(scene.lights.size()) + 6.0 * double(scene.projectors.size());
@@ -371,17 +428,16 @@ Frame renderReference(const Scene& scene, const ReferenceOptions& options, Refer
   Frame frame;
   frame.width = width;
   frame.height = height;
-  Planes planes{};
-  planes.hit = frame.add("hit").data();
-  planes.objectId = frame.add("object_id").data();
-  planes.primId = frame.add("prim_id").data();
+  frame.add("hit");
+  frame.add("object_id");
+  frame.add("prim_id");
   const char* axes[3] = {"x", "y", "z"};
-  for (int a = 0; a < 3; ++a) planes.p[a] = frame.add(std::string("P.") + axes[a]).data();
-  for (int a = 0; a < 3; ++a) planes.n[a] = frame.add(std::string("N.") + axes[a]).data();
+  for (int a = 0; a < 3; ++a) frame.add(std::string("P.") + axes[a]);
+  for (int a = 0; a < 3; ++a) frame.add(std::string("N.") + axes[a]);
   std::vector<PreparedLight> lights;
   for (const Light& light : scene.lights) {
-    planes.vis.push_back(frame.add("light." + light.name + ".vis").data());
-    planes.occluderDist.push_back(frame.add("light." + light.name + ".occluder_dist", -1.0f).data());
+    frame.add("light." + light.name + ".vis");
+    frame.add("light." + light.name + ".occluder_dist", -1.0f);
     PreparedLight prepared;
     prepared.light = &light;
     prepared.toLight = glm::normalize(-light.direction);
@@ -391,33 +447,17 @@ Frame renderReference(const Scene& scene, const ReferenceOptions& options, Refer
   std::vector<PreparedProjector> projectors;
   for (const Projector& projector : scene.projectors) {
     const std::string prefix = "proj." + projector.name + ".";
-    planes.coverage.push_back(frame.add(prefix + "coverage").data());
-    planes.u.push_back(frame.add(prefix + "u").data());
-    planes.v.push_back(frame.add(prefix + "v").data());
+    frame.add(prefix + "coverage");
+    frame.add(prefix + "u");
+    frame.add(prefix + "v");
     const char* colors[3] = {"R", "G", "B"};
-    for (int c = 0; c < 3; ++c) planes.rgb[c].push_back(frame.add(prefix + colors[c]).data());
+    for (int c = 0; c < 3; ++c) frame.add(prefix + colors[c]);
     projectors.push_back({&projector, glm::dmat4(projector.texFromWorld())});
   }
-  // frame.add may reallocate `data` while planes are added: take the pointers again now.
-  {
-    size_t index = 0;
-    auto next = [&]() { return frame.data[index++].data(); };
-    planes.hit = next();
-    planes.objectId = next();
-    planes.primId = next();
-    for (int a = 0; a < 3; ++a) planes.p[a] = next();
-    for (int a = 0; a < 3; ++a) planes.n[a] = next();
-    for (size_t l = 0; l < lights.size(); ++l) {
-      planes.vis[l] = next();
-      planes.occluderDist[l] = next();
-    }
-    for (size_t p = 0; p < projectors.size(); ++p) {
-      planes.coverage[p] = next();
-      planes.u[p] = next();
-      planes.v[p] = next();
-      for (int c = 0; c < 3; ++c) planes.rgb[c][p] = next();
-    }
-  }
+  // The channels in Planes' order (frame.add may move planes while channels are added: taken now).
+  const size_t channelCount = frame.data.size();
+  std::vector<float*> frameBase(channelCount);
+  for (size_t c = 0; c < channelCount; ++c) frameBase[c] = frame.data[c].data();
 
   nlohmann::json lightNames = nlohmann::json::array(), projectorNames = nlohmann::json::array();
   for (const Light& light : scene.lights) lightNames.push_back(light.name);
@@ -447,6 +487,7 @@ Frame renderReference(const Scene& scene, const ReferenceOptions& options, Refer
   std::unique_ptr<EmbreeScene> embree;
   arena.execute([&] { embree = std::make_unique<EmbreeScene>(scene); });
   const auto traceStart = Clock::now();
+  const double traceCpuStart = processCpuSeconds();
 
   // Progress: tiles finish in any order; whichever thread crosses the next percent reports it
   // (under a mutex, so the callback runs on one thread at a time and the fractions only grow).
@@ -469,6 +510,10 @@ Frame renderReference(const Scene& scene, const ReferenceOptions& options, Refer
   arena.execute([&] {
     tbb::parallel_for(tbb::blocked_range<int>(0, tileCount), [&](const tbb::blocked_range<int>& range) {
       Tracer tracer(scene, *embree);
+      std::vector<float> tileBuffer(channelCount * kTilePixels);
+      std::vector<float*> tileBase(channelCount);
+      for (size_t c = 0; c < channelCount; ++c) tileBase[c] = tileBuffer.data() + c * kTilePixels;
+      const Planes planes(tileBase.data(), lightCount, projectorCount);
       LaneHit center[kLanes], sample[kLanes];
       std::vector<float> centerVis(lightCount * kLanes), centerDist(lightCount * kLanes);
       std::vector<ProjectorSample> centerProj(projectorCount * kLanes);
@@ -527,7 +572,7 @@ Frame renderReference(const Scene& scene, const ReferenceOptions& options, Refer
 
             for (int lane = 0; lane < kLanes; ++lane) {
               if (!active[lane]) continue;
-              const size_t pixel = size_t(py[lane]) * width + px[lane];
+              const size_t pixel = size_t(py[lane] - y0) * kTileSize + size_t(px[lane] - x0);
               const LaneHit& h = center[lane];
               planes.hit[pixel] = h.hit ? 1.0f : 0.0f;
               planes.objectId[pixel] = h.hit ? float(embree->geometry(h.geom).object->id) : 0.0f;
@@ -555,20 +600,24 @@ Frame renderReference(const Scene& scene, const ReferenceOptions& options, Refer
             }
           }
         }
+        for (size_t c = 0; c < channelCount; ++c) copyTileRows(tileBase[c], frameBase[c], width, x0, y0, x1, y1);
         embree->check("tracing a tile");
         tileFinished();
       }
+      _mm_sfence();  // the streaming stores are visible before this thread's part is done
       primaryRays += tracer.primaryRays;
       shadowRays += tracer.shadowRays;
     });
   });
   const auto traceEnd = Clock::now();
+  const double traceCpuEnd = processCpuSeconds();
 
   if (stats) {
     stats->primaryRays = primaryRays.load();
     stats->shadowRays = shadowRays.load();
     stats->buildSeconds = std::chrono::duration<double>(traceStart - buildStart).count();
     stats->traceSeconds = std::chrono::duration<double>(traceEnd - traceStart).count();
+    stats->traceCpuSeconds = traceCpuEnd - traceCpuStart;
   }
   return frame;
 }

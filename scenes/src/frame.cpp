@@ -109,9 +109,8 @@ void writeFrameExr(const Frame& frame, const std::string& path) {
   image.width = frame.width;
   image.height = frame.height;
   image.channels = frame.names;
-  image.pixels.resize(pixels * channels);
-  for (size_t c = 0; c < channels; ++c)
-    for (size_t i = 0; i < pixels; ++i) image.pixels[i * channels + c] = frame.data[c][i];
+  // The planes go to the writer as they are: no interleaved copy of the whole frame.
+  for (size_t c = 0; c < channels; ++c) image.planes.push_back(frame.data[c].data());
   image.text[kMetaAttribute] = frame.meta.dump();
   image.text[kOrderAttribute] = nlohmann::json(frame.names).dump();
   writeImageAtomic(path, [&](const std::string& tmp) { return image_io::writeExr(tmp, image); });

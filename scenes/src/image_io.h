@@ -7,9 +7,10 @@
 //                         (scripts/device-bundle.sh). Reads .exr and .png only.
 // Both give the same results (tests/scenes_image_io_test.cpp writes with one and reads with the
 // other, both ways):
-//   * EXR: channels are 32-bit float, ZIP compression at level 1, string attributes by name. On
-//     reading, channels come in OpenImageIO's order (R, G, B, A, Z ... first, then the file's
-//     order, which EXR sorts by name): callers go by name, never by position.
+//   * EXR: channels are 32-bit float, ZIPS compression (one scanline per block) at zlib level 1,
+//     string attributes by name. On reading (any compression, any pixel type), channels come in
+//     OpenImageIO's order (R, G, B, A, Z ... first, then the file's order, which EXR sorts by
+//     name): callers go by name, never by position.
 //   * PNG writes: 8 bits per channel, 3 (RGB) or 4 (RGBA) channels, alpha stored as given
 //     (un-associated, as PNG defines it).
 //   * Textures: read as floats, 8/16-bit values times 1/255 or 1/65535, no colour transform; a PNG
@@ -25,14 +26,17 @@ namespace shadowlab::image_io {
 struct FloatImage {
   int width = 0;
   int height = 0;
-  std::vector<std::string> channels;        // names, in the order of `pixels`
-  std::vector<float> pixels;                // interleaved: (y * width + x) * channels.size() + c, top row first
+  std::vector<std::string> channels;  // names, in the order of `pixels`
+  std::vector<float> pixels;          // interleaved: (y * width + x) * channels.size() + c, top row first
+  // writeExr only: when not empty, channel c's values are planes[c][y * width + x] (one plane per
+  // channel, e.g. a Frame's) and `pixels` is not used: no full interleaved copy is made.
+  std::vector<const float*> planes;
   std::map<std::string, std::string> text;  // string attributes (EXR header); empty for other formats
 };
 
 // Every function returns "" on success, else what went wrong (without the path: callers add it).
 
-// Writes an EXR of float channels (pixels as given, channel names as given), ZIP level 1, with
+// Writes an EXR of float channels (pixels as given, channel names as given), ZIPS level 1, with
 // `image.text` as string attributes.
 std::string writeExr(const std::string& path, const FloatImage& image);
 // Reads an image file's first part with every channel as float (any EXR pixel type).

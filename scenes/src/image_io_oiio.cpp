@@ -1,6 +1,8 @@
 // image_io.h through OpenImageIO (SHADOWLAB_IMAGE_IO=oiio, the default).
 #include <OpenImageIO/imageio.h>
 
+#include <algorithm>
+
 #include "image_io.h"
 
 namespace shadowlab::image_io {
@@ -10,14 +12,32 @@ std::string writeExr(const std::string& path, const FloatImage& image) {
   spec.channelnames = image.channels;
   spec.alpha_channel = -1;  // no channel is alpha or depth: nothing gets associated or reordered
   spec.z_channel = -1;
-  // zip at level 1: still lossless, and at 1080p (16 channels) it writes in 0.34 s against 0.48 s for
-  // the default level with about the same size (9 MB); "none" is faster still but 10x larger (91 MB).
-  spec.attribute("compression", "zip:1");
+  // ZIPS (one scanline per block) at zlib level 1: lossless. A 1080p reference (11 float channels)
+  // takes 0.31 CPU s against 0.38 s for "zip:1" (16 scanlines per block) and 0.5 s for the default
+  // level, the same size (9.2 MB); "rle" 0.2 to 0.27 s but 35 MB, "none" 0.07 s but 91 MB.
+  spec.attribute("compression", "zips:1");
   for (const auto& [name, value] : image.text) spec.attribute(name, value);
   auto out = OIIO::ImageOutput::create(path);
   if (!out) return OIIO::geterror();
   if (!out->open(path, spec)) return out->geterror();
-  if (!out->write_image(OIIO::TypeDesc::FLOAT, image.pixels.data())) {
+  bool ok = true;
+  if (image.planes.empty()) {
+    ok = out->write_image(OIIO::TypeDesc::FLOAT, image.pixels.data());
+  } else {
+    // Planar input: interleaved a band of scanlines at a time (OpenEXR compresses a band's blocks
+    // in parallel), so no copy of the whole image is made.
+    const size_t channels = image.channels.size(), width = size_t(image.width);
+    constexpr int kBand = 64;
+    std::vector<float> band(size_t(kBand) * width * channels);
+    for (int y0 = 0; y0 < image.height && ok; y0 += kBand) {
+      const int y1 = std::min(image.height, y0 + kBand);
+      float* dst = band.data();
+      for (size_t i = size_t(y0) * width; i < size_t(y1) * width; ++i)
+        for (size_t c = 0; c < channels; ++c) *dst++ = image.planes[c][i];
+      ok = out->write_scanlines(y0, y1, 0, OIIO::TypeDesc::FLOAT, band.data());
+    }
+  }
+  if (!ok) {
     std::string e = out->geterror();
     out->close();
     return e;

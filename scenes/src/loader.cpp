@@ -633,7 +633,8 @@ void readObjects(const Reader& r, const Node& root, const fs::path& dir, Scene& 
   auto checkTriangles = [&](const Node& o, uint64_t total) {
     if (total > kMaxSceneTriangles)
       r.fail(o.ptr, "the scene reaches " + std::to_string(total) + " triangles with this object; expected at most " +
-                        std::to_string(kMaxSceneTriangles) + " (triangle ids travel through float channels, exact below 2^24)");
+                        std::to_string(kMaxSceneTriangles) +
+                        " (triangle ids travel through float channels, exact below 2^24)");
   };
   for (size_t i = 0; i < os.j->size(); ++i) {
     Node o = r.at(os, i);

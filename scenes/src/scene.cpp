@@ -88,16 +88,22 @@ glm::mat4 Camera::clipFromView() const {
 // expressed in world space with glm::lookAt's basis (right s, up u, forward f), then normalized.
 // Double inside: the reference traces these rays and the rasterizer uses the float matrices;
 // both must land on the same pixel center.
-glm::vec3 Camera::rayDirection(float x, float y) const {
-  glm::dvec3 forward = glm::normalize(glm::dvec3(lookAt) - glm::dvec3(position));
-  glm::dvec3 right = glm::normalize(glm::cross(forward, glm::dvec3(up)));
-  glm::dvec3 trueUp = glm::cross(right, forward);
-  double t = std::tan(double(glm::radians(vfovDeg)) * 0.5);
-  double aspect = double(float(width) / float(height));
-  double ndcX = 2.0 * x / width - 1.0;
-  double ndcY = 2.0 * y / height - 1.0;
-  return glm::vec3(glm::normalize(forward + (ndcX * aspect * t) * right - (ndcY * t) * trueUp));
+CameraRays::CameraRays(const Camera& camera)
+    : forward_(glm::normalize(glm::dvec3(camera.lookAt) - glm::dvec3(camera.position))),
+      right_(glm::normalize(glm::cross(forward_, glm::dvec3(camera.up)))),
+      trueUp_(glm::cross(right_, forward_)),
+      tanHalfFov_(std::tan(double(glm::radians(camera.vfovDeg)) * 0.5)),
+      aspect_(double(float(camera.width) / float(camera.height))),
+      width_(camera.width),
+      height_(camera.height) {}
+
+glm::vec3 CameraRays::direction(float x, float y) const {
+  const double ndcX = 2.0 * x / width_ - 1.0;
+  const double ndcY = 2.0 * y / height_ - 1.0;
+  return glm::vec3(glm::normalize(forward_ + (ndcX * aspect_ * tanHalfFov_) * right_ - (ndcY * tanHalfFov_) * trueUp_));
 }
+
+glm::vec3 Camera::rayDirection(float x, float y) const { return CameraRays(*this).direction(x, y); }
 
 std::string Camera::hash() const {
   float floats[10] = {position.x, position.y, position.z, lookAt.x, lookAt.y, lookAt.z, up.x, up.y, up.z, vfovDeg};

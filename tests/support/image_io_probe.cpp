@@ -1,7 +1,8 @@
 // image_io_probe: the image_io.h implementation this build does NOT use, as a small executable
 // (tests/CMakeLists.txt compiles it with the other image_io_*.cpp), so that
 // tests/scenes_image_io_test.cpp can check both implementations against each other.
-//   image_io_probe write DIR        writes DIR/probe.exr, DIR/probe_rgb.png, DIR/probe_rgba.png
+//   image_io_probe write DIR        writes DIR/probe.exr, DIR/probe_planar.exr (the same image from
+//                                   planes), DIR/probe_rgb.png, DIR/probe_rgba.png
 //   image_io_probe exr FILE         prints what readExr gives (JSON, see image_io_probe.h)
 //   image_io_probe texture FILE     prints what readTexture gives
 #include <cstdio>
@@ -20,6 +21,8 @@ int main(int argc, char** argv) {
   const std::string verb = argv[1], path = argv[2];
   if (verb == "write") {
     std::string err = image_io::writeExr(path + "/probe.exr", testing::probeExr());
+    std::vector<std::vector<float>> planes;
+    if (err.empty()) err = image_io::writeExr(path + "/probe_planar.exr", testing::probeExrPlanar(planes));
     for (int channels : {3, 4}) {
       if (!err.empty()) break;
       const auto px = testing::probePng(testing::kProbePngWidth, testing::kProbePngHeight, channels);

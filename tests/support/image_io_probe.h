@@ -32,6 +32,19 @@ inline image_io::FloatImage probeExr() {
   return im;
 }
 
+// The same image handed to writeExr as planes (FloatImage::planes, what writeFrameExr does):
+// `storage` keeps the planes alive; the file must read back exactly as probeExr() wrote.
+inline image_io::FloatImage probeExrPlanar(std::vector<std::vector<float>>& storage) {
+  image_io::FloatImage im = probeExr();
+  const size_t channels = im.channels.size(), pixels = size_t(im.width) * im.height;
+  storage.assign(channels, std::vector<float>(pixels));
+  for (size_t i = 0; i < pixels; ++i)
+    for (size_t c = 0; c < channels; ++c) storage[c][i] = im.pixels[i * channels + c];
+  im.pixels.clear();
+  for (const auto& plane : storage) im.planes.push_back(plane.data());
+  return im;
+}
+
 // 8-bit un-associated pixels, alpha from 0 to 255 so that associating it changes most values.
 inline std::vector<uint8_t> probePng(int width, int height, int channels) {
   std::vector<uint8_t> px;

@@ -25,6 +25,9 @@ struct ReferenceStats {
   uint64_t primaryRays = 0;
   uint64_t shadowRays = 0;    // occlusion rays to lights and projectors
   double traceSeconds = 0.0;  // trace_seconds: wall time of the trace (scene build excluded)
+  // Process CPU time (user + system, all threads) during the trace: on a machine other work shares,
+  // much steadier than the wall time (bench/reference_rays_bench compares it with bare loops).
+  double traceCpuSeconds = 0.0;
   double buildSeconds = 0.0;  // build_seconds: Embree device + BVH
   double mraysPerS() const { return traceSeconds > 0 ? (primaryRays + shadowRays) / traceSeconds * 1e-6 : 0.0; }
 };
@@ -32,6 +35,11 @@ struct ReferenceStats {
 // Traces every light and projector of the scene. Channels: see scenes/frame.h.
 // Throws DriverError when Embree reports an error.
 Frame renderReference(const Scene& scene, const ReferenceOptions& options, ReferenceStats* stats = nullptr);
+
+// The shadow-ray origin rule (reference/README.md, "Shadow-ray origins"): a shadow ray from the hit
+// point `position` on the triangle (p0, p1, p2) starts at position + N * shadowOriginOffset(...),
+// N the camera-facing unit normal. 2^-17 times the largest coordinate magnitude among the four.
+float shadowOriginOffset(const glm::vec3& position, const glm::vec3& p0, const glm::vec3& p1, const glm::vec3& p2);
 
 // A hash of everything the reference depends on (scene hash, camera, spp): the cache key.
 std::string referenceHash(const Scene& scene, const ReferenceOptions& options);

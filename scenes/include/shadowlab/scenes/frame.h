@@ -64,7 +64,8 @@ struct Frame {
   size_t pixelCount() const { return size_t(width) * size_t(height); }
 };
 
-// EXR (zip compression), written atomically. Throws InputError naming the path on failure.
+// EXR (float32 channels, ZIPS compression at zlib level 1; any EXR reads back), written atomically. Throws InputError
+// naming the path on failure.
 void writeFrameExr(const Frame& frame, const std::string& path);
 Frame readFrameExr(const std::string& path);
 
