@@ -633,7 +633,8 @@ void readObjects(const Reader& r, const Node& root, const fs::path& dir, Scene& 
   auto checkTriangles = [&](const Node& o, uint64_t total) {
     if (total > kMaxSceneTriangles)
       r.fail(o.ptr, "the scene reaches " + std::to_string(total) + " triangles with this object; expected at most " +
-                        std::to_string(kMaxSceneTriangles) + " (triangle ids travel through float channels, exact below 2^24)");
+                        std::to_string(kMaxSceneTriangles) +
+                        " (triangle ids travel through float channels, exact below 2^24)");
   };
   for (size_t i = 0; i < os.j->size(); ++i) {
     Node o = r.at(os, i);
@@ -1106,8 +1107,9 @@ std::string sharedAssetsDir() {
 }
 
 std::vector<std::string> bundledSceneNames() {
-  static const std::vector<std::string> kOrder = {"sphere_on_plane", "grazing",   "contact", "thin_wall",
-                                                  "alpha_fence",     "projector", "bunny",   "long_view"};
+  static const std::vector<std::string> kOrder = {"sphere_on_plane", "grazing",     "contact",
+                                                  "thin_wall",       "alpha_fence", "projector",
+                                                  "bunny",           "long_view",   "stacked_occluders"};
   std::vector<std::string> found;
   std::error_code ec;
   for (const auto& e : fs::directory_iterator(bundledScenesDir(), ec))
