@@ -265,3 +265,27 @@ TEST_F(FilterableMaps, MaeCarriesFractionalVisibilityAgainstBinaryAndFractionalT
     }
   }
 }
+
+// Each filterable map on every bundled scene (its first light: directional, spot or a projector
+// scene's), at a small camera and map: validation-clean (the fixture checks) and every output finite.
+TEST_F(FilterableMaps, EveryBundledSceneRendersValidationCleanAndFinite) {
+  REQUIRE_DEVICE();
+  for (const std::string& name : bundledSceneNames()) {
+    Scene s = loadScene(resolveScenePath(name));
+    s.camera.width = 96;
+    s.camera.height = 54;
+    for (Filter filter : {Filter::Vsm, Filter::Evsm2, Filter::Evsm4, Filter::Msm}) {
+      Method m;
+      m.mapSize = 256;
+      m.filter = filter;
+      const Frame f = R->render(s, m);
+      const std::string what = name + " / " + toString(filter);
+      EXPECT_EQ(R->validationMessages(), 0) << what;
+      EXPECT_EQ(f.has("light." + (s.lights.empty() ? std::string("?") : s.lights[0].name) + ".moment_bound"),
+                !s.lights.empty())
+          << what;
+      for (size_t c = 0; c < f.names.size(); ++c)
+        for (float v : f.data[c]) ASSERT_TRUE(std::isfinite(v)) << what << ": " << f.names[c];
+    }
+  }
+}
