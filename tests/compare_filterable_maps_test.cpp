@@ -289,3 +289,58 @@ TEST_F(FilterableMaps, EveryBundledSceneRendersValidationCleanAndFinite) {
     }
   }
 }
+
+// The shader's Hamburger reconstruction against the CPU copy above, where the footprint holds one
+// depth z (variance ~0, away from every edge): the stored moments are (z, z^2, z^3, z^4) with z the
+// mean, and the bound at the receiver's t must be the CPU's, in the lit (t <= z) and in the
+// shadowed (t > z) interiors alike (the moment bias keeps both away from exactly 1 and 0).
+TEST_F(FilterableMaps, MsmBoundIsTheHamburgerReconstructionWhereTheFootprintIsUniform) {
+  REQUIRE_DEVICE();
+  // The sun straight down: the ground's and the slab's depths are constant; the slab moved over
+  // the visible ground, so its shadow's interior is in view.
+  Scene s =
+      loadScene(resolveScenePath("stacked_occluders"), {{"/lights/0/direction", nlohmann::json::array({0, -1, 0})},
+                                                        {"/objects/2/transform/translate/0", 2.5},
+                                                        {"/objects/2/transform/translate/1", 1.5}});
+  s.camera.width = 480;
+  s.camera.height = 270;
+  const std::string p = "light." + s.lights[0].name + ".";
+  Method m = filtered(Filter::Msm);
+  m.msmMomentBias = 0.02f;  // a bias large enough that the bounds lie well inside (0, 1)
+  const Frame f = R->render(s, m);
+  const auto &recv = f.get(p + "receiver_depth"), &mean = f.get(p + "moment_mean"),
+             &variance = f.get(p + "moment_variance"), &bound = f.get(p + "moment_bound"), &inMap = f.get(p + "in_map"),
+             &vis = f.get(p + "vis"), &hit = f.get("hit");
+  size_t lit = 0, shadowed = 0;
+  double worst = 0, sumLit = 0, sumShadowed = 0;
+  for (size_t i = 0; i < recv.size(); ++i) {
+    if (hit[i] < 0.5f || inMap[i] < 0.5f || vis[i] == 0.0f || std::fabs(variance[i]) > 1e-7f) continue;
+    const double z = mean[i], t = double(recv[i]) - double(m.biasCompare);
+    const double moments[4] = {z, z * z, z * z * z, z * z * z * z};
+    const double expected = hamburger4(moments, t, double(m.msmMomentBias));
+    worst = std::max(worst, std::fabs(bound[i] - expected));
+    ASSERT_NEAR(bound[i], expected, 0.02) << "pixel " << i << ", z " << z << ", t " << t;
+    (t > z + 1e-3 ? shadowed : lit) += 1;
+    (t > z + 1e-3 ? sumShadowed : sumLit) += expected;
+  }
+  std::printf(
+      "  uniform footprints: %zu lit (mean bound %.4f), %zu shadowed (mean bound %.4f), largest |GPU - CPU| %.5f\n",
+      lit, sumLit / double(std::max<size_t>(lit, 1)), shadowed, sumShadowed / double(std::max<size_t>(shadowed, 1)),
+      worst);
+  EXPECT_GT(lit, 1000u);
+  EXPECT_GT(shadowed, 100u);
+  EXPECT_GT(sumShadowed / double(shadowed), 0.3) << "so large a moment bias lights the shadow's interior";
+  // With the default bias (3e-5) the same interior is dark: the bias is the knob that trades
+  // robustness for bleeding.
+  const Frame d = R->render(s, filtered(Filter::Msm));
+  const auto& boundDefault = d.get(p + "moment_bound");
+  double sum = 0;
+  size_t n = 0;
+  for (size_t i = 0; i < recv.size(); ++i)
+    if (hit[i] >= 0.5f && inMap[i] >= 0.5f && vis[i] != 0.0f && std::fabs(variance[i]) <= 1e-7f &&
+        double(recv[i]) - double(m.biasCompare) > double(mean[i]) + 1e-3)
+      sum += boundDefault[i], ++n;
+  ASSERT_EQ(n, shadowed);
+  std::printf("  the same interior with msm.moment_bias 3e-5: mean bound %.5f\n", sum / double(n));
+  EXPECT_LT(sum / double(n), 0.01);
+}
