@@ -23,22 +23,27 @@ std::string gib(double bytes) {
 double pixels(const Scene& scene) { return double(scene.camera.width) * double(scene.camera.height); }
 
 // The raster frame's channels (scenes/frame.h): hit, object and primitive ids, 11 per rendered
-// light, 5 per projector.
-double rasterFrameBytes(const Scene& scene) {
-  return (3.0 + 11.0 + 5.0 * double(scene.projectors.size())) * 4.0 * pixels(scene);
+// light (14 with a filterable map's moment channels), 5 per projector.
+double rasterFrameBytes(const Scene& scene, const Method& method) {
+  const double light = isMomentFilter(method.filter) ? 14.0 : 11.0;
+  return (3.0 + light + 5.0 * double(scene.projectors.size())) * 4.0 * pixels(scene);
 }
 
 // The device's images: the camera's visibility buffer (id + depth, 8 bytes a pixel) and the
-// resolve pass's two RGBA32F targets (32), and the map's layers (depth + id, 8 bytes a texel):
-// one per cascade, six for a point light, one otherwise, plus one per projector.
+// resolve pass's three RGBA32F targets (48), and the map's layers (depth + id, 8 bytes a texel):
+// one per cascade, six for a point light, one otherwise, plus one per projector; a filterable
+// map adds two moments images per light layer (2 or 4 floats a texel each).
 void addDeviceImages(MemoryEstimate& e, const Scene& scene, const Method& method) {
-  e.add(40.0 * pixels(scene), "camera targets");
-  int layers = method.fit == Fit::Cascades ? method.cascadeCount : 1;
+  e.add(56.0 * pixels(scene), "camera targets");
+  int lightLayers = method.fit == Fit::Cascades ? method.cascadeCount : 1;
   for (const Light& light : scene.lights)
-    if (light.type == LightType::Point) layers = std::max(layers, 6);
-  layers += int(scene.projectors.size());
+    if (light.type == LightType::Point) lightLayers = std::max(lightLayers, 6);
+  const int layers = lightLayers + int(scene.projectors.size());
   e.add(8.0 * double(method.mapSize) * double(method.mapSize) * layers,
         "map " + std::to_string(method.mapSize) + "^2 x " + std::to_string(layers) + " layer(s)");
+  if (isMomentFilter(method.filter))
+    e.add(2.0 * 4.0 * momentCount(method.filter) * double(method.mapSize) * double(method.mapSize) * lightLayers,
+          "moments " + std::to_string(method.mapSize) + "^2 x " + std::to_string(lightLayers) + " layer(s) x 2");
 }
 
 double physicalMemoryBytes() {
@@ -68,7 +73,7 @@ MemoryEstimate referenceJobMemory(const Scene& scene) {
 MemoryEstimate rasterJobMemory(const Scene& scene, const Method& method) {
   MemoryEstimate e;
   e.add(kProgramBytes, "program");
-  e.add(2.0 * rasterFrameBytes(scene), "raster frame x 2 (the EXR writer's interleaved copy)");
+  e.add(2.0 * rasterFrameBytes(scene, method), "raster frame x 2 (the EXR writer's interleaved copy)");
   addDeviceImages(e, scene, method);
   return e;
 }
@@ -77,7 +82,7 @@ MemoryEstimate compareJobMemory(const Scene& scene, const Method& method) {
   MemoryEstimate e;
   e.add(kProgramBytes, "program");
   e.add(referenceFrameBytes(scene), "reference frame");
-  e.add(rasterFrameBytes(scene), "raster frame");
+  e.add(rasterFrameBytes(scene, method), "raster frame");
   addDeviceImages(e, scene, method);
   // classes and reference-lit flags (2 bytes), errors.png (3), the triptych (9), their PNG
   // encoders' rows and the picture the triptych is drawn from (~16)

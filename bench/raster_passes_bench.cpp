@@ -59,5 +59,10 @@ SHADOWLAB_PASSES(Filter::Hw2x2, hw2x2)
 SHADOWLAB_PASSES(Filter::Bilinear4, bilinear4)
 SHADOWLAB_PASSES(Filter::Pcf, pcf5)
 SHADOWLAB_PASSES(Filter::Poisson, poisson16)
+// The filterable maps: their moments pass (blur 2) is part of the shadow time.
+SHADOWLAB_PASSES(Filter::Vsm, vsm)
+SHADOWLAB_PASSES(Filter::Evsm2, evsm2)
+SHADOWLAB_PASSES(Filter::Evsm4, evsm4)
+SHADOWLAB_PASSES(Filter::Msm, msm)
 
 BENCHMARK_MAIN();

@@ -208,7 +208,7 @@ TEST(RasterResolveParams, SpotAndNoLight) {
 
 // The kinds tables drive the enums, the keys and the shader codes: each row round-trips.
 TEST(RasterResolveParams, KindTablesAgreeWithTheShaderCodes) {
-  ASSERT_EQ(filterKinds().size(), 5u);
+  ASSERT_EQ(filterKinds().size(), 9u);
   for (const KindInfo<Filter>& k : filterKinds()) {
     EXPECT_EQ(toString(k.kind), k.key);
     Method m;
@@ -218,6 +218,14 @@ TEST(RasterResolveParams, KindTablesAgreeWithTheShaderCodes) {
   }
   EXPECT_EQ(int(Filter::Pcf), raster::abi::kFilterPcf);
   EXPECT_EQ(int(Filter::Hw2x2), raster::abi::kFilterHw2x2);
+  EXPECT_EQ(int(Filter::Vsm), raster::abi::kFilterVsm);
+  EXPECT_EQ(int(Filter::Msm), raster::abi::kFilterMsm);
+  // The filterable maps, and how many moments each stores (RG32F: 2, RGBA32F: 4).
+  for (const KindInfo<Filter>& k : filterKinds())
+    EXPECT_EQ(momentCount(k.kind), k.kind == Filter::Vsm || k.kind == Filter::Evsm2   ? 2
+                                   : k.kind == Filter::Evsm4 || k.kind == Filter::Msm ? 4
+                                                                                      : 0)
+        << k.key;
   for (const KindInfo<Fit>& k : fitKinds()) EXPECT_EQ(toString(k.kind), k.key);
   EXPECT_EQ(kindKeys(lightTypeKinds()), "directional, spot, point");
   for (const KindInfo<LightType>& k : lightTypeKinds()) EXPECT_NE(int(k.kind), raster::abi::kLightNone);

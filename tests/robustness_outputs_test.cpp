@@ -139,6 +139,13 @@ TEST(JobLimits, MaxMemoryRefusesJobsThatCannotFitBeforeAnyWork) {
       "raster grazing" + kSmall + " --set map.size=16384 --max-memory 1 -o '" + (dir / "out").string() + "'", dir);
   EXPECT_EQ(map.code, 2) << map.err;
   EXPECT_NE(map.err.find("map 16384^2 x 1 layer(s) 2.00 GiB"), std::string::npos) << map.err;
+  // a filterable map's moments: two RGBA32F images for msm, 8192^2 x 16 bytes x 2 = 2 GiB
+  CliRun moments =
+      runShadowlab("raster grazing" + kSmall + " --set map.size=8192 --set filter=msm --max-memory 1 -o '" +
+                       (dir / "out").string() + "'",
+                   dir);
+  EXPECT_EQ(moments.code, 2) << moments.err;
+  EXPECT_NE(moments.err.find("moments 8192^2 x 1 layer(s) x 2 2.00 GiB"), std::string::npos) << moments.err;
 
   CliRun small = runShadowlab("reference grazing" + kSmall + " --max-memory 1 -o '" + (dir / "ok").string() + "'", dir);
   EXPECT_EQ(small.code, 0) << small.err;

@@ -110,7 +110,9 @@ TEST(ScenesCli, BundledScenesCheckAndList) {
   std::string expected;
   for (const auto& n : shadowlab::bundledSceneNames()) expected += n + "\n";
   EXPECT_EQ(names.out, expected);
-  EXPECT_EQ(names.out, "sphere_on_plane\ngrazing\ncontact\nthin_wall\nalpha_fence\nprojector\nbunny\nlong_view\n");
+  EXPECT_EQ(names.out,
+            "sphere_on_plane\ngrazing\ncontact\nthin_wall\nalpha_fence\nprojector\nbunny\nlong_view\n"
+            "stacked_occluders\n");
 
   RunResult list = run("scenes");
   EXPECT_EQ(list.exitCode, 0);

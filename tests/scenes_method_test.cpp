@@ -70,6 +70,12 @@ TEST(ScenesMethod, KeysInDocumentationOrder) {
                                                     "filter.size",
                                                     "filter.taps",
                                                     "filter.radius",
+                                                    "filter.blur",
+                                                    "vsm.min_variance",
+                                                    "vsm.bleed_reduction",
+                                                    "evsm.exponent_pos",
+                                                    "evsm.exponent_neg",
+                                                    "msm.moment_bias",
                                                     "projector.reverse_guard"}));
 }
 
@@ -148,7 +154,8 @@ TEST(ScenesMethod, TextErrorsAreExact) {
             "--set: map.size: error: got \"1024.5\"; expected an integer 16..16384 (16384: the largest 2D image every "
             "Vulkan device must support, lavapipe's limit)");
   EXPECT_EQ(setError("filter", "pcff"),
-            "--set: filter: error: got \"pcff\"; expected one of none, hw2x2, bilinear4, pcf, poisson");
+            "--set: filter: error: got \"pcff\"; expected one of none, hw2x2, bilinear4, pcf, poisson, vsm, evsm2, "
+            "evsm4, msm");
   EXPECT_EQ(setError("map.format", "d8"), "--set: map.format: error: got \"d8\"; expected one of d16, d24, d32f");
   EXPECT_EQ(setError("bias.receiver_plane", "yes"),
             "--set: bias.receiver_plane: error: got \"yes\"; expected true, false, 1 or 0");

@@ -35,6 +35,8 @@ layout(constant_id = kSpecAffine) const bool kAffine = false;
 layout(set = 0, binding = kBindingMapDepth) uniform sampler2DArray mapDepth;         // NEAREST, raw depth
 layout(set = 0, binding = kBindingMapShadow) uniform sampler2DArrayShadow mapShadow;  // LINEAR, compare LESS_OR_EQUAL
 layout(set = 0, binding = kBindingMapIds) uniform usampler2DArray mapIds;
+// Filterable maps: the blurred moments of each light layer (moments_rows/cols.frag), LINEAR.
+layout(set = 0, binding = kBindingMoments) uniform sampler2DArray momentsMap;
 layout(set = 0, binding = kBindingCameraIds) uniform usampler2D cameraIds;
 
 // Per triangle (at its global index + 1, as in the id attachments; texel 0 a placeholder), its
@@ -50,6 +52,12 @@ layout(std430, set = 0, binding = kBindingOutPlanes) writeonly buffer OutPlanes 
 // The rasterizer splits these into the frame's channels (rasterizer.cpp, readback).
 layout(location = 0) out vec4 outA;  // vis, receiver_depth, map_depth, m
 layout(location = 1) out vec4 outB;  // bias_depth, bias_world, occluder (id), 2 * cascade + in_map
+// Filterable maps only (the pipeline has this third attachment for them alone): the moments'
+// evidence at the lookup: mean depth, variance, the bound before the bleed cut.
+layout(location = 2) out vec4 outC;
+
+const bool kMomentFilter =
+    kFilter == kFilterVsm || kFilter == kFilterEvsm2 || kFilter == kFilterEvsm4 || kFilter == kFilterMsm;
 
 // The pixel's visible surface: the camera ray through the pixel center meets the visible
 // triangle's plane at p.
@@ -129,8 +137,86 @@ float lit(Lookup L, float stored, ivec2 texel) { return stored >= refAt(L, texel
 // The texel under the lookup, clamped to the map.
 ivec2 centerTexel(Lookup L) { return clamp(ivec2(floor(L.st)), ivec2(0), ivec2(int(L.layer.size) - 1)); }
 
+// ---- Filterable maps (raster/METHODS.md "Filterable maps") ----
+// What a moments lookup found: the visibility (the bound after the bleed cut) and its evidence.
+struct MomentLookup {
+  float vis;
+  float mean;      // mean depth of the footprint (normalized map depth; EVSM: ln(E[e^(c+ z')]) / c+ mapped back)
+  float variance;  // the variance the bound used (vsm, msm: depth^2; evsm: of the positive warp)
+  float bound;     // Chebyshev's (vsm, evsm) or the Hamburger 4-moment (msm) upper bound of the lit fraction
+};
+
+// One-sided Chebyshev (Cantelli): P(z >= t) <= variance / (variance + (t - mean)^2) for t > mean.
+float chebyshevBound(float mean, float meanSq, float t, float minVariance, out float variance) {
+  variance = max(meanSq - mean * mean, minVariance);
+  float d = t - mean;
+  return t <= mean ? 1.0 : variance / (variance + d * d);
+}
+
+// Peters & Klein 2015 (Moment Shadow Mapping, I3D), Algorithm 2: the Hamburger 4-moment
+// reconstruction's bound of the lit fraction at depth t from moments b = (z, z^2, z^3, z^4) pulled
+// towards (0.5, 0.5, 0.5, 0.5) by the moment bias (the paper's alpha).
+float hamburger4(vec4 moments, float t, float momentBias) {
+  vec4 b = mix(moments, vec4(0.5), momentBias);
+  float z0 = t;
+  // Cholesky factorization of the Hankel matrix of b, only its non-trivial products.
+  float L32D22 = fma(-b.x, b.y, b.z);
+  float D22 = fma(-b.x, b.x, b.y);
+  float squaredDepthVariance = fma(-b.y, b.y, b.w);
+  float D33D22 = dot(vec2(squaredDepthVariance, -L32D22), vec2(D22, L32D22));
+  float InvD22 = 1.0 / D22;
+  float L32 = L32D22 * InvD22;
+  // The scaled inverse image of (1, z0, z0^2): forward substitution, scaling, back substitution.
+  vec3 c = vec3(1.0, z0, z0 * z0);
+  c.y -= b.x;
+  c.z -= b.y + L32 * c.y;
+  c.y *= InvD22;
+  c.z *= D22 / D33D22;
+  c.y -= L32 * c.z;
+  c.x -= dot(c.yz, b.xy);
+  // The roots z1 <= z2 of c.x + c.y z + c.z z^2: the other two support points.
+  float p = c.y / c.z, q = c.x / c.z;
+  float r = sqrt(max(p * p * 0.25 - q, 0.0));
+  float z1 = -p * 0.5 - r, z2 = -p * 0.5 + r;
+  vec4 sw = z2 < z0 ? vec4(z1, z0, 1.0, 1.0) : (z1 < z0 ? vec4(z0, z1, 0.0, 1.0) : vec4(0.0));
+  float quotient = (sw.x * z2 - b.x * (sw.x + z2) + b.y) / ((z2 - sw.y) * (z0 - z1));
+  float shadow = clamp(sw.z + sw.w * quotient, 0.0, 1.0);
+  return 1.0 - shadow;
+}
+
+float linstep(float lo, float hi, float v) { return clamp((v - lo) / (hi - lo), 0.0, 1.0); }
+
+MomentLookup momentLookup(Lookup L) {
+  // Bilinear (the sampler) over the blurred moments, at the lookup; explicit LOD 0 (one level).
+  vec4 mo = textureLod(momentsMap, vec3(L.st / L.layer.size, float(L.layer.index)), 0.0);
+  float t = L.ref, minVariance = P.moments.x;
+  MomentLookup r;
+  if (kFilter == kFilterMsm) {
+    r.mean = mo.x;
+    r.variance = mo.y - mo.x * mo.x;
+    r.bound = hamburger4(mo, t, P.moments2.x);
+  } else if (kFilter == kFilterVsm) {
+    r.mean = mo.x;
+    r.bound = chebyshevBound(mo.x, mo.y, t, minVariance, r.variance);
+  } else {
+    // EVSM: the receiver warped like the map; the variance floor scaled by the warp's slope at t.
+    float cPos = P.moments.z, cNeg = P.moments.w;
+    float tw = 2.0 * clamp(t, 0.0, 1.0) - 1.0;
+    float tPos = exp(cPos * tw);
+    r.bound = chebyshevBound(mo.x, mo.y, tPos, minVariance * (cPos * tPos) * (cPos * tPos), r.variance);
+    if (kFilter == kFilterEvsm4) {
+      float tNeg = -exp(-cNeg * tw), varianceNeg;
+      r.bound = min(r.bound, chebyshevBound(mo.z, mo.w, tNeg, minVariance * (cNeg * tNeg) * (cNeg * tNeg), varianceNeg));
+    }
+    r.mean = 0.5 * (log(max(mo.x, 1e-30)) / cPos + 1.0);
+  }
+  r.vis = linstep(P.moments.y, 1.0, r.bound);
+  return r;
+}
+
 // The filters other than none (whose one comparison the caller makes with its own fetch).
 float filterVisibility(Lookup L) {
+  if (kMomentFilter) return momentLookup(L).vis;
   ivec2 center = ivec2(floor(L.st));
   if (kFilter == kFilterHw2x2) {
     // The hardware blends four comparisons; the receiver plane cannot be applied per tap.
@@ -270,6 +356,7 @@ Surface visibleSurface(ivec2 px) {
 struct LightChannels {
   vec4 a;  // vis, receiver_depth, map_depth, m
   vec4 b;  // bias_depth, bias_world, occluder (id), 2 * cascade + in_map
+  vec4 c;  // filterable maps: moment mean, variance, bound (0 outside the map)
 };
 
 LightChannels shadeLight(Surface s) {
@@ -290,13 +377,20 @@ LightChannels shadeLight(Surface s) {
 
   float vis = 1.0;  // policy: points outside the map are lit
   float mapDepthCenter = 0.0, occluder = 0.0;
+  vec4 momentEvidence = vec4(0.0);
   if (h.inMap) {
     ivec2 c = centerTexel(L);
     mapDepthCenter = texelFetch(mapDepth, ivec3(c, layer.index), 0).r;
     // filter none is the center texel's comparison: no second fetch.
-    vis = kFilter == kFilterNone  ? (mapDepthCenter >= refAt(L, c) ? 1.0 : 0.0)
-          : kFilter == kFilterHw2x2 ? hwVis
-                                    : filterVisibility(L);
+    if (kMomentFilter) {
+      MomentLookup ml = momentLookup(L);
+      vis = ml.vis;
+      momentEvidence = vec4(ml.mean, ml.variance, ml.bound, 0.0);
+    } else {
+      vis = kFilter == kFilterNone  ? (mapDepthCenter >= refAt(L, c) ? 1.0 : 0.0)
+            : kFilter == kFilterHw2x2 ? hwVis
+                                      : filterVisibility(L);
+    }
     occluder = float(texelFetch(mapIds, ivec3(c, layer.index), 0).x);  // the readback maps it to ids
   }
   bool outsideCone = kLightType == kLightSpot && dot(normalize(p - lightPos), P.lightDirCos.xyz) < P.lightDirCos.w;
@@ -343,6 +437,7 @@ LightChannels shadeLight(Surface s) {
   LightChannels o;
   o.a = vec4(vis, h.uvz.z, mapDepthCenter, m);
   o.b = vec4(biasDepth, biasDepth * worldPerDepth, occluder, float(2 * pick.cascade + (h.inMap ? 1 : 0)));
+  o.c = momentEvidence;
   return o;
 }
 
@@ -388,5 +483,6 @@ void main() {
   LightChannels light = shadeLight(s);  // without a light (kLightNone) the readback ignores it
   outA = s.hit ? light.a : vec4(0.0);
   outB = s.hit ? light.b : vec4(0.0);
+  if (kMomentFilter) outC = s.hit ? light.c : vec4(0.0);
   shadeProjectors(s, uint(px.y * P.sizes2.x + px.x), uint(P.sizes2.x * P.sizes2.y));
 }

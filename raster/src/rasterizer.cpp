@@ -1,6 +1,9 @@
 // The rasterizer, pass by pass:
 //   Pass 1 (shadow): depth + ids (global triangle + 1) from the light into one layer per map
 //                    (cube faces for point lights), then one layer per projector.
+//   Pass 1b (moments, filterable maps only): per light layer, the moments of the map depths
+//                    blurred along rows, then along columns (a separable Gaussian), into a
+//                    moments map sampled with linear filtering (moments_rows/cols.frag).
 //   Pass 2 (camera): the camera's visibility buffer: depth + id (global triangle + 1) per pixel,
 //                    kept while the scene and the camera stay the same.
 //   Pass 3 (resolve, a full-screen fragment pass): per pixel, the visible point, the map lookup with the method's
@@ -42,6 +45,8 @@
 #include "fullscreen_vert.h"
 #include "id_plain_frag.h"
 #include "id_plain_vert.h"
+#include "moments_cols_frag.h"
+#include "moments_rows_frag.h"
 #include "resolve_frag.h"
 
 namespace shadowlab {
@@ -50,10 +55,17 @@ namespace {
 
 namespace abi = raster::abi;
 constexpr int kProjectorChannels = abi::kProjectorChannels;
-// The resolve pass's color attachments (resolve.frag's outA, outB).
-constexpr int kResolveAttachments = 2;
-constexpr VkFormat kResolveFormats[kResolveAttachments] = {VK_FORMAT_R32G32B32A32_SFLOAT,
+// The resolve pass's color attachments (resolve.frag's outA, outB, and outC for filterable maps).
+constexpr int kResolveAttachments = 3;
+constexpr VkFormat kResolveFormats[kResolveAttachments] = {VK_FORMAT_R32G32B32A32_SFLOAT, VK_FORMAT_R32G32B32A32_SFLOAT,
                                                            VK_FORMAT_R32G32B32A32_SFLOAT};
+// The attachments a frame of `filter` writes: outC (the moments' evidence) for filterable maps only.
+int resolveAttachments(Filter filter) { return isMomentFilter(filter) ? 3 : 2; }
+
+// A filterable map's moments format: RG32F for 2 moments, RGBA32F for 4 (raster/METHODS.md).
+VkFormat momentsFormat(Filter filter) {
+  return momentCount(filter) == 4 ? VK_FORMAT_R32G32B32A32_SFLOAT : VK_FORMAT_R32G32_SFLOAT;
+}
 constexpr VkFormat kIdFormat = VK_FORMAT_R32_UINT;  // global triangle + 1, 0: nothing
 constexpr VkFormat kCameraDepthFormat = VK_FORMAT_D32_SFLOAT;
 
@@ -123,18 +135,24 @@ struct Rasterizer::Impl {
   vk::PipelineLayout pipelineLayout;
   vk::DescriptorPool descriptorPool;
   VkDescriptorSet descriptorSet = VK_NULL_HANDLE;
-  vk::Sampler nearestSampler, compareSampler;
-  vk::ShaderModule idVert, idFrag, idPlainVert, idPlainFrag, fullscreenVert, resolveFrag;
+  vk::Sampler nearestSampler, compareSampler, linearSampler;
+  vk::ShaderModule idVert, idFrag, idPlainVert, idPlainFrag, fullscreenVert, resolveFrag, momentsRowsFrag,
+      momentsColsFrag;
   vk::QueryPool queries;
   // Keyed by what needs a new pipeline: (depth format, depth clamp, material tests, depth bias).
   std::map<std::tuple<VkFormat, bool, bool, bool>, vk::PipelineHandle> idPipelines;
   // Keyed by resolve.frag's specialization constants (resolve_abi.h's kSpec*).
   using ResolveKey = raster::ResolveSpecialization;
   std::map<ResolveKey, vk::PipelineHandle> resolvePipelines;
+  // Keyed by (filter, cols pass): the moments pass's two pipelines per filterable filter.
+  std::map<std::pair<Filter, bool>, vk::PipelineHandle> momentsPipelines;
   std::set<std::string> warmed;
 
   std::unique_ptr<raster::SceneGpu> scene;
   vk::Image mapDepth, mapIds, cameraDepth, cameraIds;
+  // Filterable maps: the rows-blurred moments and the moments map, one layer per light layer
+  // (1x1 placeholders, never read, for the other filters: every binding needs an image).
+  vk::Image momentsRows, moments;
   vk::Image resolveOut[kResolveAttachments];
   vk::Buffer params, output;  // output: the projector channels
 
@@ -172,8 +190,10 @@ struct Rasterizer::Impl {
   VkPipeline resolvePipeline(const ResolveKey& key);
   void ensureImages(int mapSize, VkFormat mapFormat, int layers, int width, int height);
   void writeDescriptors();
-  Frame readback(const Scene& scene, const Light* light, int width, int height);
-  void record(VkCommandBuffer cmd, const std::vector<glm::mat4>& layerClip, const IdPipelines& pipes,
+  void ensureMoments(Filter filter, int mapSize, int lightLayers);
+  VkPipeline momentsPipeline(Filter filter, bool cols);
+  Frame readback(const Scene& scene, const Light* light, const Method& method, int width, int height);
+  void record(VkCommandBuffer cmd, const std::vector<glm::mat4>& layerClip, int lightLayers, const IdPipelines& pipes,
               VkPipeline resolve, const Method& method, const glm::mat4& cameraClip, int width, int height,
               bool drawVisibility);
 
@@ -199,12 +219,15 @@ Rasterizer::Impl::Impl(const RasterDeviceOptions& options) {
   idPlainFrag = vk::createShaderModule(*context, kSpv_id_plain_frag, sizeof(kSpv_id_plain_frag));
   fullscreenVert = vk::createShaderModule(*context, kSpv_fullscreen_vert, sizeof(kSpv_fullscreen_vert));
   resolveFrag = vk::createShaderModule(*context, kSpv_resolve_frag, sizeof(kSpv_resolve_frag));
+  momentsRowsFrag = vk::createShaderModule(*context, kSpv_moments_rows_frag, sizeof(kSpv_moments_rows_frag));
+  momentsColsFrag = vk::createShaderModule(*context, kSpv_moments_cols_frag, sizeof(kSpv_moments_cols_frag));
 
   VkDevice device = context->device();
-  auto makeSampler = [&](bool compare) {
+  auto makeSampler = [&](bool compare, bool linear) {
     VkSamplerCreateInfo s{VK_STRUCTURE_TYPE_SAMPLER_CREATE_INFO};
-    // Depths are point-sampled; only the comparison sampler filters (its 0/1 results).
-    s.magFilter = s.minFilter = compare ? VK_FILTER_LINEAR : VK_FILTER_NEAREST;
+    // Depths are point-sampled; the comparison sampler filters its 0/1 results, the moments
+    // sampler the moments.
+    s.magFilter = s.minFilter = linear ? VK_FILTER_LINEAR : VK_FILTER_NEAREST;
     s.mipmapMode = VK_SAMPLER_MIPMAP_MODE_NEAREST;
     s.addressModeU = s.addressModeV = s.addressModeW = VK_SAMPLER_ADDRESS_MODE_CLAMP_TO_EDGE;
     s.compareEnable = compare;
@@ -214,8 +237,9 @@ Rasterizer::Impl::Impl(const RasterDeviceOptions& options) {
     VK_CHECK(vkCreateSampler(device, &s, nullptr, &sampler));
     return vk::Sampler(device, sampler);
   };
-  nearestSampler = makeSampler(false);
-  compareSampler = makeSampler(true);
+  nearestSampler = makeSampler(false, false);
+  compareSampler = makeSampler(true, true);
+  linearSampler = makeSampler(false, true);
 
   VkQueryPoolCreateInfo q{VK_STRUCTURE_TYPE_QUERY_POOL_CREATE_INFO};
   q.queryType = VK_QUERY_TYPE_TIMESTAMP;
@@ -295,9 +319,36 @@ VkPipeline Rasterizer::Impl::resolvePipeline(const ResolveKey& key) {
   d.fragment = resolveFrag.get();
   d.layout = pipelineLayout.get();
   d.depthTest = false;
-  d.colorFormats.assign(std::begin(kResolveFormats), std::end(kResolveFormats));
+  d.colorFormats.assign(kResolveFormats, kResolveFormats + resolveAttachments(Filter(key[abi::kSpecFilter])));
   d.fragmentSpecialization.assign(key.begin(), key.end());  // straight-line code per case
   return resolvePipelines.emplace(key, vk::createGraphicsPipeline(*context, d)).first->second.get();
+}
+
+VkPipeline Rasterizer::Impl::momentsPipeline(Filter filter, bool cols) {
+  auto key = std::make_pair(filter, cols);
+  auto it = momentsPipelines.find(key);
+  if (it != momentsPipelines.end()) return it->second.get();
+  vk::GraphicsPipelineDesc d;
+  d.vertex = fullscreenVert.get();
+  d.fragment = cols ? momentsColsFrag.get() : momentsRowsFrag.get();
+  d.layout = pipelineLayout.get();
+  d.depthTest = false;
+  d.colorFormats = {momentsFormat(filter)};
+  if (!cols) d.fragmentSpecialization = {uint32_t(filter)};  // kSpecFilter: which moments
+  return momentsPipelines.emplace(key, vk::createGraphicsPipeline(*context, d)).first->second.get();
+}
+
+void Rasterizer::Impl::ensureMoments(Filter filter, int mapSize, int lightLayers) {
+  const bool used = isMomentFilter(filter);
+  const int size = used ? mapSize : 1, layers = used ? std::max(1, lightLayers) : 1;
+  const VkFormat format = momentsFormat(filter);
+  if (moments.width() == size && moments.layers() == layers && moments.format() == format) return;
+  const VkImageUsageFlags usage = VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT | VK_IMAGE_USAGE_SAMPLED_BIT;
+  // Release the old pair first: two sets of 4096^2 RGBA32F layers would not fit together.
+  momentsRows = vk::Image();
+  moments = vk::Image();
+  momentsRows = vk::Image(*context, size, size, layers, format, usage, VK_IMAGE_ASPECT_COLOR_BIT);
+  moments = vk::Image(*context, size, size, layers, format, usage, VK_IMAGE_ASPECT_COLOR_BIT);
 }
 
 void Rasterizer::Impl::ensureImages(int mapSize, VkFormat mapFormat, int layers, int width, int height) {
@@ -349,6 +400,10 @@ void Rasterizer::Impl::writeDescriptors() {
   resources[abi::kBindingTrianglePlanes].texelView = s.trianglePlanesView.get();
   resources[abi::kBindingProjectorTexels].buffer = &s.projectorTexels;
   resources[abi::kBindingOutPlanes].buffer = &output;
+  resources[abi::kBindingMomentsRows].image =
+      image(nearestSampler, momentsRows.arrayView(), VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL);
+  resources[abi::kBindingMoments].image =
+      image(linearSampler, moments.arrayView(), VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL);
 
   VkDescriptorBufferInfo bufferInfos[kBindingCount]{};
   std::vector<VkWriteDescriptorSet> writes;
@@ -372,9 +427,9 @@ void Rasterizer::Impl::writeDescriptors() {
   vkUpdateDescriptorSets(context->device(), uint32_t(writes.size()), writes.data(), 0, nullptr);
 }
 
-void Rasterizer::Impl::record(VkCommandBuffer cmd, const std::vector<glm::mat4>& layerClip, const IdPipelines& pipes,
-                              VkPipeline resolve, const Method& method, const glm::mat4& cameraClip, int width,
-                              int height, bool drawVisibility) {
+void Rasterizer::Impl::record(VkCommandBuffer cmd, const std::vector<glm::mat4>& layerClip, int lightLayers,
+                              const IdPipelines& pipes, VkPipeline resolve, const Method& method,
+                              const glm::mat4& cameraClip, int width, int height, bool drawVisibility) {
   const raster::SceneGpu& s = *scene;
   VkQueryPool pool = queries.get();
   vkCmdResetQueryPool(cmd, pool, 0, 4);
@@ -457,6 +512,52 @@ void Rasterizer::Impl::record(VkCommandBuffer cmd, const std::vector<glm::mat4>&
   vk::transition(cmd, mapIds, VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL, VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL,
                  VK_PIPELINE_STAGE_2_COLOR_ATTACHMENT_OUTPUT_BIT, VK_ACCESS_2_COLOR_ATTACHMENT_WRITE_BIT,
                  VK_PIPELINE_STAGE_2_FRAGMENT_SHADER_BIT, VK_ACCESS_2_SHADER_SAMPLED_READ_BIT);
+  // ---- Pass 1b: the moments of filterable maps (placeholders made readable otherwise) ----
+  {
+    const bool used = isMomentFilter(method.filter);
+    const int size = moments.width();
+    auto fullscreen = [&](const vk::Image& target, int layer, VkPipeline pipeline) {
+      VkRenderingAttachmentInfo color{VK_STRUCTURE_TYPE_RENDERING_ATTACHMENT_INFO};
+      color.imageView = target.layerView(layer);
+      color.imageLayout = VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL;
+      color.loadOp = VK_ATTACHMENT_LOAD_OP_DONT_CARE;  // every texel is written
+      color.storeOp = VK_ATTACHMENT_STORE_OP_STORE;
+      VkRenderingInfo info{VK_STRUCTURE_TYPE_RENDERING_INFO};
+      info.renderArea = {{0, 0}, {uint32_t(size), uint32_t(size)}};
+      info.layerCount = 1;
+      info.colorAttachmentCount = 1;
+      info.pColorAttachments = &color;
+      vkCmdBeginRendering(cmd, &info);
+      VkViewport viewport{0, 0, float(size), float(size), 0.0f, 1.0f};
+      VkRect2D scissor{{0, 0}, {uint32_t(size), uint32_t(size)}};
+      vkCmdSetViewport(cmd, 0, 1, &viewport);
+      vkCmdSetScissor(cmd, 0, 1, &scissor);
+      vkCmdSetCullMode(cmd, VK_CULL_MODE_NONE);
+      vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_GRAPHICS, pipeline);
+      DrawPush push{glm::mat4(1.0f), uint32_t(layer), 0, 0, 0};
+      vkCmdPushConstants(cmd, pipelineLayout.get(), VK_SHADER_STAGE_VERTEX_BIT | VK_SHADER_STAGE_FRAGMENT_BIT, 0,
+                         sizeof(push), &push);
+      vkCmdDraw(cmd, 3, 1, 0, 0);
+      vkCmdEndRendering(cmd);
+    };
+    for (const vk::Image* target : {&momentsRows, &moments}) {
+      const bool cols = target == &moments;
+      if (used) {
+        vk::transition(cmd, *target, VK_IMAGE_LAYOUT_UNDEFINED, VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL,
+                       VK_PIPELINE_STAGE_2_FRAGMENT_SHADER_BIT, 0, VK_PIPELINE_STAGE_2_COLOR_ATTACHMENT_OUTPUT_BIT,
+                       VK_ACCESS_2_COLOR_ATTACHMENT_WRITE_BIT);
+        for (int layer = 0; layer < lightLayers; ++layer)
+          fullscreen(*target, layer, momentsPipeline(method.filter, cols));
+        vk::transition(cmd, *target, VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL, VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL,
+                       VK_PIPELINE_STAGE_2_COLOR_ATTACHMENT_OUTPUT_BIT, VK_ACCESS_2_COLOR_ATTACHMENT_WRITE_BIT,
+                       VK_PIPELINE_STAGE_2_FRAGMENT_SHADER_BIT, VK_ACCESS_2_SHADER_SAMPLED_READ_BIT);
+      } else {
+        vk::transition(cmd, *target, VK_IMAGE_LAYOUT_UNDEFINED, VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL,
+                       VK_PIPELINE_STAGE_2_FRAGMENT_SHADER_BIT, 0, VK_PIPELINE_STAGE_2_FRAGMENT_SHADER_BIT,
+                       VK_ACCESS_2_SHADER_SAMPLED_READ_BIT);
+      }
+    }
+  }
   // After the barriers: a CPU driver may still be rasterizing the maps until they are flushed.
   vkCmdWriteTimestamp2(cmd, VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT, pool, 1);
 
@@ -481,8 +582,9 @@ void Rasterizer::Impl::record(VkCommandBuffer cmd, const std::vector<glm::mat4>&
 
   // ---- Pass 3: resolve, one fragment per pixel, into the resolve attachments ----
   {
+    const int attachments = resolveAttachments(method.filter);
     VkRenderingAttachmentInfo colors[kResolveAttachments];
-    for (int i = 0; i < kResolveAttachments; ++i) {
+    for (int i = 0; i < attachments; ++i) {
       vk::transition(cmd, resolveOut[i], VK_IMAGE_LAYOUT_UNDEFINED, VK_IMAGE_LAYOUT_GENERAL,
                      VK_PIPELINE_STAGE_2_HOST_BIT, 0, VK_PIPELINE_STAGE_2_COLOR_ATTACHMENT_OUTPUT_BIT,
                      VK_ACCESS_2_COLOR_ATTACHMENT_WRITE_BIT);
@@ -495,7 +597,7 @@ void Rasterizer::Impl::record(VkCommandBuffer cmd, const std::vector<glm::mat4>&
     VkRenderingInfo info{VK_STRUCTURE_TYPE_RENDERING_INFO};
     info.renderArea = {{0, 0}, {uint32_t(width), uint32_t(height)}};
     info.layerCount = 1;
-    info.colorAttachmentCount = kResolveAttachments;
+    info.colorAttachmentCount = uint32_t(attachments);
     info.pColorAttachments = colors;
     vkCmdBeginRendering(cmd, &info);
     VkViewport viewport{0, 0, float(width), float(height), 0.0f, 1.0f};
@@ -525,10 +627,11 @@ void Rasterizer::Impl::record(VkCommandBuffer cmd, const std::vector<glm::mat4>&
 // are split over two threads (the split is bound by memory bandwidth, which one core does not
 // saturate). Ids arrive as global triangle index + 1 (0: none) and leave as the object's id and
 // its own primitive index.
-Frame Rasterizer::Impl::readback(const Scene& sc, const Light* light, int width, int height) {
+Frame Rasterizer::Impl::readback(const Scene& sc, const Light* light, const Method& method, int width, int height) {
+  const bool momentChannels = light && isMomentFilter(method.filter);
   output.invalidate(*context);
   cameraIds.invalidate(*context);
-  for (const vk::Image& img : resolveOut) img.invalidate(*context);
+  for (int i = 0; i < resolveAttachments(method.filter); ++i) resolveOut[i].invalidate(*context);
   Frame frame;
   frame.width = width;
   frame.height = height;
@@ -541,6 +644,9 @@ Frame Rasterizer::Impl::readback(const Scene& sc, const Light* light, int width,
     for (const char* name : {"vis", "receiver_depth", "map_depth", "m", "bias_depth", "bias_world", "occluder_id",
                              "occluder_prim", "in_map", "cascade"})
       frame.names.push_back(p + name);
+    // Filterable maps: the moments' evidence at the lookup (resolve.frag's outC).
+    if (momentChannels)
+      for (const char* name : {"moment_mean", "moment_variance", "moment_bound"}) frame.names.push_back(p + name);
   }
   for (int j = 0; j < projectorCount; ++j) {
     const std::string p = "proj." + sc.projectors[size_t(j)].name + ".";
@@ -603,8 +709,19 @@ Frame Rasterizer::Impl::readback(const Scene& sc, const Light* light, int width,
           out[8][x] = float(packed & 1);
           out[9][x] = float(packed >> 1);
         }
+        if (momentChannels) {
+          const float* c = reinterpret_cast<const float*>(rowOf(resolveOut[2], y));
+          float* mean = frame.data[13].data() + o;
+          float* variance = frame.data[14].data() + o;
+          float* bound = frame.data[15].data() + o;
+          for (int x = 0; x < width; ++x) {
+            mean[x] = c[4 * x];
+            variance[x] = c[4 * x + 1];
+            bound[x] = c[4 * x + 2];
+          }
+        }
       }
-      const size_t first = hasLight ? 13 : 3;
+      const size_t first = hasLight ? (momentChannels ? 16 : 13) : 3;
       for (int p = 0; p < kProjectorChannels * projectorCount; ++p) {
         const float* in = planes + size_t(p) * n + o;
         std::copy(in, in + width, frame.data[first + size_t(p)].data() + o);
@@ -684,6 +801,19 @@ const Light* Rasterizer::Impl::validate(const Scene& scene, const Method& method
     throw InputError(formatError("method", "map.format",
                                  "got " + toString(method.mapFormat) + ", which device " + context->deviceName() +
                                      " cannot render and sample; expected another format"));
+  if (isMomentFilter(method.filter)) {
+    // The moments map is rendered, then sampled with linear filtering.
+    const VkFormat mf = momentsFormat(method.filter);
+    vkGetPhysicalDeviceFormatProperties(context->physical(), mf, &fp);
+    need = VK_FORMAT_FEATURE_COLOR_ATTACHMENT_BIT | VK_FORMAT_FEATURE_SAMPLED_IMAGE_BIT |
+           VK_FORMAT_FEATURE_SAMPLED_IMAGE_FILTER_LINEAR_BIT;
+    if ((fp.optimalTilingFeatures & need) != need)
+      throw InputError(formatError("method", "filter",
+                                   "got " + toString(method.filter) + ", whose moments map (" +
+                                       (mf == VK_FORMAT_R32G32_SFLOAT ? "RG32F" : "RGBA32F") + ") device " +
+                                       context->deviceName() +
+                                       " cannot render and sample with linear filtering; expected another filter"));
+  }
   return light;
 }
 
@@ -709,6 +839,7 @@ void Rasterizer::Impl::prepareTargets(const Scene& sc, const Method& method, con
   const size_t channelCount = size_t(kProjectorChannels) * sc.projectors.size();
   size_t outputBytes = std::max<size_t>(1, channelCount * size_t(camera.width) * size_t(camera.height)) * sizeof(float);
   if (output.size() != outputBytes) output = vk::Buffer(*context, outputBytes, VK_BUFFER_USAGE_STORAGE_BUFFER_BIT);
+  ensureMoments(method.filter, method.mapSize, layers.lightLayers);
   raster::updatePlanes(*scene, glm::dvec3(camera.position));
   writeDescriptors();
 }
@@ -750,7 +881,8 @@ bool Rasterizer::Impl::submit(const Scene& sc, const Method& method, const raste
   visibilityKey.clear();  // until this frame is through
   for (int run = 0; run < (pipes.firstUse ? 2 : 1); ++run) {
     VkCommandBuffer cmd = commands->begin();
-    record(cmd, layerClip, pipes.ids, pipes.resolve, method, cameraClip, camera.width, camera.height, drawVisibility);
+    record(cmd, layerClip, layers.lightLayers, pipes.ids, pipes.resolve, method, cameraClip, camera.width,
+           camera.height, drawVisibility);
     commands->submitAndWait();
   }
   visibilityKey = key;
@@ -811,7 +943,7 @@ Frame Rasterizer::render(const Scene& scene, const Method& method, const std::st
   const Impl::PassTimes passes = im.readTimestamps(drewVisibility);
 
   auto tRead = std::chrono::steady_clock::now();
-  Frame frame = im.readback(scene, light, scene.camera.width, scene.camera.height);
+  Frame frame = im.readback(scene, light, method, scene.camera.width, scene.camera.height);
   double readbackMs = msSince(tRead);
   frame.meta = frameMeta(scene, light, fit, method, deviceName());
   if (timings) {

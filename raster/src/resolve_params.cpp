@@ -11,7 +11,8 @@ namespace shadowlab::raster {
 static_assert(abi::kLightDirectional == int(LightType::Directional) && abi::kLightSpot == int(LightType::Spot) &&
                   abi::kLightPoint == int(LightType::Point),
               "the shader's light codes are kinds.h's rows");
-static_assert(abi::kFilterNone == int(Filter::None) && abi::kFilterPoisson == int(Filter::Poisson),
+static_assert(abi::kFilterNone == int(Filter::None) && abi::kFilterPoisson == int(Filter::Poisson) &&
+                  abi::kFilterMsm == int(Filter::Msm),
               "the shader's filter codes are kinds.h's rows");
 
 FrameLayers fitFrameLayers(const Scene& scene, const Light* light, const Method& method, const Camera& fitCamera) {
@@ -123,6 +124,11 @@ abi::Params packResolveParams(const Scene& scene, const Light* light, const Meth
     float originShiftView = glm::dot(camera.position - fitCamera.position, forward);
     prm.cascadeInfo = glm::vec4(method.cascadeBlend, c[0], originShiftView, 0);
   }
+  // Filterable maps: EVSM's exponents clamped to what the 32F moments hold (kEvsmMaxExponent).
+  prm.moments = glm::vec4(method.vsmMinVariance, method.vsmBleedReduction,
+                          std::min(method.evsmExponentPos, abi::kEvsmMaxExponent),
+                          std::min(method.evsmExponentNeg, abi::kEvsmMaxExponent));
+  prm.moments2 = glm::vec4(method.msmMomentBias, float(method.filterBlur), 0, 0);
   const std::vector<glm::vec2>& poisson = poissonDisc();
   for (int i = 0; i < abi::kMaxTaps; ++i) prm.poisson[i] = glm::vec4(poisson[size_t(i)], 0, 0);
   return prm;

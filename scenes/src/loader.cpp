@@ -1107,8 +1107,9 @@ std::string sharedAssetsDir() {
 }
 
 std::vector<std::string> bundledSceneNames() {
-  static const std::vector<std::string> kOrder = {"sphere_on_plane", "grazing",   "contact", "thin_wall",
-                                                  "alpha_fence",     "projector", "bunny",   "long_view"};
+  static const std::vector<std::string> kOrder = {"sphere_on_plane", "grazing",     "contact",
+                                                  "thin_wall",       "alpha_fence", "projector",
+                                                  "bunny",           "long_view",   "stacked_occluders"};
   std::vector<std::string> found;
   std::error_code ec;
   for (const auto& e : fs::directory_iterator(bundledScenesDir(), ec))

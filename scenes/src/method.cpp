@@ -184,6 +184,9 @@ constexpr double kBiasLimit = 1e6;
 constexpr double kNScaleLimit = 1e6;
 const char* const kNScaleExpected = "a number > 0 and <= 1e6 (1: the optimal n of Wimmer et al.)";
 
+// EVSM's warp exponents: the 32F moments clamp them to 42 (raster/METHODS.md); beyond 100 is a typo.
+const char* const kExponentExpected = "a number > 0 and <= 100 (clamped to 42, what 32-bit moments hold)";
+
 using Setter = std::function<void(Method&, const Value&, const Where&)>;
 
 const std::vector<std::pair<std::string, Setter>>& setters() {
@@ -234,6 +237,27 @@ const std::vector<std::pair<std::string, Setter>>& setters() {
       {"filter.radius",
        [](Method& m, const Value& v, const Where& w) {
          m.filterRadius = floatIn(v, w, 0.0, 32.0, true, "a number > 0 and <= 32 (map texels)");
+       }},
+      {"filter.blur", [](Method& m, const Value& v, const Where& w) { m.filterBlur = intIn(v, w, 0, 16); }},
+      {"vsm.min_variance",
+       [](Method& m, const Value& v, const Where& w) {
+         m.vsmMinVariance = floatIn(v, w, 0.0, 1.0, false, "a number 0..1 (normalized depth squared)");
+       }},
+      {"vsm.bleed_reduction",
+       [](Method& m, const Value& v, const Where& w) {
+         m.vsmBleedReduction = floatIn(v, w, 0.0, 0.99, false, "a number 0..0.99 (0: no cut)");
+       }},
+      {"evsm.exponent_pos",
+       [](Method& m, const Value& v, const Where& w) {
+         m.evsmExponentPos = floatIn(v, w, 0.0, 100.0, true, kExponentExpected);
+       }},
+      {"evsm.exponent_neg",
+       [](Method& m, const Value& v, const Where& w) {
+         m.evsmExponentNeg = floatIn(v, w, 0.0, 100.0, true, kExponentExpected);
+       }},
+      {"msm.moment_bias",
+       [](Method& m, const Value& v, const Where& w) {
+         m.msmMomentBias = floatIn(v, w, 0.0, 1.0, false, "a number 0..1 (3e-5: 32-bit moments)");
        }},
       {"projector.reverse_guard",
        [](Method& m, const Value& v, const Where& w) { m.projectorReverseGuard = boolOf(v, w); }},
@@ -293,6 +317,16 @@ void crossCheck(const Method& m, const std::string& file, const std::string& pre
     bad("cascades.blend", nlohmann::json(double(m.cascadeBlend)).dump(), "a number 0..0.5");
   if (!(m.lispsmNScale > 0.0f && m.lispsmNScale <= kNScaleLimit))
     bad("lispsm.n_scale", nlohmann::json(double(m.lispsmNScale)).dump(), kNScaleExpected);
+  if (m.filterBlur < 0 || m.filterBlur > 16) bad("filter.blur", std::to_string(m.filterBlur), "an integer 0..16");
+  if (!(m.vsmMinVariance >= 0.0f && m.vsmMinVariance <= 1.0f))
+    bad("vsm.min_variance", nlohmann::json(double(m.vsmMinVariance)).dump(), "a number 0..1");
+  if (!(m.vsmBleedReduction >= 0.0f && m.vsmBleedReduction <= 0.99f))
+    bad("vsm.bleed_reduction", nlohmann::json(double(m.vsmBleedReduction)).dump(), "a number 0..0.99");
+  for (auto [key, v] : {std::pair<const char*, float>{"evsm.exponent_pos", m.evsmExponentPos},
+                        {"evsm.exponent_neg", m.evsmExponentNeg}})
+    if (!(v > 0.0f && v <= 100.0f)) bad(key, nlohmann::json(double(v)).dump(), kExponentExpected);
+  if (!(m.msmMomentBias >= 0.0f && m.msmMomentBias <= 1.0f))
+    bad("msm.moment_bias", nlohmann::json(double(m.msmMomentBias)).dump(), "a number 0..1");
   if (m.name.empty()) bad("name", "\"\"", "a non-empty string");
 }
 
@@ -358,11 +392,29 @@ nlohmann::json methodToJson(const Method& m) {
   j["filter.size"] = m.filterSize;
   j["filter.taps"] = m.filterTaps;
   j["filter.radius"] = m.filterRadius;
+  j["filter.blur"] = m.filterBlur;
+  j["vsm.min_variance"] = m.vsmMinVariance;
+  j["vsm.bleed_reduction"] = m.vsmBleedReduction;
+  j["evsm.exponent_pos"] = m.evsmExponentPos;
+  j["evsm.exponent_neg"] = m.evsmExponentNeg;
+  j["msm.moment_bias"] = m.msmMomentBias;
   j["projector.reverse_guard"] = m.projectorReverseGuard;
   return j;
 }
 
 void validateMethod(const Method& m, const std::string& origin) { crossCheck(m, origin, ""); }
+
+bool isMomentFilter(Filter f) { return momentCount(f) > 0; }
+
+int momentCount(Filter f) {
+  switch (f) {
+    case Filter::Vsm:
+    case Filter::Evsm2: return 2;
+    case Filter::Evsm4:
+    case Filter::Msm: return 4;
+    default: return 0;
+  }
+}
 
 std::string toString(DepthFormat f) {
   for (const auto& c : kFormats)

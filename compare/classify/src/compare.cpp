@@ -99,7 +99,9 @@ namespace {
 // Internal per-pixel codes for "disagreement not explained by coverage or acne": resolved to
 // Aliasing, or beyond the boundary band to Leak (kCandidateLeak: the leak evidence holds) or
 // Other, once the boundary distances are known. Never leave this file.
-constexpr uint8_t kCandidate = 255, kCandidateLeak = 254;
+// kCandidateBleed: the bleed evidence holds (it wins over the leak evidence beyond the band).
+constexpr uint8_t kCandidate = 255, kCandidateLeak = 254, kCandidateBleed = 253;
+constexpr uint8_t kFirstCandidate = kCandidateBleed;  // codes >= this are unresolved candidates
 // Reference decision per pixel, for the boundary distance transform.
 constexpr uint8_t kDecisionNone = 0, kDecisionLit = 1, kDecisionShadowed = 2;
 constexpr int kBlockRows = 16;
@@ -222,9 +224,10 @@ struct Channels {
   // Evidence (optional: a reference compared with itself has none; see METRICS.md).
   const float *refOccDist = nullptr, *inMap = nullptr, *occId = nullptr, *recvDepth = nullptr, *mapDepth = nullptr,
               *biasDepth = nullptr, *biasWorld = nullptr;
-  const float* m = nullptr;        // texel footprint, pixels per map texel
-  const float* cascade = nullptr;  // only for cascaded frames (readChannels says why)
-  int cascadeCount = 0;            // from the method, so that an empty cascade is still listed
+  const float *momentMean = nullptr, *momentBound = nullptr;  // filterable maps only
+  const float* m = nullptr;                                   // texel footprint, pixels per map texel
+  const float* cascade = nullptr;                             // only for cascaded frames (readChannels says why)
+  int cascadeCount = 0;  // from the method, so that an empty cascade is still listed
   // Without a light (a projector-only scene), both decisions read this plane of ones: lit
   // everywhere, so no pixel can disagree about a shadow.
   std::vector<float> noLightVis;
@@ -252,6 +255,11 @@ struct Channels {
       e.receiverDepth = recvDepth[i];
       e.mapDepth = mapDepth[i];
       e.biasDepth = biasDepth[i];
+    }
+    e.hasMoments = momentMean && momentBound;
+    if (e.hasMoments) {
+      e.momentMean = momentMean[i];
+      e.momentBound = momentBound[i];
     }
     e.hasOccluderDistance = refOccDist && biasWorld;
     if (e.hasOccluderDistance) {
@@ -316,6 +324,8 @@ Channels readChannels(const Frame& reference, const Frame& raster, const Compare
     ch.biasDepth = optional(raster, lp + "bias_depth");
     ch.biasWorld = optional(raster, lp + "bias_world");
     ch.m = optional(raster, lp + "m");
+    ch.momentMean = optional(raster, lp + "moment_mean");
+    ch.momentBound = optional(raster, lp + "moment_bound");
     // Per-cascade metrics: only for cascaded frames, so every other row keeps its keys (the channel
     // is 0 everywhere for the other fits). Frames built in code without metadata count as cascaded.
     ch.cascade = optional(raster, lp + "cascade");
@@ -419,7 +429,7 @@ void resolveCandidates(uint8_t* klass, const uint8_t* decision, const float* mPl
     int reachRow = -1;
     for (int x = 0; x < width; ++x) {
       boundary |= ((d[x] ^ dd[x]) == 3) | (x + 1 < width && (d[x] ^ d[x + 1]) == 3);
-      if (krow[x] < kCandidateLeak) continue;
+      if (krow[x] < kFirstCandidate) continue;
       any = 1;
       const double limit = limitPx(size_t(y) * width + x);
       if (limit < diagonalPx) reachRow = std::max(reachRow, int(std::ceil(limit)));
@@ -481,14 +491,14 @@ void resolveCandidates(uint8_t* klass, const uint8_t* decision, const float* mPl
     uint8_t* krow = klass + size_t(y) * width;
     PerPixelClass<uint64_t>& counts = rowCounts[size_t(y)];
     auto resolve = [&](int x, bool withinLimit) {
-      const PixelClass c = resolveCandidate(krow[x] == kCandidateLeak, withinLimit);
+      const PixelClass c = resolveCandidate(krow[x] == kCandidateLeak, withinLimit, krow[x] == kCandidateBleed);
       krow[x] = uint8_t(c);
       ++counts[classIndex(c)];
     };
     const int r = rowReach[size_t(y)];
     int xFirst = width, xLast = -1;
     for (int x = 0; x < width; ++x) {
-      if (krow[x] < kCandidateLeak) continue;
+      if (krow[x] < kFirstCandidate) continue;
       if (limitPx(size_t(y) * width + x) >= diagonalPx) {
         resolve(x, anyBoundary);
       } else {
@@ -525,7 +535,7 @@ void resolveCandidates(uint8_t* klass, const uint8_t* decision, const float* mPl
     k = 0;
     for (int x = xFirst; x <= xLast; ++x) {
       while (z[k + 1] < x) ++k;
-      if (krow[x] < kCandidateLeak) continue;  // not a candidate, or resolved above
+      if (krow[x] < kFirstCandidate) continue;  // not a candidate, or resolved above
       const int p = v[k];
       const double dist2 = double(x - p) * double(x - p) + f(p);
       const double limit = limitPx(size_t(y) * width + x);
@@ -746,7 +756,7 @@ Metrics compareFrames(const Frame& reference, const Frame& raster, const Compare
         const DisagreementClass dc = classifyDisagreement(ch.evidence(i), leakFactor);
         if (dc.candidate) {
           // Aliasing or, beyond the boundary band, leak (with its evidence) or other: pass 2.
-          klass_[i] = dc.leakEvidence ? kCandidateLeak : kCandidate;
+          klass_[i] = dc.bleedEvidence ? kCandidateBleed : dc.leakEvidence ? kCandidateLeak : kCandidate;
           ++s.candidates;
           s.candidateLimitPx = std::max(s.candidateLimitPx, mPlane_ ? m : 1.0f);
           continue;

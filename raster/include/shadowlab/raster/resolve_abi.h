@@ -28,6 +28,8 @@ SHADOWLAB_CONST(int, kMaxLightLayers, 8)
 SHADOWLAB_CONST(int, kMaxProjectors, 8)
 SHADOWLAB_CONST(int, kMaxTaps, 64)           // the Poisson disc's points
 SHADOWLAB_CONST(int, kProjectorChannels, 5)  // coverage, R, G, B, reverse
+// Filterable maps: what 32-bit float moments hold of EVSM's warps (e^(2 c) < FLT_MAX with c <= 44).
+SHADOWLAB_CONST(float, kEvsmMaxExponent, 42.0)
 
 // The codes kFilter and kLightType take: kFilter<Name>, kLight<Name> from kinds.h's rows, and
 // kLightNone for a scene rendered for its projectors only.
@@ -52,18 +54,20 @@ SHADOWLAB_CONST(int, kSpecCount, 7)
 // The descriptor set (set 0), one row per binding: X(Name, binding, kind). The kinds name
 // Vulkan descriptor types (rasterizer.cpp maps them); the set layout, the pool and the writes
 // are built from these rows. id.frag reads bindings 0..2 for its material tests.
-#define SHADOWLAB_RESOLVE_BINDINGS(X)                                                      \
-  X(TriangleMaterials, 0, StorageBuffer)   /* per triangle: its material index */          \
-  X(Materials, 1, StorageBuffer)           /* MaterialGpu per material */                  \
-  X(AlphaTexels, 2, StorageBuffer)         /* alpha textures, concatenated */              \
-  X(Params, 3, UniformBuffer)              /* Params below */                              \
-  X(MapDepth, 4, CombinedImageSampler)     /* map depths, NEAREST */                       \
-  X(MapShadow, 5, CombinedImageSampler)    /* map depths, LINEAR, compare LESS_OR_EQUAL */ \
-  X(MapIds, 6, CombinedImageSampler)       /* map ids (global triangle + 1) */             \
-  X(CameraIds, 7, CombinedImageSampler)    /* the camera's visibility buffer */            \
-  X(TrianglePlanes, 8, UniformTexelBuffer) /* per triangle: its plane */                   \
-  X(ProjectorTexels, 9, StorageBuffer)     /* projector images, RGB floats */              \
-  X(OutPlanes, 10, StorageBuffer)          /* the projector channels, one plane each */
+#define SHADOWLAB_RESOLVE_BINDINGS(X)                                                            \
+  X(TriangleMaterials, 0, StorageBuffer)   /* per triangle: its material index */                \
+  X(Materials, 1, StorageBuffer)           /* MaterialGpu per material */                        \
+  X(AlphaTexels, 2, StorageBuffer)         /* alpha textures, concatenated */                    \
+  X(Params, 3, UniformBuffer)              /* Params below */                                    \
+  X(MapDepth, 4, CombinedImageSampler)     /* map depths, NEAREST */                             \
+  X(MapShadow, 5, CombinedImageSampler)    /* map depths, LINEAR, compare LESS_OR_EQUAL */       \
+  X(MapIds, 6, CombinedImageSampler)       /* map ids (global triangle + 1) */                   \
+  X(CameraIds, 7, CombinedImageSampler)    /* the camera's visibility buffer */                  \
+  X(TrianglePlanes, 8, UniformTexelBuffer) /* per triangle: its plane */                         \
+  X(ProjectorTexels, 9, StorageBuffer)     /* projector images, RGB floats */                    \
+  X(OutPlanes, 10, StorageBuffer)          /* the projector channels, one plane each */          \
+  X(MomentsRows, 11, CombinedImageSampler) /* moments pass: the rows-blurred moments, NEAREST */ \
+  X(Moments, 12, CombinedImageSampler)     /* the blurred moments per light layer, LINEAR */
 #define SHADOWLAB_ABI_BINDING(name, binding, kind) SHADOWLAB_CONST(int, kBinding##name, binding)
 SHADOWLAB_RESOLVE_BINDINGS(SHADOWLAB_ABI_BINDING)
 #undef SHADOWLAB_ABI_BINDING
@@ -99,6 +103,8 @@ SHADOWLAB_BLOCK(Params) {
   vec4 cascadeFar[2];                 // C_1..C_8: far view depth of cascade 0..7, world units
   vec4 cascadeInfo;                   // x blend band (fraction of a cascade's depth range), y C_0,
                                       // z fit-camera view depth of the evaluation camera's origin
+  vec4 moments;   // filterable maps: x vsm.min_variance, y vsm.bleed_reduction, z, w the EVSM exponents (clamped)
+  vec4 moments2;  // x msm.moment_bias, y filter.blur (radius, texels)
 }
 SHADOWLAB_BLOCK_END(P);
 #endif
@@ -124,7 +130,9 @@ static_assert(offsetof(Params, projectorPos) == offsetof(Params, poisson) + 16 *
 static_assert(offsetof(Params, cascadeView) == offsetof(Params, projectorPos) + 16 * kMaxProjectors);
 static_assert(offsetof(Params, cascadeFar) == offsetof(Params, cascadeView) + 16);
 static_assert(offsetof(Params, cascadeInfo) == offsetof(Params, cascadeFar) + 32);
-static_assert(sizeof(Params) == 2784, "std140 size of resolve.frag's Params (glslangValidator -q reports it)");
+static_assert(offsetof(Params, moments) == offsetof(Params, cascadeInfo) + 16);
+static_assert(offsetof(Params, moments2) == offsetof(Params, moments) + 16);
+static_assert(sizeof(Params) == 2816, "std140 size of resolve.frag's Params (glslangValidator -q reports it)");
 static_assert(2 * 4 >= kMaxLightLayers, "cascadeFar holds one far split per light layer");
 static_assert(kMaxLightLayers + kMaxProjectors == kMaxLayers);
 }  // namespace shadowlab::raster::abi

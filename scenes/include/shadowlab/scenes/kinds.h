@@ -13,12 +13,16 @@
 // raster/METHODS.md documents it.
 
 // filter: how the map comparisons around the lookup are combined into light.L.vis.
-#define SHADOWLAB_FILTERS(X)                                                                    \
-  X(None, 0, "none", "the texel under the lookup, one comparison")                              \
-  X(Hw2x2, 1, "hw2x2", "the sampler's 2x2 comparisons, blended bilinearly by the hardware")     \
-  X(Bilinear4, 2, "bilinear4", "2x2 comparisons blended bilinearly in the shader")              \
-  X(Pcf, 3, "pcf", "the mean of filter.size x filter.size comparisons around the lookup texel") \
-  X(Poisson, 4, "poisson", "the mean of filter.taps comparisons on a disc of filter.radius texels")
+#define SHADOWLAB_FILTERS(X)                                                                             \
+  X(None, 0, "none", "the texel under the lookup, one comparison")                                       \
+  X(Hw2x2, 1, "hw2x2", "the sampler's 2x2 comparisons, blended bilinearly by the hardware")              \
+  X(Bilinear4, 2, "bilinear4", "2x2 comparisons blended bilinearly in the shader")                       \
+  X(Pcf, 3, "pcf", "the mean of filter.size x filter.size comparisons around the lookup texel")          \
+  X(Poisson, 4, "poisson", "the mean of filter.taps comparisons on a disc of filter.radius texels")      \
+  X(Vsm, 5, "vsm", "variance shadow map: Chebyshev's bound from 2 blurred moments (vsm.*, filter.blur)") \
+  X(Evsm2, 6, "evsm2", "exponential VSM, the positive warp's 2 moments (evsm.exponent_pos, vsm.*)")      \
+  X(Evsm4, 7, "evsm4", "exponential VSM, positive and negative warps, 4 moments (evsm.*, vsm.*)")        \
+  X(Msm, 8, "msm", "moment shadow map: Hamburger 4-moment reconstruction (msm.moment_bias, filter.blur)")
 
 // fit: how a directional light's orthographic map is fitted (spot and point lights ignore it).
 #define SHADOWLAB_FITS(X)                                                               \

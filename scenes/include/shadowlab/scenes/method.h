@@ -37,19 +37,32 @@ struct Method {
   bool cascadeStabilize = false;  // cascades.stabilize: constant-size crops snapped to whole texels
   // Light-space perspective shadow maps (fit=lispsm, directional lights): the warp's projection
   // center lies lispsmNScale * n_opt before the body's near face (larger: closer to uniform).
-  float lispsmNScale = 1.0f;          // lispsm.n_scale: > 0, <= 1e6
-  float biasConstant = 0.0f;          // bias.constant: Vulkan depthBiasConstantFactor (units of r)
-  float biasSlope = 1.5f;             // bias.slope: Vulkan depthBiasSlopeFactor
-  float biasClamp = 0.0f;             // bias.clamp: Vulkan depthBiasClamp (0 = no clamp)
-  float biasCompare = 0.0005f;        // bias.compare: added in the comparison, normalized depth
-  float biasNormal = 0.0f;            // bias.normal: normal-offset of the lookup, in map texels
-  bool biasReceiverPlane = false;     // bias.receiver_plane: receiver-plane depth bias per tap
-  Filter filter = Filter::None;       // filter: kinds.h's SHADOWLAB_FILTERS
-  int filterSize = 3;                 // filter.size: pcf grid N (odd, 3..15)
-  int filterTaps = 16;                // filter.taps: poisson taps (1..64)
-  float filterRadius = 1.5f;          // filter.radius: poisson radius in texels (> 0, <= 32)
+  float lispsmNScale = 1.0f;       // lispsm.n_scale: > 0, <= 1e6
+  float biasConstant = 0.0f;       // bias.constant: Vulkan depthBiasConstantFactor (units of r)
+  float biasSlope = 1.5f;          // bias.slope: Vulkan depthBiasSlopeFactor
+  float biasClamp = 0.0f;          // bias.clamp: Vulkan depthBiasClamp (0 = no clamp)
+  float biasCompare = 0.0005f;     // bias.compare: added in the comparison, normalized depth
+  float biasNormal = 0.0f;         // bias.normal: normal-offset of the lookup, in map texels
+  bool biasReceiverPlane = false;  // bias.receiver_plane: receiver-plane depth bias per tap
+  Filter filter = Filter::None;    // filter: kinds.h's SHADOWLAB_FILTERS
+  int filterSize = 3;              // filter.size: pcf grid N (odd, 3..15)
+  int filterTaps = 16;             // filter.taps: poisson taps (1..64)
+  float filterRadius = 1.5f;       // filter.radius: poisson radius in texels (> 0, <= 32)
+  // Filterable maps (filter=vsm, evsm2, evsm4, msm; raster/METHODS.md "Filterable maps"): a
+  // moments pass after the depth pass, pre-filtered by a separable Gaussian.
+  int filterBlur = 2;              // filter.blur: the Gaussian's radius in texels, 0..16 (0: none; sigma = radius / 2)
+  float vsmMinVariance = 1e-6f;    // vsm.min_variance: variance floor, normalized depth squared (0..1)
+  float vsmBleedReduction = 0.0f;  // vsm.bleed_reduction: linstep cut of the bound, 0..0.99 (0: none)
+  float evsmExponentPos = 40.0f;   // evsm.exponent_pos: positive warp exponent, > 0 (clamped to 42, 32F)
+  float evsmExponentNeg = 5.0f;    // evsm.exponent_neg: negative warp exponent, > 0 (clamped to 42, 32F)
+  float msmMomentBias = 3e-5f;     // msm.moment_bias: moments pulled towards (0.5, ...) by this much, 0..1
   bool projectorReverseGuard = true;  // projector.reverse_guard: only project where w >= 0
 };
+
+// The filters that read a moments map rather than comparing depths (vsm, evsm2, evsm4, msm).
+bool isMomentFilter(Filter f);
+// The moments a filter stores per texel: 2 (vsm, evsm2) or 4 (evsm4, msm); 0 for the others.
+int momentCount(Filter f);
 
 // All keys, in documentation order ("name" excluded).
 const std::vector<std::string>& methodKeys();

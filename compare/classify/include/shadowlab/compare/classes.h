@@ -31,6 +31,8 @@
     "lit in truth, shadowed by the receiver's own texel in the map (bias too small)")                          \
   X(Leak, 4, "leak", "leak", true, "leak", "leak_rate", Lower, 0x1E78FF, 0x1E78FF,                             \
     "shadowed in truth, lit because the bias let the occluder through (peter panning)")                        \
+  X(Bleed, 8, "bleed", "bleed", true, "bleed", "bleed_rate", Lower, 0x00C8C8, 0x00C8C8,                        \
+    "shadowed in truth, lit by a filterable map's bound: a second occluder depth in the footprint (VSM/MSM)")  \
   X(Aliasing, 5, "aliasing", "aliasing", true, "aliasing", "aliasing_rate", Lower, 0xFFD700, 0xFFD700,         \
     "a disagreement within boundaryTexels map texels of a true shadow boundary (map too coarse)")              \
   X(Coverage, 6, "coverage", "coverage", true, "coverage", "coverage_rate", Lower, 0x28C846, 0x28C846,         \

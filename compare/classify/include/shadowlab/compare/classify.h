@@ -29,6 +29,9 @@ struct PixelEvidence {
   float receiverDepth = 0, mapDepth = 0, biasDepth = 0;  // raster `receiver_depth`, `map_depth`, `bias_depth`
   bool hasOccluderDistance = false;                      // both below (world units)
   float referenceOccluderDist = 0, biasWorld = 0;        // reference `occluder_dist`, raster `bias_world`
+  // Filterable maps (filter=vsm, evsm2, evsm4, msm): the moments at the lookup.
+  bool hasMoments = false;                // both below, and the depths above
+  float momentMean = 0, momentBound = 0;  // raster `moment_mean` (map depth units), `moment_bound` (0..1)
   // The disagreement lies within boundaryTexels * m pixels of a reference shadow boundary. Known
   // only after the boundary distance transform (compareFrames' second pass).
   bool withinBoundaryBand = false;
@@ -51,7 +54,15 @@ struct DisagreementClass {
   PixelClass cls = PixelClass::Other;  // Coverage or Acne when !candidate
   bool candidate = false;
   bool leakEvidence = false;
+  bool bleedEvidence = false;
 };
+// Light bleeding of a filterable map: the truth is shadowed, and the lookup's moments say the
+// footprint's mean depth lies in front of the receiver by more than the bias (a real occluder on
+// average, not one the bias let through) while their bound still lights it (>= 0.5): the
+// variance that lit it comes from a second occluder depth inside the footprint (compare/METRICS.md).
+inline bool bleedEvidence(const PixelEvidence& e) {
+  return e.hasMoments && e.hasDepths && e.momentBound >= 0.5f && e.receiverDepth - e.momentMean > e.biasDepth;
+}
 inline DisagreementClass classifyDisagreement(const PixelEvidence& e, float leakBiasFactor) {
   const bool referenceLit = litDecision(e.referenceVis);
   // Outside the map no other evidence (occluder, depth) is meaningful.
@@ -64,27 +75,31 @@ inline DisagreementClass classifyDisagreement(const PixelEvidence& e, float leak
   // (b) the true occluder within the bias distance (with the sampling slack).
   const bool withinBias = e.hasOccluderDistance && e.referenceOccluderDist >= 0.0f &&
                           e.referenceOccluderDist <= leakBiasFactor * e.biasWorld;
-  return {PixelClass::Other, true, !referenceLit && (throughMap || withinBias)};
+  return {PixelClass::Other, true, !referenceLit && (throughMap || withinBias), !referenceLit && bleedEvidence(e)};
 }
 
 // A candidate's class once its boundary distance is known: aliasing within the band, beyond it
-// leak (with the leak evidence) or other.
-inline PixelClass resolveCandidate(bool leakEvidence, bool withinBoundaryBand) {
+// bleed (with the bleed evidence), leak (with the leak evidence) or other.
+inline PixelClass resolveCandidate(bool leakEvidence, bool withinBoundaryBand, bool bleedEvidence = false) {
   // Aliasing before leak: within the band the map's resolution alone explains the error (METRICS.md).
   if (withinBoundaryBand) return PixelClass::Aliasing;
+  // Bleed before leak: the moments prove an occluder in front by more than the bias, so the bias
+  // did not let it through (a bleeding pixel's true occluder may well lie within the bias's slack).
+  if (bleedEvidence) return PixelClass::Bleed;
   return leakEvidence ? PixelClass::Leak : PixelClass::Other;
 }
 
 // The class of one pixel; the first that holds, in this order (the precedence):
 //   not compared, geometry mismatch, correct (the decisions agree), then for a disagreement
 //   coverage (outside the map), acne (lit in truth, the receiver's own texel in the map),
-//   aliasing (within the boundary band), leak (the bias let a real occluder through), other.
+//   aliasing (within the boundary band), bleed (a filterable map's bound lit a pixel its moments
+//   put behind an occluder), leak (the bias let a real occluder through), other.
 inline PixelClass classifyPixel(const PixelEvidence& e, float leakBiasFactor = CompareOptions{}.leakBiasFactor) {
   const PixelClass scored = scoredClass(e.referenceHit, e.rasterHit, e.referenceObject, e.rasterObject);
   if (scored != PixelClass::Correct) return scored;
   if (litDecision(e.referenceVis) == litDecision(e.rasterVis)) return PixelClass::Correct;
   const DisagreementClass d = classifyDisagreement(e, leakBiasFactor);
-  return d.candidate ? resolveCandidate(d.leakEvidence, e.withinBoundaryBand) : d.cls;
+  return d.candidate ? resolveCandidate(d.leakEvidence, e.withinBoundaryBand, d.bleedEvidence) : d.cls;
 }
 
 // Tallies: pixels per class (indexed by the class code).
