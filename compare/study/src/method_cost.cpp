@@ -20,6 +20,13 @@ constexpr double kNsPerTriangle = 190.0;
 constexpr double kNsPerPixel = 10.0;
 constexpr double kNsPerGatherTexel = 1.9;
 constexpr double kNsPerPoissonTap = 5.8;
+// Filterable maps (vsm, evsm2 with 2 moments; evsm4, msm with 4): a moments pass over every texel
+// of every layer, then the separable Gaussian (2 passes of 2 * filter.blur + 1 taps). One
+// calibration point, bench/raster_passes_bench on the loaded VM (bunny, 1080p, map 2048, blur 2):
+// shadow pass 27 ms for none, 355 for vsm, 492 for msm, i.e. ~78 / ~111 ns a texel at 10 blur
+// taps; split as a per-texel base plus a per-tap cost. The lookup reads one bilinear moments texel.
+constexpr double kNsPerMomentTexel2 = 30.0, kNsPerBlurTap2 = 4.8;
+constexpr double kNsPerMomentTexel4 = 45.0, kNsPerBlurTap4 = 6.6;
 
 double bytesPerTexel(DepthFormat f) { return f == DepthFormat::D16 ? 2.0 : 4.0; }
 
@@ -48,6 +55,21 @@ MethodCost estimateMethodCost(const Scene& scene, const Method& method, const st
   c.texelsWritten = texels * layers;
   c.mapBytes = c.texelsWritten * bytesPerTexel(method.mapFormat);
   c.shadowMs = layers * (texels * kNsPerTexel + triangles * kNsPerTriangle) * 1e-6;
+  int moments = 0;
+  switch (method.filter) {
+    case Filter::Vsm:
+    case Filter::Evsm2: moments = 2; break;
+    case Filter::Evsm4:
+    case Filter::Msm: moments = 4; break;
+    default: break;
+  }
+  if (moments > 0) {
+    const double blurTaps = method.filterBlur > 0 ? 2.0 * (2 * method.filterBlur + 1) : 0.0;
+    const double perTexel = moments == 2 ? kNsPerMomentTexel2 + blurTaps * kNsPerBlurTap2
+                                         : kNsPerMomentTexel4 + blurTaps * kNsPerBlurTap4;
+    c.shadowMs += c.texelsWritten * perTexel * 1e-6;
+    c.mapBytes += c.texelsWritten * 4.0 * moments;  // RG32F / RGBA32F moments
+  }
 
   double taps = 1, extraNs = 0;
   switch (method.filter) {
@@ -64,6 +86,13 @@ MethodCost estimateMethodCost(const Scene& scene, const Method& method, const st
     case Filter::Poisson:
       taps = method.filterTaps;
       extraNs = taps * kNsPerPoissonTap;
+      break;
+    case Filter::Vsm:
+    case Filter::Evsm2:
+    case Filter::Evsm4:
+    case Filter::Msm:
+      taps = 1;  // one bilinear fetch of the (pre-filtered) moments
+      extraNs = 4 * kNsPerGatherTexel;
       break;
   }
   c.tapsPerPixel = taps;
