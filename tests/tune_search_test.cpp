@@ -295,6 +295,16 @@ TEST(TuneCostModel, GrowsWithWhatTheMethodDoes) {
   EXPECT_GT(cost(pcf5).lookupMs, cost(pcf3).lookupMs);
   EXPECT_EQ(cost(pcf5).tapsPerPixel, 25);
   EXPECT_GT(cost(poisson).lookupMs, cost(pcf3).lookupMs);
+  // Filterable maps pay a moments pass (more with 4 moments and a wider blur) and its memory.
+  Method vsm = m, msm = m, vsmWide = m;
+  vsm.filter = vsmWide.filter = Filter::Vsm;
+  msm.filter = Filter::Msm;
+  vsmWide.filterBlur = 6;
+  EXPECT_GT(cost(vsm).shadowMs, 10 * base.shadowMs);
+  EXPECT_GT(cost(msm).shadowMs, cost(vsm).shadowMs);
+  EXPECT_GT(cost(vsmWide).shadowMs, cost(vsm).shadowMs);
+  EXPECT_DOUBLE_EQ(cost(vsm).mapBytes, base.mapBytes + 2048.0 * 2048.0 * 8.0);
+  EXPECT_DOUBLE_EQ(cost(msm).mapBytes, base.mapBytes + 2048.0 * 2048.0 * 16.0);
   Method cascades = m;
   cascades.fit = Fit::Cascades;
   cascades.cascadeCount = 4;
