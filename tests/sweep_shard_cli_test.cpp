@@ -2,11 +2,15 @@
 // writes nothing; 3 shards merged by `shadowlab merge` give exactly the metrics of an unsharded run
 // of the same plan (2 scenes x 4 configurations at 64x48); a doctored shard journal makes the merge
 // exit 2 naming the file; a truncated or foreign reference cache entry is traced again and the
-// metrics stay identical; a shard SIGKILLed midway resumes and the merge still equals the unsharded run.
+// metrics stay identical; a process that misses a reference another one is tracing waits for it
+// instead of tracing it too; a shard SIGKILLed midway resumes and the merge still equals the
+// unsharded run.
 #include <fcntl.h>
 #include <gtest/gtest.h>
 #include <signal.h>
 #include <spawn.h>
+#include <sys/file.h>
+#include <sys/stat.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -363,5 +367,69 @@ TEST(SweepShardCli, AShardKilledMidwayResumesAndTheMergeStillEqualsTheUnshardedR
   ASSERT_EQ(one.code, 0) << one.err;
   expectSameMetrics(dir / "one" / "results.json", many / "results.json");
   EXPECT_EQ(loadResultRows((many / "results.json").string()).size(), 2 * share);
+  fs::remove_all(dir);
+}
+
+// Two processes that miss the same reference at once trace it once: the second waits on the
+// entry's lock file and then reads the entry. The test holds that lock itself (as a process that is
+// tracing would), waits until the kernel lists the sweep as blocked on it (/proc/locks), puts the
+// entry in place and lets go: the sweep must load it (references_traced 0). A sweep that traced
+// instead of waiting never shows up as blocked and fails here.
+TEST(SweepShardCli, AProcessMissingAReferenceAnotherIsTracingWaitsForItInsteadOfTracingItToo) {
+  const fs::path dir = tempDir("lock");
+  const fs::path cache = dir / "cache";
+  const std::vector<std::string> args = {
+      "sweep", "sphere_on_plane",         "--grid",      "map.size=256", "--set",       "scene:/camera/width=64",
+      "--set", "scene:/camera/height=48", "--no-report", "--cache",      cache.string()};
+  std::string line;
+  for (const auto& a : args) line += " '" + a + "'";
+  auto first = runShadowlab(line.substr(1) + " -o '" + (dir / "a").string() + "'", dir);
+  ASSERT_EQ(first.code, 0) << first.err;
+  fs::path entry;
+  for (const auto& e : fs::directory_iterator(cache)) entry = e.path();
+  ASSERT_EQ(entry.extension(), ".exr");
+  fs::rename(entry, dir / "saved.exr");
+
+  const fs::path lockPath = entry.string() + ".lock";
+  const int fd = ::open(lockPath.c_str(), O_RDWR | O_CREAT | O_CLOEXEC, 0644);
+  ASSERT_GE(fd, 0);
+  ASSERT_EQ(::flock(fd, LOCK_EX), 0);
+  struct stat st {};
+  ASSERT_EQ(::fstat(fd, &st), 0);
+  const std::string inode = ":" + std::to_string(st.st_ino) + " ";
+
+  std::vector<std::string> second = args;
+  second.push_back("-o");
+  second.push_back((dir / "b").string());
+  const pid_t pid = spawnShadowlab(second, dir);
+  ASSERT_GT(pid, 0);
+  bool blocked = false;
+  int status = 0;
+  for (int look = 0; look < 300000 && !blocked; ++look) {
+    std::ifstream locks("/proc/locks");
+    std::string l;
+    while (std::getline(locks, l))
+      if (l.find("->") != std::string::npos && l.find(" " + std::to_string(pid) + " ") != std::string::npos &&
+          l.find(inode) != std::string::npos)
+        blocked = true;
+    if (blocked) break;
+    if (::waitpid(pid, &status, WNOHANG) == pid) break;  // it ended without waiting
+    std::this_thread::sleep_for(std::chrono::milliseconds(2));
+  }
+  // The entry appears (atomically, as a tracing process writes it), then the lock is let go.
+  fs::copy_file(dir / "saved.exr", dir / "entry.tmp");
+  fs::rename(dir / "entry.tmp", entry);
+  ::close(fd);
+  if (blocked) {
+    ASSERT_EQ(::waitpid(pid, &status, 0), pid);
+  }
+  EXPECT_TRUE(blocked) << "the second sweep traced the reference itself instead of waiting on " << lockPath;
+  ASSERT_TRUE(WIFEXITED(status) && WEXITSTATUS(status) == 0) << "status " << status << "\n"
+                                                             << shadowlab::testing::slurp(dir / "spawn_stderr.txt");
+  const auto runner = nlohmann::json::parse(readFile((dir / "b" / "results.json").string())).at("runner");
+  EXPECT_EQ(runner.at("references_traced"), 0) << runner.dump();
+  EXPECT_EQ(runner.at("references_loaded"), 1) << runner.dump();
+  expectSameMetrics(dir / "a" / "results.json", dir / "b" / "results.json");
+  EXPECT_FALSE(fs::exists(lockPath)) << "the lock file is removed once the entry is there";
   fs::remove_all(dir);
 }
