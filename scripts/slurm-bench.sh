@@ -47,6 +47,7 @@ speed=(sphere_on_plane --grid map.size=256,512,1024,2048,4096
   --set scene:/camera/width=1920 --set scene:/camera/height=1080)
 rm -rf "$work"
 mkdir -p "$work"
+work=$(cd "$work" && pwd)
 cd "$work"
 cache=$work/cache
 if [ "$cold" -eq 0 ]; then
