@@ -6,7 +6,8 @@ pkgs=(build-essential cmake pkg-config libembree-dev libglm-dev libopenimageio-d
       mesa-vulkan-drivers libvulkan-dev glslang-dev glslang-tools spirv-tools vulkan-validationlayers
       nlohmann-json3-dev libcli11-dev libtbb-dev libgtest-dev libbenchmark-dev
       python3-matplotlib chromium
-      clang libclang-rt-14-dev)
+      clang libclang-rt-14-dev
+      slurm-wlm munge)  # the loopback Slurm test (tests/slurm_loopback_test.sh, scripts/slurm-local.sh)
 missing=()
 for p in "${pkgs[@]}"; do
   dpkg-query -W -f='${Status}\n' "$p" 2>/dev/null | grep -q '^install ok installed' || missing+=("$p")

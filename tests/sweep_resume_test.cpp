@@ -14,44 +14,17 @@
 #include "shadowlab/compare/sweep.h"
 #include "shadowlab/scenes/error.h"
 #include "shadowlab/scenes/io.h"
+#include "support/fake_sweep_runner.h"
 
 namespace fs = std::filesystem;
 using namespace shadowlab;
 
 namespace {
 
-// Metrics that are a known function of the method, so a row can be checked against its config.
-double fakeErrorRate(const Method& m) { return 1.0 / m.mapSize + 0.001 * m.biasSlope; }
+using FakeRunner = shadowlab::testing::FakeSweepRunner;
 
-class FakeRunner : public SweepRunner {
- public:
-  std::map<std::string, int> runs;  // config text (from the method) -> times run
-  std::atomic<bool>* stopAfter = nullptr;
-  int stopAfterRuns = -1;
-
-  SweepRunOutput run(const Scene& scene, const Method& m, const std::string& light, const std::string&) override {
-    std::string key = scene.name + "|" + std::to_string(m.mapSize) + "|" + std::to_string(m.biasSlope) + "|" + light;
-    ++runs[key];
-    ++total;
-    if (stopAfter && total == stopAfterRuns) stopAfter->store(true);  // as if Ctrl-C came during this run
-    SweepRunOutput out;
-    out.metrics = {{"error_rate", fakeErrorRate(m)},
-                   {"acne_rate", 0.0},
-                   {"leak_rate", 0.001 * m.biasSlope},
-                   {"aliasing_rate", 1.0 / m.mapSize},
-                   {"coverage_rate", 0.0},
-                   {"m_median", 1.0},
-                   {"m_p95", 2.0},
-                   {"m_max", 3.0}};
-    out.timings = {
-        {"shadow_gpu_ms", m.mapSize / 100.0}, {"camera_gpu_ms", 1.0}, {"readback_ms", 0.5}, {"compare_ms", 0.25}};
-    return out;
-  }
-  bool writeTriptych(const Scene&, const Method&, const std::string&, const std::string&) override { return false; }
-  std::string deviceName() override { return device; }
-  int total = 0;
-  std::string device;  // what deviceName() reports
-};
+// The fake's error_rate of a sphere_on_plane configuration.
+double fakeErrorRate(const Method& m) { return shadowlab::testing::fakeErrorRate("sphere_on_plane", m); }
 
 std::string tempDir(const std::string& name) {
   fs::path d = fs::temp_directory_path() / ("shadowlab_sweep_resume_" + name + "_" + std::to_string(::getpid()));

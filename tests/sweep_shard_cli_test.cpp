@@ -2,14 +2,23 @@
 // writes nothing; 3 shards merged by `shadowlab merge` give exactly the metrics of an unsharded run
 // of the same plan (2 scenes x 4 configurations at 64x48); a doctored shard journal makes the merge
 // exit 2 naming the file; a truncated or foreign reference cache entry is traced again and the
-// metrics stay identical.
+// metrics stay identical; a process that misses a reference another one is tracing waits for it
+// instead of tracing it too; a shard SIGKILLed midway resumes and the merge still equals the
+// unsharded run.
+#include <fcntl.h>
 #include <gtest/gtest.h>
+#include <signal.h>
+#include <spawn.h>
+#include <sys/file.h>
+#include <sys/stat.h>
+#include <sys/wait.h>
 #include <unistd.h>
 
 #include <algorithm>
 #include <chrono>
 #include <filesystem>
 #include <fstream>
+#include <thread>
 
 #include <nlohmann/json.hpp>
 
@@ -48,6 +57,31 @@ void expectSameMetrics(const fs::path& a, const fs::path& b) {
     EXPECT_EQ(ra[i].method, rb[i].method) << ra[i].key();
     EXPECT_EQ(ra[i].metrics, rb[i].metrics) << ra[i].key() << ": every metric must match exactly";
   }
+}
+
+// Complete lines (ending in a newline) of a journal; a torn last line does not count.
+size_t completeLines(const fs::path& journal) {
+  const std::string text = shadowlab::testing::slurp(journal);
+  return size_t(std::count(text.begin(), text.end(), '\n'));
+}
+
+// Starts SHADOWLAB_BINARY with `args` (no shell), stdout and stderr into `dir`; returns its pid.
+pid_t spawnShadowlab(const std::vector<std::string>& args, const fs::path& dir) {
+  std::vector<std::string> all = {SHADOWLAB_BINARY};
+  all.insert(all.end(), args.begin(), args.end());
+  std::vector<char*> argv;
+  for (auto& a : all) argv.push_back(a.data());
+  argv.push_back(nullptr);
+  posix_spawn_file_actions_t files;
+  posix_spawn_file_actions_init(&files);
+  posix_spawn_file_actions_addopen(&files, STDOUT_FILENO, (dir / "spawn_stdout.txt").c_str(),
+                                   O_WRONLY | O_CREAT | O_TRUNC, 0644);
+  posix_spawn_file_actions_addopen(&files, STDERR_FILENO, (dir / "spawn_stderr.txt").c_str(),
+                                   O_WRONLY | O_CREAT | O_TRUNC, 0644);
+  pid_t pid = -1;
+  const int rc = posix_spawn(&pid, SHADOWLAB_BINARY, &files, nullptr, argv.data(), environ);
+  posix_spawn_file_actions_destroy(&files);
+  return rc == 0 ? pid : -1;
 }
 
 }  // namespace
@@ -252,5 +286,150 @@ TEST(SweepShardCli, SlurmSubmitRunsTheArrayThenTheMergeAfterIt) {
   EXPECT_EQ(second, "--parsable --dependency=afterok:4242 " + (out / "merge.sbatch").string());
   EXPECT_NE(r.out.find("job 4242"), std::string::npos) << r.out;
   EXPECT_NE(r.out.find("job 4243"), std::string::npos) << r.out;
+  fs::remove_all(dir);
+}
+
+// A shard killed (SIGKILL) midway: the test freezes the running shard with SIGSTOP, reads its
+// journal while it cannot write, and kills it only once it holds at least a third of its rows and
+// fewer than all (else it lets it go on with SIGCONT and looks again). So the kill always lands midway,
+// perhaps in the middle of appending a row, whatever the machine's speed. Running the same command
+// again resumes the rows already saved; the merge then equals an unsharded run in every metric.
+TEST(SweepShardCli, AShardKilledMidwayResumesAndTheMergeStillEqualsTheUnshardedRun) {
+  const fs::path dir = tempDir("kill");
+  const std::vector<std::string> plan = {"sphere_on_plane",
+                                         "contact",
+                                         "--grid",
+                                         "map.size=128,256,512,1024",
+                                         "--grid",
+                                         "bias.slope=0,1,2",
+                                         "--set",
+                                         "scene:/camera/width=128",
+                                         "--set",
+                                         "scene:/camera/height=96",
+                                         "--no-report",
+                                         "--cache",
+                                         (dir / "cache").string()};
+  std::string planLine;
+  for (const auto& a : plan) planLine += " '" + a + "'";
+  const fs::path many = dir / "many";
+  const fs::path journal = many / "shards" / "0-of-2" / "rows.jsonl";
+  const size_t share = 12;  // 2 scenes x 12 configurations, every 2nd row
+
+  std::vector<std::string> shard0 = {"sweep"};
+  shard0.insert(shard0.end(), plan.begin(), plan.end());
+  for (const char* a : {"--shard", "0/2", "-o"}) shard0.push_back(a);
+  shard0.push_back(many.string());
+  const pid_t pid = spawnShadowlab(shard0, dir);
+  ASSERT_GT(pid, 0) << "cannot start " << SHADOWLAB_BINARY;
+  size_t rowsAtKill = 0;
+  bool killed = false;
+  for (int look = 0; look < 200000 && !killed; ++look) {
+    ASSERT_EQ(::kill(pid, SIGSTOP), 0);
+    int status = 0;
+    ASSERT_EQ(::waitpid(pid, &status, WUNTRACED), pid);
+    ASSERT_TRUE(WIFSTOPPED(status)) << "the shard ended before it could be stopped midway (status " << status
+                                    << "); stderr:\n"
+                                    << shadowlab::testing::slurp(dir / "spawn_stderr.txt");
+    const size_t rows = fs::exists(journal) ? completeLines(journal) : 0;
+    ASSERT_LT(rows, share) << "the shard saved all its rows between two looks";
+    if (rows >= share / 3) {
+      rowsAtKill = rows;
+      ASSERT_EQ(::kill(pid, SIGKILL), 0);
+      killed = true;
+    }
+    ASSERT_EQ(::kill(pid, SIGCONT), 0);
+    if (!killed) std::this_thread::sleep_for(std::chrono::milliseconds(2));  // pacing only: each look is exact
+  }
+  ASSERT_TRUE(killed) << "no row after 200000 looks";
+  int status = 0;
+  ASSERT_EQ(::waitpid(pid, &status, 0), pid);
+  ASSERT_TRUE(WIFSIGNALED(status) && WTERMSIG(status) == SIGKILL) << "status " << status;
+  std::printf("killed shard 0/2 with %zu of its %zu rows saved\n", rowsAtKill, share);
+
+  // The merge refuses the incomplete shard (naming it), then the same command resumes it.
+  auto r = runShadowlab("sweep" + planLine + " --shard 1/2 -o '" + many.string() + "'", dir);
+  ASSERT_EQ(r.code, 0) << r.err;
+  auto m = runShadowlab("merge '" + many.string() + "' --no-report --cache '" + (dir / "cache").string() + "'", dir);
+  EXPECT_EQ(m.code, 2) << m.err;
+  EXPECT_NE(m.err.find("0-of-2"), std::string::npos) << m.err;
+  EXPECT_FALSE(fs::exists(many / "results.json"));
+  r = runShadowlab("sweep" + planLine + " --shard 0/2 -o '" + many.string() + "'", dir);
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_NE(r.out.find("sweep: " + std::to_string(share) + " rows (" + std::to_string(share - rowsAtKill) + " run, " +
+                       std::to_string(rowsAtKill) + " resumed)"),
+            std::string::npos)
+      << r.out;
+  EXPECT_EQ(completeLines(journal), share) << "one complete line per row, the torn one (if any) replaced";
+  m = runShadowlab("merge '" + many.string() + "' --no-report --cache '" + (dir / "cache").string() + "'", dir);
+  ASSERT_EQ(m.code, 0) << m.err;
+
+  auto one = runShadowlab("sweep" + planLine + " -o '" + (dir / "one").string() + "'", dir);
+  ASSERT_EQ(one.code, 0) << one.err;
+  expectSameMetrics(dir / "one" / "results.json", many / "results.json");
+  EXPECT_EQ(loadResultRows((many / "results.json").string()).size(), 2 * share);
+  fs::remove_all(dir);
+}
+
+// Two processes that miss the same reference at once trace it once: the second waits on the
+// entry's lock file and then reads the entry. The test holds that lock itself (as a process that is
+// tracing would), waits until the kernel lists the sweep as blocked on it (/proc/locks), puts the
+// entry in place and lets go: the sweep must load it (references_traced 0). A sweep that traced
+// instead of waiting never shows up as blocked and fails here.
+TEST(SweepShardCli, AProcessMissingAReferenceAnotherIsTracingWaitsForItInsteadOfTracingItToo) {
+  const fs::path dir = tempDir("lock");
+  const fs::path cache = dir / "cache";
+  const std::vector<std::string> args = {
+      "sweep", "sphere_on_plane",         "--grid",      "map.size=256", "--set",       "scene:/camera/width=64",
+      "--set", "scene:/camera/height=48", "--no-report", "--cache",      cache.string()};
+  std::string line;
+  for (const auto& a : args) line += " '" + a + "'";
+  auto first = runShadowlab(line.substr(1) + " -o '" + (dir / "a").string() + "'", dir);
+  ASSERT_EQ(first.code, 0) << first.err;
+  fs::path entry;
+  for (const auto& e : fs::directory_iterator(cache)) entry = e.path();
+  ASSERT_EQ(entry.extension(), ".exr");
+  fs::rename(entry, dir / "saved.exr");
+
+  const fs::path lockPath = entry.string() + ".lock";
+  const int fd = ::open(lockPath.c_str(), O_RDWR | O_CREAT | O_CLOEXEC, 0644);
+  ASSERT_GE(fd, 0);
+  ASSERT_EQ(::flock(fd, LOCK_EX), 0);
+  struct stat st {};
+  ASSERT_EQ(::fstat(fd, &st), 0);
+  const std::string inode = ":" + std::to_string(st.st_ino) + " ";
+
+  std::vector<std::string> second = args;
+  second.push_back("-o");
+  second.push_back((dir / "b").string());
+  const pid_t pid = spawnShadowlab(second, dir);
+  ASSERT_GT(pid, 0);
+  bool blocked = false;
+  int status = 0;
+  for (int look = 0; look < 300000 && !blocked; ++look) {
+    std::ifstream locks("/proc/locks");
+    std::string l;
+    while (std::getline(locks, l))
+      if (l.find("->") != std::string::npos && l.find(" " + std::to_string(pid) + " ") != std::string::npos &&
+          l.find(inode) != std::string::npos)
+        blocked = true;
+    if (blocked) break;
+    if (::waitpid(pid, &status, WNOHANG) == pid) break;  // it ended without waiting
+    std::this_thread::sleep_for(std::chrono::milliseconds(2));
+  }
+  // The entry appears (atomically, as a tracing process writes it), then the lock is let go.
+  fs::copy_file(dir / "saved.exr", dir / "entry.tmp");
+  fs::rename(dir / "entry.tmp", entry);
+  ::close(fd);
+  if (blocked) {
+    ASSERT_EQ(::waitpid(pid, &status, 0), pid);
+  }
+  EXPECT_TRUE(blocked) << "the second sweep traced the reference itself instead of waiting on " << lockPath;
+  ASSERT_TRUE(WIFEXITED(status) && WEXITSTATUS(status) == 0) << "status " << status << "\n"
+                                                             << shadowlab::testing::slurp(dir / "spawn_stderr.txt");
+  const auto runner = nlohmann::json::parse(readFile((dir / "b" / "results.json").string())).at("runner");
+  EXPECT_EQ(runner.at("references_traced"), 0) << runner.dump();
+  EXPECT_EQ(runner.at("references_loaded"), 1) << runner.dump();
+  expectSameMetrics(dir / "a" / "results.json", dir / "b" / "results.json");
+  EXPECT_FALSE(fs::exists(lockPath)) << "the lock file is removed once the entry is there";
   fs::remove_all(dir);
 }

@@ -13,32 +13,14 @@
 #include "shadowlab/compare/sweep.h"
 #include "shadowlab/scenes/error.h"
 #include "shadowlab/scenes/io.h"
+#include "support/fake_sweep_runner.h"
 
 namespace fs = std::filesystem;
 using namespace shadowlab;
 
 namespace {
 
-// Metrics a known function of the method, so a row can be checked against its configuration.
-class FakeRunner : public SweepRunner {
- public:
-  int total = 0;
-  SweepRunOutput run(const Scene& scene, const Method& m, const std::string&, const std::string&) override {
-    ++total;
-    SweepRunOutput out;
-    out.metrics = {{"error_rate", 1.0 / m.mapSize + 0.001 * m.biasSlope + (scene.name == "contact" ? 0.5 : 0.0)},
-                   {"acne_rate", 0.0},
-                   {"leak_rate", 0.001 * m.biasSlope},
-                   {"aliasing_rate", 1.0 / m.mapSize},
-                   {"coverage_rate", 0.0},
-                   {"m_median", 1.0},
-                   {"m_p95", 2.0},
-                   {"m_max", 3.0}};
-    out.timings = {{"shadow_gpu_ms", m.mapSize / 100.0}, {"camera_gpu_ms", 1.0}};
-    return out;
-  }
-  bool writeTriptych(const Scene&, const Method&, const std::string&, const std::string&) override { return false; }
-};
+using FakeRunner = shadowlab::testing::FakeSweepRunner;
 
 std::string tempDir(const std::string& name) {
   fs::path d = fs::temp_directory_path() / ("shadowlab_sweep_shard_" + name + "_" + std::to_string(::getpid()));

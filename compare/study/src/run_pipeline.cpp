@@ -1,7 +1,13 @@
 // reference + raster + compare in one process; the reference is cached on disk by content hash.
+#include <fcntl.h>
+#include <sys/file.h>
+#include <unistd.h>
+
+#include <cerrno>
 #include <chrono>
 #include <cstdlib>
 #include <filesystem>
+#include <optional>
 
 #include "shadowlab/compare/run_pipeline.h"
 #include "shadowlab/scenes/error.h"
@@ -16,25 +22,70 @@ ReferenceCache::ReferenceCache(std::string dir) : dir_(std::move(dir)) {
   }
 }
 
-Frame ReferenceCache::get(const Scene& scene, const ReferenceOptions& options, bool* traced, ReferenceStats* stats) {
-  const std::string path = dir_ + "/" + referenceHash(scene, options) + ".exr";
+namespace {
+
+// The cached frame at `path` when it reads back and names `scene` (the hash names the content, so
+// a mismatch means a foreign or damaged file: the caller traces again and replaces it rather than
+// compare against the wrong truth); else nothing.
+std::optional<Frame> loadEntry(const std::string& path, const Scene& scene) {
   std::error_code ec;
-  if (std::filesystem::is_regular_file(path, ec)) {
-    try {
-      Frame cached = readFrameExr(path);
-      // The hash names the content, so a mismatch means a foreign or damaged file: trace again
-      // and replace it rather than compare against the wrong truth.
-      auto it = cached.meta.find("scene_hash");
-      if (it != cached.meta.end() && it->is_string() && it->get<std::string>() == scene.hash) {
-        if (traced) *traced = false;
-        return cached;
-      }
-    } catch (const InputError&) {
-      // unreadable entry (e.g. written by an older build): fall through and replace it
+  if (!std::filesystem::is_regular_file(path, ec)) return std::nullopt;
+  try {
+    Frame cached = readFrameExr(path);
+    auto it = cached.meta.find("scene_hash");
+    if (it != cached.meta.end() && it->is_string() && it->get<std::string>() == scene.hash) return cached;
+  } catch (const InputError&) {
+    // unreadable entry (e.g. written by an older build, or truncated): trace it again
+  }
+  return std::nullopt;
+}
+
+// An exclusive flock on DIR/<entry>.lock while one process traces a missing entry, so that the
+// shards of a sweep that need the same reference at once trace it once: the others wait, then read
+// it. Only an optimisation: entries are written atomically, so where locking does not work (a
+// filesystem without flock) every process simply traces, as before. The lock file is removed when
+// the entry is written; a waiter that then gets the lock on the removed file finds the entry.
+class EntryLock {
+ public:
+  explicit EntryLock(std::string path) : path_(std::move(path)) {
+    fd_ = ::open(path_.c_str(), O_RDWR | O_CREAT | O_CLOEXEC, 0644);
+    if (fd_ < 0) return;
+    int rc;
+    do rc = ::flock(fd_, LOCK_EX);
+    while (rc != 0 && errno == EINTR);
+    if (rc != 0) {
+      ::close(fd_);
+      fd_ = -1;
     }
   }
-  Frame frame = renderReference(scene, options, stats);
+  ~EntryLock() {
+    if (fd_ < 0) return;
+    ::unlink(path_.c_str());  // before the unlock: a newcomer then makes a fresh file, and finds the entry
+    ::close(fd_);
+  }
+  EntryLock(const EntryLock&) = delete;
+  EntryLock& operator=(const EntryLock&) = delete;
+
+ private:
+  std::string path_;
+  int fd_ = -1;
+};
+
+}  // namespace
+
+Frame ReferenceCache::get(const Scene& scene, const ReferenceOptions& options, bool* traced, ReferenceStats* stats) {
+  const std::string path = dir_ + "/" + referenceHash(scene, options) + ".exr";
+  if (auto cached = loadEntry(path, scene)) {
+    if (traced) *traced = false;
+    return std::move(*cached);
+  }
   makeDirs(dir_);
+  EntryLock lock(path + ".lock");
+  if (auto cached = loadEntry(path, scene)) {  // another process traced it while this one waited
+    if (traced) *traced = false;
+    return std::move(*cached);
+  }
+  Frame frame = renderReference(scene, options, stats);
   writeFrameExr(frame, path);  // atomic: concurrent runs never see a truncated entry
   if (traced) *traced = true;
   return frame;

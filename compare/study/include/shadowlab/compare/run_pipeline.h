@@ -13,7 +13,8 @@ namespace shadowlab {
 
 // Reference frames stored as DIR/<referenceHash>.exr. Default DIR: $SHADOWLAB_CACHE, else
 // ".shadowlab-cache" in the current folder. Writes are atomic, so concurrent or interrupted runs
-// never leave a truncated entry.
+// never leave a truncated entry; processes that miss the same entry at once trace it once (the
+// others wait on DIR/<referenceHash>.exr.lock, then read it).
 class ReferenceCache {
  public:
   explicit ReferenceCache(std::string dir = "");
