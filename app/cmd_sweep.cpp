@@ -21,17 +21,11 @@ namespace {
 namespace fs = std::filesystem;
 using namespace shadowlab;
 
-struct Options {
+struct Options : app::StudyOptions {  // spp 0: not given (the sweep file's, else 1)
   std::vector<std::string> scenes;
   std::vector<std::string> grid;
   std::string sweepFile;
   std::vector<std::string> sets;
-  std::string methodFile;
-  std::string outDir;
-  std::string light;
-  int spp = 0;  // 0: not given (the sweep file's, else 1)
-  std::string cacheDir;
-  std::string device;
   bool keepImages = false;
   bool noReport = false;
   std::string shard;  // "I/N": only this shard's rows, into DIR/shards/I-of-N (no report)
@@ -328,15 +322,7 @@ app::Registrar reg{
                       "Sweep file (JSON: scenes, grid, set, ...); the command line adds to it");
       sub->add_option("--set", opts->sets, "Method setting for every configuration key=value, repeatable")
           ->allow_extra_args(false);
-      sub->add_option("--method", opts->methodFile, "Base method file (JSON, see raster/METHODS.md)");
-      sub->add_option("-o,--out", opts->outDir, "Output folder (running again continues an interrupted sweep)")
-          ->required();
-      sub->add_option("--light", opts->light, "Light to render and compare (default: each scene's first)");
-      sub->add_option("--spp", opts->spp, "Reference samples per pixel (default 1)");
-      sub->add_option(
-          "--cache", opts->cacheDir,
-          "Reference cache folder (default: $SHADOWLAB_CACHE, else .shadowlab-cache beside the output folder)");
-      sub->add_option("--device", opts->device, "Vulkan device name substring (default: lavapipe)");
+      app::addStudyOptions(sub, *opts, "sweep");
       sub->add_flag("--keep-images", opts->keepImages,
                     "Write raster.exr and errors.png per configuration under DIR/images/");
       sub->add_option("--frontier-metric", opts->frontierMetric,

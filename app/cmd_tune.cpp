@@ -22,19 +22,14 @@ namespace {
 namespace fs = std::filesystem;
 using namespace shadowlab;
 
-struct Options {
+struct Options : app::StudyOptions {
+  Options() { spp = 1; }
   std::vector<std::string> scenes;
   std::string maxError, budgetMs;  // text: checked here, so "abc" is a GCC-style InputError
   std::vector<std::string> maxRates;
   std::string keys;
   std::vector<std::string> ranges;
   std::vector<std::string> fixed;
-  std::string methodFile;
-  std::string light;
-  int spp = 1;
-  std::string outDir;
-  std::string cacheDir;
-  std::string device;
   bool noReport = false;
   bool checkGrid = false;
 };
@@ -140,15 +135,7 @@ app::Registrar reg{
       sub->add_option("--fixed", opts->fixed,
                       "A method key or scene:/pointer value for every configuration (repeatable)")
           ->allow_extra_args(false);
-      sub->add_option("--method", opts->methodFile, "Base method file (JSON, see raster/METHODS.md)");
-      sub->add_option("-o,--out", opts->outDir, "Output folder (running again continues an interrupted tune)")
-          ->required();
-      sub->add_option("--light", opts->light, "Light to render and compare (default: each scene's first)");
-      sub->add_option("--spp", opts->spp, "Reference samples per pixel (default 1)");
-      sub->add_option(
-          "--cache", opts->cacheDir,
-          "Reference cache folder (default: $SHADOWLAB_CACHE, else .shadowlab-cache beside the output folder)");
-      sub->add_option("--device", opts->device, "Vulkan device name substring (default: lavapipe)");
+      app::addStudyOptions(sub, *opts, "tune");
       sub->add_flag("--no-report", opts->noReport, "No report.html (tune.html, tune.json, results.json/csv still)");
       sub->add_flag("--check-grid", opts->checkGrid,
                     "Also run the dense grid of the same keys and values and compare its best with the choice "

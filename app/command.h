@@ -32,4 +32,27 @@ struct Registrar {
   Registrar(const std::string& name, Setup setup) { commandRegistry().push_back({name, std::move(setup)}); }
 };
 
+// What the commands that run many configurations through the pipeline (sweep, tune) share: the
+// base method, the output folder, the light, the reference's samples, its cache and the device.
+struct StudyOptions {
+  std::string methodFile;
+  std::string outDir;
+  std::string light;
+  int spp = 0;  // 0: not given
+  std::string cacheDir;
+  std::string device;
+};
+
+// Registers them on `sub`; `what` names the command's run in the help ("sweep", "tune").
+inline void addStudyOptions(CLI::App* sub, StudyOptions& o, const std::string& what) {
+  sub->add_option("--method", o.methodFile, "Base method file (JSON, see raster/METHODS.md)");
+  sub->add_option("-o,--out", o.outDir, "Output folder (running again continues an interrupted " + what + ")")
+      ->required();
+  sub->add_option("--light", o.light, "Light to render and compare (default: each scene's first)");
+  sub->add_option("--spp", o.spp, "Reference samples per pixel (default 1)");
+  sub->add_option("--cache", o.cacheDir,
+                  "Reference cache folder (default: $SHADOWLAB_CACHE, else .shadowlab-cache beside the output folder)");
+  sub->add_option("--device", o.device, "Vulkan device name substring (default: lavapipe)");
+}
+
 }  // namespace shadowlab::app
