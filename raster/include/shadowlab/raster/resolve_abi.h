@@ -105,6 +105,7 @@ SHADOWLAB_BLOCK(Params) {
                                       // z fit-camera view depth of the evaluation camera's origin
   vec4 moments;   // filterable maps: x vsm.min_variance, y vsm.bleed_reduction, z, w the EVSM exponents (clamped)
   vec4 moments2;  // x msm.moment_bias, y filter.blur (radius, texels)
+  vec4 adaptive;  // adaptive depth bias: x on (0/1), y bias.adaptive_epsilon (world units)
 }
 SHADOWLAB_BLOCK_END(P);
 #endif
@@ -132,7 +133,8 @@ static_assert(offsetof(Params, cascadeFar) == offsetof(Params, cascadeView) + 16
 static_assert(offsetof(Params, cascadeInfo) == offsetof(Params, cascadeFar) + 32);
 static_assert(offsetof(Params, moments) == offsetof(Params, cascadeInfo) + 16);
 static_assert(offsetof(Params, moments2) == offsetof(Params, moments) + 16);
-static_assert(sizeof(Params) == 2816, "std140 size of resolve.frag's Params (glslangValidator -q reports it)");
+static_assert(offsetof(Params, adaptive) == offsetof(Params, moments2) + 16);
+static_assert(sizeof(Params) == 2832, "std140 size of resolve.frag's Params (glslangValidator -q reports it)");
 static_assert(2 * 4 >= kMaxLightLayers, "cascadeFar holds one far split per light layer");
 static_assert(kMaxLightLayers + kMaxProjectors == kMaxLayers);
 }  // namespace shadowlab::raster::abi
