@@ -30,6 +30,8 @@ layout(constant_id = kSpecLightType) const int kLightType = kLightDirectional;
 // Every light layer is affine (orthographic: texFromWorld's last row is (0, 0, 0, 1)), so w = 1
 // and the divisions by it fold away; the results are the same bits.
 layout(constant_id = kSpecAffine) const bool kAffine = false;
+// bias.adaptive (adaptiveEpsilon): off, its code is compiled out.
+layout(constant_id = kSpecAdaptive) const bool kAdaptive = false;
 
 // Params P (binding kBindingParams) comes from resolve_abi.h.
 layout(set = 0, binding = kBindingMapDepth) uniform sampler2DArray mapDepth;         // NEAREST, raw depth
@@ -291,7 +293,7 @@ vec3 towardsLight(vec3 p) {
 // scene-scale bias.adaptive_epsilon (world units along the light ray, here in map depth at q) plus
 // one step of the depth format (the stored depth's rounding; the paper's precision term).
 float adaptiveEpsilon(Layer l, vec3 q, vec4 tQ, float depthQ) {
-  vec4 tE = tQ + dirMap(l, towardsLight(q) * P.adaptive.y);
+  vec4 tE = tQ + dirMap(l, towardsLight(q) * P.adaptive.x);
   return max(depthQ - tE.z / tE.w, 0.0) + depthResolution(depthQ);
 }
 
@@ -307,9 +309,8 @@ LayerHit lookUp(int layerIndex, Surface s) {
   h.uvz = h.tQ.xyz / h.tQ.w;
   h.inMap = h.tQ.w > 0.0 && all(greaterThanEqual(h.uvz.xy, vec2(0.0))) && all(lessThanEqual(h.uvz.xy, vec2(1.0)));
   h.planeSlope = planeSlope(l, h.tQ, s.normal, s.e1, h.texelWorld);
-  bool adaptive = P.adaptive.x > 0.5;
-  float ref = adaptive ? h.uvz.z - adaptiveEpsilon(l, q, h.tQ, h.uvz.z) : h.uvz.z - P.bias.x;
-  h.lookup = Lookup(l, h.uvz.xy * l.size, ref, P.bias.z > 0.5 || adaptive ? h.planeSlope : vec2(0.0));
+  float ref = kAdaptive ? h.uvz.z - adaptiveEpsilon(l, q, h.tQ, h.uvz.z) : h.uvz.z - P.bias.x;
+  h.lookup = Lookup(l, h.uvz.xy * l.size, ref, P.bias.z > 0.5 || kAdaptive ? h.planeSlope : vec2(0.0));
   return h;
 }
 
@@ -429,7 +430,7 @@ LightChannels shadeLight(Surface s) {
   if (P.depthBias.z < 0.0) rasterBias = max(rasterBias, P.depthBias.z);
   // Adaptive: the bias the centre texel's comparison applied (negative where the tangent plane lies
   // beyond p at the texel centre).
-  float biasDepth = P.adaptive.x > 0.5 ? rasterBias + depthP - refAt(L, centerTexel(L))
+  float biasDepth = kAdaptive ? rasterBias + depthP - refAt(L, centerTexel(L))
                                        : P.bias.x + rasterBias + (depthP - h.uvz.z);
   vec4 tL = tP + dirMap(layer, toLight * h.texelWorld);
   float depthStep = abs(depthP - tL.z / tL.w);
