@@ -430,8 +430,8 @@ LightChannels shadeLight(Surface s) {
   if (P.depthBias.z < 0.0) rasterBias = max(rasterBias, P.depthBias.z);
   // Adaptive: the bias the centre texel's comparison applied (negative where the tangent plane lies
   // beyond p at the texel centre).
-  float biasDepth = kAdaptive ? rasterBias + depthP - refAt(L, centerTexel(L))
-                                       : P.bias.x + rasterBias + (depthP - h.uvz.z);
+  float biasDepth =
+      kAdaptive ? rasterBias + depthP - refAt(L, centerTexel(L)) : P.bias.x + rasterBias + (depthP - h.uvz.z);
   vec4 tL = tP + dirMap(layer, toLight * h.texelWorld);
   float depthStep = abs(depthP - tL.z / tL.w);
   float worldPerDepth = depthStep > 0.0 ? h.texelWorld / depthStep : 0.0;
