@@ -117,6 +117,8 @@ TEST(RasterResolveParams, MethodFieldsLandWhereTheShaderReadsThem) {
   m.biasCompare = 0.002f;
   m.biasNormal = 1.5f;
   m.biasReceiverPlane = true;
+  m.biasAdaptive = true;
+  m.biasAdaptiveEpsilon = 0.03f;
   m.biasConstant = 2.0f;
   m.biasSlope = 3.0f;
   m.biasClamp = 0.01f;
@@ -128,6 +130,10 @@ TEST(RasterResolveParams, MethodFieldsLandWhereTheShaderReadsThem) {
   FrameLayers layers = fitFrameLayers(s, &s.lights[0], m, s.camera);
   raster::abi::Params prm = packResolveParams(s, &s.lights[0], m, s.camera, layers, {});
   EXPECT_EQ(prm.bias, glm::vec4(0.002f, 1.5f, 1.0f, 2.5f));
+  EXPECT_EQ(prm.adaptive, glm::vec4(0.03f, 0.0f, 0.0f, 0.0f));
+  EXPECT_EQ(resolveSpecialization(s, &s.lights[0], m, layers)[raster::abi::kSpecAdaptive], 1u);
+  m.biasAdaptive = false;
+  EXPECT_EQ(resolveSpecialization(s, &s.lights[0], m, layers)[raster::abi::kSpecAdaptive], 0u);
   EXPECT_EQ(prm.depthBias, glm::vec4(2.0f, 3.0f, 0.01f, std::ldexp(1.0f, -16)));
   EXPECT_EQ(prm.sizes, glm::ivec4(1024, 1, 0, m.filterSize));
   EXPECT_EQ(prm.sizes2, glm::ivec4(160, 120, 24, 0));

@@ -66,6 +66,8 @@ TEST(ScenesMethod, KeysInDocumentationOrder) {
                                                     "bias.compare",
                                                     "bias.normal",
                                                     "bias.receiver_plane",
+                                                    "bias.adaptive",
+                                                    "bias.adaptive_epsilon",
                                                     "filter",
                                                     "filter.size",
                                                     "filter.taps",
@@ -90,6 +92,11 @@ TEST(ScenesMethod, SetEveryKeyFromText) {
   applyMethodSetting(m, "bias.clamp", "0.01", "--set");
   applyMethodSetting(m, "bias.compare", "0.001", "--set");
   applyMethodSetting(m, "bias.normal", "1.5", "--set");
+  applyMethodSetting(m, "bias.adaptive", "true", "--set");
+  applyMethodSetting(m, "bias.adaptive_epsilon", "0.01", "--set");
+  EXPECT_TRUE(m.biasAdaptive);
+  EXPECT_FLOAT_EQ(m.biasAdaptiveEpsilon, 0.01f);
+  EXPECT_THROW(applyMethodSetting(m, "bias.adaptive_epsilon", "-0.1", "--set"), InputError);
   applyMethodSetting(m, "bias.receiver_plane", "1", "--set");
   applyMethodSetting(m, "filter", "poisson", "--set");
   applyMethodSetting(m, "filter.size", "7", "--set");

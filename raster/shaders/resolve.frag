@@ -30,6 +30,8 @@ layout(constant_id = kSpecLightType) const int kLightType = kLightDirectional;
 // Every light layer is affine (orthographic: texFromWorld's last row is (0, 0, 0, 1)), so w = 1
 // and the divisions by it fold away; the results are the same bits.
 layout(constant_id = kSpecAffine) const bool kAffine = false;
+// bias.adaptive (adaptiveEpsilon): off, its code is compiled out.
+layout(constant_id = kSpecAdaptive) const bool kAdaptive = false;
 
 // Params P (binding kBindingParams) comes from resolve_abi.h.
 layout(set = 0, binding = kBindingMapDepth) uniform sampler2DArray mapDepth;         // NEAREST, raw depth
@@ -276,6 +278,25 @@ vec2 planeSlope(Layer l, vec4 tQ, vec3 normal, vec3 e1, float texelWorld) {
                           : vec2(0.0);
 }
 
+// One step r of the map's depth format at a depth: the fixed formats' (P.depthBias.w), a float
+// format's ulp there (Vulkan's r for D32F).
+float depthResolution(float depth) { return kFloatDepth ? exp2(floor(log2(max(depth, 1e-30))) - 23.0) : P.depthBias.w; }
+
+vec3 towardsLight(vec3 p) {
+  return kLightType == kLightDirectional ? -P.lightDirCos.xyz : normalize(P.lightPosType.xyz - p);
+}
+
+// Adaptive depth bias (Dou, Yan, Kerzner, Dai, Wyman 2014): a tap's reference is the depth at
+// which the light's ray through its texel centre meets the receiver's tangent plane. A projective
+// map keeps that plane a plane, z = depth(q) + planeSlope . (texel centre - st), so refAt with the
+// receiver plane's slope is that intersection without an inverse matrix. Less the epsilon: the
+// scene-scale bias.adaptive_epsilon (world units along the light ray, here in map depth at q) plus
+// one step of the depth format (the stored depth's rounding; the paper's precision term).
+float adaptiveEpsilon(Layer l, vec3 q, vec4 tQ, float depthQ) {
+  vec4 tE = tQ + dirMap(l, towardsLight(q) * P.adaptive.x);
+  return max(depthQ - tE.z / tE.w, 0.0) + depthResolution(depthQ);
+}
+
 // The one lookup of a surface point in a light layer, for the pixel's own layer and for the next
 // cascade of a blend band: the normal offset, the projection, the receiver plane.
 LayerHit lookUp(int layerIndex, Surface s) {
@@ -288,7 +309,8 @@ LayerHit lookUp(int layerIndex, Surface s) {
   h.uvz = h.tQ.xyz / h.tQ.w;
   h.inMap = h.tQ.w > 0.0 && all(greaterThanEqual(h.uvz.xy, vec2(0.0))) && all(lessThanEqual(h.uvz.xy, vec2(1.0)));
   h.planeSlope = planeSlope(l, h.tQ, s.normal, s.e1, h.texelWorld);
-  h.lookup = Lookup(l, h.uvz.xy * l.size, h.uvz.z - P.bias.x, P.bias.z > 0.5 ? h.planeSlope : vec2(0.0));
+  float ref = kAdaptive ? h.uvz.z - adaptiveEpsilon(l, q, h.tQ, h.uvz.z) : h.uvz.z - P.bias.x;
+  h.lookup = Lookup(l, h.uvz.xy * l.size, ref, P.bias.z > 0.5 || kAdaptive ? h.planeSlope : vec2(0.0));
   return h;
 }
 
@@ -396,17 +418,20 @@ LightChannels shadeLight(Surface s) {
   bool outsideCone = kLightType == kLightSpot && dot(normalize(p - lightPos), P.lightDirCos.xyz) < P.lightDirCos.w;
   // Facing rule (the reference's): the side the camera sees is unlit when the light is behind
   // it. A shadow map has no answer there (the surface against itself); N.L shading gives 0.
-  vec3 toLight = kLightType == kLightDirectional ? -P.lightDirCos.xyz : normalize(lightPos - p);
+  vec3 toLight = towardsLight(p);
   bool facesAway = !(dot(normal, toLight) > 0.0);
 
   // Rasterizer depth bias the map texel carries when the receiver is its own caster:
   // constant * r + slope * maxDepthSlope, clamped (Vulkan's formula; maxDepthSlope per texel).
   vec2 slope = h.planeSlope;
-  float r = kFloatDepth ? exp2(floor(log2(max(depthP, 1e-30))) - 23.0) : P.depthBias.w;
+  float r = depthResolution(depthP);
   float rasterBias = P.depthBias.x * r + P.depthBias.y * max(abs(slope.x), abs(slope.y));
   if (P.depthBias.z > 0.0) rasterBias = min(rasterBias, P.depthBias.z);
   if (P.depthBias.z < 0.0) rasterBias = max(rasterBias, P.depthBias.z);
-  float biasDepth = P.bias.x + rasterBias + (depthP - h.uvz.z);
+  // Adaptive: the bias the centre texel's comparison applied (negative where the tangent plane lies
+  // beyond p at the texel centre).
+  float biasDepth =
+      kAdaptive ? rasterBias + depthP - refAt(L, centerTexel(L)) : P.bias.x + rasterBias + (depthP - h.uvz.z);
   vec4 tL = tP + dirMap(layer, toLight * h.texelWorld);
   float depthStep = abs(depthP - tL.z / tL.w);
   float worldPerDepth = depthStep > 0.0 ? h.texelWorld / depthStep : 0.0;

@@ -104,6 +104,7 @@ abi::Params packResolveParams(const Scene& scene, const Light* light, const Meth
   }
   prm.bias =
       glm::vec4(method.biasCompare, method.biasNormal, method.biasReceiverPlane ? 1.0f : 0.0f, method.filterRadius);
+  prm.adaptive = glm::vec4(method.biasAdaptiveEpsilon, 0.0f, 0.0f, 0.0f);
   prm.depthBias = glm::vec4(method.biasConstant, method.biasSlope, method.biasClamp, depthResolution(method.mapFormat));
   prm.sizes = glm::ivec4(method.mapSize, frameLayers.lightLayers, projectorCount, method.filterSize);
   prm.sizes2 = glm::ivec4(width, height, method.filterTaps, method.projectorReverseGuard ? 1 : 0);
@@ -150,6 +151,7 @@ ResolveSpecialization resolveSpecialization(const Scene& scene, const Light* lig
   spec[abi::kSpecFloatDepth] = depthResolution(method.mapFormat) > 0.0f ? 0u : 1u;
   spec[abi::kSpecLightType] = lightTypeCode(light);
   spec[abi::kSpecAffine] = affine ? 1u : 0u;
+  spec[abi::kSpecAdaptive] = method.biasAdaptive ? 1u : 0u;
   return spec;
 }
 

@@ -231,6 +231,11 @@ const std::vector<std::pair<std::string, Setter>>& setters() {
          m.biasNormal = floatIn(v, w, 0.0, 64.0, false, "a number 0..64 (map texels)");
        }},
       {"bias.receiver_plane", [](Method& m, const Value& v, const Where& w) { m.biasReceiverPlane = boolOf(v, w); }},
+      {"bias.adaptive", [](Method& m, const Value& v, const Where& w) { m.biasAdaptive = boolOf(v, w); }},
+      {"bias.adaptive_epsilon",
+       [](Method& m, const Value& v, const Where& w) {
+         m.biasAdaptiveEpsilon = floatIn(v, w, 0.0, 1e3, false, "a number 0..1000 (world units along the light ray)");
+       }},
       {"filter", [](Method& m, const Value& v, const Where& w) { m.filter = enumOf(v, w, kFilters); }},
       {"filter.size", [](Method& m, const Value& v, const Where& w) { m.filterSize = intIn(v, w, 3, 15); }},
       {"filter.taps", [](Method& m, const Value& v, const Where& w) { m.filterTaps = intIn(v, w, 1, 64); }},
@@ -309,6 +314,8 @@ void crossCheck(const Method& m, const std::string& file, const std::string& pre
                         {"bias.compare", m.biasCompare},
                         {"bias.normal", m.biasNormal}})
     if (!std::isfinite(v)) bad(key, nlohmann::json(double(v)).dump(), "a finite number");
+  if (!(m.biasAdaptiveEpsilon >= 0.0f && m.biasAdaptiveEpsilon <= 1e3f))
+    bad("bias.adaptive_epsilon", nlohmann::json(double(m.biasAdaptiveEpsilon)).dump(), "a number 0..1000");
   if (m.cascadeCount < 1 || m.cascadeCount > 8)
     bad("cascades.count", std::to_string(m.cascadeCount), "an integer 1..8");
   if (!(m.cascadeLambda >= 0.0f && m.cascadeLambda <= 1.0f))
@@ -388,6 +395,8 @@ nlohmann::json methodToJson(const Method& m) {
   j["bias.compare"] = m.biasCompare;
   j["bias.normal"] = m.biasNormal;
   j["bias.receiver_plane"] = m.biasReceiverPlane;
+  j["bias.adaptive"] = m.biasAdaptive;
+  j["bias.adaptive_epsilon"] = m.biasAdaptiveEpsilon;
   j["filter"] = toString(m.filter);
   j["filter.size"] = m.filterSize;
   j["filter.taps"] = m.filterTaps;

@@ -49,7 +49,8 @@ SHADOWLAB_CONST(int, kSpecBlend, 3)           // 0/1: a cascade blend band
 SHADOWLAB_CONST(int, kSpecFloatDepth, 4)      // 0/1: the map's depth format is float
 SHADOWLAB_CONST(int, kSpecLightType, 5)       // a kLight* code
 SHADOWLAB_CONST(int, kSpecAffine, 6)          // 0/1: every light layer is orthographic
-SHADOWLAB_CONST(int, kSpecCount, 7)
+SHADOWLAB_CONST(int, kSpecAdaptive, 7)        // 0/1: bias.adaptive
+SHADOWLAB_CONST(int, kSpecCount, 8)
 
 // The descriptor set (set 0), one row per binding: X(Name, binding, kind). The kinds name
 // Vulkan descriptor types (rasterizer.cpp maps them); the set layout, the pool and the writes
@@ -105,6 +106,7 @@ SHADOWLAB_BLOCK(Params) {
                                       // z fit-camera view depth of the evaluation camera's origin
   vec4 moments;   // filterable maps: x vsm.min_variance, y vsm.bleed_reduction, z, w the EVSM exponents (clamped)
   vec4 moments2;  // x msm.moment_bias, y filter.blur (radius, texels)
+  vec4 adaptive;  // adaptive depth bias (on: kSpecAdaptive): x bias.adaptive_epsilon (world units)
 }
 SHADOWLAB_BLOCK_END(P);
 #endif
@@ -132,7 +134,8 @@ static_assert(offsetof(Params, cascadeFar) == offsetof(Params, cascadeView) + 16
 static_assert(offsetof(Params, cascadeInfo) == offsetof(Params, cascadeFar) + 32);
 static_assert(offsetof(Params, moments) == offsetof(Params, cascadeInfo) + 16);
 static_assert(offsetof(Params, moments2) == offsetof(Params, moments) + 16);
-static_assert(sizeof(Params) == 2816, "std140 size of resolve.frag's Params (glslangValidator -q reports it)");
+static_assert(offsetof(Params, adaptive) == offsetof(Params, moments2) + 16);
+static_assert(sizeof(Params) == 2832, "std140 size of resolve.frag's Params (glslangValidator -q reports it)");
 static_assert(2 * 4 >= kMaxLightLayers, "cascadeFar holds one far split per light layer");
 static_assert(kMaxLightLayers + kMaxProjectors == kMaxLayers);
 }  // namespace shadowlab::raster::abi

@@ -44,10 +44,15 @@ struct Method {
   float biasCompare = 0.0005f;     // bias.compare: added in the comparison, normalized depth
   float biasNormal = 0.0f;         // bias.normal: normal-offset of the lookup, in map texels
   bool biasReceiverPlane = false;  // bias.receiver_plane: receiver-plane depth bias per tap
-  Filter filter = Filter::None;    // filter: kinds.h's SHADOWLAB_FILTERS
-  int filterSize = 3;              // filter.size: pcf grid N (odd, 3..15)
-  int filterTaps = 16;             // filter.taps: poisson taps (1..64)
-  float filterRadius = 1.5f;       // filter.radius: poisson radius in texels (> 0, <= 32)
+  // Adaptive depth bias (Dou et al. 2014; raster/METHODS.md "Adaptive depth bias"): each tap is
+  // compared against the depth where the light's ray through its texel centre meets the receiver's
+  // tangent plane, less a scene-scale epsilon; replaces bias.compare in the comparison.
+  bool biasAdaptive = false;           // bias.adaptive
+  float biasAdaptiveEpsilon = 0.001f;  // bias.adaptive_epsilon: world units along the light ray, 0..1e3
+  Filter filter = Filter::None;        // filter: kinds.h's SHADOWLAB_FILTERS
+  int filterSize = 3;                  // filter.size: pcf grid N (odd, 3..15)
+  int filterTaps = 16;                 // filter.taps: poisson taps (1..64)
+  float filterRadius = 1.5f;           // filter.radius: poisson radius in texels (> 0, <= 32)
   // Filterable maps (filter=vsm, evsm2, evsm4, msm; raster/METHODS.md "Filterable maps"): a
   // moments pass after the depth pass, pre-filtered by a separable Gaussian.
   int filterBlur = 2;              // filter.blur: the Gaussian's radius in texels, 0..16 (0: none; sigma = radius / 2)
