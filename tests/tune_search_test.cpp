@@ -347,3 +347,15 @@ TEST(TunePlan, RefusesBadArgumentsNamingThem) {
     EXPECT_NE(what.find(c.message), std::string::npos) << "got: " << what << "\nexpected: " << c.message;
   }
 }
+
+// bias.adaptive is a categorical key (false, true): the search tries both, and the dense grid
+// doubles with it.
+TEST(TunePlan, AdaptiveBiasIsACategoricalKeyOfTwoValues) {
+  TuneSpec spec = threeScenes();
+  spec.maxError = 0.01;
+  spec.keys = {"bias.adaptive", "bias.slope"};
+  const TunePlan plan = planTune(spec);
+  EXPECT_EQ(plan.gridConfigurations, 2u * 17u);
+  spec.keys = {"bias.slope"};
+  EXPECT_EQ(planTune(spec).gridConfigurations, 17u);
+}

@@ -148,6 +148,7 @@ std::string defaultRangeOf(const TunableKey& k) {
 const std::vector<TunableKey>& tunableKeys() {
   // Sorted by key. filter and fit take every kind of kinds.h (defaultRangeOf).
   static const std::vector<TunableKey> keys = {
+      {"bias.adaptive", TuneRole::Categorical, "false,true", ""},
       {"bias.compare", TuneRole::Bias, "0:0.004:16", ""},
       {"bias.constant", TuneRole::Bias, "0:200000:16", ""},
       {"bias.normal", TuneRole::Bias, "0:4:16", ""},
