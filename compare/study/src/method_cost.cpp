@@ -65,6 +65,12 @@ MethodCost estimateMethodCost(const Scene& scene, const Method& method, const st
       taps = method.filterTaps;
       extraNs = taps * kNsPerPoissonTap;
       break;
+    // Filterable maps: one bilinear fetch of the moments per pixel; their moments pass is not
+    // modelled yet (not calibrated, compare/TUNE.md).
+    case Filter::Vsm:
+    case Filter::Evsm2:
+    case Filter::Evsm4:
+    case Filter::Msm: break;
   }
   c.tapsPerPixel = taps;
   c.pixels = double(scene.camera.width) * double(scene.camera.height);
