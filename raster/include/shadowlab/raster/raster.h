@@ -28,6 +28,7 @@ struct RasterTimings {
   // per pixel into 1 byte, what an engine pays beside the shadow pass (0 without a light).
   // method_gpu_ms = shadowGpuMs + lookupGpuMs (compare/TIMINGS.md).
   double lookupGpuMs = 0;
+  double methodGpuMs() const { return shadowGpuMs + lookupGpuMs; }
   double readbackMs = 0;    // readback_ms: CPU wall time to copy the outputs back into the Frame
   double renderWallMs = 0;  // render_wall_ms: CPU wall time of render() (names: compare/TIMINGS.md)
 };
