@@ -97,6 +97,7 @@ int run(const Options& o) {
                  {timing::kVisibilityGpuMs, r.timings.visibilityGpuMs},
                  {timing::kLookupGpuMs, r.timings.lookupGpuMs},
                  {timing::kMethodGpuMs, r.timings.methodGpuMs()},
+                 {timing::kMomentsGpuMs, r.timings.momentsGpuMs},
                  {timing::kReadbackMs, r.timings.readbackMs},
                  {timing::kRenderWallMs, r.timings.renderWallMs},
                  {timing::kCompareMs, r.compareMs},

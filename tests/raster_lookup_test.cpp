@@ -79,6 +79,13 @@ TEST_F(RasterLookup, EqualsTheResolveVisibilityForEveryFilter) {
         EXPECT_GT(a.fractional, 0u) << what << ": the filter's soft edge is there";
       }
       EXPECT_GT(t.lookupGpuMs, 0.0) << what;
+      // The moments pass is timed as its part of the shadow pass, for the filterable maps only.
+      if (isMomentFilter(kind.kind)) {
+        EXPECT_GT(t.momentsGpuMs, 0.0) << what;
+        EXPECT_LT(t.momentsGpuMs, t.shadowGpuMs) << what;
+      } else {
+        EXPECT_EQ(t.momentsGpuMs, 0.0) << what;
+      }
     }
   }
 }

@@ -287,8 +287,16 @@ def _evidence_resolve(t):
     return max(camera - (visibility or 0.0), 0.0)
 
 
+def _shadow_maps(t):
+    shadow, moments = num(t, "shadow_gpu_ms"), num(t, "moments_gpu_ms")
+    if shadow is None:
+        return None
+    return max(shadow - (moments or 0.0), 0.0)
+
+
 TIME_STAGES = [
-    ("shadow pass (shadow_gpu_ms; filterable maps: with their moments)", "tab:blue", _stage("shadow_gpu_ms"), True),
+    ("shadow pass: map layers (shadow_gpu_ms - moments_gpu_ms)", "tab:blue", _shadow_maps, True),
+    ("shadow pass: moments of filterable maps (moments_gpu_ms)", "tab:green", _stage("moments_gpu_ms"), True),
     ("lookup pass (lookup_gpu_ms)", "tab:cyan", _stage("lookup_gpu_ms"), True),
     ("visibility buffer (visibility_gpu_ms)", "tab:olive", _stage("visibility_gpu_ms"), False),
     ("evidence resolve (camera_gpu_ms - visibility_gpu_ms)", "tab:orange", _evidence_resolve, False),

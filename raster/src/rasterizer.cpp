@@ -67,9 +67,10 @@ constexpr VkFormat kResolveFormats[kResolveAttachments] = {VK_FORMAT_R32G32B32A3
 int resolveAttachments(Filter filter) { return isMomentFilter(filter) ? 3 : 2; }
 // The lookup pass's one attachment: the visibility, 1 byte per pixel.
 constexpr VkFormat kLookupFormat = VK_FORMAT_R8_UNORM;
-// GPU timestamps per frame: 0 start, 1 after the shadow pass, 3 after the visibility buffer,
-// 4 after the resolve, 2 after the lookup (the end).
-constexpr uint32_t kTimestamps = 5;
+// GPU timestamps per frame: 0 start, 5 after the map layers (before the moments pass), 1 after
+// the shadow pass (moments included), 3 after the visibility buffer, 4 after the resolve, 2 after
+// the lookup (the end).
+constexpr uint32_t kTimestamps = 6;
 
 // A filterable map's moments format: RG32F for 2 moments, RGBA32F for 4 (raster/METHODS.md).
 VkFormat momentsFormat(Filter filter) {
@@ -186,6 +187,7 @@ struct Rasterizer::Impl {
     double shadowGpuMs = 0;   // pass 1
     double resolveGpuMs = 0;  // pass 3 (pass 2's time is visibilityGpuMs)
     double lookupGpuMs = 0;   // pass 4
+    double momentsGpuMs = 0;  // pass 1b (part of shadowGpuMs)
   };
   const Light* validate(const Scene& scene, const Method& method, const std::string& lightName) const;
   int maxMapSize() const;
@@ -536,6 +538,7 @@ void Rasterizer::Impl::record(VkCommandBuffer cmd, const std::vector<glm::mat4>&
   vk::transition(cmd, mapIds, VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL, VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL,
                  VK_PIPELINE_STAGE_2_COLOR_ATTACHMENT_OUTPUT_BIT, VK_ACCESS_2_COLOR_ATTACHMENT_WRITE_BIT,
                  VK_PIPELINE_STAGE_2_FRAGMENT_SHADER_BIT, VK_ACCESS_2_SHADER_SAMPLED_READ_BIT);
+  vkCmdWriteTimestamp2(cmd, VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT, pool, 5);
   // ---- Pass 1b: the moments of filterable maps (placeholders made readable otherwise) ----
   {
     const bool used = isMomentFilter(method.filter);
@@ -971,6 +974,7 @@ Rasterizer::Impl::PassTimes Rasterizer::Impl::readTimestamps(bool drewVisibility
   t.shadowGpuMs = double(stamps[1] - stamps[0]) * msPerTick;
   t.resolveGpuMs = double(stamps[4] - stamps[3]) * msPerTick;
   t.lookupGpuMs = double(stamps[2] - stamps[4]) * msPerTick;
+  t.momentsGpuMs = double(stamps[1] - stamps[5]) * msPerTick;
   return t;
 }
 
@@ -1023,6 +1027,7 @@ Frame Rasterizer::render(const Scene& scene, const Method& method, const std::st
     timings->visibilityGpuMs = im.visibilityGpuMs;
     timings->cameraGpuMs = im.visibilityGpuMs + passes.resolveGpuMs;
     timings->lookupGpuMs = light ? passes.lookupGpuMs : 0.0;
+    timings->momentsGpuMs = isMomentFilter(method.filter) ? passes.momentsGpuMs : 0.0;
     timings->readbackMs = readbackMs;
     timings->renderWallMs = msSince(t0);
   }

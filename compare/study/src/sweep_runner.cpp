@@ -51,10 +51,15 @@ class PipelineRunner final : public SweepRunner {
     rasterizer().recycle(std::move(raster));  // the next row's planes, without fresh memory
     SweepRunOutput out;
     out.metrics = m.toJson();
-    out.timings = {{timing::kShadowGpuMs, t.shadowGpuMs},         {timing::kCameraGpuMs, t.cameraGpuMs},
-                   {timing::kVisibilityGpuMs, t.visibilityGpuMs}, {timing::kLookupGpuMs, t.lookupGpuMs},
-                   {timing::kMethodGpuMs, t.methodGpuMs()},       {timing::kReadbackMs, t.readbackMs},
-                   {timing::kRenderWallMs, t.renderWallMs},       {timing::kCompareMs, compareMs}};
+    out.timings = {{timing::kShadowGpuMs, t.shadowGpuMs},
+                   {timing::kCameraGpuMs, t.cameraGpuMs},
+                   {timing::kVisibilityGpuMs, t.visibilityGpuMs},
+                   {timing::kLookupGpuMs, t.lookupGpuMs},
+                   {timing::kMethodGpuMs, t.methodGpuMs()},
+                   {timing::kMomentsGpuMs, t.momentsGpuMs},
+                   {timing::kReadbackMs, t.readbackMs},
+                   {timing::kRenderWallMs, t.renderWallMs},
+                   {timing::kCompareMs, compareMs}};
     return out;
   }
 

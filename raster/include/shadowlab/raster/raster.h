@@ -29,6 +29,9 @@ struct RasterTimings {
   // method_gpu_ms = shadowGpuMs + lookupGpuMs (compare/TIMINGS.md).
   double lookupGpuMs = 0;
   double methodGpuMs() const { return shadowGpuMs + lookupGpuMs; }
+  // moments_gpu_ms: the filterable maps' moments pass, the part of shadowGpuMs after the map
+  // layers are drawn (0 for the other filters).
+  double momentsGpuMs = 0;
   double readbackMs = 0;    // readback_ms: CPU wall time to copy the outputs back into the Frame
   double renderWallMs = 0;  // render_wall_ms: CPU wall time of render() (names: compare/TIMINGS.md)
 };
