@@ -303,7 +303,8 @@ TIME_STAGES = [
     ("readback (readback_ms)", "tab:red", _stage("readback_ms"), False),
     ("compare (compare_ms)", "tab:purple", _stage("compare_ms"), False),
 ]
-OTHER_STAGE = ("other wall time (config_wall_ms less the stages: recording, submit, reference, pictures)",
+OTHER_STAGE = ("other wall time (config_wall_ms less the stages: recording, submit, a pipeline's first-use compile "
+               "and warm-up frame, reference, pictures)",
                "tab:gray")
 
 
