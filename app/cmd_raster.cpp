@@ -62,6 +62,9 @@ int run(const Options& o) {
                            {timing::kShadowGpuMs, t.shadowGpuMs},
                            {timing::kCameraGpuMs, t.cameraGpuMs},
                            {timing::kVisibilityGpuMs, t.visibilityGpuMs},
+                           {timing::kLookupGpuMs, t.lookupGpuMs},
+                           {timing::kMethodGpuMs, t.methodGpuMs()},
+                           {timing::kMomentsGpuMs, t.momentsGpuMs},
                            {timing::kReadbackMs, t.readbackMs},
                            {timing::kRenderWallMs, t.renderWallMs}};
   writeJsonAtomic(o.outDir + "/raster.json", report);

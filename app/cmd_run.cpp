@@ -94,6 +94,10 @@ int run(const Options& o) {
   row.metrics = r.metrics.toJson();
   row.timings = {{timing::kShadowGpuMs, r.timings.shadowGpuMs},
                  {timing::kCameraGpuMs, r.timings.cameraGpuMs},
+                 {timing::kVisibilityGpuMs, r.timings.visibilityGpuMs},
+                 {timing::kLookupGpuMs, r.timings.lookupGpuMs},
+                 {timing::kMethodGpuMs, r.timings.methodGpuMs()},
+                 {timing::kMomentsGpuMs, r.timings.momentsGpuMs},
                  {timing::kReadbackMs, r.timings.readbackMs},
                  {timing::kRenderWallMs, r.timings.renderWallMs},
                  {timing::kCompareMs, r.compareMs},

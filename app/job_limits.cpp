@@ -29,12 +29,13 @@ double rasterFrameBytes(const Scene& scene, const Method& method) {
   return (3.0 + light + 5.0 * double(scene.projectors.size())) * 4.0 * pixels(scene);
 }
 
-// The device's images: the camera's visibility buffer (id + depth, 8 bytes a pixel) and the
-// resolve pass's three RGBA32F targets (48), and the map's layers (depth + id, 8 bytes a texel):
-// one per cascade, six for a point light, one otherwise, plus one per projector; a filterable
-// map adds two moments images per light layer (2 or 4 floats a texel each).
+// The device's images: the camera's visibility buffer (id + depth, 8 bytes a pixel), the
+// resolve pass's two RGBA32F targets (32; a third, 16 more, once a filterable map is rendered) and
+// the lookup pass's R8 target (1), and the map's layers (depth + id, 8 bytes a texel): one per
+// cascade, six for a point light, one otherwise, plus one per projector; a filterable map adds two
+// moments images per light layer (2 or 4 floats a texel each).
 void addDeviceImages(MemoryEstimate& e, const Scene& scene, const Method& method) {
-  e.add(56.0 * pixels(scene), "camera targets");
+  e.add((isMomentFilter(method.filter) ? 57.0 : 41.0) * pixels(scene), "camera targets");
   int lightLayers = method.fit == Fit::Cascades ? method.cascadeCount : 1;
   for (const Light& light : scene.lights)
     if (light.type == LightType::Point) lightLayers = std::max(lightLayers, 6);

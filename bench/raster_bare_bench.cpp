@@ -7,12 +7,20 @@
 //
 // The bare program draws the whole scene with one indexed draw from a position-only vertex buffer
 // and no per-pixel evidence: it is what the rasterizer's numbers are compared with, not a mode of it.
+//
+// harnessVsBare: the whole per-configuration yardstick, the bare harness (that shadow pass,
+// that camera pass writing 1 byte (R8) of visibility per pixel, a 1-byte-per-pixel readback, a CPU
+// count of the pixels that disagree with the reference) against shadowlab's configuration (shadow +
+// camera passes, readback into the Frame, compareFrames against the same reference). The
+// reference is traced once per scene before timing (a sweep reads it from its cache).
 #include <benchmark/benchmark.h>
 
 #include <glm/gtc/matrix_transform.hpp>
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
+#include <map>
 #include <vector>
 
 #include "bare_camera_frag.h"
@@ -21,7 +29,9 @@
 #include "bare_shadow_ids_frag.h"
 #include "bare_shadow_vert.h"
 #include "bench_scene.h"
+#include "shadowlab/compare/compare.h"
 #include "shadowlab/raster/raster.h"
+#include "shadowlab/reference/reference.h"
 #include "vk/buffer.h"
 #include "vk/check.h"
 #include "vk/commands.h"
@@ -43,6 +53,14 @@ struct Push {
 struct BareTimes {
   double shadowGpuMs = 0, cameraGpuMs = 0;
 };
+
+// The camera pass's clear value: pixels no triangle covers keep it (coverage() tells them apart).
+constexpr float kClearVis = 0.2f;
+constexpr uint8_t kClearByte = 51;  // round(0.2 * 255)
+
+double msSince(std::chrono::steady_clock::time_point t0) {
+  return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+}
 
 class BareProgram {
  public:
@@ -99,8 +117,7 @@ class BareProgram {
     shadowPipe_ = pipeline(shadowVert_.get(), shadowFrag_.get(), {}, VK_FORMAT_X8_D24_UNORM_PACK32, true);
     shadowIdsPipe_ =
         pipeline(shadowVert_.get(), shadowIdsFrag_.get(), {VK_FORMAT_R32_UINT}, VK_FORMAT_X8_D24_UNORM_PACK32, true);
-    cameraPipe_ =
-        pipeline(cameraVert_.get(), cameraFrag_.get(), {VK_FORMAT_R8G8B8A8_UNORM}, VK_FORMAT_D32_SFLOAT, false);
+    cameraPipe_ = pipeline(cameraVert_.get(), cameraFrag_.get(), {VK_FORMAT_R8_UNORM}, VK_FORMAT_D32_SFLOAT, false);
     for (int linear = 0; linear < 2; ++linear) {
       VkSamplerCreateInfo s{VK_STRUCTURE_TYPE_SAMPLER_CREATE_INFO};
       s.magFilter = s.minFilter = linear ? VK_FILTER_LINEAR : VK_FILTER_NEAREST;
@@ -155,8 +172,9 @@ class BareProgram {
                   VK_IMAGE_USAGE_DEPTH_STENCIL_ATTACHMENT_BIT | VK_IMAGE_USAGE_SAMPLED_BIT, VK_IMAGE_ASPECT_DEPTH_BIT);
     mapIds_ = vk::Image(c_, kMapSize, kMapSize, 1, VK_FORMAT_R32_UINT, VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT,
                         VK_IMAGE_ASPECT_COLOR_BIT);
-    color_ = vk::Image(c_, width_, height_, 1, VK_FORMAT_R8G8B8A8_UNORM, VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT,
-                       VK_IMAGE_ASPECT_COLOR_BIT, true);  // host-readable: coverage() checks the picture
+    // 1 byte of visibility per pixel, host-readable: readback() and coverage() read it in place.
+    color_ = vk::Image(c_, width_, height_, 1, VK_FORMAT_R8_UNORM, VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT,
+                       VK_IMAGE_ASPECT_COLOR_BIT, true);
     depth_ = vk::Image(c_, width_, height_, 1, VK_FORMAT_D32_SFLOAT, VK_IMAGE_USAGE_DEPTH_STENCIL_ATTACHMENT_BIT,
                        VK_IMAGE_ASPECT_DEPTH_BIT);
   }
@@ -225,17 +243,27 @@ class BareProgram {
     return {double(t[1] - t[0]) * ms, double(t[2] - t[1]) * ms};
   }
 
-  // Of the image's pixels, the fraction drawn (alpha 1) and, of those, the fraction in shadow:
-  // evidence that the bare program renders the scene and looks its map up, not an empty frame.
+  // Of the image's pixels, the fraction drawn (not the clear value) and, of those, the fraction in
+  // shadow: evidence that the bare program renders the scene and looks its map up.
   std::pair<double, double> coverage() const {
     color_.invalidate(c_);
     size_t drawn = 0, dark = 0;
     for (int y = 0; y < height_; ++y) {
       const uint8_t* row = static_cast<const uint8_t*>(color_.mapped()) + size_t(y) * color_.rowPitch();
       for (int x = 0; x < width_; ++x)
-        if (row[4 * x + 3] == 255) drawn++, dark += row[4 * x] < 128;
+        if (row[x] != kClearByte) drawn++, dark += row[x] < 128;
     }
     return {double(drawn) / (double(width_) * height_), drawn ? double(dark) / double(drawn) : 0.0};
+  }
+
+  // The bare harness's readback: the visibility bytes, one per pixel, into `out`.
+  void readback(std::vector<uint8_t>& out) const {
+    color_.invalidate(c_);
+    out.resize(size_t(width_) * size_t(height_));
+    for (int y = 0; y < height_; ++y) {
+      const uint8_t* row = static_cast<const uint8_t*>(color_.mapped()) + size_t(y) * color_.rowPitch();
+      std::copy(row, row + width_, out.data() + size_t(y) * size_t(width_));
+    }
   }
 
  private:
@@ -246,6 +274,7 @@ class BareProgram {
       c.imageLayout = VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL;
       c.loadOp = VK_ATTACHMENT_LOAD_OP_CLEAR;
       c.storeOp = VK_ATTACHMENT_STORE_OP_STORE;
+      c.clearValue.color.float32[0] = kClearVis;
     }
     VkRenderingAttachmentInfo d{VK_STRUCTURE_TYPE_RENDERING_ATTACHMENT_INFO};
     d.imageView = depthView;
@@ -335,8 +364,110 @@ void versusBare(benchmark::State& state, Filter filter, int copies) {
   state.SetLabel(rasterizer().deviceName());
 }
 
+// The scenes of the goal at 1920x1080: sphere_on_plane, and the four-bunny bench scene.
+const Scene& goalScene(const std::string& name) {
+  if (name == "bunny_x4") return bench::benchScene(4);
+  static std::map<std::string, Scene> cache;
+  auto it = cache.find(name);
+  if (it != cache.end()) return it->second;
+  Scene s = loadScene(resolveScenePath(name));
+  s.camera.width = 1920;
+  s.camera.height = 1080;
+  return cache.emplace(name, std::move(s)).first->second;
+}
+
+// The reference of a scene, traced once (a sweep reads it from its cache: not a per-configuration cost).
+const Frame& referenceOf(const Scene& s) {
+  static std::map<std::string, Frame> cache;
+  auto it = cache.find(s.name + s.hash);
+  if (it != cache.end()) return it->second;
+  return cache.emplace(s.name + s.hash, renderReference(s, ReferenceOptions{})).first->second;
+}
+
+// One iteration: a bare harness configuration, then a shadowlab one, each end to end (passes,
+// readback, count or compare). Iteration time: shadowlab's.
+void harnessVsBare(benchmark::State& state, const std::string& sceneName, Filter filter) {
+  const Scene& s = goalScene(sceneName);
+  const Frame& ref = referenceOf(s);
+  // The bare count's reference: the traced visibility as bytes, 255 lit, 0 shadowed, the clear
+  // value where no surface is (what the bare camera pass leaves there).
+  const std::vector<float>& refVis = ref.get("light." + s.lights.front().name + ".vis");
+  const std::vector<float>& refHit = ref.get("hit");
+  std::vector<uint8_t> refBytes(refVis.size());
+  for (size_t i = 0; i < refVis.size(); ++i) refBytes[i] = refHit[i] < 0.5f ? kClearByte : (refVis[i] > 0.5f ? 255 : 0);
+  BareProgram bare(bareContext());
+  bare.setScene(s);
+  const bool linear = filter == Filter::Hw2x2;
+  Method m;
+  m.mapSize = kMapSize;
+  m.filter = filter;
+  RasterTimings t;
+  std::vector<uint8_t> bytes;
+  for (int i = 0; i < 2; ++i) bare.frame(linear), rasterizer().recycle(rasterizer().render(s, m, "", &t));
+  std::vector<double> bs, bc, br, bn, ss, sc, sl, sr, sx;
+  size_t bareWrong = 0;
+  double rasterWrong = 0;
+  for (auto _ : state) {
+    const BareTimes b = bare.frame(linear);
+    auto t0 = std::chrono::steady_clock::now();
+    bare.readback(bytes);
+    br.push_back(msSince(t0));
+    t0 = std::chrono::steady_clock::now();
+    size_t wrong = 0;
+    for (size_t i = 0; i < bytes.size(); ++i) wrong += (bytes[i] >= 128) != (refBytes[i] >= 128);
+    bn.push_back(msSince(t0));
+    bareWrong = wrong;
+    benchmark::DoNotOptimize(wrong);
+
+    Frame f = rasterizer().render(s, m, "", &t);
+    t0 = std::chrono::steady_clock::now();
+    const Metrics metrics = compareFrames(ref, f);
+    sx.push_back(msSince(t0));
+    rasterWrong = metrics.toJson().value("error_rate", 0.0);
+    rasterizer().recycle(std::move(f));
+    state.SetIterationTime((t.shadowGpuMs + t.cameraGpuMs + t.readbackMs + sx.back()) * 1e-3);
+    bs.push_back(b.shadowGpuMs), bc.push_back(b.cameraGpuMs), ss.push_back(t.shadowGpuMs), sc.push_back(t.cameraGpuMs),
+        sl.push_back(t.lookupGpuMs), sr.push_back(t.readbackMs);
+  }
+  auto median = [](std::vector<double> v) {
+    std::sort(v.begin(), v.end());
+    return v.empty() ? 0.0 : v[v.size() / 2];
+  };
+  const double bareMs = median(bs) + median(bc) + median(br) + median(bn);
+  const double ours = median(ss) + median(sc) + median(sr) + median(sx);
+  state.counters["bare_shadow_gpu_ms"] = median(bs);
+  state.counters["bare_camera_gpu_ms"] = median(bc);
+  state.counters["bare_readback_ms"] = median(br);
+  state.counters["bare_count_ms"] = median(bn);
+  state.counters["bare_total_ms"] = bareMs;
+  state.counters["shadow_gpu_ms"] = median(ss);
+  state.counters["camera_gpu_ms"] = median(sc);
+  state.counters["readback_ms"] = median(sr);
+  state.counters["compare_ms"] = median(sx);
+  state.counters["total_ms"] = ours;
+  state.counters["ratio"] = ours / bareMs;  // the goal: <= 1.3
+  // The method's time (the report's axis) against the bare program's two passes.
+  state.counters["lookup_gpu_ms"] = median(sl);
+  state.counters["method_ratio"] = (median(ss) + median(sl)) / (median(bs) + median(bc));
+  state.counters["bare_wrong_fraction"] = double(bareWrong) / double(bytes.size());
+  state.counters["error_rate"] = rasterWrong;
+  state.SetLabel(rasterizer().deviceName());
+}
+
 }  // namespace
 
+BENCHMARK_CAPTURE(harnessVsBare, none_sphere, "sphere_on_plane", Filter::None)
+    ->UseManualTime()
+    ->Unit(benchmark::kMillisecond);
+BENCHMARK_CAPTURE(harnessVsBare, hw2x2_sphere, "sphere_on_plane", Filter::Hw2x2)
+    ->UseManualTime()
+    ->Unit(benchmark::kMillisecond);
+BENCHMARK_CAPTURE(harnessVsBare, none_bunny_x4, "bunny_x4", Filter::None)
+    ->UseManualTime()
+    ->Unit(benchmark::kMillisecond);
+BENCHMARK_CAPTURE(harnessVsBare, hw2x2_bunny_x4, "bunny_x4", Filter::Hw2x2)
+    ->UseManualTime()
+    ->Unit(benchmark::kMillisecond);
 BENCHMARK_CAPTURE(versusBare, none_bunny, Filter::None, 1)->UseManualTime()->Unit(benchmark::kMillisecond);
 BENCHMARK_CAPTURE(versusBare, none_bunny_x4, Filter::None, 4)->UseManualTime()->Unit(benchmark::kMillisecond);
 BENCHMARK_CAPTURE(versusBare, hw2x2_bunny, Filter::Hw2x2, 1)->UseManualTime()->Unit(benchmark::kMillisecond);

@@ -190,9 +190,9 @@ TEST(SweepCli, SmallSweepRowsMatchShadowlabRunExactly) {
   // Columns of results.csv: identification, the method, every metric, every timing.
   std::string csv = slurp(dir + "/sweep/results.csv");
   std::string header = csv.substr(0, csv.find('\n'));
-  for (const char* col :
-       {"scene", "config", "light", "map.size", "bias.slope", "error_rate", "acne_rate", "leak_rate", "aliasing_rate",
-        "coverage_rate", "m_p95", "shadow_gpu_ms", "camera_gpu_ms", "compare_ms", "config_wall_ms"})
+  for (const char* col : {"scene", "config", "light", "map.size", "bias.slope", "error_rate", "acne_rate", "leak_rate",
+                          "aliasing_rate", "coverage_rate", "m_p95", "shadow_gpu_ms", "lookup_gpu_ms", "method_gpu_ms",
+                          "camera_gpu_ms", "visibility_gpu_ms", "readback_ms", "compare_ms", "config_wall_ms"})
     EXPECT_NE(("," + header + ",").find(std::string(",") + col + ","), std::string::npos) << col << " in " << header;
   EXPECT_EQ(std::count(csv.begin(), csv.end(), '\n'), 5);
 

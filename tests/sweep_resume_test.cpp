@@ -203,13 +203,21 @@ TEST(SweepResume, ParetoFrontKeepsOnlyRowsThatBeatEveryFasterRow) {
   for (int i = 0; i < 5; ++i) {
     rows[i].scene = "s";
     rows[i].config = "c" + std::to_string(i);
-    rows[i].timings = {{"shadow_gpu_ms", ms[i] / 2}, {"camera_gpu_ms", ms[i] / 2}};
+    // The harness's camera pass (the evidence resolve) shrinks as the method's time grows: ranked
+    // by shadow + camera the front would be c3 alone. It must not count (compare/TIMINGS.md).
+    rows[i].timings = {{"shadow_gpu_ms", ms[i] / 2},
+                       {"lookup_gpu_ms", ms[i] / 2},
+                       {"method_gpu_ms", ms[i]},
+                       {"camera_gpu_ms", 1000.0 / ms[i]}};
     rows[i].metrics = {{"error_rate", err[i]}};
   }
-  // By time: c0 (10, 0.5) front; c4 (15, 0.6) dominated; c1 (20, 0.2) front; c2 (30, 0.3) dominated;
-  // c3 (40, 0.1) front.
+  // By method time: c0 (10, 0.5) front; c4 (15, 0.6) dominated; c1 (20, 0.2) front; c2 (30, 0.3)
+  // dominated; c3 (40, 0.1) front.
   EXPECT_EQ(paretoFront(rows, "s"), (std::vector<size_t>{0, 1, 3}));
   EXPECT_TRUE(paretoFront(rows, "other").empty());
+  // A row from before the lookup pass (no method_gpu_ms): its shadow pass + lookup (absent: 0).
+  rows[3].timings = {{"shadow_gpu_ms", 5.0}, {"camera_gpu_ms", 1.0}};  // now the fastest, and the most accurate
+  EXPECT_EQ(paretoFront(rows, "s"), (std::vector<size_t>{3}));
 }
 
 TEST(SweepResume, ASecondSweepIntoTheSameFolderIsRefusedWhileOneRuns) {

@@ -32,6 +32,10 @@ layout(constant_id = kSpecLightType) const int kLightType = kLightDirectional;
 layout(constant_id = kSpecAffine) const bool kAffine = false;
 // bias.adaptive (adaptiveEpsilon): off, its code is compiled out.
 layout(constant_id = kSpecAdaptive) const bool kAdaptive = false;
+// The lookup pass: what an engine pays for the method, the same lookup and filter as the resolve
+// (shadeLight below) with only the visibility written, 1 byte per pixel into outA's R8 attachment;
+// the unread evidence is dead code the compiler removes.
+layout(constant_id = kSpecLookupOnly) const bool kLookupOnly = false;
 
 // Params P (binding kBindingParams) comes from resolve_abi.h.
 layout(set = 0, binding = kBindingMapDepth) uniform sampler2DArray mapDepth;         // NEAREST, raw depth
@@ -506,6 +510,10 @@ void main() {
   ivec2 px = ivec2(gl_FragCoord.xy);  // the viewport is the image: every pixel, once
   Surface s = visibleSurface(px);
   LightChannels light = shadeLight(s);  // without a light (kLightNone) the readback ignores it
+  if (kLookupOnly) {
+    outA = vec4(s.hit ? light.a.x : 0.0);  // the R8 attachment keeps x: the resolve's vis, as UNORM
+    return;
+  }
   outA = s.hit ? light.a : vec4(0.0);
   outB = s.hit ? light.b : vec4(0.0);
   if (kMomentFilter) outC = s.hit ? light.c : vec4(0.0);

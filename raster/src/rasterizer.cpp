@@ -9,6 +9,10 @@
 //   Pass 3 (resolve, a full-screen fragment pass): per pixel, the visible point, the map lookup with the method's
 //                    bias and filter, the evidence channels into two color attachments
 //                    (kResolveFormats), the projectors into a storage buffer (one plane per channel).
+//   Pass 4 (lookup, with a light): resolve.frag specialized to the method's lookup alone
+//                    (kSpecLookupOnly): the visibility as 1 byte per pixel (kLookupFormat), the
+//                    evidence compiled out; timed on its own (lookup_gpu_ms, what an engine pays
+//                    for the method besides its shadow pass).
 // The visibility buffer and the resolve attachments are linear images in host memory: the CPU
 // splits them into the Frame's channel planes in place, without a copy to a buffer first.
 #include "shadowlab/raster/raster.h"
@@ -61,6 +65,12 @@ constexpr VkFormat kResolveFormats[kResolveAttachments] = {VK_FORMAT_R32G32B32A3
                                                            VK_FORMAT_R32G32B32A32_SFLOAT};
 // The attachments a frame of `filter` writes: outC (the moments' evidence) for filterable maps only.
 int resolveAttachments(Filter filter) { return isMomentFilter(filter) ? 3 : 2; }
+// The lookup pass's one attachment: the visibility, 1 byte per pixel.
+constexpr VkFormat kLookupFormat = VK_FORMAT_R8_UNORM;
+// GPU timestamps per frame: 0 start, 5 after the map layers (before the moments pass), 1 after
+// the shadow pass (moments included), 3 after the visibility buffer, 4 after the resolve, 2 after
+// the lookup (the end).
+constexpr uint32_t kTimestamps = 6;
 
 // A filterable map's moments format: RG32F for 2 moments, RGBA32F for 4 (raster/METHODS.md).
 VkFormat momentsFormat(Filter filter) {
@@ -153,7 +163,9 @@ struct Rasterizer::Impl {
   // Filterable maps: the rows-blurred moments and the moments map, one layer per light layer
   // (1x1 placeholders, never read, for the other filters: every binding needs an image).
   vk::Image momentsRows, moments;
+  // resolveOut[2] (the moment channels) is allocated at the first filterable map only.
   vk::Image resolveOut[kResolveAttachments];
+  vk::Image lookupOut;        // pass 4's visibility (R8), host-readable
   vk::Buffer params, output;  // output: the projector channels
 
   explicit Impl(const RasterDeviceOptions& options);
@@ -168,11 +180,14 @@ struct Rasterizer::Impl {
   struct FramePipelines {
     IdPipelines ids;
     VkPipeline resolve = VK_NULL_HANDLE;
-    bool firstUse = false;  // lavapipe compiles at first use: run once untimed
+    VkPipeline lookup = VK_NULL_HANDLE;  // pass 4; none without a light
+    bool firstUse = false;               // lavapipe compiles at first use: run once untimed
   };
   struct PassTimes {
     double shadowGpuMs = 0;   // pass 1
     double resolveGpuMs = 0;  // pass 3 (pass 2's time is visibilityGpuMs)
+    double lookupGpuMs = 0;   // pass 4
+    double momentsGpuMs = 0;  // pass 1b (part of shadowGpuMs)
   };
   const Light* validate(const Scene& scene, const Method& method, const std::string& lightName) const;
   int maxMapSize() const;
@@ -188,14 +203,14 @@ struct Rasterizer::Impl {
   void createLayouts();
   VkPipeline idPipeline(VkFormat format, bool depthClamp, bool materialTests, bool depthBias);
   VkPipeline resolvePipeline(const ResolveKey& key);
-  void ensureImages(int mapSize, VkFormat mapFormat, int layers, int width, int height);
+  void ensureImages(int mapSize, VkFormat mapFormat, int layers, int width, int height, bool momentChannels);
   void writeDescriptors();
   void ensureMoments(Filter filter, int mapSize, int lightLayers);
   VkPipeline momentsPipeline(Filter filter, bool cols);
   Frame readback(const Scene& scene, const Light* light, const Method& method, int width, int height);
   void record(VkCommandBuffer cmd, const std::vector<glm::mat4>& layerClip, int lightLayers, const IdPipelines& pipes,
-              VkPipeline resolve, const Method& method, const glm::mat4& cameraClip, int width, int height,
-              bool drawVisibility);
+              VkPipeline resolve, VkPipeline lookup, const Method& method, const glm::mat4& cameraClip, int width,
+              int height, bool drawVisibility);
 
   // The camera's visibility buffer depends on the scene and the camera only, not on the method:
   // while both stay the same (a sweep over methods, a stability run with a fixed evaluation
@@ -243,7 +258,7 @@ Rasterizer::Impl::Impl(const RasterDeviceOptions& options) {
 
   VkQueryPoolCreateInfo q{VK_STRUCTURE_TYPE_QUERY_POOL_CREATE_INFO};
   q.queryType = VK_QUERY_TYPE_TIMESTAMP;
-  q.queryCount = 4;
+  q.queryCount = kTimestamps;
   VkQueryPool pool;
   VK_CHECK(vkCreateQueryPool(device, &q, nullptr, &pool));
   queries = vk::QueryPool(device, pool);
@@ -319,7 +334,8 @@ VkPipeline Rasterizer::Impl::resolvePipeline(const ResolveKey& key) {
   d.fragment = resolveFrag.get();
   d.layout = pipelineLayout.get();
   d.depthTest = false;
-  d.colorFormats.assign(kResolveFormats, kResolveFormats + resolveAttachments(Filter(key[abi::kSpecFilter])));
+  if (key[abi::kSpecLookupOnly]) d.colorFormats = {kLookupFormat};
+  else d.colorFormats.assign(kResolveFormats, kResolveFormats + resolveAttachments(Filter(key[abi::kSpecFilter])));
   d.fragmentSpecialization.assign(key.begin(), key.end());  // straight-line code per case
   return resolvePipelines.emplace(key, vk::createGraphicsPipeline(*context, d)).first->second.get();
 }
@@ -351,7 +367,8 @@ void Rasterizer::Impl::ensureMoments(Filter filter, int mapSize, int lightLayers
   moments = vk::Image(*context, size, size, layers, format, usage, VK_IMAGE_ASPECT_COLOR_BIT);
 }
 
-void Rasterizer::Impl::ensureImages(int mapSize, VkFormat mapFormat, int layers, int width, int height) {
+void Rasterizer::Impl::ensureImages(int mapSize, VkFormat mapFormat, int layers, int width, int height,
+                                    bool momentChannels) {
   const vk::Context& c = *context;
   if (mapDepth.width() != mapSize || mapDepth.format() != mapFormat || mapDepth.layers() != layers) {
     mapDepth =
@@ -367,10 +384,19 @@ void Rasterizer::Impl::ensureImages(int mapSize, VkFormat mapFormat, int layers,
     cameraIds =
         vk::Image(c, width, height, 1, kIdFormat, VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT | VK_IMAGE_USAGE_SAMPLED_BIT,
                   VK_IMAGE_ASPECT_COLOR_BIT, true);
-    for (int i = 0; i < kResolveAttachments; ++i)
-      resolveOut[i] = vk::Image(c, width, height, 1, kResolveFormats[i], VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT,
-                                VK_IMAGE_ASPECT_COLOR_BIT, true);
+    for (int i = 0; i < kResolveAttachments; ++i) {
+      resolveOut[i] = vk::Image();
+      if (i < 2)
+        resolveOut[i] = vk::Image(c, width, height, 1, kResolveFormats[i], VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT,
+                                  VK_IMAGE_ASPECT_COLOR_BIT, true);
+    }
+    lookupOut = vk::Image(c, width, height, 1, kLookupFormat, VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT,
+                          VK_IMAGE_ASPECT_COLOR_BIT, true);
   }
+  // The moment channels' target (33 MB at 1080p) only once a filterable map needs it; kept after.
+  if (momentChannels && resolveOut[2].width() != width)
+    resolveOut[2] = vk::Image(c, width, height, 1, kResolveFormats[2], VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT,
+                              VK_IMAGE_ASPECT_COLOR_BIT, true);
 }
 
 void Rasterizer::Impl::writeDescriptors() {
@@ -428,11 +454,11 @@ void Rasterizer::Impl::writeDescriptors() {
 }
 
 void Rasterizer::Impl::record(VkCommandBuffer cmd, const std::vector<glm::mat4>& layerClip, int lightLayers,
-                              const IdPipelines& pipes, VkPipeline resolve, const Method& method,
+                              const IdPipelines& pipes, VkPipeline resolve, VkPipeline lookup, const Method& method,
                               const glm::mat4& cameraClip, int width, int height, bool drawVisibility) {
   const raster::SceneGpu& s = *scene;
   VkQueryPool pool = queries.get();
-  vkCmdResetQueryPool(cmd, pool, 0, 4);
+  vkCmdResetQueryPool(cmd, pool, 0, kTimestamps);
   vkCmdWriteTimestamp2(cmd, VK_PIPELINE_STAGE_2_TOP_OF_PIPE_BIT, pool, 0);
   VkDescriptorSet set = descriptorSet;
   vkCmdBindDescriptorSets(cmd, VK_PIPELINE_BIND_POINT_GRAPHICS, pipelineLayout.get(), 0, 1, &set, 0, nullptr);
@@ -512,6 +538,7 @@ void Rasterizer::Impl::record(VkCommandBuffer cmd, const std::vector<glm::mat4>&
   vk::transition(cmd, mapIds, VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL, VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL,
                  VK_PIPELINE_STAGE_2_COLOR_ATTACHMENT_OUTPUT_BIT, VK_ACCESS_2_COLOR_ATTACHMENT_WRITE_BIT,
                  VK_PIPELINE_STAGE_2_FRAGMENT_SHADER_BIT, VK_ACCESS_2_SHADER_SAMPLED_READ_BIT);
+  vkCmdWriteTimestamp2(cmd, VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT, pool, 5);
   // ---- Pass 1b: the moments of filterable maps (placeholders made readable otherwise) ----
   {
     const bool used = isMomentFilter(method.filter);
@@ -618,6 +645,33 @@ void Rasterizer::Impl::record(VkCommandBuffer cmd, const std::vector<glm::mat4>&
   dep.memoryBarrierCount = 1;
   dep.pMemoryBarriers = &toHost;
   vkCmdPipelineBarrier2(cmd, &dep);
+  vkCmdWriteTimestamp2(cmd, VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT, pool, 4);
+
+  // ---- Pass 4: the lookup, the method's visibility alone (1 byte per pixel), timed on its own ----
+  if (lookup != VK_NULL_HANDLE) {
+    vk::transition(cmd, lookupOut, VK_IMAGE_LAYOUT_UNDEFINED, VK_IMAGE_LAYOUT_GENERAL, VK_PIPELINE_STAGE_2_HOST_BIT, 0,
+                   VK_PIPELINE_STAGE_2_COLOR_ATTACHMENT_OUTPUT_BIT, VK_ACCESS_2_COLOR_ATTACHMENT_WRITE_BIT);
+    VkRenderingAttachmentInfo color{VK_STRUCTURE_TYPE_RENDERING_ATTACHMENT_INFO};
+    color.imageView = lookupOut.layerView(0);
+    color.imageLayout = VK_IMAGE_LAYOUT_GENERAL;
+    color.loadOp = VK_ATTACHMENT_LOAD_OP_DONT_CARE;  // every pixel is written
+    color.storeOp = VK_ATTACHMENT_STORE_OP_STORE;
+    VkRenderingInfo info{VK_STRUCTURE_TYPE_RENDERING_INFO};
+    info.renderArea = {{0, 0}, {uint32_t(width), uint32_t(height)}};
+    info.layerCount = 1;
+    info.colorAttachmentCount = 1;
+    info.pColorAttachments = &color;
+    vkCmdBeginRendering(cmd, &info);
+    VkViewport viewport{0, 0, float(width), float(height), 0.0f, 1.0f};
+    VkRect2D scissor{{0, 0}, {uint32_t(width), uint32_t(height)}};
+    vkCmdSetViewport(cmd, 0, 1, &viewport);
+    vkCmdSetScissor(cmd, 0, 1, &scissor);
+    vkCmdSetCullMode(cmd, VK_CULL_MODE_NONE);
+    vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_GRAPHICS, lookup);
+    vkCmdDraw(cmd, 3, 1, 0, 0);
+    vkCmdEndRendering(cmd);
+    vkCmdPipelineBarrier2(cmd, &dep);
+  }
   vkCmdWriteTimestamp2(cmd, VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT, pool, 2);
 }
 
@@ -745,6 +799,19 @@ int Rasterizer::maxMapSize() const { return impl_->maxMapSize(); }
 
 int Rasterizer::validationMessages() const { return impl_->context->validationMessages(); }
 
+std::vector<uint8_t> Rasterizer::lookupVisibility() const {
+  const vk::Image& img = impl_->lookupOut;
+  std::vector<uint8_t> out;
+  if (!img.mapped()) return out;
+  img.invalidate(*impl_->context);
+  out.resize(size_t(img.width()) * size_t(img.height()));
+  for (int y = 0; y < img.height(); ++y) {
+    const uint8_t* row = static_cast<const uint8_t*>(img.mapped()) + size_t(y) * img.rowPitch();
+    std::copy(row, row + img.width(), out.data() + size_t(y) * size_t(img.width()));
+  }
+  return out;
+}
+
 void Rasterizer::recycle(Frame&& frame) {
   const size_t n = frame.pixelCount();
   for (std::vector<float>& plane : frame.data)
@@ -835,7 +902,7 @@ void Rasterizer::Impl::upload(const Scene& sc) {
 void Rasterizer::Impl::prepareTargets(const Scene& sc, const Method& method, const raster::FrameLayers& layers) {
   const Camera& camera = sc.camera;
   ensureImages(method.mapSize, vkDepthFormat(method.mapFormat), std::max(1, int(layers.layers.size())), camera.width,
-               camera.height);
+               camera.height, isMomentFilter(method.filter));
   const size_t channelCount = size_t(kProjectorChannels) * sc.projectors.size();
   size_t outputBytes = std::max<size_t>(1, channelCount * size_t(camera.width) * size_t(camera.height)) * sizeof(float);
   if (output.size() != outputBytes) output = vk::Buffer(*context, outputBytes, VK_BUFFER_USAGE_STORAGE_BUFFER_BIT);
@@ -860,6 +927,13 @@ Rasterizer::Impl::FramePipelines Rasterizer::Impl::pipelinesFor(const Method& me
   p.ids = {idPipeline(mapFormat, depthClamp, false, true), idPipeline(mapFormat, depthClamp, true, true),
            idPipeline(kCameraDepthFormat, false, false, false), idPipeline(kCameraDepthFormat, false, true, false)};
   p.resolve = resolvePipeline(spec);
+  if (spec[abi::kSpecLightType] != uint32_t(abi::kLightNone)) {
+    // The lookup: the same specialization, the evidence and the projectors compiled out.
+    raster::ResolveSpecialization lookupSpec = spec;
+    lookupSpec[abi::kSpecLookupOnly] = 1u;
+    lookupSpec[abi::kSpecProjectorCount] = 0u;
+    p.lookup = resolvePipeline(lookupSpec);
+  }
   // lavapipe compiles shaders at first use: the first frame of a combination runs twice.
   std::string warmKey = std::to_string(int(mapFormat)) + "/" + std::to_string(depthClamp);
   for (uint32_t k : spec) warmKey += "/" + std::to_string(k);
@@ -881,7 +955,7 @@ bool Rasterizer::Impl::submit(const Scene& sc, const Method& method, const raste
   visibilityKey.clear();  // until this frame is through
   for (int run = 0; run < (pipes.firstUse ? 2 : 1); ++run) {
     VkCommandBuffer cmd = commands->begin();
-    record(cmd, layerClip, layers.lightLayers, pipes.ids, pipes.resolve, method, cameraClip, camera.width,
+    record(cmd, layerClip, layers.lightLayers, pipes.ids, pipes.resolve, pipes.lookup, method, cameraClip, camera.width,
            camera.height, drawVisibility);
     commands->submitAndWait();
   }
@@ -889,16 +963,18 @@ bool Rasterizer::Impl::submit(const Scene& sc, const Method& method, const raste
   return drawVisibility;
 }
 
-// Timestamps: the passes' GPU times of the last submit (see record() for the four stamps).
+// Timestamps: the passes' GPU times of the last submit (kTimestamps says which stamp is where).
 Rasterizer::Impl::PassTimes Rasterizer::Impl::readTimestamps(bool drewVisibility) {
-  uint64_t stamps[4] = {0, 0, 0, 0};
-  VK_CHECK(vkGetQueryPoolResults(context->device(), queries.get(), 0, 4, sizeof(stamps), stamps, sizeof(uint64_t),
-                                 VK_QUERY_RESULT_64_BIT | VK_QUERY_RESULT_WAIT_BIT));
+  uint64_t stamps[kTimestamps] = {};
+  VK_CHECK(vkGetQueryPoolResults(context->device(), queries.get(), 0, kTimestamps, sizeof(stamps), stamps,
+                                 sizeof(uint64_t), VK_QUERY_RESULT_64_BIT | VK_QUERY_RESULT_WAIT_BIT));
   const double msPerTick = context->properties().limits.timestampPeriod * 1e-6;
   if (drewVisibility) visibilityGpuMs = double(stamps[3] - stamps[1]) * msPerTick;
   PassTimes t;
   t.shadowGpuMs = double(stamps[1] - stamps[0]) * msPerTick;
-  t.resolveGpuMs = double(stamps[2] - stamps[3]) * msPerTick;
+  t.resolveGpuMs = double(stamps[4] - stamps[3]) * msPerTick;
+  t.lookupGpuMs = double(stamps[2] - stamps[4]) * msPerTick;
+  t.momentsGpuMs = double(stamps[1] - stamps[5]) * msPerTick;
   return t;
 }
 
@@ -950,6 +1026,8 @@ Frame Rasterizer::render(const Scene& scene, const Method& method, const std::st
     timings->shadowGpuMs = passes.shadowGpuMs;
     timings->visibilityGpuMs = im.visibilityGpuMs;
     timings->cameraGpuMs = im.visibilityGpuMs + passes.resolveGpuMs;
+    timings->lookupGpuMs = light ? passes.lookupGpuMs : 0.0;
+    timings->momentsGpuMs = isMomentFilter(method.filter) ? passes.momentsGpuMs : 0.0;
     timings->readbackMs = readbackMs;
     timings->renderWallMs = msSince(t0);
   }

@@ -53,6 +53,10 @@ class PipelineRunner final : public SweepRunner {
     out.metrics = m.toJson();
     out.timings = {{timing::kShadowGpuMs, t.shadowGpuMs},
                    {timing::kCameraGpuMs, t.cameraGpuMs},
+                   {timing::kVisibilityGpuMs, t.visibilityGpuMs},
+                   {timing::kLookupGpuMs, t.lookupGpuMs},
+                   {timing::kMethodGpuMs, t.methodGpuMs()},
+                   {timing::kMomentsGpuMs, t.momentsGpuMs},
                    {timing::kReadbackMs, t.readbackMs},
                    {timing::kRenderWallMs, t.renderWallMs},
                    {timing::kCompareMs, compareMs}};

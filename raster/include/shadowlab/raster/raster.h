@@ -1,6 +1,7 @@
 #pragma once
 // Vulkan 1.3 headless shadow-mapping rasterizer (lavapipe by default).
 // No Vulkan header leaks through this interface.
+#include <cstdint>
 #include <memory>
 #include <string>
 #include <vector>
@@ -23,8 +24,16 @@ struct RasterTimings {
   // keeps it and adds the time it took when it was drawn (visibilityGpuMs). camera_gpu_ms.
   double cameraGpuMs = 0;
   double visibilityGpuMs = 0;  // visibility_gpu_ms: the camera pass's first part, the visibility buffer
-  double readbackMs = 0;       // readback_ms: CPU wall time to copy the outputs back into the Frame
-  double renderWallMs = 0;     // render_wall_ms: CPU wall time of render() (names: compare/TIMINGS.md)
+  // lookup_gpu_ms: GPU timestamps of the lookup pass, the method's visibility (and filter) alone
+  // per pixel into 1 byte, what an engine pays beside the shadow pass (0 without a light).
+  // method_gpu_ms = shadowGpuMs + lookupGpuMs (compare/TIMINGS.md).
+  double lookupGpuMs = 0;
+  double methodGpuMs() const { return shadowGpuMs + lookupGpuMs; }
+  // moments_gpu_ms: the filterable maps' moments pass, the part of shadowGpuMs after the map
+  // layers are drawn (0 for the other filters).
+  double momentsGpuMs = 0;
+  double readbackMs = 0;    // readback_ms: CPU wall time to copy the outputs back into the Frame
+  double renderWallMs = 0;  // render_wall_ms: CPU wall time of render() (names: compare/TIMINGS.md)
 };
 
 class Rasterizer {
@@ -41,6 +50,10 @@ class Rasterizer {
   // Hands a finished frame's channel planes back for the next render() to fill: a frame of the
   // same size then needs no fresh (zero-filled) memory. Optional; a sweep calls it per row.
   void recycle(Frame&& frame);
+  // The last render()'s lookup pass output: the light's visibility, one byte (UNORM, 255 = lit)
+  // per pixel, row-major; empty before the first render, stale after a render without a light.
+  // It equals the frame's vis channel converted to 8 bits (tests/raster_lookup_test.cpp).
+  std::vector<uint8_t> lookupVisibility() const;
 
   // Renders `scene` with `method` for the light named `light` (empty: the scene's first light)
   // and all projectors. The GPU copy of the scene is kept and reused while the scene hash is the

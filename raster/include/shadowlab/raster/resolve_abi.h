@@ -50,7 +50,10 @@ SHADOWLAB_CONST(int, kSpecFloatDepth, 4)      // 0/1: the map's depth format is 
 SHADOWLAB_CONST(int, kSpecLightType, 5)       // a kLight* code
 SHADOWLAB_CONST(int, kSpecAffine, 6)          // 0/1: every light layer is orthographic
 SHADOWLAB_CONST(int, kSpecAdaptive, 7)        // 0/1: bias.adaptive
-SHADOWLAB_CONST(int, kSpecCount, 8)
+// 0/1: the lookup pass (rasterizer.cpp, pass 4): the light's visibility alone into one R8
+// attachment, the evidence and the projectors compiled out (compare/TIMINGS.md, lookup_gpu_ms).
+SHADOWLAB_CONST(int, kSpecLookupOnly, 8)
+SHADOWLAB_CONST(int, kSpecCount, 9)
 
 // The descriptor set (set 0), one row per binding: X(Name, binding, kind). The kinds name
 // Vulkan descriptor types (rasterizer.cpp maps them); the set layout, the pool and the writes

@@ -258,8 +258,10 @@ std::vector<std::string> writeSweepReport(const SweepPlan& plan, const std::vect
 
 // Pieces of the report, usable on their own.
 void writeResultsCsv(const std::string& path, const std::vector<ResultRow>& rows);
-// Per scene: configurations on the Pareto front of (raster time = shadow_gpu_ms + camera_gpu_ms,
-// error_rate), by increasing time: each is the lowest error reachable within its time budget.
+// Per scene: configurations on the Pareto front of (the method's time = method_gpu_ms, i.e.
+// shadow_gpu_ms + lookup_gpu_ms, compare/TIMINGS.md; error_rate), by increasing time: each is the
+// lowest error reachable within its time budget. The harness's stages (camera_gpu_ms, readback,
+// compare) do not count. A row without method_gpu_ms: shadow_gpu_ms + lookup_gpu_ms (absent: 0).
 std::vector<size_t> paretoFront(const std::vector<ResultRow>& rows, const std::string& scene);
 // The chart script: $SHADOWLAB_REPORT_SCRIPT when set, else <sourceDir>/compare/report/charts.py
 // (the executables know their source folder through the SHADOWLAB_SOURCE_DIR definition).

@@ -1,0 +1,137 @@
+// The lookup pass (rasterizer.cpp, pass 4; lookup_gpu_ms in compare/TIMINGS.md) is resolve.frag
+// specialized to the visibility alone. It must compute exactly what the resolve computes, or the
+// report's time axis would time some other method: its byte per pixel must equal the resolve's
+// vis converted to 8 bits (UNORM, round to nearest), for every filter, light type, cascades with a
+// blend band, the receiver-plane bias and a scene with a projector (which the lookup leaves out).
+// Quarter-size cameras keep the executable fast on lavapipe.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstdint>
+#include <string>
+
+#include "shadowlab/raster/raster.h"
+#include "shadowlab/scenes/loader.h"
+#include "support/raster_device.h"
+
+using namespace shadowlab;
+
+namespace {
+
+using RasterLookup = shadowlab::testing::ValidatedRasterTest;
+
+Scene quarterScene(const std::string& name) {
+  Scene s = loadScene(resolveScenePath(name));
+  s.camera.width /= 4;
+  s.camera.height /= 4;
+  return s;
+}
+
+struct Agreement {
+  size_t mismatches = 0, fractional = 0, lit = 0, shadowed = 0;
+  std::string first;  // the first mismatch, for the failure message
+};
+
+// Renders and compares the lookup's bytes with the frame's vis channel, pixel by pixel.
+Agreement renderAndCompare(Rasterizer& r, const Scene& s, const Method& m, RasterTimings* timings = nullptr) {
+  RasterTimings local;
+  Frame f = r.render(s, m, "", timings ? timings : &local);
+  const std::vector<float>& vis = f.get("light." + s.lights.front().name + ".vis");
+  const std::vector<uint8_t> bytes = r.lookupVisibility();
+  Agreement a;
+  EXPECT_EQ(bytes.size(), vis.size());
+  for (size_t i = 0; i < vis.size() && i < bytes.size(); ++i) {
+    const int expected = int(std::lround(double(vis[i]) * 255.0));
+    if (bytes[i] != expected) {
+      if (a.mismatches++ == 0)
+        a.first = "pixel " + std::to_string(i) + ": vis " + std::to_string(vis[i]) + " (byte " +
+                  std::to_string(expected) + "), lookup " + std::to_string(int(bytes[i]));
+    }
+    a.lit += expected == 255;
+    a.shadowed += f.get("hit")[i] > 0.5f && expected == 0;
+    a.fractional += expected != 0 && expected != 255;
+  }
+  return a;
+}
+
+}  // namespace
+
+// Every filter kind on a scene with a projector and on the sphere: the same bytes, and the frames
+// hold both shadow and light (a lookup that wrote a constant could not pass).
+TEST_F(RasterLookup, EqualsTheResolveVisibilityForEveryFilter) {
+  REQUIRE_DEVICE();
+  for (const char* sceneName : {"sphere_on_plane", "projector"}) {
+    const Scene s = quarterScene(sceneName);
+    for (const auto& kind : filterKinds()) {
+      // The projector scene (its resolve has projectors, the lookup none) with a few filters only.
+      const bool few = kind.kind == Filter::None || kind.kind == Filter::Pcf || kind.kind == Filter::Msm;
+      if (std::string(sceneName) == "projector" && !few) continue;
+      Method m;
+      m.mapSize = 512;
+      m.filter = kind.kind;
+      RasterTimings t;
+      const Agreement a = renderAndCompare(*R, s, m, &t);
+      const std::string what = std::string(sceneName) + ", filter=" + toString(kind.kind);
+      EXPECT_EQ(a.mismatches, 0u) << what << "; first: " << a.first;
+      EXPECT_GT(a.lit, 100u) << what;
+      EXPECT_GT(a.shadowed, 100u) << what;
+      if (kind.kind != Filter::None) {
+        EXPECT_GT(a.fractional, 0u) << what << ": the filter's soft edge is there";
+      }
+      EXPECT_GT(t.lookupGpuMs, 0.0) << what;
+      // The moments pass is timed as its part of the shadow pass, for the filterable maps only.
+      if (isMomentFilter(kind.kind)) {
+        EXPECT_GT(t.momentsGpuMs, 0.0) << what;
+        EXPECT_LT(t.momentsGpuMs, t.shadowGpuMs) << what;
+      } else {
+        EXPECT_EQ(t.momentsGpuMs, 0.0) << what;
+      }
+    }
+  }
+}
+
+// The other code paths of the shared lookup: cascades with a blend band, the receiver plane and
+// normal offset, spot and point lights (cube faces), a float depth map.
+TEST_F(RasterLookup, EqualsTheResolveVisibilityOnEveryLookupPath) {
+  REQUIRE_DEVICE();
+  const Scene sphere = quarterScene("sphere_on_plane");
+  {
+    Method m;
+    m.mapSize = 512;
+    m.fit = Fit::Cascades;
+    m.cascadeCount = 3;
+    m.cascadeBlend = 0.3f;
+    m.filter = Filter::Pcf;
+    m.filterSize = 3;
+    const Agreement a = renderAndCompare(*R, sphere, m);
+    EXPECT_EQ(a.mismatches, 0u) << "cascades with a blend band; first: " << a.first;
+    EXPECT_GT(a.fractional, 0u);
+  }
+  {
+    Method m;
+    m.mapSize = 512;
+    m.biasReceiverPlane = true;
+    m.biasNormal = 1.5f;
+    m.filter = Filter::Bilinear4;
+    m.mapFormat = DepthFormat::D32F;
+    const Agreement a = renderAndCompare(*R, sphere, m);
+    EXPECT_EQ(a.mismatches, 0u) << "receiver plane, normal offset, D32F; first: " << a.first;
+  }
+  for (LightType type : {LightType::Spot, LightType::Point}) {
+    Scene s = sphere;
+    Light& l = s.lights.front();
+    l.type = type;
+    l.position = glm::vec3(0.5f, 4.0f, 0.5f);
+    l.direction = glm::vec3(0, -1, 0);
+    l.coneDeg = 100.0f;
+    for (Filter filter : {Filter::None, Filter::Hw2x2, Filter::Vsm}) {
+      Method m;
+      m.mapSize = 512;
+      m.filter = filter;
+      const Agreement a = renderAndCompare(*R, s, m);
+      EXPECT_EQ(a.mismatches, 0u) << (type == LightType::Spot ? "spot" : "point") << ", " << toString(filter)
+                                  << "; first: " << a.first;
+      EXPECT_GT(a.shadowed, 100u);
+    }
+  }
+}
