@@ -46,7 +46,7 @@ TEST(TuneCli, BadArgumentsExit2NamingThemAndWriteNothing) {
       {"grazing --max-error 2", "--max-error: error: got \"2\""},
       {"grazing --budget-ms 0", "--budget-ms: error: got \"0\"; expected a time in milliseconds > 0"},
       {"grazing --max-error 0.002 --keys bias.slope,map.sise",
-       "--keys map.sise: error: unknown key \"map.sise\"; expected one of bias.compare"},
+       "--keys map.sise: error: unknown key \"map.sise\"; expected one of bias.adaptive, bias.compare"},
       {"grazing --max-error 0.002 --keys cull", "--keys cull: error: \"cull\" cannot be tuned (set it with --fixed)"},
       {"grazing --max-error 0.002 --range bias.slope=3:1", "--range bias.slope=3:1: error: empty range 3:1 (lo > hi)"},
       {"grazing --max-error 0.002 --range map.size=300:500", "--range map.size=300:500: error: empty range 300:500"},

@@ -102,16 +102,6 @@ std::string headerCells(const std::vector<const char*>& names) {
   return h;
 }
 
-// The report's time axis: the method's cost, what an engine would pay (method_gpu_ms = shadow pass
-// + lookup pass, compare/TIMINGS.md), not the harness's evidence resolve, readback and compare;
-// GPU timestamps, so CPU scheduling noise does not reorder the front. A row written before the
-// lookup pass existed (a resumed journal) has no method_gpu_ms: its shadow pass alone.
-double methodMs(const ResultRow& r) {
-  const double method = num(r.timings, timing::kMethodGpuMs);
-  if (std::isfinite(method)) return method;
-  return num(r.timings, timing::kShadowGpuMs, 0.0) + num(r.timings, timing::kLookupGpuMs, 0.0);
-}
-
 // Starts `argv` with stdout and stderr into `logPath`; returns its pid (-1 when fork failed).
 pid_t spawnLogged(const std::vector<std::string>& argv, const std::string& logPath) {
   int logFd = ::open(logPath.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
@@ -207,6 +197,16 @@ window.addEventListener('load', function () {
 )JS";
 
 }  // namespace
+
+// The report's time axis: the method's cost, what an engine would pay (method_gpu_ms = shadow pass
+// + lookup pass, compare/TIMINGS.md), not the harness's evidence resolve, readback and compare;
+// GPU timestamps, so CPU scheduling noise does not reorder the front. A row written before the
+// lookup pass existed (a resumed journal) has no method_gpu_ms: its shadow pass alone.
+double methodMs(const ResultRow& r) {
+  const double method = num(r.timings, timing::kMethodGpuMs);
+  if (std::isfinite(method)) return method;
+  return num(r.timings, timing::kShadowGpuMs, 0.0) + num(r.timings, timing::kLookupGpuMs, 0.0);
+}
 
 std::string defaultReportScript(const std::string& sourceDir) {
   const char* env = std::getenv("SHADOWLAB_REPORT_SCRIPT");

@@ -101,8 +101,7 @@ class Engine {
           c.worstError = err;
           c.worstScene = plan_.sweep.sceneNames[s];
         }
-        const double measured = num(e.rows.at(s).timings, "shadow_gpu_ms") + num(e.rows.at(s).timings, "camera_gpu_ms");
-        if (std::isfinite(measured)) c.measuredMs = std::max(c.measuredMs, measured);
+        c.measuredMs = std::max(c.measuredMs, methodMs(e.rows.at(s)));
       }
       std::tie(c.costMs, c.mapBytes) = tuneCost(e, scenes);
     }

@@ -167,7 +167,7 @@ std::string choiceSentence(const TunePlan& plan, const TuneResult& r, const Tune
            (which ? ", " + describe(plan, *which) + ", is estimated at " + fmt("%.3g", cheapest) + " ms" : "");
   }
   const TuneEvaluation& e = r.evaluations[size_t(c.evaluation)];
-  const std::string costs = "estimated " + fmt("%.3g", c.costMs) + " ms (measured shadow + camera " +
+  const std::string costs = "estimated " + fmt("%.3g", c.costMs) + " ms (measured method_gpu_ms " +
                             fmt("%.3g", c.measuredMs) + " ms), map " + mib(c.mapBytes);
   if (!c.met) {
     std::string failing;
@@ -194,7 +194,7 @@ nlohmann::json choiceJson(const TunePlan& plan, const TuneResult& r, const TuneC
                       {"worst_scene", c.worstScene},
                       {"estimated_ms", c.costMs},
                       {"map_bytes", c.mapBytes},
-                      {"measured_shadow_camera_gpu_ms", c.measuredMs},
+                      {"measured_method_gpu_ms", c.measuredMs},
                       {"rows_asked", c.rowsAsked},
                       {"rows_run", c.rowsRun},
                       {"sentence", c.sentence}};
@@ -320,7 +320,8 @@ std::string tuneHtml(const TunePlan& plan, const TuneResult& r,
     h << "the lowest worst-case error_rate whose estimated cost is within " << fmt("%g", plan.spec.budgetMs) << " ms.";
   }
   h << " Costs are the deterministic model of compare/TUNE.md (\"The cost model\"), not measured times; the measured "
-       "shadow_gpu_ms + camera_gpu_ms stand beside them. Rows: <a href=\"results.json\">results.json</a>, "
+       "method_gpu_ms (shadow pass + lookup pass, compare/TIMINGS.md) stands beside them. Rows: <a "
+       "href=\"results.json\">results.json</a>, "
        "<a href=\"results.csv\">results.csv</a>, <a href=\"tune.json\">tune.json</a>, the method: "
        "<a href=\"tuned.json\">tuned.json</a>.</p>\n";
   h << "<p class=\"verdict" << (r.robust.met ? "" : " fail") << "\">" << escapeMarkup(r.verdict) << "</p>\n";
@@ -557,7 +558,7 @@ void writeTuneOutputs(TunePlan& plan, SweepRunner& runner, const TuneOptions& op
       if (row.metrics.contains("error_rate")) sj["error_rate"] = row.metrics["error_rate"];
       for (const auto& c : kPixelClasses)  // each error class's rate (classes.h)
         if (c.error && c.rateMetric && row.metrics.contains(c.rateMetric)) sj[c.rateMetric] = row.metrics[c.rateMetric];
-      for (const char* t : {"shadow_gpu_ms", "camera_gpu_ms"})
+      for (const char* t : {"shadow_gpu_ms", "lookup_gpu_ms", "method_gpu_ms", "camera_gpu_ms"})
         if (row.timings.contains(t)) sj[t] = row.timings[t];
       scenes[plan.sweep.sceneNames[s]] = sj;
     }

@@ -263,6 +263,9 @@ void writeResultsCsv(const std::string& path, const std::vector<ResultRow>& rows
 // lowest error reachable within its time budget. The harness's stages (camera_gpu_ms, readback,
 // compare) do not count. A row without method_gpu_ms: shadow_gpu_ms + lookup_gpu_ms (absent: 0).
 std::vector<size_t> paretoFront(const std::vector<ResultRow>& rows, const std::string& scene);
+// A row's method time, the report's and tune's time axis: method_gpu_ms, else (a row journaled
+// before the lookup pass existed) shadow_gpu_ms + lookup_gpu_ms, an absent term counting 0.
+double methodMs(const ResultRow& r);
 // The chart script: $SHADOWLAB_REPORT_SCRIPT when set, else <sourceDir>/compare/report/charts.py
 // (the executables know their source folder through the SHADOWLAB_SOURCE_DIR definition).
 std::string defaultReportScript(const std::string& sourceDir);

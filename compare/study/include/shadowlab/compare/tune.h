@@ -116,7 +116,7 @@ struct TuneChoice {
   double worstError = 0;       // largest error_rate over the scope's scenes
   std::string worstScene;
   double costMs = 0, mapBytes = 0;  // the model's estimate, largest over the scope's scenes
-  double measuredMs = 0;            // measured shadow_gpu_ms + camera_gpu_ms, largest over the scenes
+  double measuredMs = 0;            // measured method_gpu_ms (methodMs), largest over the scenes
   size_t rowsAsked = 0;             // rows this search looked at (new or already evaluated)
   size_t rowsRun = 0;               // of which run for the first time by this search
   std::string sentence;             // the verdict
