@@ -346,7 +346,7 @@ def chart_time_breakdown(scenes, rows_by_scene, out_dir):
         ax.set_yticks(range(len(rows)))
         ax.set_yticklabels([r["config"] for r in rows], fontsize=6)
         ax.invert_yaxis()  # the fastest method on top
-        ax.set_title(f"{scene}: where the time goes (configurations by method time, fastest first)")
+        ax.set_title(f"{scene}: where the time goes (configurations by method time, fastest first)", loc="left", fontsize=9)
         ax.set_xlabel("ms per configuration")
         ax.grid(True, axis="x", alpha=0.3)
         ax.legend(fontsize=6.5, loc="upper left", bbox_to_anchor=(1.02, 1.0), borderaxespad=0)
