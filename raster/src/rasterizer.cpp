@@ -18,6 +18,7 @@
 #include "shadowlab/raster/raster.h"
 
 #include <algorithm>
+#include <functional>
 #include <array>
 #include <chrono>
 #include <cmath>
@@ -65,6 +66,36 @@ constexpr VkFormat kResolveFormats[kResolveAttachments] = {VK_FORMAT_R32G32B32A3
                                                            VK_FORMAT_R32G32B32A32_SFLOAT};
 // The attachments a frame of `filter` writes: outC (the moments' evidence) for filterable maps only.
 int resolveAttachments(Filter filter) { return isMomentFilter(filter) ? 3 : 2; }
+// A colour attachment that a full-screen pass overwrites entirely (its old contents are not loaded).
+VkRenderingAttachmentInfo overwrittenColor(VkImageView view, VkImageLayout layout) {
+  VkRenderingAttachmentInfo color{VK_STRUCTURE_TYPE_RENDERING_ATTACHMENT_INFO};
+  color.imageView = view;
+  color.imageLayout = layout;
+  color.loadOp = VK_ATTACHMENT_LOAD_OP_DONT_CARE;  // every pixel is written
+  color.storeOp = VK_ATTACHMENT_STORE_OP_STORE;
+  return color;
+}
+// A full-screen pass (the moments, the resolve, the lookup): one triangle drawn with `pipeline`
+// over width x height into `count` colour attachments; `beforeDraw` (optional) runs after the
+// pipeline is bound, e.g. for push constants.
+void drawFullscreen(VkCommandBuffer cmd, const VkRenderingAttachmentInfo* colors, uint32_t count, uint32_t width,
+                    uint32_t height, VkPipeline pipeline, const std::function<void()>& beforeDraw = {}) {
+  VkRenderingInfo info{VK_STRUCTURE_TYPE_RENDERING_INFO};
+  info.renderArea = {{0, 0}, {width, height}};
+  info.layerCount = 1;
+  info.colorAttachmentCount = count;
+  info.pColorAttachments = colors;
+  vkCmdBeginRendering(cmd, &info);
+  VkViewport viewport{0, 0, float(width), float(height), 0.0f, 1.0f};
+  VkRect2D scissor{{0, 0}, {width, height}};
+  vkCmdSetViewport(cmd, 0, 1, &viewport);
+  vkCmdSetScissor(cmd, 0, 1, &scissor);
+  vkCmdSetCullMode(cmd, VK_CULL_MODE_NONE);
+  vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_GRAPHICS, pipeline);
+  if (beforeDraw) beforeDraw();
+  vkCmdDraw(cmd, 3, 1, 0, 0);
+  vkCmdEndRendering(cmd);
+}
 // The lookup pass's one attachment: the visibility, 1 byte per pixel.
 constexpr VkFormat kLookupFormat = VK_FORMAT_R8_UNORM;
 // GPU timestamps per frame: 0 start, 5 after the map layers (before the moments pass), 1 after
@@ -544,28 +575,13 @@ void Rasterizer::Impl::record(VkCommandBuffer cmd, const std::vector<glm::mat4>&
     const bool used = isMomentFilter(method.filter);
     const int size = moments.width();
     auto fullscreen = [&](const vk::Image& target, int layer, VkPipeline pipeline) {
-      VkRenderingAttachmentInfo color{VK_STRUCTURE_TYPE_RENDERING_ATTACHMENT_INFO};
-      color.imageView = target.layerView(layer);
-      color.imageLayout = VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL;
-      color.loadOp = VK_ATTACHMENT_LOAD_OP_DONT_CARE;  // every texel is written
-      color.storeOp = VK_ATTACHMENT_STORE_OP_STORE;
-      VkRenderingInfo info{VK_STRUCTURE_TYPE_RENDERING_INFO};
-      info.renderArea = {{0, 0}, {uint32_t(size), uint32_t(size)}};
-      info.layerCount = 1;
-      info.colorAttachmentCount = 1;
-      info.pColorAttachments = &color;
-      vkCmdBeginRendering(cmd, &info);
-      VkViewport viewport{0, 0, float(size), float(size), 0.0f, 1.0f};
-      VkRect2D scissor{{0, 0}, {uint32_t(size), uint32_t(size)}};
-      vkCmdSetViewport(cmd, 0, 1, &viewport);
-      vkCmdSetScissor(cmd, 0, 1, &scissor);
-      vkCmdSetCullMode(cmd, VK_CULL_MODE_NONE);
-      vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_GRAPHICS, pipeline);
-      DrawPush push{glm::mat4(1.0f), uint32_t(layer), 0, 0, 0};
-      vkCmdPushConstants(cmd, pipelineLayout.get(), VK_SHADER_STAGE_VERTEX_BIT | VK_SHADER_STAGE_FRAGMENT_BIT, 0,
-                         sizeof(push), &push);
-      vkCmdDraw(cmd, 3, 1, 0, 0);
-      vkCmdEndRendering(cmd);
+      const VkRenderingAttachmentInfo color =
+          overwrittenColor(target.layerView(layer), VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL);
+      drawFullscreen(cmd, &color, 1, uint32_t(size), uint32_t(size), pipeline, [&] {
+        DrawPush push{glm::mat4(1.0f), uint32_t(layer), 0, 0, 0};
+        vkCmdPushConstants(cmd, pipelineLayout.get(), VK_SHADER_STAGE_VERTEX_BIT | VK_SHADER_STAGE_FRAGMENT_BIT, 0,
+                           sizeof(push), &push);
+      });
     };
     for (const vk::Image* target : {&momentsRows, &moments}) {
       const bool cols = target == &moments;
@@ -615,26 +631,9 @@ void Rasterizer::Impl::record(VkCommandBuffer cmd, const std::vector<glm::mat4>&
       vk::transition(cmd, resolveOut[i], VK_IMAGE_LAYOUT_UNDEFINED, VK_IMAGE_LAYOUT_GENERAL,
                      VK_PIPELINE_STAGE_2_HOST_BIT, 0, VK_PIPELINE_STAGE_2_COLOR_ATTACHMENT_OUTPUT_BIT,
                      VK_ACCESS_2_COLOR_ATTACHMENT_WRITE_BIT);
-      colors[i] = {VK_STRUCTURE_TYPE_RENDERING_ATTACHMENT_INFO};
-      colors[i].imageView = resolveOut[i].layerView(0);
-      colors[i].imageLayout = VK_IMAGE_LAYOUT_GENERAL;
-      colors[i].loadOp = VK_ATTACHMENT_LOAD_OP_DONT_CARE;  // every pixel is written
-      colors[i].storeOp = VK_ATTACHMENT_STORE_OP_STORE;
+      colors[i] = overwrittenColor(resolveOut[i].layerView(0), VK_IMAGE_LAYOUT_GENERAL);
     }
-    VkRenderingInfo info{VK_STRUCTURE_TYPE_RENDERING_INFO};
-    info.renderArea = {{0, 0}, {uint32_t(width), uint32_t(height)}};
-    info.layerCount = 1;
-    info.colorAttachmentCount = uint32_t(attachments);
-    info.pColorAttachments = colors;
-    vkCmdBeginRendering(cmd, &info);
-    VkViewport viewport{0, 0, float(width), float(height), 0.0f, 1.0f};
-    VkRect2D scissor{{0, 0}, {uint32_t(width), uint32_t(height)}};
-    vkCmdSetViewport(cmd, 0, 1, &viewport);
-    vkCmdSetScissor(cmd, 0, 1, &scissor);
-    vkCmdSetCullMode(cmd, VK_CULL_MODE_NONE);
-    vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_GRAPHICS, resolve);
-    vkCmdDraw(cmd, 3, 1, 0, 0);
-    vkCmdEndRendering(cmd);
+    drawFullscreen(cmd, colors, uint32_t(attachments), uint32_t(width), uint32_t(height), resolve);
   }
   VkMemoryBarrier2 toHost{VK_STRUCTURE_TYPE_MEMORY_BARRIER_2};
   toHost.srcStageMask = VK_PIPELINE_STAGE_2_FRAGMENT_SHADER_BIT | VK_PIPELINE_STAGE_2_COLOR_ATTACHMENT_OUTPUT_BIT;
@@ -651,25 +650,8 @@ void Rasterizer::Impl::record(VkCommandBuffer cmd, const std::vector<glm::mat4>&
   if (lookup != VK_NULL_HANDLE) {
     vk::transition(cmd, lookupOut, VK_IMAGE_LAYOUT_UNDEFINED, VK_IMAGE_LAYOUT_GENERAL, VK_PIPELINE_STAGE_2_HOST_BIT, 0,
                    VK_PIPELINE_STAGE_2_COLOR_ATTACHMENT_OUTPUT_BIT, VK_ACCESS_2_COLOR_ATTACHMENT_WRITE_BIT);
-    VkRenderingAttachmentInfo color{VK_STRUCTURE_TYPE_RENDERING_ATTACHMENT_INFO};
-    color.imageView = lookupOut.layerView(0);
-    color.imageLayout = VK_IMAGE_LAYOUT_GENERAL;
-    color.loadOp = VK_ATTACHMENT_LOAD_OP_DONT_CARE;  // every pixel is written
-    color.storeOp = VK_ATTACHMENT_STORE_OP_STORE;
-    VkRenderingInfo info{VK_STRUCTURE_TYPE_RENDERING_INFO};
-    info.renderArea = {{0, 0}, {uint32_t(width), uint32_t(height)}};
-    info.layerCount = 1;
-    info.colorAttachmentCount = 1;
-    info.pColorAttachments = &color;
-    vkCmdBeginRendering(cmd, &info);
-    VkViewport viewport{0, 0, float(width), float(height), 0.0f, 1.0f};
-    VkRect2D scissor{{0, 0}, {uint32_t(width), uint32_t(height)}};
-    vkCmdSetViewport(cmd, 0, 1, &viewport);
-    vkCmdSetScissor(cmd, 0, 1, &scissor);
-    vkCmdSetCullMode(cmd, VK_CULL_MODE_NONE);
-    vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_GRAPHICS, lookup);
-    vkCmdDraw(cmd, 3, 1, 0, 0);
-    vkCmdEndRendering(cmd);
+    const VkRenderingAttachmentInfo color = overwrittenColor(lookupOut.layerView(0), VK_IMAGE_LAYOUT_GENERAL);
+    drawFullscreen(cmd, &color, 1, uint32_t(width), uint32_t(height), lookup);
     vkCmdPipelineBarrier2(cmd, &dep);
   }
   vkCmdWriteTimestamp2(cmd, VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT, pool, 2);
