@@ -10,6 +10,7 @@
 #include "shadowlab/reference/reference.h"
 #include "shadowlab/scenes/loader.h"
 #include "support/raster_device.h"
+#include "support/half_scene_reference.h"
 #include "support/reference_score.h"
 
 using namespace shadowlab;
@@ -20,20 +21,8 @@ using AdaptiveBias = shadowlab::testing::ValidatedRasterTest;
 using shadowlab::testing::Score;
 using shadowlab::testing::score;
 
-// Half the scene's pixels (480x270), as raster_reference_test renders them.
-Scene halfScene(const std::string& name) {
-  Scene s = loadScene(resolveScenePath(name));
-  s.camera.width /= 2;
-  s.camera.height /= 2;
-  return s;
-}
-
-const Frame& reference(const Scene& s) {
-  static std::map<std::string, Frame> cache;
-  auto it = cache.find(s.name);
-  if (it != cache.end()) return it->second;
-  return cache.emplace(s.name, renderReference(s, ReferenceOptions{})).first->second;
-}
+using shadowlab::testing::halfScene;
+const Frame& reference(const Scene& s) { return shadowlab::testing::cachedReference(s); }
 
 }  // namespace
 

@@ -11,6 +11,7 @@
 
 #include "shadowlab/raster/raster.h"
 #include "support/raster_device.h"
+#include "support/half_scene_reference.h"
 #include "support/reference_score.h"
 #include "shadowlab/reference/reference.h"
 #include "shadowlab/scenes/loader.h"
@@ -23,21 +24,8 @@ using RasterVsReference = shadowlab::testing::ValidatedRasterTest;
 using shadowlab::testing::Score;
 using shadowlab::testing::score;
 
-Scene halfScene(const std::string& name) {
-  Scene s = loadScene(resolveScenePath(name));
-  s.camera.width /= 2;
-  s.camera.height /= 2;
-  return s;
-}
-
-// The reference of each (scene, size) once per executable.
-const Frame& reference(const Scene& s) {
-  static std::map<std::string, Frame> cache;
-  std::string key = s.name + "/" + std::to_string(s.camera.width);
-  auto it = cache.find(key);
-  if (it != cache.end()) return it->second;
-  return cache.emplace(key, renderReference(s, ReferenceOptions{})).first->second;
-}
+using shadowlab::testing::halfScene;
+const Frame& reference(const Scene& s) { return shadowlab::testing::cachedReference(s); }
 
 }  // namespace
 
