@@ -41,17 +41,6 @@ static_assert(std::atomic<bool>::is_always_lock_free, "the signal handler needs 
 
 extern "C" void onInterrupt(int) { gStop.store(true); }
 
-// SA_RESETHAND: the first Ctrl-C asks for a clean stop after the configuration in progress; a
-// second one kills the process the default way (rows already appended are safe either way).
-void installInterruptHandlers() {
-  struct sigaction sa {};
-  sa.sa_handler = onInterrupt;
-  sigemptyset(&sa.sa_mask);
-  sa.sa_flags = SA_RESETHAND;
-  sigaction(SIGINT, &sa, nullptr);
-  sigaction(SIGTERM, &sa, nullptr);
-}
-
 // Single-quoted for a POSIX shell.
 std::string shellQuote(const std::string& s) {
   std::string out = "'";
@@ -278,7 +267,7 @@ int run(const Options& o) {
   if (shard.active())
     std::fprintf(stderr, "sweep: shard %zu/%zu: every %zu-th row from row %zu, into %s\n", shard.index, shard.count,
                  shard.count, shard.index, shardDir(o.outDir, shard).c_str());
-  installInterruptHandlers();
+  app::installStopHandlers(onInterrupt);
   const SweepSummary summary = runSweep(plan, *runner, options);
   out.keep();  // rows, log and lock live there: a later run continues from them
   if (summary.interrupted) {

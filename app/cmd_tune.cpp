@@ -87,12 +87,7 @@ int run(const Options& o) {
   for (const auto& k : plan.keys) std::fprintf(stderr, " %s (%zu values)", k.key.c_str(), k.values.size());
   std::fprintf(stderr, "; the dense grid would be %zu rows; into %s\n",
                plan.gridConfigurations * plan.sweep.sceneNames.size(), o.outDir.c_str());
-  struct sigaction sa {};
-  sa.sa_handler = onTuneInterrupt;
-  sigemptyset(&sa.sa_mask);
-  sa.sa_flags = SA_RESETHAND;
-  sigaction(SIGINT, &sa, nullptr);
-  sigaction(SIGTERM, &sa, nullptr);
+  app::installStopHandlers(onTuneInterrupt);
   const TuneResult result = runTune(plan, *runner, options);
   out.keep();
   if (result.interrupted) {

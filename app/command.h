@@ -11,6 +11,8 @@
 // The returned function runs when that subcommand was chosen; it returns the exit code.
 // It throws InputError (-> 2) or DriverError (-> 3); main prints what() and maps the code.
 // Exit codes: 0 ok, 1 gate failed, 2 bad input or usage, 3 internal/driver failure.
+#include <signal.h>
+
 #include <functional>
 #include <string>
 #include <vector>
@@ -31,6 +33,18 @@ std::vector<CommandEntry>& commandRegistry();
 struct Registrar {
   Registrar(const std::string& name, Setup setup) { commandRegistry().push_back({name, std::move(setup)}); }
 };
+
+// SIGINT/SIGTERM call `handler` once (SA_RESETHAND): the first Ctrl-C asks a long command (sweep,
+// tune) for a clean stop after the configuration in progress; a second one kills the process the
+// default way (rows already appended are safe either way).
+inline void installStopHandlers(void (*handler)(int)) {
+  struct sigaction sa {};
+  sa.sa_handler = handler;
+  sigemptyset(&sa.sa_mask);
+  sa.sa_flags = SA_RESETHAND;
+  sigaction(SIGINT, &sa, nullptr);
+  sigaction(SIGTERM, &sa, nullptr);
+}
 
 // What the commands that run many configurations through the pipeline (sweep, tune) share: the
 // base method, the output folder, the light, the reference's samples, its cache and the device.
