@@ -1,6 +1,7 @@
 // `shadowlab sweep [SCENES...] [--grid key=v1,v2]... [--sweep FILE] [--set key=value]... -o DIR`:
 // every scene x configuration of the grid, one row each, resumable; ends with results.json,
 // results.csv, figures/ and report.html (compare/SWEEPS.md).
+#include <algorithm>
 #include <signal.h>
 #include <unistd.h>
 
@@ -207,14 +208,19 @@ int run(const Options& o) {
   if (!o.sweepFile.empty()) loadSweepFile(o.sweepFile, spec);
   if (!o.scenes.empty()) spec.scenes = o.scenes;  // the command line names replace the file's
   for (const auto& g : o.grid) {
+    // A --grid axis replaces the file's axes of that key, in every grid of a union, and is swept
+    // in every one of them.
     SweepAxis axis = parseGridArgument(g);
-    bool replaced = false;
-    for (auto& existing : spec.grid)
-      if (existing.key == axis.key) {
-        existing = axis;
-        replaced = true;
-      }
-    if (!replaced) spec.grid.push_back(std::move(axis));
+    auto first =
+        std::find_if(spec.grid.begin(), spec.grid.end(), [&](const SweepAxis& a) { return a.key == axis.key; });
+    if (first == spec.grid.end()) {
+      spec.grid.push_back(std::move(axis));
+    } else {
+      *first = std::move(axis);
+      const std::string key = first->key;
+      spec.grid.erase(std::remove_if(first + 1, spec.grid.end(), [&](const SweepAxis& a) { return a.key == key; }),
+                      spec.grid.end());
+    }
   }
   for (const auto& s : o.sets) {
     SweepSetting setting = parseSetArgument(s);

@@ -290,3 +290,82 @@ TEST(SweepPlan, SceneFailureKeyNeedsADeclaredFailureAndNoSecondNameForIt) {
       std::string::npos);
   fs::remove_all(dir);
 }
+
+// A union of grids: "grid" as an array of grid objects, each expanded as a product on its own.
+// A key one block does not sweep carries the base method's value there, so every configuration
+// names every swept key; a configuration two blocks share is run once; sweptAxes gives one axis
+// per key for the report.
+TEST(SweepPlan, UnionOfGridsExpandsEachBlockAndJoinsThem) {
+  std::string dir = tempDir("union");
+  std::string path = writeText(dir + "/union.json", R"({
+    "scenes": ["sphere_on_plane"],
+    "grid": [
+      {"map.size": [512, 1024], "filter": ["none", "pcf"]},
+      {"map.size": [1024], "fit": ["sphere", "lispsm"]}
+    ],
+    "set": {"bias.slope": 2}
+  })");
+  SweepSpec spec;
+  loadSweepFile(path, spec);
+  SweepPlan plan = planSweep(spec);
+  std::vector<std::string> configs;
+  for (const auto& c : plan.configs) configs.push_back(c.config);
+  // Block 1's fit=sphere,map.size=1024 is block 0's filter=none,map.size=1024: not repeated.
+  EXPECT_EQ(configs,
+            (std::vector<std::string>{"filter=none,fit=sphere,map.size=512", "filter=pcf,fit=sphere,map.size=512",
+                                      "filter=none,fit=sphere,map.size=1024", "filter=pcf,fit=sphere,map.size=1024",
+                                      "filter=none,fit=lispsm,map.size=1024"}));
+  EXPECT_EQ(plan.configs[4].method.fit, Fit::Lispsm);
+  EXPECT_EQ(plan.configs[4].method.filter, Filter::None);
+  EXPECT_EQ(plan.configs[1].method.filter, Filter::Pcf);
+  for (const auto& c : plan.configs) EXPECT_EQ(c.method.biasSlope, 2.0f) << c.config;
+  EXPECT_EQ(plan.jobs.size(), 5u);
+  const std::vector<SweepAxis> axes = sweptAxes(plan);
+  ASSERT_EQ(axes.size(), 3u);
+  EXPECT_EQ(axes[0].key, "map.size");
+  EXPECT_EQ(axes[0].values, (std::vector<nlohmann::json>{"512", "1024"}));
+  EXPECT_EQ(axes[1].key, "filter");
+  EXPECT_EQ(axes[2].key, "fit");
+  EXPECT_EQ(axes[2].values, (std::vector<nlohmann::json>{"sphere", "lispsm"}));
+
+  // A --grid axis replaces the key's axes in every block (app/cmd_sweep.cpp does this) and is
+  // swept in all of them.
+  SweepSpec again = spec;
+  again.grid.erase(
+      std::remove_if(again.grid.begin(), again.grid.end(), [](const SweepAxis& a) { return a.key == "map.size"; }),
+      again.grid.end());
+  again.grid.push_back(parseGridArgument("map.size=256"));
+  EXPECT_EQ(planSweep(again).configs.size(), 3u);  // none, pcf; sphere is block 0's none; lispsm
+
+  // Errors name the block: a key twice in one block, a block that is not an object, an empty union,
+  // and a scene: key some blocks leave out (it has no base value).
+  std::string twice = writeText(dir + "/twice.json", R"({"scenes": ["sphere_on_plane"],
+    "grid": [{"map.size": [512]}, {"map.size": [256], "filter": ["pcf"]}, {"filter": ["none"], "fit": ["tight"]}]})");
+  SweepSpec ok;
+  loadSweepFile(twice, ok);
+  EXPECT_EQ(planSweep(ok).configs.size(), 3u) << "the same key in two blocks is fine";
+  std::string notObject = writeText(dir + "/notobject.json", R"({"grid": [{"map.size": [512]}, [1, 2]]})");
+  EXPECT_EQ(inputErrorOf([&] {
+              SweepSpec s;
+              loadSweepFile(notObject, s);
+            }),
+            notObject + ": /grid/1: error: got an array; expected a grid object {\"key\": [v1, v2, ...]}");
+  std::string empty = writeText(dir + "/empty.json", R"({"grid": []})");
+  EXPECT_EQ(inputErrorOf([&] {
+              SweepSpec s;
+              loadSweepFile(empty, s);
+            }),
+            empty + ": /grid: error: empty list of grids; expected at least one grid object");
+  std::string sceneKey = writeText(dir + "/scenekey.json", R"({"scenes": ["sphere_on_plane"],
+    "grid": [{"scene:/lights/0/elevation_deg": [30, 60]}, {"map.size": [512]}]})");
+  const std::string e = inputErrorOf([&] {
+    SweepSpec s;
+    loadSweepFile(sceneKey, s);
+    planSweep(s);
+  });
+  EXPECT_NE(e.find("\"scene:/lights/0/elevation_deg\" is swept in another grid of the union but not in this one"),
+            std::string::npos)
+      << e;
+  EXPECT_NE(e.find("/grid/1"), std::string::npos) << e;
+  fs::remove_all(dir);
+}

@@ -123,14 +123,20 @@ def positive_floor(values):
 def chart_error_by_size(scenes, rows_by_scene, swept, classes, out_dir):
     if "map.size" not in swept:
         return None, "map.size is not in the grid (sweep it, e.g. --grid map.size=256,512,1024,2048)"
-    others = [k for k in swept if k not in ("map.size", "filter")]
+    # One line per filter, and per fit too when the fit is swept (a union of grids may sweep fits
+    # with one filter only: the lines are the combinations the rows have).
+    line_keys = ["filter"] + (["fit"] if "fit" in swept else [])
+    others = [k for k in swept if k not in ["map.size"] + line_keys]
+
+    def line_of(r):
+        return ", ".join(f"{k}={method_value(r, k)}" for k in line_keys)
     fig, axes = panel_grid(len(scenes) * len(classes), width_per=3.3, height_per=2.8, max_cols=len(classes))
     drew_zero = False
     for si, scene in enumerate(scenes):
         rows = rows_by_scene[scene]
         filters = []
         for r in rows:
-            f = str(method_value(r, "filter"))
+            f = line_of(r)
             if f not in filters:
                 filters.append(f)
         for ci, (metric, label, colour) in enumerate(classes):
@@ -139,7 +145,7 @@ def chart_error_by_size(scenes, rows_by_scene, swept, classes, out_dir):
                 for spine in ax.spines.values():
                     spine.set_edgecolor(colour)
                     spine.set_linewidth(1.5)
-            best = best_by(rows, lambda r: (str(method_value(r, "filter")), method_value(r, "map.size")),
+            best = best_by(rows, lambda r: (line_of(r), method_value(r, "map.size")),
                            lambda r: num(r["metrics"], "error_rate"))
             floor = positive_floor([num(r["metrics"], metric) for r in best.values()])
             for f in filters:
@@ -147,7 +153,7 @@ def chart_error_by_size(scenes, rows_by_scene, swept, classes, out_dir):
                              if k[0] == f and num(r["metrics"], metric) is not None)
                 xs = [p[0] for p in pts]
                 ys = [p[1] if p[1] > 0 else floor for p in pts]
-                line, = ax.plot(xs, ys, marker="o", label=f"filter={f}")
+                line, = ax.plot(xs, ys, marker="o", label=f)
                 zx = [p[0] for p in pts if p[1] <= 0]
                 if zx:
                     drew_zero = True
@@ -161,10 +167,11 @@ def chart_error_by_size(scenes, rows_by_scene, swept, classes, out_dir):
             ax.grid(True, which="both", alpha=0.3)
             if ci == 0:
                 ax.legend(fontsize=7)
-    caption = ("Error rate by class against shadow-map resolution (log-log), one line per filter, one row of panels "
-               "per scene; each class's panel is framed in its errors.png colour.")
+    caption = ("Error rate by class against shadow-map resolution (log-log), one line per "
+               + " and ".join(line_keys) + ", one row of panels per scene; each class's panel is framed in its "
+               "errors.png colour.")
     if others:
-        caption += (" At each size and filter the configuration with the lowest error_rate over "
+        caption += (" At each size and " + " and ".join(line_keys) + " the configuration with the lowest error_rate over "
                     + ", ".join(others) + " is shown.")
     if drew_zero:
         caption += " Hollow triangles: a rate of exactly 0, drawn at the panel's floor (log axes cannot show 0)."

@@ -64,7 +64,8 @@ nlohmann::json computeFrontiers(const SweepPlan& plan, const std::vector<ResultR
   // Axes with a single value are constants: they name no frontier and are left out of labels.
   std::vector<const SweepAxis*> walked;
   std::map<std::string, bool> singleValued;
-  for (const auto& axis : plan.spec.grid) {
+  const std::vector<SweepAxis> axes = sweptAxes(plan);  // one per key, also for a union of grids
+  for (const auto& axis : axes) {
     singleValued[axis.key] = axis.values.size() < 2;
     if (axis.key.rfind(prefix, 0) == 0 && axis.values.size() >= 2) walked.push_back(&axis);
   }

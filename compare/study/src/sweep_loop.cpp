@@ -273,15 +273,9 @@ nlohmann::json sweepDescription(const SweepPlan& plan) {
   d["scenes"] = plan.sceneNames;
   d["scene_paths"] = plan.scenePaths;
   nlohmann::json grid = nlohmann::json::array();
-  for (const auto& axis : plan.spec.grid) {
-    nlohmann::json values = nlohmann::json::array();
-    // The canonical texts, in the order given, as they appear in `config`.
-    std::vector<std::string> seen;
-    for (const auto& c : plan.configs)
-      for (const auto& [k, v] : c.values)
-        if (k == axis.key && std::find(seen.begin(), seen.end(), v) == seen.end()) seen.push_back(v);
-    grid.push_back({{"key", axis.key}, {"values", seen}});
-  }
+  // The canonical texts, in the order given, as they appear in `config` (one axis per key, also
+  // for a union of grids).
+  for (const auto& axis : sweptAxes(plan)) grid.push_back({{"key", axis.key}, {"values", axis.values}});
   d["grid"] = grid;
   nlohmann::json fixed = nlohmann::json::object();
   for (const auto& s : plan.spec.fixed) fixed[s.key] = s.value;

@@ -193,28 +193,46 @@ void loadSweepFile(const std::string& path, SweepSpec& spec) {
         spec.scenes.push_back(s);
       }
     } else if (k == "grid") {
-      if (!v.is_object()) fail(ptr, "got " + jsonTypeName(v) + "; expected an object {\"key\": [v1, v2, ...]}");
-      for (auto g = v.begin(); g != v.end(); ++g) {
-        const std::string gptr = ptr + "/" + jsonPointerToken(g.key());
-        SweepAxis axis;
-        axis.key = g.key();
-        axis.origin = path + ": " + gptr;
-        checkKey(axis.key, axis.origin);
-        const ojson& list = g.value();
-        if (!list.is_array()) fail(gptr, "got " + jsonTypeName(list) + "; expected an array of values");
-        if (list.empty()) fail(gptr, "empty list of values; expected at least one");
-        for (size_t i = 0; i < list.size(); ++i) {
-          const ojson& item = list[i];
-          const std::string iptr = gptr + "/" + std::to_string(i);
-          if (!item.is_primitive() || item.is_null()) {
-            if (!isSceneKey(axis.key) || item.is_null())
-              fail(iptr, "got " + jsonTypeName(item) + "; expected a number, string or boolean");
+      // One grid object, or an array of them: a union of grids, each block expanded on its own.
+      auto readGrid = [&](const ojson& object, const std::string& objectPtr, int block) {
+        for (auto g = object.begin(); g != object.end(); ++g) {
+          const std::string gptr = objectPtr + "/" + jsonPointerToken(g.key());
+          SweepAxis axis;
+          axis.key = g.key();
+          axis.block = block;
+          axis.origin = path + ": " + gptr;
+          checkKey(axis.key, axis.origin);
+          const ojson& list = g.value();
+          if (!list.is_array()) fail(gptr, "got " + jsonTypeName(list) + "; expected an array of values");
+          if (list.empty()) fail(gptr, "empty list of values; expected at least one");
+          for (size_t i = 0; i < list.size(); ++i) {
+            const ojson& item = list[i];
+            const std::string iptr = gptr + "/" + std::to_string(i);
+            if (!item.is_primitive() || item.is_null()) {
+              if (!isSceneKey(axis.key) || item.is_null())
+                fail(iptr, "got " + jsonTypeName(item) + "; expected a number, string or boolean");
+            }
+            axis.values.push_back(nlohmann::json::parse(item.dump()));
+            axis.valueOrigins.push_back(path + ": " + iptr);
           }
-          axis.values.push_back(nlohmann::json::parse(item.dump()));
-          axis.valueOrigins.push_back(path + ": " + iptr);
+          // A key given twice in a file is caught by the plan's duplicate check.
+          spec.grid.push_back(std::move(axis));
         }
-        // A key given twice in a file is caught by the plan's duplicate check.
-        spec.grid.push_back(std::move(axis));
+      };
+      if (v.is_object()) {
+        readGrid(v, ptr, -1);
+      } else if (v.is_array()) {
+        if (v.empty()) fail(ptr, "empty list of grids; expected at least one grid object");
+        for (size_t b = 0; b < v.size(); ++b) {
+          const std::string bptr = ptr + "/" + std::to_string(b);
+          if (!v[b].is_object() || v[b].empty())
+            fail(bptr, "got " + (v[b].is_object() ? std::string("an empty object") : jsonTypeName(v[b])) +
+                           "; expected a grid object {\"key\": [v1, v2, ...]}");
+          readGrid(v[b], bptr, int(b));
+        }
+      } else {
+        fail(ptr, "got " + jsonTypeName(v) +
+                      "; expected an object {\"key\": [v1, v2, ...]} or an array of them (a union of grids)");
       }
     } else if (k == "set") {
       if (!v.is_object()) fail(ptr, "got " + jsonTypeName(v) + "; expected an object {\"key\": value}");
@@ -291,15 +309,21 @@ SweepPlan planSweep(const SweepSpec& spec) {
     std::string origin;
   };
   std::vector<std::vector<Point>> axisPoints;
-  std::set<std::string> axisKeys;
-  for (const auto& axis : spec.grid) {
+  int blocks = 1;  // a union of grids: blocks 0..blocks-1 (axes of block -1 belong to every block)
+  for (const auto& axis : spec.grid) blocks = std::max(blocks, axis.block + 1);
+  std::vector<std::string> sweptKeys;  // every key swept in any block, first-given order
+  for (size_t a = 0; a < spec.grid.size(); ++a) {
+    const SweepAxis& axis = spec.grid[a];
     checkKey(axis.key, axis.origin);
     if (axis.values.empty())
       throw InputError(
           formatError(axis.origin, "", "empty list of values for \"" + axis.key + "\"; expected at least one"));
-    if (!axisKeys.insert(axis.key).second)
-      throw InputError(
-          formatError(axis.origin, "", "\"" + axis.key + "\" is swept twice; expected each key in one --grid"));
+    for (size_t b = 0; b < a; ++b)
+      if (spec.grid[b].key == axis.key &&
+          (axis.block < 0 || spec.grid[b].block < 0 || spec.grid[b].block == axis.block))
+        throw InputError(
+            formatError(axis.origin, "", "\"" + axis.key + "\" is swept twice; expected each key in one --grid"));
+    if (std::find(sweptKeys.begin(), sweptKeys.end(), axis.key) == sweptKeys.end()) sweptKeys.push_back(axis.key);
     if (fixedKeys.count(axis.key))
       throw InputError(
           formatError(axis.origin, "", "\"" + axis.key + "\" is both swept and fixed by --set; expected one of them"));
@@ -326,38 +350,69 @@ SweepPlan planSweep(const SweepSpec& spec) {
     axisPoints.push_back(std::move(points));
   }
 
-  size_t total = 1;
-  for (const auto& pts : axisPoints) {
-    total *= pts.size();
+  // The axes of each block; a key a block does not sweep takes the base method's value there (a
+  // scene: key has no such value, so it must be swept in every block).
+  std::vector<std::vector<size_t>> blockAxes(static_cast<size_t>(blocks));
+  for (size_t a = 0; a < spec.grid.size(); ++a)
+    for (int b = 0; b < blocks; ++b)
+      if (spec.grid[a].block < 0 || spec.grid[a].block == b) blockAxes[size_t(b)].push_back(a);
+  size_t total = 0;
+  for (int b = 0; b < blocks; ++b) {
+    size_t product = 1;
+    for (size_t a : blockAxes[size_t(b)]) {
+      product *= axisPoints[a].size();
+      if (product > kMaxConfigurations) break;
+    }
+    total += product;
     if (total > kMaxConfigurations)
       throw InputError(formatError(
           "shadowlab sweep", "",
           "the grid has more than " + std::to_string(kMaxConfigurations) +
               " configurations; expected a smaller grid (the plan, its journal and results.json are held in "
               "memory, and at ~0.1-0.2 s a row 100000 rows are hours on one machine)"));
+    for (const std::string& key : sweptKeys) {
+      const auto& axes = blockAxes[size_t(b)];
+      const bool inBlock = std::any_of(axes.begin(), axes.end(), [&](size_t a) { return spec.grid[a].key == key; });
+      if (!inBlock && isSceneKey(key))
+        throw InputError(formatError("shadowlab sweep", "/grid/" + std::to_string(b),
+                                     "\"" + key +
+                                         "\" is swept in another grid of the union but not in this one; "
+                                         "expected a scene: key in every grid (or fixed with --set)"));
+    }
   }
 
-  // Expand: the last axis varies fastest (odometer order).
-  std::vector<size_t> idx(axisPoints.size(), 0);
-  for (size_t n = 0; n < total; ++n) {
-    SweepConfig c;
-    c.method = base;
-    c.sceneOverrides = fixedSceneOverrides;
-    for (size_t a = 0; a < axisPoints.size(); ++a) {
-      const Point& p = axisPoints[a][idx[a]];
-      const std::string& key = spec.grid[a].key;
-      if (isSceneKey(key)) c.sceneOverrides.push_back({scenePointerOf(key), p.value});
-      else applyValue(c.method, key, p.value, p.origin);
-      c.values.emplace_back(key, p.text);
-    }
-    std::sort(c.values.begin(), c.values.end());
-    for (const auto& [k, v] : c.values) c.config += (c.config.empty() ? "" : ",") + k + "=" + v;
-    if (c.config.empty()) c.config = "default";
-    validateMethod(c.method, "shadowlab sweep: configuration " + c.config);
-    plan.configs.push_back(std::move(c));
-    for (size_t a = axisPoints.size(); a-- > 0;) {
-      if (++idx[a] < axisPoints[a].size()) break;
-      idx[a] = 0;
+  // Expand each block: its last axis varies fastest (odometer order); a configuration an earlier
+  // block already holds is not repeated.
+  std::set<std::string> seenConfigs;
+  for (int b = 0; b < blocks; ++b) {
+    const std::vector<size_t>& axes = blockAxes[size_t(b)];
+    size_t count = 1;
+    for (size_t a : axes) count *= axisPoints[a].size();
+    std::vector<size_t> idx(axes.size(), 0);
+    for (size_t n = 0; n < count; ++n) {
+      SweepConfig c;
+      c.method = base;
+      c.sceneOverrides = fixedSceneOverrides;
+      for (size_t i = 0; i < axes.size(); ++i) {
+        const Point& p = axisPoints[axes[i]][idx[i]];
+        const std::string& key = spec.grid[axes[i]].key;
+        if (isSceneKey(key)) c.sceneOverrides.push_back({scenePointerOf(key), p.value});
+        else applyValue(c.method, key, p.value, p.origin);
+        c.values.emplace_back(key, p.text);
+      }
+      for (const std::string& key : sweptKeys)
+        if (std::none_of(axes.begin(), axes.end(), [&](size_t a) { return spec.grid[a].key == key; }))
+          c.values.emplace_back(key, methodValueText(base, key));
+      std::sort(c.values.begin(), c.values.end());
+      for (const auto& [k, v] : c.values) c.config += (c.config.empty() ? "" : ",") + k + "=" + v;
+      if (c.config.empty()) c.config = "default";
+      for (size_t i = axes.size(); i-- > 0;) {
+        if (++idx[i] < axisPoints[axes[i]].size()) break;
+        idx[i] = 0;
+      }
+      if (!seenConfigs.insert(c.config).second) continue;
+      validateMethod(c.method, "shadowlab sweep: configuration " + c.config);
+      plan.configs.push_back(std::move(c));
     }
   }
 
@@ -450,6 +505,23 @@ SweepPlan planSweep(const SweepSpec& spec) {
     plan.sceneNames.push_back(sceneName);
   }
   return plan;
+}
+
+std::vector<SweepAxis> sweptAxes(const SweepPlan& plan) {
+  std::vector<SweepAxis> out;
+  for (const auto& given : plan.spec.grid) {
+    if (std::any_of(out.begin(), out.end(), [&](const SweepAxis& a) { return a.key == given.key; })) continue;
+    SweepAxis axis;
+    axis.key = given.key;
+    axis.origin = given.origin;
+    std::vector<std::string> seen;
+    for (const auto& c : plan.configs)
+      for (const auto& [k, v] : c.values)
+        if (k == axis.key && std::find(seen.begin(), seen.end(), v) == seen.end()) seen.push_back(v);
+    for (const auto& v : seen) axis.values.push_back(v);
+    out.push_back(std::move(axis));
+  }
+  return out;
 }
 
 }  // namespace shadowlab

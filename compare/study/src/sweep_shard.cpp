@@ -76,7 +76,11 @@ nlohmann::json sweepSpecToJson(const SweepPlan& plan) {
   j["scenes"] = scenes;
   nlohmann::json grid = nlohmann::json::array();
   for (const auto& a : spec.grid)
-    grid.push_back({{"key", a.key}, {"values", a.values}, {"origin", a.origin}, {"value_origins", a.valueOrigins}});
+    grid.push_back({{"key", a.key},
+                    {"values", a.values},
+                    {"origin", a.origin},
+                    {"value_origins", a.valueOrigins},
+                    {"block", a.block}});
   j["grid"] = grid;
   nlohmann::json fixed = nlohmann::json::array();
   for (const auto& s : spec.fixed) fixed.push_back({{"key", s.key}, {"value", s.value}, {"origin", s.origin}});
@@ -101,6 +105,7 @@ SweepSpec sweepSpecFromJson(const nlohmann::json& j, const std::string& origin) 
       axis.values = a.at("values").get<std::vector<nlohmann::json>>();
       axis.origin = a.at("origin").get<std::string>();
       axis.valueOrigins = a.at("value_origins").get<std::vector<std::string>>();
+      axis.block = a.value("block", -1);
       spec.grid.push_back(std::move(axis));
     }
     for (const auto& s : j.at("set"))

@@ -41,6 +41,11 @@ struct SweepAxis {
   std::vector<nlohmann::json> values;     // text from the command line, typed values from a sweep file
   std::string origin;                     // where it came from, for messages: "--grid map.size=..."
   std::vector<std::string> valueOrigins;  // one per value ("sweep.json: /grid/map.size/2")
+  // Which block of a union of grids the axis belongs to: a sweep file's "grid" may be an array of
+  // grid objects, each expanded as a product on its own and the configurations joined (a key
+  // swept in another block takes the base method's value here). -1: every block (--grid axes,
+  // and the axes of a single grid object).
+  int block = -1;
 };
 
 struct SweepSetting {
@@ -51,7 +56,7 @@ struct SweepSetting {
 
 struct SweepSpec {
   std::vector<std::string> scenes;  // bundled names or paths; empty = every bundled scene
-  std::vector<SweepAxis> grid;      // in the order given; the last axis varies fastest
+  std::vector<SweepAxis> grid;      // in the order given; the last axis varies fastest (per block)
   std::vector<SweepSetting> fixed;  // --set / "set": applied to every configuration, before the grid
   std::string methodFile;           // optional base method file (--method / "method")
   std::string light;                // empty: each scene's first light
@@ -115,6 +120,12 @@ struct SweepPlan {
 // Validates everything (keys, every value of every axis, cross-field rules of every configuration,
 // scenes, lights) and expands the grid. Reads the inputs; writes nothing.
 SweepPlan planSweep(const SweepSpec& spec);
+
+// The swept keys of a plan, one axis each, in the order they were first given, with the distinct
+// canonical value texts of its configurations in first-seen order (strings). For a single grid
+// the axes as given; for a union of grids a key swept in one block only also lists the base
+// value the other blocks' configurations carry.
+std::vector<SweepAxis> sweptAxes(const SweepPlan& plan);
 
 // What one configuration produced (the renderer-independent part of a ResultRow).
 struct SweepRunOutput {
