@@ -90,7 +90,11 @@ PsmMap psmTexFromClip(glm::dvec4 lightClip, const std::vector<glm::dvec4>& visib
   double inf = std::numeric_limits<double>::infinity();
   glm::dvec3 lo(inf), hi(-inf);
   for (const glm::dvec3& q : visible) lo = glm::min(lo, q), hi = glm::max(hi, q);
-  const glm::dvec3 center = 0.5 * (lo + hi);
+  // The point the light's frustum looks at: on the view axis (the unit cube's center in x, y, as
+  // in the paper), at the visible body's middle depth. A light along the view axis then looks
+  // straight down it: its image plane is parallel to the infinity plane and the map is
+  // orthographic (warp 0), the fallback's case.
+  const glm::dvec3 center(0.0, 0.0, 0.5 * (lo.z + hi.z));
   double scale = 0;
   for (const glm::dvec3& q : all) scale = std::max(scale, glm::length(q));
   // z'(q) = |C.w| a.q - sigma a.C: the distance from c along a, times |C.w| (for C.w = 0: -a.C).
