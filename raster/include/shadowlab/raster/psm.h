@@ -36,7 +36,8 @@ const char* toString(PsmLight kind);
 // The virtual camera: the fit camera moved back by `slide` (world units) along its view axis,
 // its projection (OpenGL-style: x, y in [-1, 1] at the frustum's sides, z in [-1, 1] from nearView
 // to farView, w = view depth) with nearView, farView the caster body's depth range seen from it.
-// Only the projection center (the slide) shapes the warp; near and far only scale z of PPS.
+// The projection center (the slide) shapes the warp; near and far only scale PPS's z (and so the
+// direction of the map's axis below).
 struct PsmCamera {
   glm::dmat4 clipFromWorld{1.0};
   double slide = 0;     // world units behind the fit camera
@@ -58,7 +59,8 @@ PsmCamera psmVirtualCamera(const Camera& camera, double zNear, double zFar, doub
 // The map from clip space of the virtual camera: clip (x, y, z, w) -> (u w, v w, depth w, w), for
 // C (the light, clipFromWorld * (towardLight, 0)), the visible body's vertices and the caster
 // body's (both in clip coordinates, w > 0). In PPS (q = clip.xyz / clip.w), with a the unit axis
-// from c towards the visible body's box center (or -z where that cone would not hold every caster)
+// from c towards `center`, the view axis at the visible body's middle PPS depth (the paper's cube
+// center; -z where that cone would not hold every caster: the map is then orthographic)
 // and e1, e2 across it:
 //   z'(q)  = |C.w| a.q - sigma a.C.xyz         (> 0 over the casters: the distance from c along a, times |C.w|)
 //   w(q)   = z'(q) / z'_min = 1 + rho (a.q - t0),  rho = |C.w| / z'_min
@@ -66,8 +68,10 @@ PsmCamera psmVirtualCamera(const Camera& camera, double zNear, double zFar, doub
 //   u, v   = X_1, X_2 over their ranges on the visible body's vertices
 //   source: depth w = (a.q - t0) w(t1) / (t1 - t0);  sink: depth w = (t1 - a.q) w(t0) / (t1 - t0)
 // [t0, t1] the range of a.q over the casters (padded by a hair). Each row is affine in q, so times
-// clip.w it is linear in clip: one 4x4. As C.w -> 0 it tends to the orthographic map along -C.xyz
-// (rho -> 0). ok = false where no center cone holds the casters (z' <= 0 somewhere).
+// clip.w it is linear in clip: one 4x4. As C.w -> 0 it tends to the orthographic projection of PPS
+// along -C.xyz (rho -> 0): in world space the camera's own perspective warp, PSM's strongest. With a = -z (the axis
+// normal to the infinity plane c lies on) it is orthographic in world space whatever c: w times clip w is constant. ok
+// = false where no axis holds the casters.
 struct PsmMap {
   bool ok = false;
   glm::dmat4 texFromClip{1.0};
