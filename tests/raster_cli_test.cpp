@@ -79,6 +79,7 @@ TEST(RasterCli, BadMethodValuesExitTwoAndWriteNothing) {
       {"--set nonsense=1", "nonsense"},
       {"--set fit=lispsm --set lispsm.n_scale=0", "lispsm.n_scale"},
       {"--set fit=lispsm --set lispsm.n_scale=nan", "lispsm.n_scale"},
+      {"--set fit=psm --set psm.slide_back=-1", "psm.slide_back"},
       {"--light moon", "moon"},
   };
   for (const Case& c : cases) {

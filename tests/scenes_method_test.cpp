@@ -60,6 +60,7 @@ TEST(ScenesMethod, KeysInDocumentationOrder) {
                                                     "cascades.blend",
                                                     "cascades.stabilize",
                                                     "lispsm.n_scale",
+                                                    "psm.slide_back",
                                                     "bias.constant",
                                                     "bias.slope",
                                                     "bias.clamp",
@@ -184,7 +185,7 @@ TEST(ScenesMethod, TextErrorsAreExact) {
 // not nlohmann's type_error 316 escaping from the message builder (found by fuzz_method).
 TEST(ScenesMethod, ValueThatIsNotUtf8IsAnInputError) {
   EXPECT_EQ(setError("fit", "cascad\xffhes"),
-            "--set: fit: error: got \"cascad\xef\xbf\xbdhes\"; expected one of sphere, tight, cascades, lispsm");
+            "--set: fit: error: got \"cascad\xef\xbf\xbdhes\"; expected one of sphere, tight, cascades, lispsm, psm");
   EXPECT_NE(setError("map.size", "\xff\xfe").find("--set: map.size: error: got \""), std::string::npos);
 }
 
@@ -311,7 +312,8 @@ TEST(ScenesMethod, LispsmKeys) {
   EXPECT_EQ(setError("lispsm.n_scale", "nan"), "--set: lispsm.n_scale: error: got \"nan\"; " + expected);
   EXPECT_EQ(setError("lispsm.n_scale", "inf"), "--set: lispsm.n_scale: error: got \"inf\"; " + expected);
   EXPECT_EQ(setError("lispsm.n_scale", "2e6"), "--set: lispsm.n_scale: error: got \"2e6\"; " + expected);
-  EXPECT_EQ(setError("fit", "psm"), "--set: fit: error: got \"psm\"; expected one of sphere, tight, cascades, lispsm");
+  EXPECT_EQ(setError("fit", "pssm"),
+            "--set: fit: error: got \"pssm\"; expected one of sphere, tight, cascades, lispsm, psm");
   Method json;
   EXPECT_EQ(errorOf([&] { applyMethodJson(json, "lispsm.n_scale", 0.0, "grid"); }),
             "grid: lispsm.n_scale: error: got 0.0; " + expected);
@@ -325,5 +327,35 @@ TEST(ScenesMethod, LispsmKeys) {
   hand.lispsmNScale = std::nanf("");
   EXPECT_THROW(validateMethod(hand, "code"), InputError);
   hand.lispsmNScale = 0.0f;
+  EXPECT_THROW(validateMethod(hand, "code"), InputError);
+}
+
+// fit=psm and its one key: the default 0 (the paper's PSM: the virtual camera slides back only as
+// far as the casters need), a share of the visible depth range up to 1000, the JSON round trip;
+// negatives, NaN, infinity and more than 1000 are refused with the key named.
+TEST(ScenesMethod, PsmKeys) {
+  Method d;
+  EXPECT_FLOAT_EQ(d.psmSlideBack, 0.0f);
+  Method m;
+  applyMethodSetting(m, "fit", "psm", "--set");
+  applyMethodSetting(m, "psm.slide_back", "0.25", "--set");
+  EXPECT_EQ(m.fit, Fit::Psm);
+  EXPECT_FLOAT_EQ(m.psmSlideBack, 0.25f);
+  validateMethod(m, "--set");
+  nlohmann::json j = roundTripped(m);
+  EXPECT_EQ(j["fit"], "psm");
+  EXPECT_EQ(j["psm.slide_back"], 0.25);
+  const std::string expected = "expected a number 0..1000 (units of the visible view-depth range; 0: the paper's PSM)";
+  for (const char* bad : {"-0.1", "nan", "inf", "1001"})
+    EXPECT_EQ(setError("psm.slide_back", bad),
+              std::string("--set: psm.slide_back: error: got \"") + bad + "\"; " + expected);
+  fs::path file = tempFile("slide.json", R"({"fit": "psm", "psm.slide_back": -1})");
+  EXPECT_EQ(errorOf([&] { loadMethodFile(file.string()); }),
+            file.string() + ": /psm.slide_back: error: got -1; " + expected);
+  fs::remove_all(file.parent_path());
+  Method hand;
+  hand.psmSlideBack = std::nanf("");
+  EXPECT_THROW(validateMethod(hand, "code"), InputError);
+  hand.psmSlideBack = -1.0f;
   EXPECT_THROW(validateMethod(hand, "code"), InputError);
 }

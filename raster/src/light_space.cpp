@@ -6,6 +6,7 @@
 
 #include "shadowlab/raster/cascades.h"
 #include "shadowlab/raster/lispsm.h"
+#include "shadowlab/raster/psm.h"
 
 #include <glm/gtc/matrix_transform.hpp>
 
@@ -70,6 +71,25 @@ void sceneBoundsIn(const Scene& scene, const glm::mat4& lightFromWorld, glm::vec
   boundsMax += pad;
 }
 
+// The part of the scene in the view frustum: per object with vertices, the exact intersection of
+// the frustum (camera near..far) with the object's box (lispsm.h's viewBoxIntersection), empty
+// where they miss. One box for the whole scene would count the empty air around a camera standing
+// inside it as visible.
+std::vector<std::vector<glm::dvec3>> visibleBody(const Scene& scene, const Camera& camera) {
+  std::vector<std::vector<glm::dvec3>> parts;
+  for (const Object& o : scene.objects) {
+    if (o.positions.empty()) continue;
+    glm::vec3 objectMin = o.positions.front(), objectMax = objectMin;
+    for (const glm::vec3& p : o.positions) {
+      objectMin = glm::min(objectMin, p);
+      objectMax = glm::max(objectMax, p);
+    }
+    std::vector<glm::dvec3> c = viewBoxIntersection(camera, objectMin, objectMax);
+    if (!c.empty()) parts.push_back(std::move(c));
+  }
+  return parts;
+}
+
 // Warps below this strength (d / n: how much denser the near face's texels are along the axis,
 // minus 1) are not worth a second basis: the fit falls back to fit=tight exactly. It also covers
 // the view along the light, where the warp has no axis (sin(gamma) = 0, d / n = 0).
@@ -88,16 +108,8 @@ bool lispsmLayer(const Scene& scene, const Camera& camera, const glm::mat4& ligh
   // its light-space x/y box clipped to the scene's as fit=tight does, extended towards the light
   // to the scene bounds so that every caster lies in it. Every visible point is in it.
   std::vector<glm::dvec3> corners;
-  for (const Object& o : scene.objects) {
-    if (o.positions.empty()) continue;
-    glm::vec3 objectMin = o.positions.front(), objectMax = objectMin;
-    for (const glm::vec3& p : o.positions) {
-      objectMin = glm::min(objectMin, p);
-      objectMax = glm::max(objectMax, p);
-    }
-    std::vector<glm::dvec3> c = viewBoxIntersection(camera, objectMin, objectMax);
-    corners.insert(corners.end(), c.begin(), c.end());
-  }
+  for (const std::vector<glm::dvec3>& part : visibleBody(scene, camera))
+    corners.insert(corners.end(), part.begin(), part.end());
   if (corners.empty()) return false;  // nothing of the scene in view: no body to warp for
   glm::dvec3 forward64 = glm::normalize(glm::dvec3(camera.lookAt) - glm::dvec3(camera.position));
   double inf = std::numeric_limits<double>::infinity();
@@ -124,6 +136,50 @@ bool lispsmLayer(const Scene& scene, const Camera& camera, const glm::mat4& ligh
   LispsmMap map = lispsmTexFromLight(bodyMin, bodyMax, eyeX, inverseNear, method.mapSize);
   layer.texFromWorld = glm::mat4(map.texFromLight * basis.lightFromWorld);
   layer.texelWorldPerW = float(map.texelWorldPerW);
+  return true;
+}
+
+// The casters that can shadow a visible point lie on its ray towards the light, inside the scene's
+// box. Per part of the visible body: its vertices and the same moved towards the light by T, the
+// smallest over the box's faces the light's rays leave by of the largest exit distance over the
+// vertices (each face's exit distance is affine in the point, so its largest over the part is at
+// a vertex: the hull holds every such caster).
+std::vector<glm::dvec3> casterBody(const Scene& scene, const std::vector<std::vector<glm::dvec3>>& parts,
+                                   glm::dvec3 towardLight) {
+  glm::dvec3 lo(scene.boundsMin()), hi(scene.boundsMax());
+  std::vector<glm::dvec3> out;
+  for (const std::vector<glm::dvec3>& part : parts) {
+    double reach = std::numeric_limits<double>::infinity();
+    for (int i = 0; i < 3; ++i) {
+      if (towardLight[i] == 0.0) continue;
+      double face = towardLight[i] > 0.0 ? hi[i] : lo[i], largest = 0.0;
+      for (const glm::dvec3& p : part) largest = std::max(largest, (face - p[i]) / towardLight[i]);
+      reach = std::min(reach, largest);
+    }
+    if (!std::isfinite(reach)) reach = 0.0;
+    for (const glm::dvec3& p : part) {
+      out.push_back(p);
+      out.push_back(p + reach * towardLight);
+    }
+  }
+  return out;
+}
+
+// fit=psm for a directional light (psm.h); false where it falls back to fit=tight: nothing of the
+// scene in view, no cone from the light in post-perspective space holding the casters, or a warp
+// below kLispsmMinWarp (the view along the light, either way: the map is orthographic there).
+bool psmLayer(const Scene& scene, const Camera& camera, glm::vec3 lightDirection, const Method& method,
+              MapLayer& layer) {
+  std::vector<std::vector<glm::dvec3>> parts = visibleBody(scene, camera);
+  std::vector<glm::dvec3> visible;
+  for (const std::vector<glm::dvec3>& part : parts) visible.insert(visible.end(), part.begin(), part.end());
+  if (visible.empty()) return false;
+  glm::dvec3 towardLight = -glm::normalize(glm::dvec3(lightDirection));
+  PsmFit fit =
+      psmFit(camera, towardLight, visible, casterBody(scene, parts, towardLight), method.psmSlideBack, method.mapSize);
+  if (!fit.ok || !(fit.texels.warp >= kLispsmMinWarp)) return false;
+  layer.texFromWorld = glm::mat4(fit.texFromWorld);
+  layer.texelWorldPerW = float(fit.texels.texelWorldPerW);
   return true;
 }
 
@@ -163,9 +219,11 @@ LightSpace fitLight(const Scene& scene, const Light& light, const Method& method
       return out;
     }
     const Camera& camera = fitCamera;
-    if (method.fit == Fit::Lispsm) {
+    if (method.fit == Fit::Lispsm || method.fit == Fit::Psm) {
       MapLayer layer;
-      if (lispsmLayer(scene, camera, viewFromWorld, method, layer)) {
+      bool warped = method.fit == Fit::Lispsm ? lispsmLayer(scene, camera, viewFromWorld, method, layer)
+                                              : psmLayer(scene, camera, dir, method, layer);
+      if (warped) {
         out.layers.push_back(layer);
         return out;
       }

@@ -33,11 +33,13 @@ struct LightSpace {
 // whole texels). Fit::Lispsm: the light-space perspective warp of lispsm.h of the view
 // frustum's part of the scene (in a basis rotated about the light so that y follows the view
 // direction), one perspective layer; where the warp is negligible (view nearly along the light)
-// exactly Fit::Tight. The depth range is always the scene box's in light space: casters between the
-// light and the slice still cast. Spot: perspective with fov = cone angle, near = light.nearPlane,
-// far = the farthest corner of the scene's box. Point: six 90-degree faces.
-// `fitCamera` is the camera the tight and cascaded fits (and their splits) follow; normally
-// scene.camera, another one to measure shimmer with a fixed evaluation view (raster.h).
+// exactly Fit::Tight. Fit::Psm: the perspective shadow map of psm.h, one projective layer in the
+// post-perspective space of the fit camera slid back behind every caster; where its map is
+// (nearly) orthographic (the view along the light) exactly Fit::Tight. The depth range is always the scene box's in
+// light space: casters between the light and the slice still cast. Spot: perspective with fov = cone angle, near =
+// light.nearPlane, far = the farthest corner of the scene's box. Point: six 90-degree faces. `fitCamera` is the camera
+// the tight and cascaded fits (and their splits) follow; normally scene.camera, another one to measure shimmer with a
+// fixed evaluation view (raster.h).
 LightSpace fitLight(const Scene& scene, const Light& light, const Method& method, const Camera& fitCamera);
 MapLayer projectorLayer(const Projector& projector, int mapSize);
 

@@ -184,6 +184,10 @@ constexpr double kBiasLimit = 1e6;
 constexpr double kNScaleLimit = 1e6;
 const char* const kNScaleExpected = "a number > 0 and <= 1e6 (1: the optimal n of Wimmer et al.)";
 
+// psm.slide_back is in units of the visible body's view-depth range: at 1000 the warp is long gone.
+constexpr double kSlideBackLimit = 1e3;
+const char* const kSlideBackExpected = "a number 0..1000 (units of the visible view-depth range; 0: the paper's PSM)";
+
 // EVSM's warp exponents: the 32F moments clamp them to 42 (raster/METHODS.md); beyond 100 is a typo.
 const char* const kExponentExpected = "a number > 0 and <= 100 (clamped to 42, what 32-bit moments hold)";
 
@@ -209,6 +213,10 @@ const std::vector<std::pair<std::string, Setter>>& setters() {
       {"lispsm.n_scale",
        [](Method& m, const Value& v, const Where& w) {
          m.lispsmNScale = floatIn(v, w, 0.0, kNScaleLimit, true, kNScaleExpected);
+       }},
+      {"psm.slide_back",
+       [](Method& m, const Value& v, const Where& w) {
+         m.psmSlideBack = floatIn(v, w, 0.0, kSlideBackLimit, false, kSlideBackExpected);
        }},
       {"bias.constant",
        [](Method& m, const Value& v, const Where& w) {
@@ -324,6 +332,8 @@ void crossCheck(const Method& m, const std::string& file, const std::string& pre
     bad("cascades.blend", nlohmann::json(double(m.cascadeBlend)).dump(), "a number 0..0.5");
   if (!(m.lispsmNScale > 0.0f && m.lispsmNScale <= kNScaleLimit))
     bad("lispsm.n_scale", nlohmann::json(double(m.lispsmNScale)).dump(), kNScaleExpected);
+  if (!(m.psmSlideBack >= 0.0f && m.psmSlideBack <= kSlideBackLimit))
+    bad("psm.slide_back", nlohmann::json(double(m.psmSlideBack)).dump(), kSlideBackExpected);
   if (m.filterBlur < 0 || m.filterBlur > 16) bad("filter.blur", std::to_string(m.filterBlur), "an integer 0..16");
   if (!(m.vsmMinVariance >= 0.0f && m.vsmMinVariance <= 1.0f))
     bad("vsm.min_variance", nlohmann::json(double(m.vsmMinVariance)).dump(), "a number 0..1");
@@ -389,6 +399,7 @@ nlohmann::json methodToJson(const Method& m) {
   j["cascades.blend"] = m.cascadeBlend;
   j["cascades.stabilize"] = m.cascadeStabilize;
   j["lispsm.n_scale"] = m.lispsmNScale;
+  j["psm.slide_back"] = m.psmSlideBack;
   j["bias.constant"] = m.biasConstant;
   j["bias.slope"] = m.biasSlope;
   j["bias.clamp"] = m.biasClamp;

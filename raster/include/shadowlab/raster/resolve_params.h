@@ -19,7 +19,8 @@ namespace shadowlab::raster {
 struct MapLayer {
   glm::mat4 texFromWorld{1.0f};
   // World size of one texel at w = 1 (orthographic: everywhere; fit=lispsm: an upper bound of the
-  // texel's larger side per unit of w, see lispsm.h).
+  // texel's larger side per unit of w, see lispsm.h; fit=psm: the largest of that ratio over the
+  // visible body's vertices, see psm.h).
   float texelWorldPerW = 0;
 };
 

@@ -29,7 +29,8 @@
   X(Sphere, 0, "sphere", "the scene's bounding sphere")                                 \
   X(Tight, 1, "tight", "the fit camera's view frustum intersected with the scene")      \
   X(Cascades, 2, "cascades", "one tight crop per slice of the view depth (cascades.*)") \
-  X(Lispsm, 3, "lispsm", "the tight body under a light-space perspective warp (lispsm.n_scale)")
+  X(Lispsm, 3, "lispsm", "the tight body under a light-space perspective warp (lispsm.n_scale)") \
+  X(Psm, 4, "psm", "perspective shadow map: the map in the camera's post-perspective space (psm.slide_back)")
 
 // A scene light's "type".
 #define SHADOWLAB_LIGHT_TYPES(X)                                                  \

@@ -37,7 +37,10 @@ struct Method {
   bool cascadeStabilize = false;  // cascades.stabilize: constant-size crops snapped to whole texels
   // Light-space perspective shadow maps (fit=lispsm, directional lights): the warp's projection
   // center lies lispsmNScale * n_opt before the body's near face (larger: closer to uniform).
-  float lispsmNScale = 1.0f;       // lispsm.n_scale: > 0, <= 1e6
+  float lispsmNScale = 1.0f;  // lispsm.n_scale: > 0, <= 1e6
+  // Perspective shadow maps (fit=psm, directional lights): the virtual camera slides back, beyond
+  // what keeps every caster in front of it, by psmSlideBack times the visible depth range.
+  float psmSlideBack = 0.0f;       // psm.slide_back: 0..1000
   float biasConstant = 0.0f;       // bias.constant: Vulkan depthBiasConstantFactor (units of r)
   float biasSlope = 1.5f;          // bias.slope: Vulkan depthBiasSlopeFactor
   float biasClamp = 0.0f;          // bias.clamp: Vulkan depthBiasClamp (0 = no clamp)
