@@ -233,6 +233,16 @@ struct Rasterizer::Impl {
     std::vector<float> m, cascade;
   };
   std::list<Footprint> footprints;  // most recently used first, at most kKeptFootprints
+  // The kept planes are lent (moved, not copied) to the last partial frame; recycle() moves them
+  // back and re-zeroes that frame's evidence planes at its listed pixels only, for the next one.
+  // A frame not handed back leaves its group without planes: its next frame is a full one.
+  struct Lent {
+    std::string footprintKey;
+    const float* kept[5] = {};         // hit, object_id, prim_id, m, cascade
+    std::vector<const float*> zeroed;  // evidence planes: 0 except at `listed`
+    std::vector<uint32_t> listed;
+  } lent;
+  std::vector<std::vector<float>> zeroSpare;  // planes of zeros (recycled evidence planes)
 
   explicit Impl(const RasterDeviceOptions& options);
   // Work may still be in flight when a render throws (a failed call after a submission): wait for
@@ -267,10 +277,10 @@ struct Rasterizer::Impl {
   std::string cameraKey(const Scene& scene) const;
   std::string footprintKey(const Scene& scene, const abi::Params& params,
                            const raster::ResolveSpecialization& spec) const;
-  const Footprint* findFootprint(const std::string& key);
+  Footprint* findFootprint(const std::string& key);
   void keepFootprint(const std::string& key, const std::string& camera, const Frame& frame, const Light& light);
   Frame partialFrame(const Scene& scene, const Light& light, const Method& method, const EvidenceSelector& select,
-                     const Footprint& footprint, const FramePipelines& pipes, RasterTimings& t);
+                     Footprint& footprint, const FramePipelines& pipes, RasterTimings& t);
   bool submit(const Scene& scene, const Method& method, const raster::FrameLayers& layers,
               const FramePipelines& pipes);  // returns whether it drew the visibility buffer
   PassTimes readTimestamps(bool drewVisibility);
@@ -845,9 +855,33 @@ std::vector<uint8_t> Rasterizer::lookupVisibility() const {
 }
 
 void Rasterizer::recycle(Frame&& frame) {
+  Impl& im = *impl_;
   const size_t n = frame.pixelCount();
-  for (std::vector<float>& plane : frame.data)
-    if (plane.size() == n && n > 0) impl_->spare.push_back(std::move(plane));
+  Impl::Lent& lent = im.lent;
+  Impl::Footprint* footprint = nullptr;
+  for (Impl::Footprint& f : im.footprints)
+    if (f.key == lent.footprintKey) footprint = &f;
+  std::vector<float>* home[5] = {&im.cameraPlanes.hit, &im.cameraPlanes.objectId, &im.cameraPlanes.primId,
+                                 footprint ? &footprint->m : nullptr, footprint ? &footprint->cascade : nullptr};
+  for (std::vector<float>& plane : frame.data) {
+    if (plane.size() != n || n == 0) continue;
+    const float* data = plane.data();
+    bool back = false;
+    for (int k = 0; k < 5 && !back; ++k)
+      if (data == lent.kept[k] && home[k] && home[k]->empty()) {
+        *home[k] = std::move(plane);  // the kept plane, lent to this frame
+        lent.kept[k] = nullptr;
+        back = true;
+      }
+    if (back) continue;
+    if (std::find(lent.zeroed.begin(), lent.zeroed.end(), data) != lent.zeroed.end() && im.zeroSpare.size() < 16) {
+      for (uint32_t i : lent.listed) plane[i] = 0.0f;  // the only non-zero values
+      im.zeroSpare.push_back(std::move(plane));
+    } else {
+      im.spare.push_back(std::move(plane));
+    }
+  }
+  lent.zeroed.clear();
   frame = Frame();
 }
 
@@ -1049,7 +1083,7 @@ std::string Rasterizer::Impl::footprintKey(const Scene& sc, const abi::Params& p
   return cameraKey(sc) + "/" + hashHex(h);
 }
 
-const Rasterizer::Impl::Footprint* Rasterizer::Impl::findFootprint(const std::string& key) {
+Rasterizer::Impl::Footprint* Rasterizer::Impl::findFootprint(const std::string& key) {
   for (auto it = footprints.begin(); it != footprints.end(); ++it)
     if (it->key == key) {
       footprints.splice(footprints.begin(), footprints, it);
@@ -1062,15 +1096,16 @@ const Rasterizer::Impl::Footprint* Rasterizer::Impl::findFootprint(const std::st
 // cascade for the next frames of the group.
 void Rasterizer::Impl::keepFootprint(const std::string& key, const std::string& camera, const Frame& frame,
                                      const Light& light) {
-  if (cameraPlanes.key != camera) {
+  if (cameraPlanes.key != camera || cameraPlanes.hit.empty()) {
+    if (cameraPlanes.key != camera) footprints.clear();  // of another camera: never found again
     cameraPlanes.key.clear();
-    footprints.clear();  // of another camera: never found again
     cameraPlanes.hit = frame.get("hit");
     cameraPlanes.objectId = frame.get("object_id");
     cameraPlanes.primId = frame.get("prim_id");
     cameraPlanes.key = camera;
   }
   const std::string p = "light." + light.name + ".";
+  footprints.remove_if([&](const Footprint& f) { return f.key == key; });  // one whose planes are lent
   while (footprints.size() >= kKeptFootprints) footprints.pop_back();
   footprints.push_front({key, frame.get(p + "m"), frame.get(p + "cascade")});
 }
@@ -1080,8 +1115,8 @@ void Rasterizer::Impl::keepFootprint(const std::string& key, const std::string& 
 // kSpecCompact into kCompactWidth-wide targets, one texel per listed pixel) and builds the frame
 // from the bytes, the kept planes and the listed pixels' evidence.
 Frame Rasterizer::Impl::partialFrame(const Scene& sc, const Light& light, const Method& method,
-                                     const EvidenceSelector& select, const Footprint& footprint,
-                                     const FramePipelines& pipes, RasterTimings& t) {
+                                     const EvidenceSelector& select, Footprint& footprint, const FramePipelines& pipes,
+                                     RasterTimings& t) {
   const int width = sc.camera.width, height = sc.camera.height;
   const size_t n = size_t(width) * size_t(height);
   auto t0 = std::chrono::steady_clock::now();
@@ -1180,22 +1215,38 @@ Frame Rasterizer::Impl::partialFrame(const Scene& sc, const Light& light, const 
   if (momentChannels)
     for (const char* name : {"moment_mean", "moment_variance", "moment_bound"}) frame.names.push_back(p + name);
   frame.data.resize(frame.names.size());
-  for (size_t c = 0; c < frame.data.size() && !spare.empty(); ++c) {
-    frame.data[c] = std::move(spare.back());
-    spare.pop_back();
-  }
-  spare.clear();
   // Planes: 0 hit, 1 object_id, 2 prim_id, 3 vis, 4 receiver_depth, 5 map_depth, 6 m, 7 bias_depth,
   // 8 bias_world, 9 occluder_id, 10 occluder_prim, 11 in_map, 12 cascade, 13.. the moments'.
-  const std::vector<float>* kept[13] = {&cameraPlanes.hit, &cameraPlanes.objectId, &cameraPlanes.primId};
+  // The kept ones are lent to the frame, the evidence planes come zeroed from zeroSpare when a
+  // frame handed them back, the rest from spare.
+  std::vector<float>* kept[13] = {&cameraPlanes.hit, &cameraPlanes.objectId, &cameraPlanes.primId};
   kept[6] = &footprint.m;
   kept[12] = &footprint.cascade;
+  if (!zeroSpare.empty() && zeroSpare.front().size() != n) zeroSpare.clear();
+  lent = Lent();
+  lent.footprintKey = footprint.key;
+  std::vector<uint8_t> zeroed(frame.data.size(), 0);
+  for (size_t c = 0; c < frame.data.size(); ++c) {
+    std::vector<float>* from = c < 13 ? kept[c] : nullptr;
+    if (from) {
+      frame.data[c] = std::move(*from);
+      from->clear();
+      lent.kept[c == 6 ? 3 : c == 12 ? 4 : c] = frame.data[c].data();
+      continue;
+    }
+    std::vector<std::vector<float>>& pool = c != 3 && !zeroSpare.empty() ? zeroSpare : spare;
+    zeroed[c] = &pool == &zeroSpare;
+    if (!pool.empty()) {
+      frame.data[c] = std::move(pool.back());
+      pool.pop_back();
+    }
+  }
+  spare.clear();
   auto fill = [&](size_t first, size_t step) {
     for (size_t c = first; c < frame.data.size(); c += step) {
       std::vector<float>& plane = frame.data[c];
-      if (c < 13 && kept[c]) {
-        plane.assign(kept[c]->begin(), kept[c]->end());
-      } else if (c == 3) {
+      if ((c < 13 && kept[c]) || zeroed[c]) continue;
+      if (c == 3) {
         plane.resize(n);
         for (size_t i = 0; i < n; ++i) plane[i] = vis8[i] == 255 ? 1.0f : 0.0f;  // fractional: listed below
       } else {
@@ -1208,6 +1259,8 @@ Frame Rasterizer::Impl::partialFrame(const Scene& sc, const Light& light, const 
     fill(0, 2);
     helper.join();
   }
+  for (size_t c = 4; c < frame.data.size(); ++c)
+    if (c != 6 && c != 12) lent.zeroed.push_back(frame.data[c].data());
   const std::vector<uint32_t>& objectIds = scene->objectIds;
   const std::vector<uint32_t>& triangleBase = scene->objectTriangleBase;
   const std::vector<uint32_t>& triangleObject = scene->triangleObject;
@@ -1239,6 +1292,7 @@ Frame Rasterizer::Impl::partialFrame(const Scene& sc, const Light& light, const 
       for (int j = 0; j < 3; ++j) frame.data[size_t(13 + j)][i] = c[j];
     }
   }
+  lent.listed = std::move(listed);
   t.evidenceGpuMs = evidenceMs;
   t.evidencePixels = count;
   t.partialEvidence = true;
@@ -1274,6 +1328,9 @@ Frame Rasterizer::render(const Scene& scene, const Method& method, const std::st
                          const Camera* fitCamera, const EvidenceSelector* select) {
   auto t0 = std::chrono::steady_clock::now();
   Impl& im = *impl_;
+  // Planes lent to a frame not handed back before this render stay with it (its group's next
+  // frame is a full one): recycle() only takes back what the last render lent.
+  im.lent = Impl::Lent();
   const Light* light = im.validate(scene, method, lightName);
   const Camera& fit = fitCamera ? *fitCamera : scene.camera;  // what the light frustum follows
   im.upload(scene);
@@ -1287,7 +1344,9 @@ Frame Rasterizer::render(const Scene& scene, const Method& method, const std::st
   const bool onDemand = select && *select && light && scene.projectors.empty();
   const std::string group = onDemand ? im.footprintKey(scene, params, spec) : std::string();
   const std::string camera = onDemand ? im.cameraKey(scene) : std::string();
-  const Impl::Footprint* footprint = onDemand && im.cameraPlanes.key == camera ? im.findFootprint(group) : nullptr;
+  Impl::Footprint* footprint =
+      onDemand && im.cameraPlanes.key == camera && !im.cameraPlanes.hit.empty() ? im.findFootprint(group) : nullptr;
+  if (footprint && footprint->m.empty()) footprint = nullptr;  // lent to a frame not handed back
   const Impl::FramePipelines pipes = im.pipelinesFor(method, layers, spec, footprint != nullptr);
   const bool drewVisibility = im.submit(scene, method, layers, pipes);
   const Impl::PassTimes passes = im.readTimestamps(drewVisibility);
