@@ -356,13 +356,7 @@ void versusBare(benchmark::State& state, Filter filter, int copies) {
   state.counters["bare_shadow_gpu_ms"] = median(bs);
   state.counters["bare_camera_gpu_ms"] = median(bc);
   state.counters["shadow_gpu_ms"] = median(ss);
-  state.counters["camera_ms"] = median(sc);  // full: camera_gpu_ms; on demand: lookup + evidence
-  state.counters["evidence_gpu_ms"] = median(se);
-  state.counters["visibility_gpu_ms"] = median(sv);
-  state.counters["total_with_visibility_ms"] = ours + (full ? 0.0 : median(sv));
-  state.counters["ratio_with_visibility"] = (ours + (full ? 0.0 : median(sv))) / bareMs;
-  state.counters["partial_fraction"] = partial / double(std::max<size_t>(1, sx.size()));
-  state.counters["evidence_pixels"] = listed / double(std::max<size_t>(1, sx.size()));
+  state.counters["camera_gpu_ms"] = median(sc);
   state.counters["shadow_ratio"] = median(ss) / median(bs);
   state.counters["camera_ratio"] = median(sc) / median(bc);
   state.counters["triangles"] = double(s.triangleCount());
