@@ -1144,6 +1144,7 @@ Frame Rasterizer::Impl::partialFrame(const Scene& sc, const Light& light, const 
 
   // ---- Pass 5: the evidence of the listed pixels ----
   double evidenceMs = 0;
+  int compactWidth = kCompactWidth;
   if (count > 0) {
     const size_t bytes = count * sizeof(uint32_t);
     if (evidencePixels.size() < bytes) {
@@ -1152,16 +1153,20 @@ Frame Rasterizer::Impl::partialFrame(const Scene& sc, const Light& light, const 
       writeDescriptors();
     }
     evidencePixels.upload(listed.data(), bytes);
-    const int rows = int((count + kCompactWidth - 1) / kCompactWidth);
-    if (evidenceOut[0].height() < rows) {
-      const int allocRows = std::max(rows, 2 * evidenceOut[0].height());
+    // kCompactWidth wide, wider when the list needs more rows than the device's largest image.
+    const int maxSize = maxMapSize();
+    while ((count + size_t(compactWidth) - 1) / size_t(compactWidth) > size_t(maxSize)) compactWidth *= 2;
+    const int rows = int((count + size_t(compactWidth) - 1) / size_t(compactWidth));
+    if (evidenceOut[0].height() < rows || evidenceOut[0].width() != compactWidth) {
+      const int allocRows =
+          std::min(maxSize, std::max(rows, evidenceOut[0].width() == compactWidth ? 2 * evidenceOut[0].height() : 0));
       for (int i = 0; i < kResolveAttachments; ++i) evidenceOut[i] = vk::Image();
       for (int i = 0; i < 2; ++i)
-        evidenceOut[i] = vk::Image(*context, kCompactWidth, allocRows, 1, kResolveFormats[i],
+        evidenceOut[i] = vk::Image(*context, compactWidth, allocRows, 1, kResolveFormats[i],
                                    VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT, VK_IMAGE_ASPECT_COLOR_BIT, true);
     }
     if (attachments == 3 && evidenceOut[2].height() != evidenceOut[0].height())
-      evidenceOut[2] = vk::Image(*context, kCompactWidth, evidenceOut[0].height(), 1, kResolveFormats[2],
+      evidenceOut[2] = vk::Image(*context, compactWidth, evidenceOut[0].height(), 1, kResolveFormats[2],
                                  VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT, VK_IMAGE_ASPECT_COLOR_BIT, true);
     for (int run = 0; run < (pipes.evidenceFirstUse ? 2 : 1); ++run) {
       VkCommandBuffer cmd = commands->begin();
@@ -1177,8 +1182,8 @@ Frame Rasterizer::Impl::partialFrame(const Scene& sc, const Light& light, const 
                        VK_ACCESS_2_COLOR_ATTACHMENT_WRITE_BIT);
         colors[i] = overwrittenColor(evidenceOut[i].layerView(0), VK_IMAGE_LAYOUT_GENERAL);
       }
-      drawFullscreen(cmd, colors, uint32_t(attachments), uint32_t(kCompactWidth), uint32_t(rows), pipes.evidence, [&] {
-        DrawPush push{glm::mat4(1.0f), uint32_t(count), uint32_t(kCompactWidth), 0, 0};
+      drawFullscreen(cmd, colors, uint32_t(attachments), uint32_t(compactWidth), uint32_t(rows), pipes.evidence, [&] {
+        DrawPush push{glm::mat4(1.0f), uint32_t(count), uint32_t(compactWidth), 0, 0};
         vkCmdPushConstants(cmd, pipelineLayout.get(), VK_SHADER_STAGE_VERTEX_BIT | VK_SHADER_STAGE_FRAGMENT_BIT, 0,
                            sizeof(push), &push);
       });
@@ -1266,7 +1271,7 @@ Frame Rasterizer::Impl::partialFrame(const Scene& sc, const Light& light, const 
   const std::vector<uint32_t>& triangleObject = scene->triangleObject;
   for (size_t k = 0; k < count; ++k) {
     const size_t i = listed[k];
-    const size_t y = k / kCompactWidth, x = k % kCompactWidth;
+    const size_t y = k / size_t(compactWidth), x = k % size_t(compactWidth);
     const float* a = reinterpret_cast<const float*>(static_cast<const char*>(evidenceOut[0].mapped()) +
                                                     y * evidenceOut[0].rowPitch()) +
                      4 * x;
