@@ -67,7 +67,8 @@ class Rasterizer {
   void recycle(Frame&& frame);
   // The last render()'s lookup pass output: the light's visibility, one byte (UNORM, 255 = lit)
   // per pixel, row-major; empty before the first render, stale after a render without a light.
-  // It equals the frame's vis channel converted to 8 bits (tests/raster_lookup_test.cpp).
+  // It equals the frame's vis channel converted to 8 bits, 255 only where vis is exactly 1 and 0
+  // only where it is exactly 0, 128..255 exactly where vis >= 0.5 (tests/raster_lookup_test.cpp).
   std::vector<uint8_t> lookupVisibility() const;
 
   // Renders `scene` with `method` for the light named `light` (empty: the scene's first light)
