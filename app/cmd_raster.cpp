@@ -65,6 +65,7 @@ int run(const Options& o) {
                            {timing::kLookupGpuMs, t.lookupGpuMs},
                            {timing::kMethodGpuMs, t.methodGpuMs()},
                            {timing::kMomentsGpuMs, t.momentsGpuMs},
+                           {timing::kEvidenceGpuMs, t.evidenceGpuMs},
                            {timing::kReadbackMs, t.readbackMs},
                            {timing::kRenderWallMs, t.renderWallMs}};
   writeJsonAtomic(o.outDir + "/raster.json", report);

@@ -98,6 +98,7 @@ int run(const Options& o) {
                  {timing::kLookupGpuMs, r.timings.lookupGpuMs},
                  {timing::kMethodGpuMs, r.timings.methodGpuMs()},
                  {timing::kMomentsGpuMs, r.timings.momentsGpuMs},
+                 {timing::kEvidenceGpuMs, r.timings.evidenceGpuMs},
                  {timing::kReadbackMs, r.timings.readbackMs},
                  {timing::kRenderWallMs, r.timings.renderWallMs},
                  {timing::kCompareMs, r.compareMs},

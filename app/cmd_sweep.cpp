@@ -28,6 +28,7 @@ struct Options : app::StudyOptions {  // spp 0: not given (the sweep file's, els
   std::string sweepFile;
   std::vector<std::string> sets;
   bool keepImages = false;
+  bool fullEvidence = false;  // every row renders the full frame (no evidence on demand)
   bool noReport = false;
   std::string shard;  // "I/N": only this shard's rows, into DIR/shards/I-of-N (no report)
   std::string slurm;  // N (text, checked here): write DIR/sweep.sbatch (an N-task array of shards) and DIR/merge.sbatch
@@ -65,6 +66,7 @@ std::string sweepArguments(const Options& o, const std::string& cacheDir) {
   if (o.spp != 0) add("--spp", std::to_string(o.spp));
   if (!o.device.empty()) add("--device", o.device);
   if (o.keepImages) a += " --keep-images";
+  if (o.fullEvidence) a += " --full-evidence";
   if (!o.frontierMetric.empty()) add("--frontier-metric", o.frontierMetric);
   if (!o.frontierThreshold.empty()) add("--frontier-threshold", o.frontierThreshold);
   add("--cache", absolutePath(cacheDir));
@@ -257,7 +259,7 @@ int run(const Options& o) {
   cacheFolder.keep();  // a cache outlives the command
 
   // ---- work ------------------------------------------------------------------------------------
-  auto runner = makePipelineRunner(cacheDir, spec.spp, o.device);
+  auto runner = makePipelineRunner(cacheDir, spec.spp, o.device, 1, o.fullEvidence);
   SweepOptions options;
   options.outDir = o.outDir;
   options.progress = stderr;
@@ -320,6 +322,9 @@ app::Registrar reg{
       app::addStudyOptions(sub, *opts, "sweep");
       sub->add_flag("--keep-images", opts->keepImages,
                     "Write raster.exr and errors.png per configuration under DIR/images/");
+      sub->add_flag("--full-evidence", opts->fullEvidence,
+                    "Render every configuration's full frame (every evidence channel at every pixel) instead of "
+                    "resolving the evidence only where the decisions disagree; the metrics are the same");
       sub->add_option("--frontier-metric", opts->frontierMetric,
                       "Metric walked along swept scene: parameters for failure frontiers (default error_rate)");
       sub->add_option("--frontier-threshold", opts->frontierThreshold,

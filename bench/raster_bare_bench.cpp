@@ -10,9 +10,14 @@
 //
 // harnessVsBare: the whole per-configuration yardstick, the bare harness (that shadow pass,
 // that camera pass writing 1 byte (R8) of visibility per pixel, a 1-byte-per-pixel readback, a CPU
-// count of the pixels that disagree with the reference) against shadowlab's configuration (shadow +
-// camera passes, readback into the Frame, compareFrames against the same reference). The
-// reference is traced once per scene before timing (a sweep reads it from its cache).
+// count of the pixels that disagree with the reference) against shadowlab's configuration as a sweep
+// runs it: with evidence on demand (the default captures) the shadow pass, the lookup pass, the
+// evidence pass over the pixels that disagree with the reference (disagreementSelector), the
+// readback into the Frame (bytes, the selection, the kept planes) and compareFrames; the camera's
+// visibility buffer is kept from the first frame, as in a sweep (total_with_visibility_ms adds its
+// time all the same). The *_full captures: the full frame (shadow + camera passes, the readback
+// of every channel, compareFrames), as before evidence on demand. The reference is traced once per
+// scene before timing (a sweep reads it from its cache).
 #include <benchmark/benchmark.h>
 
 #include <glm/gtc/matrix_transform.hpp>
@@ -30,6 +35,7 @@
 #include "bare_shadow_vert.h"
 #include "bench_scene.h"
 #include "shadowlab/compare/compare.h"
+#include "shadowlab/compare/run_pipeline.h"
 #include "shadowlab/raster/raster.h"
 #include "shadowlab/reference/reference.h"
 #include "vk/buffer.h"
@@ -386,7 +392,7 @@ const Frame& referenceOf(const Scene& s) {
 
 // One iteration: a bare harness configuration, then a shadowlab one, each end to end (passes,
 // readback, count or compare). Iteration time: shadowlab's.
-void harnessVsBare(benchmark::State& state, const std::string& sceneName, Filter filter) {
+void harnessVsBare(benchmark::State& state, const std::string& sceneName, Filter filter, bool full) {
   const Scene& s = goalScene(sceneName);
   const Frame& ref = referenceOf(s);
   // The bare count's reference: the traced visibility as bytes, 255 lit, 0 shadowed, the clear
@@ -403,8 +409,12 @@ void harnessVsBare(benchmark::State& state, const std::string& sceneName, Filter
   m.filter = filter;
   RasterTimings t;
   std::vector<uint8_t> bytes;
-  for (int i = 0; i < 2; ++i) bare.frame(linear), rasterizer().recycle(rasterizer().render(s, m, "", &t));
-  std::vector<double> bs, bc, br, bn, ss, sc, sl, sr, sx;
+  const EvidenceSelector selectLocal = disagreementSelector(ref, s.lights.front().name);
+  const EvidenceSelector* select = full ? nullptr : &selectLocal;
+  for (int i = 0; i < 2; ++i)
+    bare.frame(linear), rasterizer().recycle(rasterizer().render(s, m, "", &t, nullptr, select));
+  std::vector<double> bs, bc, br, bn, ss, sc, sl, sr, sx, se, sv;
+  double partial = 0, listed = 0;
   size_t bareWrong = 0;
   double rasterWrong = 0;
   for (auto _ : state) {
@@ -419,15 +429,20 @@ void harnessVsBare(benchmark::State& state, const std::string& sceneName, Filter
     bareWrong = wrong;
     benchmark::DoNotOptimize(wrong);
 
-    Frame f = rasterizer().render(s, m, "", &t);
+    Frame f = rasterizer().render(s, m, "", &t, nullptr, select);
     t0 = std::chrono::steady_clock::now();
     const Metrics metrics = compareFrames(ref, f);
     sx.push_back(msSince(t0));
     rasterWrong = metrics.toJson().value("error_rate", 0.0);
     rasterizer().recycle(std::move(f));
-    state.SetIterationTime((t.shadowGpuMs + t.cameraGpuMs + t.readbackMs + sx.back()) * 1e-3);
-    bs.push_back(b.shadowGpuMs), bc.push_back(b.cameraGpuMs), ss.push_back(t.shadowGpuMs), sc.push_back(t.cameraGpuMs),
-        sl.push_back(t.lookupGpuMs), sr.push_back(t.readbackMs);
+    // Per configuration: the full frame's passes (the lookup not counted, as before), or on demand
+    // the shadow, lookup and evidence passes (the visibility buffer is kept between configurations).
+    const double camera = full ? t.cameraGpuMs : t.lookupGpuMs + t.evidenceGpuMs;
+    state.SetIterationTime((t.shadowGpuMs + camera + t.readbackMs + sx.back()) * 1e-3);
+    bs.push_back(b.shadowGpuMs), bc.push_back(b.cameraGpuMs), ss.push_back(t.shadowGpuMs), sc.push_back(camera),
+        sl.push_back(t.lookupGpuMs), sr.push_back(t.readbackMs), se.push_back(t.evidenceGpuMs),
+        sv.push_back(t.visibilityGpuMs);
+    partial += t.partialEvidence, listed += double(t.evidencePixels);
   }
   auto median = [](std::vector<double> v) {
     std::sort(v.begin(), v.end());
@@ -441,7 +456,13 @@ void harnessVsBare(benchmark::State& state, const std::string& sceneName, Filter
   state.counters["bare_count_ms"] = median(bn);
   state.counters["bare_total_ms"] = bareMs;
   state.counters["shadow_gpu_ms"] = median(ss);
-  state.counters["camera_gpu_ms"] = median(sc);
+  state.counters["camera_ms"] = median(sc);  // full: camera_gpu_ms; on demand: lookup + evidence
+  state.counters["evidence_gpu_ms"] = median(se);
+  state.counters["visibility_gpu_ms"] = median(sv);
+  state.counters["total_with_visibility_ms"] = ours + (full ? 0.0 : median(sv));
+  state.counters["ratio_with_visibility"] = (ours + (full ? 0.0 : median(sv))) / bareMs;
+  state.counters["partial_fraction"] = partial / double(std::max<size_t>(1, sx.size()));
+  state.counters["evidence_pixels"] = listed / double(std::max<size_t>(1, sx.size()));
   state.counters["readback_ms"] = median(sr);
   state.counters["compare_ms"] = median(sx);
   state.counters["total_ms"] = ours;
@@ -456,16 +477,28 @@ void harnessVsBare(benchmark::State& state, const std::string& sceneName, Filter
 
 }  // namespace
 
-BENCHMARK_CAPTURE(harnessVsBare, none_sphere, "sphere_on_plane", Filter::None)
+BENCHMARK_CAPTURE(harnessVsBare, none_sphere, "sphere_on_plane", Filter::None, false)
     ->UseManualTime()
     ->Unit(benchmark::kMillisecond);
-BENCHMARK_CAPTURE(harnessVsBare, hw2x2_sphere, "sphere_on_plane", Filter::Hw2x2)
+BENCHMARK_CAPTURE(harnessVsBare, none_sphere_full, "sphere_on_plane", Filter::None, true)
     ->UseManualTime()
     ->Unit(benchmark::kMillisecond);
-BENCHMARK_CAPTURE(harnessVsBare, none_bunny_x4, "bunny_x4", Filter::None)
+BENCHMARK_CAPTURE(harnessVsBare, hw2x2_sphere, "sphere_on_plane", Filter::Hw2x2, false)
     ->UseManualTime()
     ->Unit(benchmark::kMillisecond);
-BENCHMARK_CAPTURE(harnessVsBare, hw2x2_bunny_x4, "bunny_x4", Filter::Hw2x2)
+BENCHMARK_CAPTURE(harnessVsBare, hw2x2_sphere_full, "sphere_on_plane", Filter::Hw2x2, true)
+    ->UseManualTime()
+    ->Unit(benchmark::kMillisecond);
+BENCHMARK_CAPTURE(harnessVsBare, none_bunny_x4, "bunny_x4", Filter::None, false)
+    ->UseManualTime()
+    ->Unit(benchmark::kMillisecond);
+BENCHMARK_CAPTURE(harnessVsBare, none_bunny_x4_full, "bunny_x4", Filter::None, true)
+    ->UseManualTime()
+    ->Unit(benchmark::kMillisecond);
+BENCHMARK_CAPTURE(harnessVsBare, hw2x2_bunny_x4, "bunny_x4", Filter::Hw2x2, false)
+    ->UseManualTime()
+    ->Unit(benchmark::kMillisecond);
+BENCHMARK_CAPTURE(harnessVsBare, hw2x2_bunny_x4_full, "bunny_x4", Filter::Hw2x2, true)
     ->UseManualTime()
     ->Unit(benchmark::kMillisecond);
 BENCHMARK_CAPTURE(versusBare, none_bunny, Filter::None, 1)->UseManualTime()->Unit(benchmark::kMillisecond);

@@ -52,13 +52,16 @@ TEST(RasterCli, WritesExrPngAndJson) {
   EXPECT_EQ(j["method"]["filter.size"], 5);
   EXPECT_EQ(j["light"], "sun");
   for (const char* k : {"shadow_gpu_ms", "camera_gpu_ms", "visibility_gpu_ms", "lookup_gpu_ms", "method_gpu_ms",
-                        "readback_ms", "render_wall_ms"}) {
+                        "evidence_gpu_ms", "readback_ms", "render_wall_ms"}) {
     ASSERT_TRUE(j[k].is_number()) << k;
     EXPECT_GT(j[k].get<double>(), 0.0) << k;
   }
   // The render call's wall time spans both GPU passes; the camera pass contains the visibility buffer.
   EXPECT_GT(j["render_wall_ms"].get<double>(), j["shadow_gpu_ms"].get<double>() + j["camera_gpu_ms"].get<double>());
   EXPECT_GE(j["camera_gpu_ms"].get<double>(), j["visibility_gpu_ms"].get<double>());
+  // The camera pass is the visibility buffer and the evidence resolve (here the full one).
+  EXPECT_EQ(j["camera_gpu_ms"].get<double>(),
+            j["visibility_gpu_ms"].get<double>() + j["evidence_gpu_ms"].get<double>());
   // The method's time: the shadow pass and the lookup pass, not the harness's camera pass.
   EXPECT_EQ(j["method_gpu_ms"].get<double>(), j["shadow_gpu_ms"].get<double>() + j["lookup_gpu_ms"].get<double>());
   for (const char* old : {"shadow_ms", "camera_ms", "camera_visibility_ms", "total_ms"})

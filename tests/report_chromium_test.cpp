@@ -254,8 +254,8 @@ TEST(ReportChromium, ChartsWhoseKeyIsNotSweptAreSkippedWithANote) {
   for (const auto& c : manifest["charts"])
     if (c["id"] == "time_breakdown") stages = c["stages"].get<std::vector<std::string>>();
   ASSERT_EQ(stages.size(), 6u) << manifest.dump(1);
-  for (const char* want : {"shadow_gpu_ms", "lookup_gpu_ms", "(visibility_gpu_ms)", "camera_gpu_ms - visibility_gpu_ms",
-                           "readback_ms", "compare_ms"}) {
+  for (const char* want :
+       {"shadow_gpu_ms", "lookup_gpu_ms", "(visibility_gpu_ms)", "evidence_gpu_ms", "readback_ms", "compare_ms"}) {
     bool found = false;
     for (const std::string& s : stages) found = found || s.find(want) != std::string::npos;
     EXPECT_TRUE(found) << want;

@@ -279,8 +279,9 @@ def chart_accuracy_vs_time(scenes, rows_by_scene, out_dir):
 
 
 # "Where the time goes": the stages of one configuration, stacked in this order, the method's first.
-# (label, colour, value(timings) or None when the row lacks it). The evidence resolve is the camera
-# pass less its visibility buffer; "other" is the row's wall time the stages leave (CPU recording,
+# (label, colour, value(timings) or None when the row lacks it). The evidence resolve is
+# evidence_gpu_ms (with evidence on demand the resolve of the listed pixels only; rows of earlier
+# builds: the camera pass less its visibility buffer); "other" is the row's wall time the stages leave (CPU recording,
 # submit and wait, the reference when the scene changes, pictures). GPU stages are timestamps, the
 # others CPU wall time; on a CPU driver (lavapipe) both are the same cores' time.
 def _stage(key):
@@ -288,7 +289,10 @@ def _stage(key):
 
 
 def _evidence_resolve(t):
-    camera, visibility = num(t, "camera_gpu_ms"), num(t, "visibility_gpu_ms")
+    evidence = num(t, "evidence_gpu_ms")  # the listed pixels only (evidence on demand), or every pixel
+    if evidence is not None:
+        return evidence
+    camera, visibility = num(t, "camera_gpu_ms"), num(t, "visibility_gpu_ms")  # rows of earlier builds
     if camera is None:
         return None
     return max(camera - (visibility or 0.0), 0.0)
@@ -306,7 +310,8 @@ TIME_STAGES = [
     ("shadow pass: moments of filterable maps (moments_gpu_ms)", "tab:green", _stage("moments_gpu_ms"), True),
     ("lookup pass (lookup_gpu_ms)", "tab:cyan", _stage("lookup_gpu_ms"), True),
     ("visibility buffer (visibility_gpu_ms)", "tab:olive", _stage("visibility_gpu_ms"), False),
-    ("evidence resolve (camera_gpu_ms - visibility_gpu_ms)", "tab:orange", _evidence_resolve, False),
+    ("evidence resolve (evidence_gpu_ms; earlier rows: camera_gpu_ms - visibility_gpu_ms)", "tab:orange",
+     _evidence_resolve, False),
     ("readback (readback_ms)", "tab:red", _stage("readback_ms"), False),
     ("compare (compare_ms)", "tab:purple", _stage("compare_ms"), False),
 ]

@@ -36,6 +36,11 @@ layout(constant_id = kSpecAdaptive) const bool kAdaptive = false;
 // (shadeLight below) with only the visibility written, 1 byte per pixel into outA's R8 attachment;
 // the unread evidence is dead code the compiler removes.
 layout(constant_id = kSpecLookupOnly) const bool kLookupOnly = false;
+// The evidence pass (evidence on demand): fragment k of a compact target resolves the k-th listed
+// pixel (evidencePixels[k], y * width + x) instead of the pixel under it. Nothing here depends on
+// the 2x2 quad but hw2x2's implicit LOD, which selects nothing (see hwVis in shadeLight), so the
+// listed pixels get the full resolve's bits (tests/raster_evidence_test.cpp).
+layout(constant_id = kSpecCompact) const bool kCompact = false;
 
 // Params P (binding kBindingParams) comes from resolve_abi.h.
 layout(set = 0, binding = kBindingMapDepth) uniform sampler2DArray mapDepth;         // NEAREST, raw depth
@@ -54,6 +59,13 @@ layout(set = 0, binding = kBindingCameraIds) uniform usampler2D cameraIds;
 layout(set = 0, binding = kBindingTrianglePlanes) uniform samplerBuffer trianglePlanes;
 layout(std430, set = 0, binding = kBindingProjectorTexels) readonly buffer ProjectorTexels { float projectorTexels[]; };
 layout(std430, set = 0, binding = kBindingOutPlanes) writeonly buffer OutPlanes { float outPlanes[]; };
+layout(std430, set = 0, binding = kBindingEvidencePixels) readonly buffer EvidencePixels { uint evidencePixels[]; };
+// The evidence pass's list: how many pixels, and the compact target's width (the shadow pass's
+// push block: a mat4, then these two).
+layout(push_constant) uniform Push {
+  layout(offset = 64) uint count;
+  uint compactWidth;
+} pc;
 
 // The rasterizer splits these into the frame's channels (rasterizer.cpp, readback).
 layout(location = 0) out vec4 outA;  // vis, receiver_depth, map_depth, m
@@ -506,16 +518,33 @@ void shadeProjectors(Surface s, uint pixel, uint planeSize) {
   }
 }
 
+// The lookup pass's byte: the visibility as UNORM, with the extremes kept exact (255 only where
+// the visibility, clamped to [0, 1], is 1; 0 only where it is 0, NaN included) and the lit
+// decision kept exact (bytes 128..255 exactly where vis >= 0.5), whatever way the unit rounds.
+// Every other pixel is fractional: evidence on demand resolves exactly those again for the
+// float (raster/METHODS.md, "Evidence on demand").
+float lookupByte(float vis) {
+  float v = vis >= 1.0 ? 1.0 : (vis > 0.0 ? vis : 0.0);
+  if (v > 0.0 && v < 1.0) v = v >= 0.5 ? clamp(v, 128.0 / 255.0, 254.0 / 255.0) : clamp(v, 1.0 / 255.0, 127.0 / 255.0);
+  return v;
+}
+
 void main() {
   ivec2 px = ivec2(gl_FragCoord.xy);  // the viewport is the image: every pixel, once
+  if (kCompact) {
+    uint k = min(uint(px.y) * pc.compactWidth + uint(px.x), pc.count - 1u);  // the tail repeats the last
+    uint pixel = evidencePixels[k];
+    px = ivec2(int(pixel % uint(P.sizes2.x)), int(pixel / uint(P.sizes2.x)));
+  }
   Surface s = visibleSurface(px);
   LightChannels light = shadeLight(s);  // without a light (kLightNone) the readback ignores it
   if (kLookupOnly) {
-    outA = vec4(s.hit ? light.a.x : 0.0);  // the R8 attachment keeps x: the resolve's vis, as UNORM
+    outA = vec4(lookupByte(s.hit ? light.a.x : 0.0));  // the R8 attachment keeps x
     return;
   }
   outA = s.hit ? light.a : vec4(0.0);
   outB = s.hit ? light.b : vec4(0.0);
   if (kMomentFilter) outC = s.hit ? light.c : vec4(0.0);
+  if (kCompact) return;  // no projectors (their planes are every pixel's)
   shadeProjectors(s, uint(px.y * P.sizes2.x + px.x), uint(P.sizes2.x * P.sizes2.y));
 }

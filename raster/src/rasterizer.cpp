@@ -10,9 +10,20 @@
 //                    bias and filter, the evidence channels into two color attachments
 //                    (kResolveFormats), the projectors into a storage buffer (one plane per channel).
 //   Pass 4 (lookup, with a light): resolve.frag specialized to the method's lookup alone
-//                    (kSpecLookupOnly): the visibility as 1 byte per pixel (kLookupFormat), the
-//                    evidence compiled out; timed on its own (lookup_gpu_ms, what an engine pays
-//                    for the method besides its shadow pass).
+//                    (kSpecLookupOnly): the visibility as 1 byte per pixel (kLookupFormat; 0 and
+//                    255 only for exactly 0 and 1, the 0.5 threshold exact), the evidence
+//                    compiled out; timed on its own (lookup_gpu_ms, what an engine pays for the
+//                    method besides its shadow pass).
+// Evidence on demand (render() with an EvidenceSelector, a light, no projectors, and the group's
+// planes kept): pass 3 is skipped. After passes 1, 2 and 4 the CPU reads the bytes back, lists the
+// fractional pixels and those the selector asks for (where the decision disagrees with the
+// reference), and
+//   Pass 5 (evidence): resolve.frag specialized to kSpecCompact draws a kCompactWidth-wide target
+//                    with one fragment per listed pixel (evidencePixels[k] instead of
+//                    gl_FragCoord), the same channels as pass 3 for those pixels only;
+// the frame is then the bytes (0/1 exactly), the kept planes of the group (hit, object_id,
+// prim_id from the last full frame of the camera; m and cascade per footprintKey: the light's
+// layers, the camera, the cascade splits) and the listed pixels' evidence, zeros elsewhere.
 // The visibility buffer and the resolve attachments are linear images in host memory: the CPU
 // splits them into the Frame's channel planes in place, without a copy to a buffer first.
 #include "shadowlab/raster/raster.h"
@@ -24,6 +35,7 @@
 #include <cmath>
 #include <cstring>
 #include <iterator>
+#include <list>
 #include <map>
 #include <set>
 #include <stdexcept>
@@ -102,6 +114,11 @@ constexpr VkFormat kLookupFormat = VK_FORMAT_R8_UNORM;
 // the shadow pass (moments included), 3 after the visibility buffer, 4 after the resolve, 2 after
 // the lookup (the end).
 constexpr uint32_t kTimestamps = 6;
+// The evidence pass's compact targets: listed pixel k at (k % width, k / width).
+constexpr int kCompactWidth = 256;
+// How many groups' planes (m, cascade) evidence on demand keeps: a sweep whose fastest axis is a
+// bias or a filter needs one; a grid with map.size fastest, one per size.
+constexpr size_t kKeptFootprints = 4;
 
 // A filterable map's moments format: RG32F for 2 moments, RGBA32F for 4 (raster/METHODS.md).
 VkFormat momentsFormat(Filter filter) {
@@ -198,6 +215,34 @@ struct Rasterizer::Impl {
   vk::Image resolveOut[kResolveAttachments];
   vk::Image lookupOut;        // pass 4's visibility (R8), host-readable
   vk::Buffer params, output;  // output: the projector channels
+  // Evidence on demand (pass 5): the listed pixels, the compact targets (kCompactWidth wide, as
+  // many rows as the list needs; [2] for filterable maps only), their two timestamps.
+  vk::Buffer evidencePixels;
+  vk::Image evidenceOut[kResolveAttachments];
+  vk::QueryPool evidenceQueries;
+  std::set<raster::ResolveSpecialization> evidenceWarmed;
+  // The planes that depend on the scene and the camera only (hit, object_id, prim_id, as the last
+  // full frame read them back) and, per group, on the light's layers too (m, cascade): what
+  // evidence on demand copies instead of resolving (render()'s `select`).
+  struct CameraPlanes {
+    std::string key;  // the visibility key they were read with
+    std::vector<float> hit, objectId, primId;
+  } cameraPlanes;
+  struct Footprint {
+    std::string key;  // footprintKey
+    std::vector<float> m, cascade;
+  };
+  std::list<Footprint> footprints;  // most recently used first, at most kKeptFootprints
+  // The kept planes are lent (moved, not copied) to the last partial frame; recycle() moves them
+  // back and re-zeroes that frame's evidence planes at its listed pixels only, for the next one.
+  // A frame not handed back leaves its group without planes: its next frame is a full one.
+  struct Lent {
+    std::string footprintKey;
+    const float* kept[5] = {};         // hit, object_id, prim_id, m, cascade
+    std::vector<const float*> zeroed;  // evidence planes: 0 except at `listed`
+    std::vector<uint32_t> listed;
+  } lent;
+  std::vector<std::vector<float>> zeroSpare;  // planes of zeros (recycled evidence planes)
 
   explicit Impl(const RasterDeviceOptions& options);
   // Work may still be in flight when a render throws (a failed call after a submission): wait for
@@ -211,8 +256,10 @@ struct Rasterizer::Impl {
   struct FramePipelines {
     IdPipelines ids;
     VkPipeline resolve = VK_NULL_HANDLE;
-    VkPipeline lookup = VK_NULL_HANDLE;  // pass 4; none without a light
-    bool firstUse = false;               // lavapipe compiles at first use: run once untimed
+    VkPipeline lookup = VK_NULL_HANDLE;    // pass 4; none without a light
+    VkPipeline evidence = VK_NULL_HANDLE;  // pass 5 (evidence on demand; then no pass 3)
+    bool evidenceFirstUse = false;
+    bool firstUse = false;  // lavapipe compiles at first use: run once untimed
   };
   struct PassTimes {
     double shadowGpuMs = 0;   // pass 1
@@ -226,7 +273,14 @@ struct Rasterizer::Impl {
   void prepareTargets(const Scene& scene, const Method& method, const raster::FrameLayers& layers);
   std::vector<raster::ProjectorTexels> projectorTexels() const;
   FramePipelines pipelinesFor(const Method& method, const raster::FrameLayers& layers,
-                              const raster::ResolveSpecialization& spec);
+                              const raster::ResolveSpecialization& spec, bool partial);
+  std::string cameraKey(const Scene& scene) const;
+  std::string footprintKey(const Scene& scene, const abi::Params& params,
+                           const raster::ResolveSpecialization& spec) const;
+  Footprint* findFootprint(const std::string& key);
+  void keepFootprint(const std::string& key, const std::string& camera, const Frame& frame, const Light& light);
+  Frame partialFrame(const Scene& scene, const Light& light, const Method& method, const EvidenceSelector& select,
+                     Footprint& footprint, const FramePipelines& pipes, RasterTimings& t);
   bool submit(const Scene& scene, const Method& method, const raster::FrameLayers& layers,
               const FramePipelines& pipes);  // returns whether it drew the visibility buffer
   PassTimes readTimestamps(bool drewVisibility);
@@ -294,6 +348,10 @@ Rasterizer::Impl::Impl(const RasterDeviceOptions& options) {
   VK_CHECK(vkCreateQueryPool(device, &q, nullptr, &pool));
   queries = vk::QueryPool(device, pool);
   params = vk::Buffer(*context, sizeof(abi::Params), VK_BUFFER_USAGE_UNIFORM_BUFFER_BIT);
+  evidencePixels = vk::Buffer(*context, 4096 * sizeof(uint32_t), VK_BUFFER_USAGE_STORAGE_BUFFER_BIT);
+  q.queryCount = 2;
+  VK_CHECK(vkCreateQueryPool(device, &q, nullptr, &pool));
+  evidenceQueries = vk::QueryPool(device, pool);
 }
 
 void Rasterizer::Impl::createLayouts() {
@@ -457,6 +515,7 @@ void Rasterizer::Impl::writeDescriptors() {
   resources[abi::kBindingTrianglePlanes].texelView = s.trianglePlanesView.get();
   resources[abi::kBindingProjectorTexels].buffer = &s.projectorTexels;
   resources[abi::kBindingOutPlanes].buffer = &output;
+  resources[abi::kBindingEvidencePixels].buffer = &evidencePixels;
   resources[abi::kBindingMomentsRows].image =
       image(nearestSampler, momentsRows.arrayView(), VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL);
   resources[abi::kBindingMoments].image =
@@ -623,8 +682,9 @@ void Rasterizer::Impl::record(VkCommandBuffer cmd, const std::vector<glm::mat4>&
                  VK_PIPELINE_STAGE_2_FRAGMENT_SHADER_BIT, VK_ACCESS_2_SHADER_SAMPLED_READ_BIT);
   vkCmdWriteTimestamp2(cmd, VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT, pool, 3);
 
-  // ---- Pass 3: resolve, one fragment per pixel, into the resolve attachments ----
-  {
+  // ---- Pass 3: resolve, one fragment per pixel, into the resolve attachments (evidence on
+  // demand: none; pass 5 resolves the listed pixels after the readback of pass 4) ----
+  if (resolve != VK_NULL_HANDLE) {
     const int attachments = resolveAttachments(method.filter);
     VkRenderingAttachmentInfo colors[kResolveAttachments];
     for (int i = 0; i < attachments; ++i) {
@@ -795,9 +855,33 @@ std::vector<uint8_t> Rasterizer::lookupVisibility() const {
 }
 
 void Rasterizer::recycle(Frame&& frame) {
+  Impl& im = *impl_;
   const size_t n = frame.pixelCount();
-  for (std::vector<float>& plane : frame.data)
-    if (plane.size() == n && n > 0) impl_->spare.push_back(std::move(plane));
+  Impl::Lent& lent = im.lent;
+  Impl::Footprint* footprint = nullptr;
+  for (Impl::Footprint& f : im.footprints)
+    if (f.key == lent.footprintKey) footprint = &f;
+  std::vector<float>* home[5] = {&im.cameraPlanes.hit, &im.cameraPlanes.objectId, &im.cameraPlanes.primId,
+                                 footprint ? &footprint->m : nullptr, footprint ? &footprint->cascade : nullptr};
+  for (std::vector<float>& plane : frame.data) {
+    if (plane.size() != n || n == 0) continue;
+    const float* data = plane.data();
+    bool back = false;
+    for (int k = 0; k < 5 && !back; ++k)
+      if (data == lent.kept[k] && home[k] && home[k]->empty()) {
+        *home[k] = std::move(plane);  // the kept plane, lent to this frame
+        lent.kept[k] = nullptr;
+        back = true;
+      }
+    if (back) continue;
+    if (std::find(lent.zeroed.begin(), lent.zeroed.end(), data) != lent.zeroed.end() && im.zeroSpare.size() < 16) {
+      for (uint32_t i : lent.listed) plane[i] = 0.0f;  // the only non-zero values
+      im.zeroSpare.push_back(std::move(plane));
+    } else {
+      im.spare.push_back(std::move(plane));
+    }
+  }
+  lent.zeroed.clear();
   frame = Frame();
 }
 
@@ -902,13 +986,23 @@ std::vector<raster::ProjectorTexels> Rasterizer::Impl::projectorTexels() const {
 
 // Pipelines: the id writers for the map's format and clamp, the resolve for its specialization.
 Rasterizer::Impl::FramePipelines Rasterizer::Impl::pipelinesFor(const Method& method, const raster::FrameLayers& layers,
-                                                                const raster::ResolveSpecialization& spec) {
+                                                                const raster::ResolveSpecialization& spec,
+                                                                bool partial) {
   VkFormat mapFormat = vkDepthFormat(method.mapFormat);
   bool depthClamp = layers.depthClamp;
   FramePipelines p;
   p.ids = {idPipeline(mapFormat, depthClamp, false, true), idPipeline(mapFormat, depthClamp, true, true),
            idPipeline(kCameraDepthFormat, false, false, false), idPipeline(kCameraDepthFormat, false, true, false)};
-  p.resolve = resolvePipeline(spec);
+  if (partial) {
+    // Evidence on demand: the resolve over the listed pixels only (pass 5), no projectors.
+    raster::ResolveSpecialization compactSpec = spec;
+    compactSpec[abi::kSpecCompact] = 1u;
+    compactSpec[abi::kSpecProjectorCount] = 0u;
+    p.evidence = resolvePipeline(compactSpec);
+    p.evidenceFirstUse = evidenceWarmed.insert(compactSpec).second;
+  } else {
+    p.resolve = resolvePipeline(spec);
+  }
   if (spec[abi::kSpecLightType] != uint32_t(abi::kLightNone)) {
     // The lookup: the same specialization, the evidence and the projectors compiled out.
     raster::ResolveSpecialization lookupSpec = spec;
@@ -917,7 +1011,8 @@ Rasterizer::Impl::FramePipelines Rasterizer::Impl::pipelinesFor(const Method& me
     p.lookup = resolvePipeline(lookupSpec);
   }
   // lavapipe compiles shaders at first use: the first frame of a combination runs twice.
-  std::string warmKey = std::to_string(int(mapFormat)) + "/" + std::to_string(depthClamp);
+  std::string warmKey =
+      std::to_string(int(mapFormat)) + "/" + std::to_string(depthClamp) + "/" + std::to_string(partial);
   for (uint32_t k : spec) warmKey += "/" + std::to_string(k);
   p.firstUse = warmed.insert(warmKey).second;
   return p;
@@ -931,8 +1026,7 @@ bool Rasterizer::Impl::submit(const Scene& sc, const Method& method, const raste
   std::vector<glm::mat4> layerClip;
   for (const raster::MapLayer& l : layers.layers) layerClip.push_back(raster::clipFromTex() * l.texFromWorld);
   glm::mat4 cameraClip = camera.clipFromView() * camera.viewFromWorld();
-  const std::string key = scene->hash + "/" + hashHex(fnv1a64(&cameraClip, sizeof(cameraClip))) + "/" +
-                          std::to_string(camera.width) + "x" + std::to_string(camera.height);
+  const std::string key = cameraKey(sc);
   const bool drawVisibility = visibilityKey != key;
   visibilityKey.clear();  // until this frame is through
   for (int run = 0; run < (pipes.firstUse ? 2 : 1); ++run) {
@@ -960,6 +1054,257 @@ Rasterizer::Impl::PassTimes Rasterizer::Impl::readTimestamps(bool drewVisibility
   return t;
 }
 
+// The visibility buffer's key: the scene, the camera's matrices, the image size.
+std::string Rasterizer::Impl::cameraKey(const Scene& sc) const {
+  const Camera& camera = sc.camera;
+  glm::mat4 cameraClip = camera.clipFromView() * camera.viewFromWorld();
+  return scene->hash + "/" + hashHex(fnv1a64(&cameraClip, sizeof(cameraClip))) + "/" + std::to_string(camera.width) +
+         "x" + std::to_string(camera.height);
+}
+
+// Evidence on demand's group: everything m and the cascade index are computed from in resolve.frag
+// (the visible point, the pixel's layer and its projection, the cascade splits, the cube face),
+// none of which is a bias or a filter. The specialization constants that change that code (light
+// type, cascaded, affine) are part of it; the filter's is not (the same bits whatever the filter:
+// tests/compare_on_demand_test.cpp).
+std::string Rasterizer::Impl::footprintKey(const Scene& sc, const abi::Params& p,
+                                           const raster::ResolveSpecialization& spec) const {
+  const int lightLayers = std::clamp(p.sizes.y, 0, abi::kMaxLightLayers);
+  uint64_t h = fnv1a64(p.texFromWorld, sizeof(glm::mat4) * size_t(lightLayers));
+  h = fnv1a64(p.layerInfo, sizeof(glm::vec4) * size_t(lightLayers), h);
+  for (const glm::vec4* v : {&p.lightPosType, &p.lightDirCos, &p.cameraOrigin, &p.rayX, &p.rayY, &p.rayC,
+                             &p.cascadeView, &p.cascadeFar[0], &p.cascadeFar[1]})
+    h = fnv1a64(v, sizeof(glm::vec4), h);
+  const float splits[2] = {p.cascadeInfo.y, p.cascadeInfo.z};  // not x: the blend band
+  h = fnv1a64(splits, sizeof(splits), h);
+  const int32_t sizes[2] = {p.sizes.x, p.sizes.y};
+  h = fnv1a64(sizes, sizeof(sizes), h);
+  for (int k : {abi::kSpecLightType, abi::kSpecCascaded, abi::kSpecAffine}) h = fnv1a64(&spec[size_t(k)], 4, h);
+  return cameraKey(sc) + "/" + hashHex(h);
+}
+
+Rasterizer::Impl::Footprint* Rasterizer::Impl::findFootprint(const std::string& key) {
+  for (auto it = footprints.begin(); it != footprints.end(); ++it)
+    if (it->key == key) {
+      footprints.splice(footprints.begin(), footprints, it);
+      return &footprints.front();
+    }
+  return nullptr;
+}
+
+// After a full frame rendered with a selector: keeps its camera planes and its group's m and
+// cascade for the next frames of the group.
+void Rasterizer::Impl::keepFootprint(const std::string& key, const std::string& camera, const Frame& frame,
+                                     const Light& light) {
+  if (cameraPlanes.key != camera || cameraPlanes.hit.empty()) {
+    if (cameraPlanes.key != camera) footprints.clear();  // of another camera: never found again
+    cameraPlanes.key.clear();
+    cameraPlanes.hit = frame.get("hit");
+    cameraPlanes.objectId = frame.get("object_id");
+    cameraPlanes.primId = frame.get("prim_id");
+    cameraPlanes.key = camera;
+  }
+  const std::string p = "light." + light.name + ".";
+  footprints.remove_if([&](const Footprint& f) { return f.key == key; });  // one whose planes are lent
+  while (footprints.size() >= kKeptFootprints) footprints.pop_back();
+  footprints.push_front({key, frame.get(p + "m"), frame.get(p + "cascade")});
+}
+
+// Evidence on demand, after the shadow and lookup passes: reads the lookup's bytes, lists the
+// fractional pixels and those `select` asks for, resolves only those (pass 5: resolve.frag with
+// kSpecCompact into kCompactWidth-wide targets, one texel per listed pixel) and builds the frame
+// from the bytes, the kept planes and the listed pixels' evidence.
+Frame Rasterizer::Impl::partialFrame(const Scene& sc, const Light& light, const Method& method,
+                                     const EvidenceSelector& select, Footprint& footprint, const FramePipelines& pipes,
+                                     RasterTimings& t) {
+  const int width = sc.camera.width, height = sc.camera.height;
+  const size_t n = size_t(width) * size_t(height);
+  auto t0 = std::chrono::steady_clock::now();
+  lookupOut.invalidate(*context);
+  std::vector<uint8_t> vis8(n);
+  for (int y = 0; y < height; ++y) {
+    const uint8_t* row = static_cast<const uint8_t*>(lookupOut.mapped()) + size_t(y) * lookupOut.rowPitch();
+    std::copy(row, row + width, vis8.data() + size_t(y) * size_t(width));
+  }
+  std::vector<uint32_t> asked;
+  select(vis8.data(), width, height, asked);
+  if (!std::is_sorted(asked.begin(), asked.end())) std::sort(asked.begin(), asked.end());
+  std::vector<uint32_t> listed;
+  {
+    size_t a = 0;
+    for (uint32_t i = 0; i < uint32_t(n); ++i) {
+      while (a < asked.size() && asked[a] < i) ++a;
+      const bool fractional = vis8[i] != 0 && vis8[i] != 255;
+      if (fractional || (a < asked.size() && asked[a] == i)) listed.push_back(i);
+    }
+  }
+  const size_t count = listed.size();
+  const int attachments = resolveAttachments(method.filter);
+  double readMs = msSince(t0);
+
+  // ---- Pass 5: the evidence of the listed pixels ----
+  double evidenceMs = 0;
+  int compactWidth = kCompactWidth;
+  if (count > 0) {
+    const size_t bytes = count * sizeof(uint32_t);
+    if (evidencePixels.size() < bytes) {
+      evidencePixels =
+          vk::Buffer(*context, std::max<size_t>(bytes, 2 * evidencePixels.size()), VK_BUFFER_USAGE_STORAGE_BUFFER_BIT);
+      writeDescriptors();
+    }
+    evidencePixels.upload(listed.data(), bytes);
+    // kCompactWidth wide, wider when the list needs more rows than the device's largest image.
+    const int maxSize = maxMapSize();
+    while ((count + size_t(compactWidth) - 1) / size_t(compactWidth) > size_t(maxSize)) compactWidth *= 2;
+    const int rows = int((count + size_t(compactWidth) - 1) / size_t(compactWidth));
+    if (evidenceOut[0].height() < rows || evidenceOut[0].width() != compactWidth) {
+      const int allocRows =
+          std::min(maxSize, std::max(rows, evidenceOut[0].width() == compactWidth ? 2 * evidenceOut[0].height() : 0));
+      for (int i = 0; i < kResolveAttachments; ++i) evidenceOut[i] = vk::Image();
+      for (int i = 0; i < 2; ++i)
+        evidenceOut[i] = vk::Image(*context, compactWidth, allocRows, 1, kResolveFormats[i],
+                                   VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT, VK_IMAGE_ASPECT_COLOR_BIT, true);
+    }
+    if (attachments == 3 && evidenceOut[2].height() != evidenceOut[0].height())
+      evidenceOut[2] = vk::Image(*context, compactWidth, evidenceOut[0].height(), 1, kResolveFormats[2],
+                                 VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT, VK_IMAGE_ASPECT_COLOR_BIT, true);
+    for (int run = 0; run < (pipes.evidenceFirstUse ? 2 : 1); ++run) {
+      VkCommandBuffer cmd = commands->begin();
+      VkQueryPool pool = evidenceQueries.get();
+      vkCmdResetQueryPool(cmd, pool, 0, 2);
+      vkCmdWriteTimestamp2(cmd, VK_PIPELINE_STAGE_2_TOP_OF_PIPE_BIT, pool, 0);
+      VkDescriptorSet set = descriptorSet;
+      vkCmdBindDescriptorSets(cmd, VK_PIPELINE_BIND_POINT_GRAPHICS, pipelineLayout.get(), 0, 1, &set, 0, nullptr);
+      VkRenderingAttachmentInfo colors[kResolveAttachments];
+      for (int i = 0; i < attachments; ++i) {
+        vk::transition(cmd, evidenceOut[i], VK_IMAGE_LAYOUT_UNDEFINED, VK_IMAGE_LAYOUT_GENERAL,
+                       VK_PIPELINE_STAGE_2_HOST_BIT, 0, VK_PIPELINE_STAGE_2_COLOR_ATTACHMENT_OUTPUT_BIT,
+                       VK_ACCESS_2_COLOR_ATTACHMENT_WRITE_BIT);
+        colors[i] = overwrittenColor(evidenceOut[i].layerView(0), VK_IMAGE_LAYOUT_GENERAL);
+      }
+      drawFullscreen(cmd, colors, uint32_t(attachments), uint32_t(compactWidth), uint32_t(rows), pipes.evidence, [&] {
+        DrawPush push{glm::mat4(1.0f), uint32_t(count), uint32_t(compactWidth), 0, 0};
+        vkCmdPushConstants(cmd, pipelineLayout.get(), VK_SHADER_STAGE_VERTEX_BIT | VK_SHADER_STAGE_FRAGMENT_BIT, 0,
+                           sizeof(push), &push);
+      });
+      VkMemoryBarrier2 toHost{VK_STRUCTURE_TYPE_MEMORY_BARRIER_2};
+      toHost.srcStageMask = VK_PIPELINE_STAGE_2_COLOR_ATTACHMENT_OUTPUT_BIT;
+      toHost.srcAccessMask = VK_ACCESS_2_COLOR_ATTACHMENT_WRITE_BIT;
+      toHost.dstStageMask = VK_PIPELINE_STAGE_2_HOST_BIT;
+      toHost.dstAccessMask = VK_ACCESS_2_HOST_READ_BIT;
+      VkDependencyInfo dep{VK_STRUCTURE_TYPE_DEPENDENCY_INFO};
+      dep.memoryBarrierCount = 1;
+      dep.pMemoryBarriers = &toHost;
+      vkCmdPipelineBarrier2(cmd, &dep);
+      vkCmdWriteTimestamp2(cmd, VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT, pool, 1);
+      commands->submitAndWait();
+    }
+    uint64_t stamps[2] = {};
+    VK_CHECK(vkGetQueryPoolResults(context->device(), evidenceQueries.get(), 0, 2, sizeof(stamps), stamps,
+                                   sizeof(uint64_t), VK_QUERY_RESULT_64_BIT | VK_QUERY_RESULT_WAIT_BIT));
+    evidenceMs = double(stamps[1] - stamps[0]) * context->properties().limits.timestampPeriod * 1e-6;
+    for (int i = 0; i < attachments; ++i) evidenceOut[i].invalidate(*context);
+  }
+
+  // ---- The frame: the readback's channels, in its order ----
+  auto t1 = std::chrono::steady_clock::now();
+  const bool momentChannels = isMomentFilter(method.filter);
+  Frame frame;
+  frame.width = width;
+  frame.height = height;
+  frame.names = {"hit", "object_id", "prim_id"};
+  const std::string p = "light." + light.name + ".";
+  for (const char* name : {"vis", "receiver_depth", "map_depth", "m", "bias_depth", "bias_world", "occluder_id",
+                           "occluder_prim", "in_map", "cascade"})
+    frame.names.push_back(p + name);
+  if (momentChannels)
+    for (const char* name : {"moment_mean", "moment_variance", "moment_bound"}) frame.names.push_back(p + name);
+  frame.data.resize(frame.names.size());
+  // Planes: 0 hit, 1 object_id, 2 prim_id, 3 vis, 4 receiver_depth, 5 map_depth, 6 m, 7 bias_depth,
+  // 8 bias_world, 9 occluder_id, 10 occluder_prim, 11 in_map, 12 cascade, 13.. the moments'.
+  // The kept ones are lent to the frame, the evidence planes come zeroed from zeroSpare when a
+  // frame handed them back, the rest from spare.
+  std::vector<float>* kept[13] = {&cameraPlanes.hit, &cameraPlanes.objectId, &cameraPlanes.primId};
+  kept[6] = &footprint.m;
+  kept[12] = &footprint.cascade;
+  if (!zeroSpare.empty() && zeroSpare.front().size() != n) zeroSpare.clear();
+  lent = Lent();
+  lent.footprintKey = footprint.key;
+  std::vector<uint8_t> zeroed(frame.data.size(), 0);
+  for (size_t c = 0; c < frame.data.size(); ++c) {
+    std::vector<float>* from = c < 13 ? kept[c] : nullptr;
+    if (from) {
+      frame.data[c] = std::move(*from);
+      from->clear();
+      lent.kept[c == 6 ? 3 : c == 12 ? 4 : c] = frame.data[c].data();
+      continue;
+    }
+    std::vector<std::vector<float>>& pool = c != 3 && !zeroSpare.empty() ? zeroSpare : spare;
+    zeroed[c] = &pool == &zeroSpare;
+    if (!pool.empty()) {
+      frame.data[c] = std::move(pool.back());
+      pool.pop_back();
+    }
+  }
+  spare.clear();
+  auto fill = [&](size_t first, size_t step) {
+    for (size_t c = first; c < frame.data.size(); c += step) {
+      std::vector<float>& plane = frame.data[c];
+      if ((c < 13 && kept[c]) || zeroed[c]) continue;
+      if (c == 3) {
+        plane.resize(n);
+        for (size_t i = 0; i < n; ++i) plane[i] = vis8[i] == 255 ? 1.0f : 0.0f;  // fractional: listed below
+      } else {
+        plane.assign(n, 0.0f);
+      }
+    }
+  };
+  {
+    std::thread helper(fill, 1, 2);
+    fill(0, 2);
+    helper.join();
+  }
+  for (size_t c = 4; c < frame.data.size(); ++c)
+    if (c != 6 && c != 12) lent.zeroed.push_back(frame.data[c].data());
+  const std::vector<uint32_t>& objectIds = scene->objectIds;
+  const std::vector<uint32_t>& triangleBase = scene->objectTriangleBase;
+  const std::vector<uint32_t>& triangleObject = scene->triangleObject;
+  for (size_t k = 0; k < count; ++k) {
+    const size_t i = listed[k];
+    const size_t y = k / size_t(compactWidth), x = k % size_t(compactWidth);
+    const float* a = reinterpret_cast<const float*>(static_cast<const char*>(evidenceOut[0].mapped()) +
+                                                    y * evidenceOut[0].rowPitch()) +
+                     4 * x;
+    const float* b = reinterpret_cast<const float*>(static_cast<const char*>(evidenceOut[1].mapped()) +
+                                                    y * evidenceOut[1].rowPitch()) +
+                     4 * x;
+    frame.data[3][i] = a[0];
+    frame.data[4][i] = a[1];
+    frame.data[5][i] = a[2];
+    frame.data[7][i] = b[0];
+    frame.data[8][i] = b[1];
+    const uint32_t id = uint32_t(b[2]);  // exact up to 2^24
+    if (id != 0) {
+      const uint32_t object = triangleObject[id - 1];
+      frame.data[9][i] = float(objectIds[object]);
+      frame.data[10][i] = float(id - 1 - triangleBase[object]);
+    }
+    frame.data[11][i] = float(int(b[3]) & 1);  // 2 * cascade + in_map; the cascade is kept
+    if (momentChannels) {
+      const float* c = reinterpret_cast<const float*>(static_cast<const char*>(evidenceOut[2].mapped()) +
+                                                      y * evidenceOut[2].rowPitch()) +
+                       4 * x;
+      for (int j = 0; j < 3; ++j) frame.data[size_t(13 + j)][i] = c[j];
+    }
+  }
+  lent.listed = std::move(listed);
+  t.evidenceGpuMs = evidenceMs;
+  t.evidencePixels = count;
+  t.partialEvidence = true;
+  t.readbackMs = readMs + msSince(t1);
+  return frame;
+}
+
 namespace {
 
 // Metadata: what the frame is of, for its EXR header and raster.json.
@@ -985,9 +1330,12 @@ nlohmann::json frameMeta(const Scene& scene, const Light* light, const Camera& f
 }  // namespace
 
 Frame Rasterizer::render(const Scene& scene, const Method& method, const std::string& lightName, RasterTimings* timings,
-                         const Camera* fitCamera) {
+                         const Camera* fitCamera, const EvidenceSelector* select) {
   auto t0 = std::chrono::steady_clock::now();
   Impl& im = *impl_;
+  // Planes lent to a frame not handed back before this render stay with it (its group's next
+  // frame is a full one): recycle() only takes back what the last render lent.
+  im.lent = Impl::Lent();
   const Light* light = im.validate(scene, method, lightName);
   const Camera& fit = fitCamera ? *fitCamera : scene.camera;  // what the light frustum follows
   im.upload(scene);
@@ -995,24 +1343,44 @@ Frame Rasterizer::render(const Scene& scene, const Method& method, const std::st
   im.prepareTargets(scene, method, layers);
   const abi::Params params = raster::packResolveParams(scene, light, method, fit, layers, im.projectorTexels());
   im.params.upload(&params, sizeof(params));
-  const Impl::FramePipelines pipes =
-      im.pipelinesFor(method, layers, raster::resolveSpecialization(scene, light, method, layers));
+  const raster::ResolveSpecialization spec = raster::resolveSpecialization(scene, light, method, layers);
+  // Evidence on demand: with a selector, a light, no projectors (their planes are every pixel's)
+  // and the group's planes kept from an earlier frame.
+  const bool onDemand = select && *select && light && scene.projectors.empty();
+  const std::string group = onDemand ? im.footprintKey(scene, params, spec) : std::string();
+  const std::string camera = onDemand ? im.cameraKey(scene) : std::string();
+  Impl::Footprint* footprint =
+      onDemand && im.cameraPlanes.key == camera && !im.cameraPlanes.hit.empty() ? im.findFootprint(group) : nullptr;
+  if (footprint && footprint->m.empty()) footprint = nullptr;  // lent to a frame not handed back
+  const Impl::FramePipelines pipes = im.pipelinesFor(method, layers, spec, footprint != nullptr);
   const bool drewVisibility = im.submit(scene, method, layers, pipes);
   const Impl::PassTimes passes = im.readTimestamps(drewVisibility);
 
-  auto tRead = std::chrono::steady_clock::now();
-  Frame frame = im.readback(scene, light, method, scene.camera.width, scene.camera.height);
-  double readbackMs = msSince(tRead);
-  frame.meta = frameMeta(scene, light, fit, method, deviceName());
-  if (timings) {
-    timings->shadowGpuMs = passes.shadowGpuMs;
-    timings->visibilityGpuMs = im.visibilityGpuMs;
-    timings->cameraGpuMs = im.visibilityGpuMs + passes.resolveGpuMs;
-    timings->lookupGpuMs = light ? passes.lookupGpuMs : 0.0;
-    timings->momentsGpuMs = isMomentFilter(method.filter) ? passes.momentsGpuMs : 0.0;
-    timings->readbackMs = readbackMs;
-    timings->renderWallMs = msSince(t0);
+  RasterTimings local;
+  RasterTimings& t = timings ? *timings : local;
+  t = RasterTimings();
+  Frame frame;
+  if (footprint) {
+    frame = im.partialFrame(scene, *light, method, *select, *footprint, pipes, t);
+  } else {
+    auto tRead = std::chrono::steady_clock::now();
+    frame = im.readback(scene, light, method, scene.camera.width, scene.camera.height);
+    t.readbackMs = msSince(tRead);
+    t.evidenceGpuMs = passes.resolveGpuMs;
+    t.evidencePixels = frame.pixelCount();
+    if (onDemand) im.keepFootprint(group, camera, frame, *light);
   }
+  frame.meta = frameMeta(scene, light, fit, method, deviceName());
+  if (t.partialEvidence) {
+    frame.meta["evidence"] = "partial";
+    frame.meta["evidence_pixels"] = t.evidencePixels;
+  }
+  t.shadowGpuMs = passes.shadowGpuMs;
+  t.visibilityGpuMs = im.visibilityGpuMs;
+  t.cameraGpuMs = im.visibilityGpuMs + t.evidenceGpuMs;
+  t.lookupGpuMs = light ? passes.lookupGpuMs : 0.0;
+  t.momentsGpuMs = isMomentFilter(method.filter) ? passes.momentsGpuMs : 0.0;
+  t.renderWallMs = msSince(t0);
   return frame;
 }
 

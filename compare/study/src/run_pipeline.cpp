@@ -10,6 +10,7 @@
 #include <optional>
 
 #include "shadowlab/compare/run_pipeline.h"
+#include "shadowlab/compare/classify.h"
 #include "shadowlab/scenes/error.h"
 #include "shadowlab/scenes/io.h"
 
@@ -89,6 +90,18 @@ Frame ReferenceCache::get(const Scene& scene, const ReferenceOptions& options, b
   writeFrameExr(frame, path);  // atomic: concurrent runs never see a truncated entry
   if (traced) *traced = true;
   return frame;
+}
+
+EvidenceSelector disagreementSelector(const Frame& reference, const std::string& light) {
+  const std::string name = "light." + light + ".vis";
+  if (light.empty() || !reference.has(name) || reference.get(name).size() != reference.pixelCount()) return {};
+  const float* refVis = reference.get(name).data();
+  const size_t n = reference.pixelCount();
+  return [refVis, n](const uint8_t* vis8, int width, int height, std::vector<uint32_t>& pixels) {
+    if (size_t(width) * size_t(height) != n) return;  // another frame: the rasterizer's own pixels only
+    for (size_t i = 0; i < n; ++i)
+      if (litDecision(refVis[i]) != (vis8[i] >= 128)) pixels.push_back(uint32_t(i));
+  };
 }
 
 RunResult runPipeline(const Scene& scene, const Method& method, Rasterizer& rasterizer, ReferenceCache& cache,

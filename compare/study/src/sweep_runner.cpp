@@ -26,8 +26,9 @@ double msSince(Clock::time_point t0) { return std::chrono::duration<double, std:
 
 class PipelineRunner final : public SweepRunner {
  public:
-  PipelineRunner(const std::string& cacheDir, int spp, const std::string& device, size_t keepReferences)
-      : cache_(cacheDir), keep_(keepReferences < 1 ? 1 : keepReferences) {
+  PipelineRunner(const std::string& cacheDir, int spp, const std::string& device, size_t keepReferences,
+                 bool fullEvidence)
+      : cache_(cacheDir), keep_(keepReferences < 1 ? 1 : keepReferences), fullEvidence_(fullEvidence) {
     referenceOptions_.spp = spp;
     deviceOptions_.device = device;
   }
@@ -36,11 +37,15 @@ class PipelineRunner final : public SweepRunner {
                      const std::string& imagesDir) override {
     const Frame& reference = referenceFor(scene);
     RasterTimings t;
-    Frame raster = rasterizer().render(scene, method, light, &t);
     CompareOptions options;
     options.light = scene.lightOrDefault(light);
-    Classification classification;
     const bool keep = !imagesDir.empty();
+    // A row that keeps no pictures needs the metrics only: evidence on demand (raster.h), the
+    // same metrics (tests/compare_on_demand_test.cpp). Pictures and --full-evidence: every channel.
+    const EvidenceSelector select =
+        keep || fullEvidence_ ? EvidenceSelector() : disagreementSelector(reference, options.light);
+    Frame raster = rasterizer().render(scene, method, light, &t, nullptr, select ? &select : nullptr);
+    Classification classification;
     const auto c0 = Clock::now();
     Metrics m = compareFrames(reference, raster, options, keep ? &classification : nullptr);
     const double compareMs = msSince(c0);
@@ -51,15 +56,13 @@ class PipelineRunner final : public SweepRunner {
     rasterizer().recycle(std::move(raster));  // the next row's planes, without fresh memory
     SweepRunOutput out;
     out.metrics = m.toJson();
-    out.timings = {{timing::kShadowGpuMs, t.shadowGpuMs},
-                   {timing::kCameraGpuMs, t.cameraGpuMs},
-                   {timing::kVisibilityGpuMs, t.visibilityGpuMs},
-                   {timing::kLookupGpuMs, t.lookupGpuMs},
-                   {timing::kMethodGpuMs, t.methodGpuMs()},
-                   {timing::kMomentsGpuMs, t.momentsGpuMs},
-                   {timing::kReadbackMs, t.readbackMs},
-                   {timing::kRenderWallMs, t.renderWallMs},
-                   {timing::kCompareMs, compareMs}};
+    out.timings = {
+        {timing::kShadowGpuMs, t.shadowGpuMs},         {timing::kCameraGpuMs, t.cameraGpuMs},
+        {timing::kVisibilityGpuMs, t.visibilityGpuMs}, {timing::kLookupGpuMs, t.lookupGpuMs},
+        {timing::kMethodGpuMs, t.methodGpuMs()},       {timing::kMomentsGpuMs, t.momentsGpuMs},
+        {timing::kEvidenceGpuMs, t.evidenceGpuMs},     {timing::kReadbackMs, t.readbackMs},
+        {timing::kRenderWallMs, t.renderWallMs},       {timing::kCompareMs, compareMs},
+    };
     return out;
   }
 
@@ -128,6 +131,7 @@ class PipelineRunner final : public SweepRunner {
   RasterDeviceOptions deviceOptions_;
   std::unique_ptr<Rasterizer> rasterizer_;
   size_t keep_ = 1;
+  bool fullEvidence_ = false;                      // --full-evidence: every row renders the full frame
   std::list<std::pair<std::string, Frame>> held_;  // reference hash -> frame, most recently used first
   int traced_ = 0, loaded_ = 0;
   double referenceWallSeconds_ = 0;
@@ -136,8 +140,8 @@ class PipelineRunner final : public SweepRunner {
 }  // namespace
 
 std::unique_ptr<SweepRunner> makePipelineRunner(const std::string& cacheDir, int spp, const std::string& device,
-                                                size_t keepReferences) {
-  return std::make_unique<PipelineRunner>(cacheDir, spp, device, keepReferences);
+                                                size_t keepReferences, bool fullEvidence) {
+  return std::make_unique<PipelineRunner>(cacheDir, spp, device, keepReferences, fullEvidence);
 }
 
 }  // namespace shadowlab

@@ -2,6 +2,7 @@
 // Vulkan 1.3 headless shadow-mapping rasterizer (lavapipe by default).
 // No Vulkan header leaks through this interface.
 #include <cstdint>
+#include <functional>
 #include <memory>
 #include <string>
 #include <vector>
@@ -32,9 +33,23 @@ struct RasterTimings {
   // moments_gpu_ms: the filterable maps' moments pass, the part of shadowGpuMs after the map
   // layers are drawn (0 for the other filters).
   double momentsGpuMs = 0;
-  double readbackMs = 0;    // readback_ms: CPU wall time to copy the outputs back into the Frame
-  double renderWallMs = 0;  // render_wall_ms: CPU wall time of render() (names: compare/TIMINGS.md)
+  // evidence_gpu_ms: GPU timestamps of the evidence resolve, the part of cameraGpuMs after the
+  // visibility buffer: the full-screen resolve, or with evidence on demand the resolve of the
+  // listed pixels only (evidencePixels of them; the full path: every pixel).
+  double evidenceGpuMs = 0;
+  uint64_t evidencePixels = 0;
+  bool partialEvidence = false;  // the frame's evidence planes hold the listed pixels only
+  double readbackMs = 0;         // readback_ms: CPU wall time to copy the outputs back into the Frame
+  double renderWallMs = 0;       // render_wall_ms: CPU wall time of render() (names: compare/TIMINGS.md)
 };
+
+// Evidence on demand (raster/METHODS.md): given the lookup pass's bytes (`vis8`, row-major,
+// width x height; 255 only where the visibility is exactly 1, 0 only where it is exactly 0, 128..255
+// exactly where it is >= 0.5), appends to `pixels` the pixel indices (y * width + x) whose evidence
+// channels the caller will read; the rasterizer adds every fractional pixel (a byte other than 0
+// and 255) itself. The study layer passes one that lists where the lit decision disagrees with the
+// reference's; raster does not know why a pixel is listed.
+using EvidenceSelector = std::function<void(const uint8_t* vis8, int width, int height, std::vector<uint32_t>& pixels)>;
 
 class Rasterizer {
  public:
@@ -52,7 +67,8 @@ class Rasterizer {
   void recycle(Frame&& frame);
   // The last render()'s lookup pass output: the light's visibility, one byte (UNORM, 255 = lit)
   // per pixel, row-major; empty before the first render, stale after a render without a light.
-  // It equals the frame's vis channel converted to 8 bits (tests/raster_lookup_test.cpp).
+  // It equals the frame's vis channel converted to 8 bits, 255 only where vis is exactly 1 and 0
+  // only where it is exactly 0, 128..255 exactly where vis >= 0.5 (tests/raster_lookup_test.cpp).
   std::vector<uint8_t> lookupVisibility() const;
 
   // Renders `scene` with `method` for the light named `light` (empty: the scene's first light)
@@ -64,8 +80,19 @@ class Rasterizer {
   // cascaded crops and the cascade splits (picked by the pixel's view depth along this camera's
   // forward axis). The image is always rendered from scene.camera, so a fixed scene.camera with a
   // moving fit camera shows the same surface point in every pixel of every frame (shimmer).
+  // `select` (optional): evidence on demand. When the scene has a light and no projectors and the
+  // planes that do not depend on bias or filter (hit, object_id, prim_id, m, cascade) are kept
+  // from an earlier render of the same group (the same scene, camera and light layers: map size,
+  // fit, light; a render with `select` keeps them), the frame is made from the lookup pass (vis
+  // exact at every byte 0 or 255), those kept planes and one resolve of the listed pixels only: the
+  // other evidence channels (receiver_depth, map_depth, bias_depth, bias_world, occluder_id,
+  // occluder_prim, in_map, the moment channels) are 0 except at the listed and fractional pixels,
+  // and meta "evidence" is "partial" ("evidence_pixels": how many). compareFrames gives the same
+  // metrics as on the full frame when `select` lists every disagreement. Otherwise (no selector,
+  // projectors, a group not kept yet) the full frame, as without it.
   Frame render(const Scene& scene, const Method& method, const std::string& light = "",
-               RasterTimings* timings = nullptr, const Camera* fitCamera = nullptr);
+               RasterTimings* timings = nullptr, const Camera* fitCamera = nullptr,
+               const EvidenceSelector* select = nullptr);
 
  private:
   struct Impl;

@@ -53,7 +53,11 @@ SHADOWLAB_CONST(int, kSpecAdaptive, 7)        // 0/1: bias.adaptive
 // 0/1: the lookup pass (rasterizer.cpp, pass 4): the light's visibility alone into one R8
 // attachment, the evidence and the projectors compiled out (compare/TIMINGS.md, lookup_gpu_ms).
 SHADOWLAB_CONST(int, kSpecLookupOnly, 8)
-SHADOWLAB_CONST(int, kSpecCount, 9)
+// 0/1: the evidence pass (rasterizer.cpp, pass 5): the resolve over a compacted list of pixels
+// (EvidencePixels below), fragment k of a compact target resolving listed pixel k instead of the
+// pixel under gl_FragCoord; the projectors compiled out (raster/METHODS.md, "Evidence on demand").
+SHADOWLAB_CONST(int, kSpecCompact, 9)
+SHADOWLAB_CONST(int, kSpecCount, 10)
 
 // The descriptor set (set 0), one row per binding: X(Name, binding, kind). The kinds name
 // Vulkan descriptor types (rasterizer.cpp maps them); the set layout, the pool and the writes
@@ -71,7 +75,8 @@ SHADOWLAB_CONST(int, kSpecCount, 9)
   X(ProjectorTexels, 9, StorageBuffer)     /* projector images, RGB floats */                    \
   X(OutPlanes, 10, StorageBuffer)          /* the projector channels, one plane each */          \
   X(MomentsRows, 11, CombinedImageSampler) /* moments pass: the rows-blurred moments, NEAREST */ \
-  X(Moments, 12, CombinedImageSampler)     /* the blurred moments per light layer, LINEAR */
+  X(Moments, 12, CombinedImageSampler)     /* the blurred moments per light layer, LINEAR */     \
+  X(EvidencePixels, 13, StorageBuffer)     /* evidence pass: the listed pixels (y * width + x) */
 #define SHADOWLAB_ABI_BINDING(name, binding, kind) SHADOWLAB_CONST(int, kBinding##name, binding)
 SHADOWLAB_RESOLVE_BINDINGS(SHADOWLAB_ABI_BINDING)
 #undef SHADOWLAB_ABI_BINDING

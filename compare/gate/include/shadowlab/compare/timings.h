@@ -15,17 +15,19 @@ constexpr const char* kVisibilityGpuMs = "visibility_gpu_ms";  // the visibility
 constexpr const char* kLookupGpuMs = "lookup_gpu_ms";    // GPU timestamps: the method's visibility alone, 1 byte/pixel
 constexpr const char* kMethodGpuMs = "method_gpu_ms";    // shadow_gpu_ms + lookup_gpu_ms: what an engine pays
 constexpr const char* kMomentsGpuMs = "moments_gpu_ms";  // the moments pass's part of shadow_gpu_ms (filterable maps)
-constexpr const char* kReadbackMs = "readback_ms";       // CPU wall: outputs copied into the Frame
-constexpr const char* kRenderWallMs = "render_wall_ms";  // CPU wall of Rasterizer::render
-constexpr const char* kCompareMs = "compare_ms";         // CPU wall of compareFrames
-constexpr const char* kReferenceMs = "reference_ms";     // CPU wall: reference traced or read from the cache
-constexpr const char* kConfigWallMs = "config_wall_ms";  // one configuration end to end
+constexpr const char* kEvidenceGpuMs = "evidence_gpu_ms";  // camera_gpu_ms - visibility: the evidence resolve
+constexpr const char* kReadbackMs = "readback_ms";         // CPU wall: outputs copied into the Frame
+constexpr const char* kRenderWallMs = "render_wall_ms";    // CPU wall of Rasterizer::render
+constexpr const char* kCompareMs = "compare_ms";           // CPU wall of compareFrames
+constexpr const char* kReferenceMs = "reference_ms";       // CPU wall: reference traced or read from the cache
+constexpr const char* kConfigWallMs = "config_wall_ms";    // one configuration end to end
 constexpr const char* kCommandWallMs = "command_wall_ms";  // the whole command (stability.json)
 
 // True for a current per-row timing name above.
 inline bool isTimingName(const std::string& key) {
-  for (const char* name : {kShadowGpuMs, kCameraGpuMs, kVisibilityGpuMs, kLookupGpuMs, kMethodGpuMs, kMomentsGpuMs,
-                           kReadbackMs, kRenderWallMs, kCompareMs, kReferenceMs, kConfigWallMs, kCommandWallMs})
+  for (const char* name :
+       {kShadowGpuMs, kCameraGpuMs, kVisibilityGpuMs, kLookupGpuMs, kMethodGpuMs, kMomentsGpuMs, kEvidenceGpuMs,
+        kReadbackMs, kRenderWallMs, kCompareMs, kReferenceMs, kConfigWallMs, kCommandWallMs})
     if (key == name) return true;
   return false;
 }

@@ -163,8 +163,11 @@ class SweepRunner {
 // whose name contains `device`; empty = lavapipe), compareFrames. `keepReferences`: how many scenes'
 // reference frames stay in memory (a sweep visits scenes one after another and needs 1; shadowlab
 // tune evaluates each configuration on every scene in turn and keeps one per scene).
+// Rows that keep no pictures render with evidence on demand (raster.h, `disagreementSelector`):
+// the same metrics, the evidence resolved only where the decisions disagree; `fullEvidence`
+// (--full-evidence) renders every row's full frame instead.
 std::unique_ptr<SweepRunner> makePipelineRunner(const std::string& cacheDir, int spp, const std::string& device = "",
-                                                size_t keepReferences = 1);
+                                                size_t keepReferences = 1, bool fullEvidence = false);
 
 // The cache folder a sweep into `outDir` uses when none is given: $SHADOWLAB_CACHE, else
 // <parent of outDir>/.shadowlab-cache, so sweeps side by side share their references.

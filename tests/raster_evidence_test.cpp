@@ -1,0 +1,147 @@
+// Evidence on demand (Rasterizer::render with an EvidenceSelector; raster/METHODS.md): the frame
+// made from the lookup pass, the kept planes of the group and the resolve of the listed pixels
+// only (pass 5, resolve.frag with kSpecCompact) must hold, at every listed or fractional pixel,
+// the full resolve's bits in every light channel (hw2x2's implicit LOD and the compact target's
+// quads included), elsewhere the full frame's vis (exactly 0 or 1), hit, object_id, prim_id, m and
+// cascade, and zeros in the other evidence channels.
+#include <gtest/gtest.h>
+
+#include <cstdint>
+#include <cstring>
+#include <string>
+
+#include "shadowlab/raster/raster.h"
+#include "shadowlab/scenes/loader.h"
+#include "support/raster_device.h"
+
+using namespace shadowlab;
+
+namespace {
+
+using RasterEvidence = shadowlab::testing::ValidatedRasterTest;
+
+bool sameBits(float a, float b) { return std::memcmp(&a, &b, sizeof a) == 0; }
+
+Scene smallScene(const std::string& name) {
+  Scene s = loadScene(resolveScenePath(name));
+  s.camera.width = 320;
+  s.camera.height = 180;
+  return s;
+}
+
+struct Check {
+  size_t listed = 0, fractional = 0, mismatches = 0;
+  std::string first;
+};
+
+// Renders `m` fully, then with a selector listing every 7th pixel, and compares the two frames.
+// The first render with a selector keeps the group's planes (a full frame when the group is new);
+// handed back, a partial frame's planes are reused, its evidence planes zeroed again only where it
+// listed pixels (every 5th here, so a value left over would show at the 7th's unlisted pixels).
+Check renderBoth(Rasterizer& r, const Scene& s, const Method& m, bool* partial) {
+  auto everyNth = [](uint32_t step) {
+    return EvidenceSelector([step](const uint8_t*, int width, int height, std::vector<uint32_t>& pixels) {
+      for (uint32_t i = 0; i < uint32_t(width * height); i += step) pixels.push_back(i);
+    });
+  };
+  const EvidenceSelector every5th = everyNth(5), every7th = everyNth(7);
+  r.recycle(r.render(s, m, "", nullptr, nullptr, &every5th));
+  const Frame full = r.render(s, m);
+  RasterTimings t;
+  Frame part = r.render(s, m, "", &t, nullptr, &every7th);
+  *partial = t.partialEvidence;
+  Check c;
+  EXPECT_EQ(full.names, part.names);
+  if (full.names != part.names) return c;
+  const std::string p = "light." + s.lights.front().name + ".";
+  const std::vector<float>& vis = full.get(p + "vis");
+  for (size_t i = 0; i < full.pixelCount(); ++i) {
+    const bool fractional = vis[i] > 0.0f && vis[i] < 1.0f;
+    const bool listed = i % 7 == 0 || fractional;
+    c.listed += listed;
+    c.fractional += fractional;
+    for (size_t k = 0; k < full.names.size(); ++k) {
+      const std::string& name = full.names[k];
+      const bool everywhere = name == "hit" || name == "object_id" || name == "prim_id" || name == p + "vis" ||
+                              name == p + "m" || name == p + "cascade";
+      const float want = listed || everywhere ? full.data[k][i] : 0.0f;
+      if (!sameBits(part.data[k][i], want) && c.mismatches++ == 0)
+        c.first = name + " at pixel " + std::to_string(i) + ": " + std::to_string(part.data[k][i]) + ", full " +
+                  std::to_string(full.data[k][i]);
+    }
+  }
+  r.recycle(std::move(part));  // as a sweep does: the next case's frames reuse its planes
+  return c;
+}
+
+}  // namespace
+
+// Every filter path that reads the map differently (hw2x2's hardware blend with its implicit LOD,
+// gathers, the moments, a blend band between cascades), the receiver plane and the normal offset.
+TEST_F(RasterEvidence, ListedPixelsGetTheFullResolvesBits) {
+  REQUIRE_DEVICE();
+  const Scene sphere = smallScene("sphere_on_plane");
+  struct Case {
+    const char* what;
+    Method m;
+  };
+  std::vector<Case> cases;
+  auto add = [&](const char* what, auto edit) {
+    Method m;
+    m.mapSize = 512;
+    edit(m);
+    cases.push_back({what, m});
+  };
+  add("none", [](Method&) {});
+  add("hw2x2", [](Method& m) { m.filter = Filter::Hw2x2; });
+  add("pcf 5, receiver plane, normal offset", [](Method& m) {
+    m.filter = Filter::Pcf;
+    m.filterSize = 5;
+    m.biasReceiverPlane = true;
+    m.biasNormal = 1.0f;
+  });
+  add("msm", [](Method& m) { m.filter = Filter::Msm; });
+  add("cascades, blend, hw2x2", [](Method& m) {
+    m.fit = Fit::Cascades;
+    m.cascadeCount = 3;
+    m.cascadeBlend = 0.3f;
+    m.filter = Filter::Hw2x2;
+  });
+  int partials = 0;
+  for (const Case& c : cases) {
+    bool partial = false;
+    const Check k = renderBoth(*R, sphere, c.m, &partial);
+    partials += partial;
+    EXPECT_EQ(k.mismatches, 0u) << c.what << "; first: " << k.first;
+    EXPECT_GT(k.listed, 1000u) << c.what;
+    if (c.m.filter != Filter::None) {
+      EXPECT_GT(k.fractional, 0u) << c.what;
+    }
+  }
+  EXPECT_EQ(partials, int(cases.size()));
+}
+
+// Without a selector, with a scene that has projectors, or a selector that is empty: the full frame.
+TEST_F(RasterEvidence, FullFrameWhereOnDemandDoesNotApply) {
+  REQUIRE_DEVICE();
+  EvidenceSelector none = [](const uint8_t*, int, int, std::vector<uint32_t>&) {};
+  Method m;
+  m.mapSize = 256;
+  const Scene projector = smallScene("projector");
+  RasterTimings t;
+  for (int i = 0; i < 2; ++i) {
+    const Frame f = R->render(projector, m, "", &t, nullptr, &none);
+    EXPECT_FALSE(t.partialEvidence);
+    EXPECT_FALSE(f.meta.contains("evidence"));
+  }
+  const Scene sphere = smallScene("sphere_on_plane");
+  R->render(sphere, m, "", &t, nullptr, &none);  // keeps the group
+  const Frame f = R->render(sphere, m, "", &t, nullptr, &none);
+  EXPECT_TRUE(t.partialEvidence);
+  EXPECT_EQ(f.meta.value("evidence", ""), "partial");
+  EXPECT_EQ(f.meta.value("evidence_pixels", uint64_t(0)), t.evidencePixels);
+  EXPECT_LT(t.evidencePixels, f.pixelCount() / 10);
+  R->render(sphere, m, "", &t);
+  EXPECT_FALSE(t.partialEvidence);
+  EXPECT_EQ(t.evidencePixels, uint64_t(sphere.camera.width) * uint64_t(sphere.camera.height));
+}
