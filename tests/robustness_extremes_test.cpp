@@ -48,13 +48,14 @@ std::string writeFile(const fs::path& path, const std::string& text) {
 }
 
 // The methods whose arithmetic differs most at the extremes: every fit (the sphere's, the tight
-// and cascaded crops, LiSPSM's warp, stabilized with a blend band) and the biases and filters that divide by a
-// slope or a derivative.
+// and cascaded crops, LiSPSM's and TSM's warps, stabilized with a blend band) and the biases and filters that divide by
+// a slope or a derivative.
 std::vector<std::pair<std::string, Method>> extremeMethods() {
   std::vector<std::vector<std::pair<std::string, std::string>>> settings = {
       {},
       {{"fit", "tight"}},
       {{"fit", "lispsm"}},
+      {{"fit", "tsm"}},
       {{"fit", "cascades"}},
       {{"fit", "cascades"}, {"cascades.stabilize", "true"}, {"cascades.blend", "0.2"}},
       {{"bias.normal", "1.5"}, {"filter", "pcf"}},

@@ -184,6 +184,12 @@ constexpr double kBiasLimit = 1e6;
 constexpr double kNScaleLimit = 1e6;
 const char* const kNScaleExpected = "a number > 0 and <= 1e6 (1: the optimal n of Wimmer et al.)";
 
+// fit=tsm's 80 % rule: the target line strictly inside the map (0: q on the top line, 1: no warp
+// can reach it), the focus region's end a share of the view depth range past its near end.
+const char* const kTsmFocusExpected =
+    "a number > 0 and < 1 (the map line the focus region ends on; 0.8: the 80 % rule)";
+const char* const kTsmFocusDistanceExpected = "a number > 0 and <= 1 (share of the view depth range)";
+
 // EVSM's warp exponents: the 32F moments clamp them to 42 (raster/METHODS.md); beyond 100 is a typo.
 const char* const kExponentExpected = "a number > 0 and <= 100 (clamped to 42, what 32-bit moments hold)";
 
@@ -209,6 +215,15 @@ const std::vector<std::pair<std::string, Setter>>& setters() {
       {"lispsm.n_scale",
        [](Method& m, const Value& v, const Where& w) {
          m.lispsmNScale = floatIn(v, w, 0.0, kNScaleLimit, true, kNScaleExpected);
+       }},
+      {"tsm.focus",
+       [](Method& m, const Value& v, const Where& w) {
+         m.tsmFocus = floatIn(v, w, 0.0, 1.0, true, kTsmFocusExpected);
+         if (!(m.tsmFocus < 1.0f)) fail(w.file, w.place, v.got(), kTsmFocusExpected);  // open at 1 too
+       }},
+      {"tsm.focus_distance",
+       [](Method& m, const Value& v, const Where& w) {
+         m.tsmFocusDistance = floatIn(v, w, 0.0, 1.0, true, kTsmFocusDistanceExpected);
        }},
       {"bias.constant",
        [](Method& m, const Value& v, const Where& w) {
@@ -324,6 +339,10 @@ void crossCheck(const Method& m, const std::string& file, const std::string& pre
     bad("cascades.blend", nlohmann::json(double(m.cascadeBlend)).dump(), "a number 0..0.5");
   if (!(m.lispsmNScale > 0.0f && m.lispsmNScale <= kNScaleLimit))
     bad("lispsm.n_scale", nlohmann::json(double(m.lispsmNScale)).dump(), kNScaleExpected);
+  if (!(m.tsmFocus > 0.0f && m.tsmFocus < 1.0f))
+    bad("tsm.focus", nlohmann::json(double(m.tsmFocus)).dump(), kTsmFocusExpected);
+  if (!(m.tsmFocusDistance > 0.0f && m.tsmFocusDistance <= 1.0f))
+    bad("tsm.focus_distance", nlohmann::json(double(m.tsmFocusDistance)).dump(), kTsmFocusDistanceExpected);
   if (m.filterBlur < 0 || m.filterBlur > 16) bad("filter.blur", std::to_string(m.filterBlur), "an integer 0..16");
   if (!(m.vsmMinVariance >= 0.0f && m.vsmMinVariance <= 1.0f))
     bad("vsm.min_variance", nlohmann::json(double(m.vsmMinVariance)).dump(), "a number 0..1");
@@ -389,6 +408,8 @@ nlohmann::json methodToJson(const Method& m) {
   j["cascades.blend"] = m.cascadeBlend;
   j["cascades.stabilize"] = m.cascadeStabilize;
   j["lispsm.n_scale"] = m.lispsmNScale;
+  j["tsm.focus"] = m.tsmFocus;
+  j["tsm.focus_distance"] = m.tsmFocusDistance;
   j["bias.constant"] = m.biasConstant;
   j["bias.slope"] = m.biasSlope;
   j["bias.clamp"] = m.biasClamp;

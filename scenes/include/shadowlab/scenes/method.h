@@ -37,7 +37,12 @@ struct Method {
   bool cascadeStabilize = false;  // cascades.stabilize: constant-size crops snapped to whole texels
   // Light-space perspective shadow maps (fit=lispsm, directional lights): the warp's projection
   // center lies lispsmNScale * n_opt before the body's near face (larger: closer to uniform).
-  float lispsmNScale = 1.0f;       // lispsm.n_scale: > 0, <= 1e6
+  float lispsmNScale = 1.0f;  // lispsm.n_scale: > 0, <= 1e6
+  // Trapezoidal shadow maps (fit=tsm, directional lights; raster/METHODS.md): the 80 % rule maps
+  // the end of the focus region (tsmFocusDistance of the view depth range, from its near end) to
+  // the map line tsmFocus (0.8: the paper's 80 % line).
+  float tsmFocus = 0.8f;           // tsm.focus: (0, 1)
+  float tsmFocusDistance = 0.5f;   // tsm.focus_distance: (0, 1]
   float biasConstant = 0.0f;       // bias.constant: Vulkan depthBiasConstantFactor (units of r)
   float biasSlope = 1.5f;          // bias.slope: Vulkan depthBiasSlopeFactor
   float biasClamp = 0.0f;          // bias.clamp: Vulkan depthBiasClamp (0 = no clamp)
