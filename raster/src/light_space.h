@@ -33,7 +33,9 @@ struct LightSpace {
 // whole texels). Fit::Lispsm: the light-space perspective warp of lispsm.h of the view
 // frustum's part of the scene (in a basis rotated about the light so that y follows the view
 // direction), one perspective layer; where the warp is negligible (view nearly along the light)
-// exactly Fit::Tight. The depth range is always the scene box's in light space: casters between the
+// exactly Fit::Tight. Fit::Tsm: the trapezoidal warp of tsm.h (Martin & Tan) of the same part of
+// the scene, one perspective layer; with no center line or no eta for the 80 % rule, exactly
+// Fit::Tight. The depth range is always the scene box's in light space: casters between the
 // light and the slice still cast. Spot: perspective with fov = cone angle, near = light.nearPlane,
 // far = the farthest corner of the scene's box. Point: six 90-degree faces.
 // `fitCamera` is the camera the tight and cascaded fits (and their splits) follow; normally

@@ -18,8 +18,8 @@ namespace shadowlab::raster {
 // (v = 0 on the map's top row), depth in [0,1] from near to far, w > 0 in front.
 struct MapLayer {
   glm::mat4 texFromWorld{1.0f};
-  // World size of one texel at w = 1 (orthographic: everywhere; fit=lispsm: an upper bound of the
-  // texel's larger side per unit of w, see lispsm.h).
+  // World size of one texel at w = 1 (orthographic: everywhere; fit=lispsm, fit=tsm: an upper bound
+  // of the texel's larger side per unit of w, see lispsm.h, tsm.h).
   float texelWorldPerW = 0;
 };
 
