@@ -56,8 +56,8 @@ struct TsmMap {
   glm::dmat4 texFromLight{1.0};
   // The light's own depth, unwarped: depth = dot(depthFromLight, (p, 1)) = (zMax - z) / (zMax - zMin).
   glm::dvec4 depthFromLight{0.0};
-  // An upper bound of a texel's larger side per unit of w (world units), exact at the base's
-  // center: max(top width, lambda sqrt(1 + slope^2)) / mapSize, slope the steeper side's.
+  // An upper bound of a texel's larger side per unit of w (world units): max(top width,
+  // lambda sqrt(1 + slope^2)) / mapSize, slope the steeper side's against the center line.
   double texelWorldPerW = 0;
 };
 TsmMap tsmFit(const std::vector<glm::dvec3>& hull, glm::dvec2 nearCenter, glm::dvec2 farCenter, glm::dvec2 focusPoint,
