@@ -108,6 +108,30 @@ TEST_F(TsmVsReference, LowerFootprintThanTightOnLongViewsFloor) {
   EXPECT_EQ(outside, 0u);
   EXPECT_GT(differ, seen * 9 / 10);
 
+  // The depth is the light's own, not the warp's (Martin & Tan): the receiver depth is tight's
+  // (the same light-space z range) to float rounding, and where the ground lights itself the map
+  // holds that same depth (warped depth would be it over w, w up to 1 + lambda / eta here).
+  const auto& recvTight = rasTight.get("light." + light + ".receiver_depth");
+  const auto& recvTsm = rasTsm.get("light." + light + ".receiver_depth");
+  const auto& mapTsm = rasTsm.get("light." + light + ".map_depth");
+  const auto& visTsm = rasTsm.get("light." + light + ".vis");
+  const auto& object = rasTsm.get("object_id");
+  double worstReceiver = 0.0;
+  std::vector<double> selfGap;
+  for (size_t i = 0; i < hit.size(); ++i) {
+    if (hit[i] < 0.5f) continue;
+    worstReceiver = std::max(worstReceiver, double(std::abs(recvTight[i] - recvTsm[i])));
+    if (object[i] == ground && visTsm[i] > 0.5f) selfGap.push_back(std::abs(double(mapTsm[i]) - double(recvTsm[i])));
+  }
+  ASSERT_GT(selfGap.size(), 10000u);
+  std::nth_element(selfGap.begin(), selfGap.begin() + std::ptrdiff_t(selfGap.size() / 2), selfGap.end());
+  std::printf("  receiver depth |tsm - tight| max %.2e; lit ground |map - receiver| median %.2e\n", worstReceiver,
+              selfGap[selfGap.size() / 2]);
+  EXPECT_LT(worstReceiver, 1e-5);
+  // Measured: 1.8e-7 and 3.7e-4 (the slope bias, 1.5 depth slopes per texel, and the lookup's
+  // offset from the texel centre); the warped depth L / w would put the gap at L (1 - 1 / w).
+  EXPECT_LT(selfGap[selfGap.size() / 2], 2e-3);
+
   // tsm.focus_distance 0.7: the focus region's end further out on the 0.8 line, a weaker warp: the
   // floor's m_p95 between the two (measured 6.6). At 1 the whole depth range would have to fit
   // above the 0.8 line, which the uniform map already gives it: no eta, fit=tight bit for bit.

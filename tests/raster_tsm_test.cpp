@@ -230,4 +230,12 @@ TEST(RasterTsm, ViewAlongTheLightFallsBackToTightsMatrix) {
   FrameLayers b = fitFrameLayers(s, &s.lights[0], tsm, s.camera);
   EXPECT_NE(a.layers[0].texFromWorld, b.layers[0].texFromWorld);
   EXPECT_NE(b.layers[0].texFromWorld[0][3], 0.0f);
+  // Its depth is the light's own: tight's (affine, w = 1) depth row, the same light-space z range.
+  ASSERT_TRUE(b.layers[0].lightDepth);
+  EXPECT_FALSE(a.layers[0].lightDepth);
+  const glm::mat4& t = a.layers[0].texFromWorld;
+  for (int c = 0; c < 4; ++c) EXPECT_NEAR(b.layers[0].depthFromWorld[c], t[c][2], 1e-6) << c;
+  EXPECT_EQ(resolveSpecialization(s, &s.lights[0], tsm, b)[raster::abi::kSpecLightDepth], 1u);
+  EXPECT_EQ(resolveSpecialization(s, &s.lights[0], tight, a)[raster::abi::kSpecLightDepth], 0u);
+  EXPECT_EQ(packResolveParams(s, &s.lights[0], tsm, s.camera, b, {}).lightDepth, b.layers[0].depthFromWorld);
 }

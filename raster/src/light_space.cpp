@@ -171,6 +171,10 @@ bool tsmLayer(const Scene& scene, const Camera& camera, const glm::mat4& lightVi
   if (!map.valid || !(map.lambda / map.eta >= kTsmMinWarp)) return false;
   layer.texFromWorld = glm::mat4(map.texFromLight * lightView);
   layer.texelWorldPerW = float(map.texelWorldPerW);
+  // The depth is the light's own (Martin & Tan): the shadow pass writes it, the resolve compares
+  // it; texFromWorld's z / w (the same depth over w) only places the vertices for the clipper.
+  layer.lightDepth = true;
+  layer.depthFromWorld = glm::vec4(map.depthFromLight * lightView);  // a row: (depth row) * lightView
   return true;
 }
 
