@@ -5,6 +5,8 @@
 //   the map's top row), depth in [0,1] from near to far (Vulkan), w > 0 in front.
 // The shadow pass renders layer i with clipFromTex() * texFromWorld, so texel (x, y) of the map
 // covers u in [x, x+1) / size, v in [y, y+1) / size exactly.
+// A layer with MapLayer::lightDepth (fit=tsm) takes its depth from depthFromWorld instead
+// (resolve_params.h): the light's own, unwarped.
 #include <vector>
 
 #include <glm/glm.hpp>

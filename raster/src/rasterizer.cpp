@@ -116,8 +116,8 @@ struct DrawPush {
   glm::mat4 clipFromWorld;
   uint32_t objectIndex, triangleBase, pad0, pad1;
   // id_light_depth.vert/.frag only (layers with MapLayer::lightDepth): the light's depth row and the
-  // depth bias the fragment shader applies (x bias.constant * r, 0 r for a float format: w = 1 and
-  // x the constant factor; y bias.slope, z bias.clamp).
+  // depth bias the fragment shader applies: x bias.constant * r (a float format: w = 1 and x the
+  // constant factor alone, r from the depth's exponent in the shader), y bias.slope, z bias.clamp.
   glm::vec4 depthRow{0.0f}, depthBias{0.0f};
 };
 

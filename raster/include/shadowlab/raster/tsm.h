@@ -55,6 +55,8 @@ struct TsmMap {
   // base), depth*w = (zMax - z) / (zMax - zMin): depth = that / w, the order along a light ray kept.
   glm::dmat4 texFromLight{1.0};
   // The light's own depth, unwarped: depth = dot(depthFromLight, (p, 1)) = (zMax - z) / (zMax - zMin).
+  // fit=tsm's map holds this one (MapLayer::lightDepth), as the paper does: texFromLight's z / w
+  // only places the vertices for the clipper.
   glm::dvec4 depthFromLight{0.0};
   // An upper bound of a texel's larger side per unit of w (world units): max(top width,
   // lambda sqrt(1 + slope^2)) / mapSize, slope the steeper side's against the center line.
