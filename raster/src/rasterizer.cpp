@@ -180,7 +180,8 @@ constexpr VkShaderStageFlags kBindingStages = VK_SHADER_STAGE_FRAGMENT_BIT;
 // (alpha cutoff, one-sided back faces), for the shadow pass and for the camera pass.
 struct IdPipelines {
   VkPipeline shadowPlain, shadowTested, cameraPlain, cameraTested;
-  VkPipeline shadowLightDepth = VK_NULL_HANDLE;  // light-depth layers (fit=tsm): every draw, material tests on
+  // Light-depth layers (fit=tsm): the same two, with id_light_depth.vert/.frag.
+  VkPipeline shadowLightDepthPlain = VK_NULL_HANDLE, shadowLightDepthTested = VK_NULL_HANDLE;
 };
 
 struct Rasterizer::Impl {
@@ -366,12 +367,12 @@ VkPipeline Rasterizer::Impl::idPipeline(VkFormat format, bool depthClamp, bool m
   d.layout = pipelineLayout.get();
   d.bindings = {{0, 5 * sizeof(float), VK_VERTEX_INPUT_RATE_VERTEX}};
   d.attributes = {{0, 0, VK_FORMAT_R32G32B32_SFLOAT, 0}};
-  if (materialTests) d.attributes.push_back({1, 0, VK_FORMAT_R32G32_SFLOAT, 3 * sizeof(float)});
+  if (materialTests || lightDepth) d.attributes.push_back({1, 0, VK_FORMAT_R32G32_SFLOAT, 3 * sizeof(float)});
   d.colorFormats = {kIdFormat};
   d.depthFormat = format;
   d.depthClamp = depthClamp;
   d.depthBias = depthBias;
-  if (materialTests && !lightDepth) d.fragmentSpecialization = {1u};
+  if (materialTests || lightDepth) d.fragmentSpecialization = {materialTests ? 1u : 0u};
   return idPipelines.emplace(key, vk::createGraphicsPipeline(*context, d)).first->second.get();
 }
 
@@ -518,8 +519,8 @@ void Rasterizer::Impl::record(VkCommandBuffer cmd, const std::vector<LayerDraw>&
 
   // Plain draws first, then those that need the material tests (discard turns early depth
   // testing off, so only the draws that need it pay for it).
-  // A light-depth layer draws everything with its one pipeline and the depth bias in the push
-  // constants (its fragment shader writes the depth, which replaces the rasterizer's bias).
+  // A light-depth layer draws with its own pipelines and the depth bias in the push constants (its
+  // fragment shader writes the depth, which replaces the rasterizer's bias).
   glm::vec4 shaderBias(method.biasConstant * raster::depthResolution(method.mapFormat), method.biasSlope,
                        method.biasClamp, raster::depthResolution(method.mapFormat) > 0.0f ? 0.0f : 1.0f);
   if (shaderBias.w > 0.5f) shaderBias.x = method.biasConstant;
@@ -534,9 +535,8 @@ void Rasterizer::Impl::record(VkCommandBuffer cmd, const std::vector<LayerDraw>&
         bool backCulled = cull == VK_CULL_MODE_BACK_BIT;
         if (!shadowPass && d.allOneSided) cull = VK_CULL_MODE_BACK_BIT, backCulled = true;
         bool needsTests = d.hasAlpha || (d.anyOneSided && !backCulled);
-        // A light-depth layer: one pipeline (material tests on) for every draw, in the first round.
-        if (lightDepth ? tested == 1 : needsTests != (tested == 1)) continue;
-        VkPipeline p = lightDepth   ? pipes.shadowLightDepth
+        if (needsTests != (tested == 1)) continue;
+        VkPipeline p = lightDepth   ? (needsTests ? pipes.shadowLightDepthTested : pipes.shadowLightDepthPlain)
                        : shadowPass ? (needsTests ? pipes.shadowTested : pipes.shadowPlain)
                                     : (needsTests ? pipes.cameraTested : pipes.cameraPlain);
         if (p != bound) vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_GRAPHICS, p), bound = p;
@@ -936,7 +936,10 @@ Rasterizer::Impl::FramePipelines Rasterizer::Impl::pipelinesFor(const Method& me
   p.ids = {idPipeline(mapFormat, depthClamp, false, true), idPipeline(mapFormat, depthClamp, true, true),
            idPipeline(kCameraDepthFormat, false, false, false), idPipeline(kCameraDepthFormat, false, true, false)};
   for (const raster::MapLayer& l : layers.layers)
-    if (l.lightDepth) p.ids.shadowLightDepth = idPipeline(mapFormat, depthClamp, true, false, true);
+    if (l.lightDepth) {
+      p.ids.shadowLightDepthPlain = idPipeline(mapFormat, depthClamp, false, false, true);
+      p.ids.shadowLightDepthTested = idPipeline(mapFormat, depthClamp, true, false, true);
+    }
   p.resolve = resolvePipeline(spec);
   if (spec[abi::kSpecLightType] != uint32_t(abi::kLightNone)) {
     // The lookup: the same specialization, the evidence and the projectors compiled out.
