@@ -1,6 +1,6 @@
 // Evidence on demand end to end (raster/METHODS.md "Evidence on demand", compare/SWEEPS.md): on
 // every bundled scene at 160x90, under a method set covering every filter, cascades with a blend
-// band, lispsm, the receiver plane, adaptive and normal-offset biases, d32f, a spot and a point
+// band, lispsm, psm, tsm, the receiver plane, adaptive and normal-offset biases, d32f, a spot and a point
 // light, the metrics of compareFrames on the on-demand frame (the sweep's selector,
 // disagreementSelector) equal those of the full frame exactly, class by class (timings are not
 // metrics). A selector that drops the disagreeing pixels must change them.
@@ -52,7 +52,7 @@ struct Case {
 };
 
 // Groups of configurations that share the light's layers (so all but a group's first frame are
-// on demand): the default fit with every filter and bias, cascades, lispsm, the spot, the point.
+// on demand): the default fit with every filter and bias, cascades, lispsm, psm, tsm, the spot, the point.
 std::vector<Case> cases() {
   std::vector<Case> out;
   auto add = [&](std::string what, int light, auto edit) {
@@ -101,6 +101,12 @@ std::vector<Case> cases() {
       m.fit = Fit::Lispsm;
       m.filter = f;
     });
+  for (Fit fit : {Fit::Psm, Fit::Tsm})
+    for (Filter f : {Filter::None, Filter::Pcf})
+      add(std::string(toString(fit)) + ", " + toString(f), 0, [fit, f](Method& m) {
+        m.fit = fit;
+        m.filter = f;
+      });
   for (int light : {1, 2})
     for (Filter f : {Filter::None, Filter::Hw2x2, Filter::Pcf})
       add(std::string(light == 1 ? "spot, " : "point, ") + toString(f), light, [f](Method& m) { m.filter = f; });
@@ -122,9 +128,10 @@ TEST_F(OnDemand, SameMetricsAsTheFullFrameOnEveryBundledScene) {
   for (const std::string& name : bundledSceneNames()) {
     const Scene base = tinyScene(name);
     if (base.lights.empty()) continue;  // a projector-only scene: the full path (tested in raster_evidence)
-    // Five groups of light layers (the default fit, cascades, lispsm, the spot, the point): each
-    // group's first frame is a full one that keeps its planes. Projectors: every frame full.
-    if (base.projectors.empty()) expectedPartial += int(all.size()) - 5;
+    // Seven groups of light layers (the default fit, cascades, lispsm, psm, tsm, the spot, the
+    // point): each group's first frame is a full one that keeps its planes. Projectors: every
+    // frame full.
+    if (base.projectors.empty()) expectedPartial += int(all.size()) - 7;
     for (int light = 0; light < 3; ++light) {
       const Scene s = withLight(base, light);
       const std::string lightName = s.lights.front().name;

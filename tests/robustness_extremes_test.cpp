@@ -48,7 +48,7 @@ std::string writeFile(const fs::path& path, const std::string& text) {
 }
 
 // The methods whose arithmetic differs most at the extremes: every fit (the sphere's, the tight
-// and cascaded crops, LiSPSM's and PSM's warps, stabilized with a blend band) and the biases and filters that divide by
+// and cascaded crops, LiSPSM's, PSM's and TSM's warps, stabilized with a blend band) and the biases and filters that divide by
 // a slope or a derivative.
 std::vector<std::pair<std::string, Method>> extremeMethods() {
   std::vector<std::vector<std::pair<std::string, std::string>>> settings = {
@@ -56,6 +56,7 @@ std::vector<std::pair<std::string, Method>> extremeMethods() {
       {{"fit", "tight"}},
       {{"fit", "lispsm"}},
       {{"fit", "psm"}},
+      {{"fit", "tsm"}},
       {{"fit", "cascades"}},
       {{"fit", "cascades"}, {"cascades.stabilize", "true"}, {"cascades.blend", "0.2"}},
       {{"bias.normal", "1.5"}, {"filter", "pcf"}},

@@ -61,6 +61,8 @@ TEST(ScenesMethod, KeysInDocumentationOrder) {
                                                     "cascades.stabilize",
                                                     "lispsm.n_scale",
                                                     "psm.slide_back",
+                                                    "tsm.focus",
+                                                    "tsm.focus_distance",
                                                     "bias.constant",
                                                     "bias.slope",
                                                     "bias.clamp",
@@ -185,7 +187,7 @@ TEST(ScenesMethod, TextErrorsAreExact) {
 // not nlohmann's type_error 316 escaping from the message builder (found by fuzz_method).
 TEST(ScenesMethod, ValueThatIsNotUtf8IsAnInputError) {
   EXPECT_EQ(setError("fit", "cascad\xffhes"),
-            "--set: fit: error: got \"cascad\xef\xbf\xbdhes\"; expected one of sphere, tight, cascades, lispsm, psm");
+            "--set: fit: error: got \"cascad\xef\xbf\xbdhes\"; expected one of sphere, tight, cascades, lispsm, psm, tsm");
   EXPECT_NE(setError("map.size", "\xff\xfe").find("--set: map.size: error: got \""), std::string::npos);
 }
 
@@ -313,7 +315,7 @@ TEST(ScenesMethod, LispsmKeys) {
   EXPECT_EQ(setError("lispsm.n_scale", "inf"), "--set: lispsm.n_scale: error: got \"inf\"; " + expected);
   EXPECT_EQ(setError("lispsm.n_scale", "2e6"), "--set: lispsm.n_scale: error: got \"2e6\"; " + expected);
   EXPECT_EQ(setError("fit", "pssm"),
-            "--set: fit: error: got \"pssm\"; expected one of sphere, tight, cascades, lispsm, psm");
+            "--set: fit: error: got \"pssm\"; expected one of sphere, tight, cascades, lispsm, psm, tsm");
   Method json;
   EXPECT_EQ(errorOf([&] { applyMethodJson(json, "lispsm.n_scale", 0.0, "grid"); }),
             "grid: lispsm.n_scale: error: got 0.0; " + expected);
@@ -357,5 +359,36 @@ TEST(ScenesMethod, PsmKeys) {
   hand.psmSlideBack = std::nanf("");
   EXPECT_THROW(validateMethod(hand, "code"), InputError);
   hand.psmSlideBack = -1.0f;
+  EXPECT_THROW(validateMethod(hand, "code"), InputError);
+}
+
+// fit=tsm and its two keys (the 80 % rule's target line and the focus region's end): defaults 0.8
+// and 0.5, the JSON round trip, and the open ends refused with the key named.
+TEST(ScenesMethod, TsmKeys) {
+  Method d;
+  EXPECT_FLOAT_EQ(d.tsmFocus, 0.8f);
+  EXPECT_FLOAT_EQ(d.tsmFocusDistance, 0.5f);
+  Method m;
+  applyMethodSetting(m, "fit", "tsm", "--set");
+  applyMethodSetting(m, "tsm.focus", "0.7", "--set");
+  applyMethodSetting(m, "tsm.focus_distance", "1", "--set");
+  EXPECT_EQ(m.fit, Fit::Tsm);
+  validateMethod(m, "--set");
+  nlohmann::json j = roundTripped(m);
+  EXPECT_EQ(j["fit"], "tsm");
+  EXPECT_FLOAT_EQ(j["tsm.focus"].get<float>(), 0.7f);
+  EXPECT_EQ(j["tsm.focus_distance"], 1.0);
+  const std::string focus = "expected a number > 0 and < 1 (the map line the focus region ends on; 0.8: the 80 % rule)";
+  for (const char* bad : {"0", "1", "-0.5", "nan", "2"})
+    EXPECT_EQ(setError("tsm.focus", bad), std::string("--set: tsm.focus: error: got \"") + bad + "\"; " + focus);
+  const std::string distance = "expected a number > 0 and <= 1 (share of the view depth range)";
+  for (const char* bad : {"0", "1.5", "inf"})
+    EXPECT_EQ(setError("tsm.focus_distance", bad),
+              std::string("--set: tsm.focus_distance: error: got \"") + bad + "\"; " + distance);
+  Method hand;
+  hand.tsmFocus = 1.0f;
+  EXPECT_THROW(validateMethod(hand, "code"), InputError);
+  hand.tsmFocus = 0.8f;
+  hand.tsmFocusDistance = 0.0f;
   EXPECT_THROW(validateMethod(hand, "code"), InputError);
 }

@@ -30,6 +30,9 @@ layout(constant_id = kSpecLightType) const int kLightType = kLightDirectional;
 // Every light layer is affine (orthographic: texFromWorld's last row is (0, 0, 0, 1)), so w = 1
 // and the divisions by it fold away; the results are the same bits.
 layout(constant_id = kSpecAffine) const bool kAffine = false;
+// The light layers' depth is the light's own (fit=tsm): depth = dot(P.lightDepth, (p, 1)), not
+// texFromWorld's z / w; u, v and w still come from texFromWorld.
+layout(constant_id = kSpecLightDepth) const bool kLightDepth = false;
 // bias.adaptive (adaptiveEpsilon): off, its code is compiled out.
 layout(constant_id = kSpecAdaptive) const bool kAdaptive = false;
 // The lookup pass: what an engine pays for the method, the same lookup and filter as the resolve
@@ -123,17 +126,25 @@ vec3 planePoint(vec2 pixel, vec4 plane) {
   return P.cameraOrigin.xyz + d * (plane.w / dot(d, plane.xyz));
 }
 
-// The layer's homogeneous coordinates of a point; they move by dirMap(v) per unit of v:
-// project(p + v) = project(p) + dirMap(v).
+// The layer's homogeneous coordinates of a point (u w, v w, depth w, w); the first, second and
+// fourth move by dirMap(v) per unit of v, and so does the third unless kLightDepth:
+// project(p + v) = projectStep(l, project(p), v).
 vec4 project(Layer l, vec3 pWorld) {
   vec4 t = l.texFromWorld * vec4(pWorld, 1.0);
   if (kAffine) t.w = 1.0;
+  if (kLightDepth) t.z = dot(P.lightDepth, vec4(pWorld, 1.0)) * t.w;
   return t;
 }
 vec4 dirMap(Layer l, vec3 v) {
   vec4 t = l.texFromWorld[0] * v.x + l.texFromWorld[1] * v.y + l.texFromWorld[2] * v.z;
   if (kAffine) t.w = 0.0;
   return t;
+}
+// kLightDepth: depth * w is the light depth (affine) times w (affine), not affine itself.
+vec4 projectStep(Layer l, vec4 t, vec3 v) {
+  vec4 r = t + dirMap(l, v);
+  if (kLightDepth) r.z = (t.z / t.w + dot(P.lightDepth.xyz, v)) * r.w;
+  return r;
 }
 
 // Lit (1) when the stored depth is not in front of the reference depth.
@@ -283,7 +294,7 @@ float filterVisibility(Lookup L) {
 // tQ = project(q); the tangent points' coordinates follow from it by linearity.
 vec2 planeSlope(Layer l, vec4 tQ, vec3 normal, vec3 e1, float texelWorld) {
   vec3 e2 = cross(normal, e1);
-  vec4 t1 = tQ + dirMap(l, e1 * texelWorld), t2 = tQ + dirMap(l, e2 * texelWorld);
+  vec4 t1 = projectStep(l, tQ, e1 * texelWorld), t2 = projectStep(l, tQ, e2 * texelWorld);
   float gSize = l.size;
   vec3 m0 = vec3(tQ.xy / tQ.w * gSize, tQ.z / tQ.w), m1 = vec3(t1.xy / t1.w * gSize, t1.z / t1.w),
        m2 = vec3(t2.xy / t2.w * gSize, t2.z / t2.w);
@@ -309,7 +320,7 @@ vec3 towardsLight(vec3 p) {
 // scene-scale bias.adaptive_epsilon (world units along the light ray, here in map depth at q) plus
 // one step of the depth format (the stored depth's rounding; the paper's precision term).
 float adaptiveEpsilon(Layer l, vec3 q, vec4 tQ, float depthQ) {
-  vec4 tE = tQ + dirMap(l, towardsLight(q) * P.adaptive.x);
+  vec4 tE = projectStep(l, tQ, towardsLight(q) * P.adaptive.x);
   return max(depthQ - tE.z / tE.w, 0.0) + depthResolution(depthQ);
 }
 
@@ -448,7 +459,7 @@ LightChannels shadeLight(Surface s) {
   // beyond p at the texel centre).
   float biasDepth =
       kAdaptive ? rasterBias + depthP - refAt(L, centerTexel(L)) : P.bias.x + rasterBias + (depthP - h.uvz.z);
-  vec4 tL = tP + dirMap(layer, toLight * h.texelWorld);
+  vec4 tL = projectStep(layer, tP, toLight * h.texelWorld);
   float depthStep = abs(depthP - tL.z / tL.w);
   float worldPerDepth = depthStep > 0.0 ? h.texelWorld / depthStep : 0.0;
 

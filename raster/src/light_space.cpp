@@ -7,6 +7,7 @@
 #include "shadowlab/raster/cascades.h"
 #include "shadowlab/raster/lispsm.h"
 #include "shadowlab/raster/psm.h"
+#include "shadowlab/raster/tsm.h"
 
 #include <glm/gtc/matrix_transform.hpp>
 
@@ -95,6 +96,30 @@ std::vector<std::vector<glm::dvec3>> visibleBody(const Scene& scene, const Camer
 // the view along the light, where the warp has no axis (sin(gamma) = 0, d / n = 0).
 constexpr double kLispsmMinWarp = 1e-3;
 
+// The part of the scene in the fit camera's view frustum, as the union of the frustum's exact
+// intersections with each object's box (lispsm.h; one box for the whole scene would count the
+// empty air around a camera standing inside it as visible, z_n would drop to the near plane): its
+// vertices (world) and their view-depth range [zNear, zFar]. Empty when nothing is in view.
+struct ViewBody {
+  std::vector<glm::dvec3> corners;
+  double zNear = 0, zFar = 0;
+};
+ViewBody viewBody(const Scene& scene, const Camera& camera) {
+  ViewBody body;
+  for (const std::vector<glm::dvec3>& part : visibleBody(scene, camera))
+    body.corners.insert(body.corners.end(), part.begin(), part.end());
+  glm::dvec3 forward64 = glm::normalize(glm::dvec3(camera.lookAt) - glm::dvec3(camera.position));
+  double inf = std::numeric_limits<double>::infinity();
+  body.zNear = inf;
+  body.zFar = -inf;
+  for (const glm::dvec3& c : body.corners) {
+    double depth = glm::dot(c - glm::dvec3(camera.position), forward64);
+    body.zNear = std::min(body.zNear, depth);
+    body.zFar = std::max(body.zFar, depth);
+  }
+  return body;
+}
+
 // fit=lispsm for a directional light; false where it falls back to fit=tight.
 bool lispsmLayer(const Scene& scene, const Camera& camera, const glm::mat4& lightViewFromWorld, const Method& method,
                  MapLayer& layer) {
@@ -102,23 +127,15 @@ bool lispsmLayer(const Scene& scene, const Camera& camera, const glm::mat4& ligh
   LispsmBasis basis = lispsmBasis(lightViewFromWorld, forward);
   if (!(basis.sinGamma > 0.0)) return false;
   glm::mat4 lightFromWorld(basis.lightFromWorld);
-  // The body: the part of the scene in the view frustum, as the union of the frustum's exact
-  // intersections with each object's box (lispsm.h; one box for the whole scene would count the
-  // empty air around a camera standing inside it as visible, z_n would drop to the near plane),
-  // its light-space x/y box clipped to the scene's as fit=tight does, extended towards the light
-  // to the scene bounds so that every caster lies in it. Every visible point is in it.
-  std::vector<glm::dvec3> corners;
-  for (const std::vector<glm::dvec3>& part : visibleBody(scene, camera))
-    corners.insert(corners.end(), part.begin(), part.end());
-  if (corners.empty()) return false;  // nothing of the scene in view: no body to warp for
-  glm::dvec3 forward64 = glm::normalize(glm::dvec3(camera.lookAt) - glm::dvec3(camera.position));
+  // The body: the view frustum's part of the scene (viewBody), its light-space x/y box clipped to
+  // the scene's as fit=tight does, extended towards the light to the scene bounds so that every
+  // caster lies in it. Every visible point is in it.
+  ViewBody body = viewBody(scene, camera);
+  if (body.corners.empty()) return false;  // nothing of the scene in view: no body to warp for
+  double zNear = body.zNear, zFar = body.zFar;
   double inf = std::numeric_limits<double>::infinity();
-  double zNear = inf, zFar = -inf;
   glm::dvec2 lo(inf), hi(-inf);
-  for (const glm::dvec3& c : corners) {
-    double depth = glm::dot(c - glm::dvec3(camera.position), forward64);
-    zNear = std::min(zNear, depth);
-    zFar = std::max(zFar, depth);
+  for (const glm::dvec3& c : body.corners) {
     glm::dvec2 l(basis.lightFromWorld * glm::dvec4(c, 1.0));
     lo = glm::min(lo, l);
     hi = glm::max(hi, l);
@@ -183,6 +200,40 @@ bool psmLayer(const Scene& scene, const Camera& camera, glm::vec3 lightDirection
   return true;
 }
 
+// Trapezoids whose warp is below this strength (lambda / eta: w on the base is 1 + lambda / eta
+// times w on the top, the texels there that much wider) fall back to fit=tight exactly, as fit=lispsm
+// does below kLispsmMinWarp.
+constexpr double kTsmMinWarp = 1e-3;
+
+// fit=tsm for a directional light (tsm.h); false where it falls back to fit=tight: nothing of the
+// scene in view, no center line (the view along the light: the near and far faces' centers project
+// to one point), no eta for the 80 % rule, or a warp below kTsmMinWarp.
+bool tsmLayer(const Scene& scene, const Camera& camera, const glm::mat4& lightViewFromWorld, const Method& method,
+              MapLayer& layer) {
+  ViewBody body = viewBody(scene, camera);
+  if (body.corners.empty()) return false;
+  glm::dmat4 lightView(lightViewFromWorld);
+  std::vector<glm::dvec3> hull;
+  hull.reserve(body.corners.size());
+  for (const glm::dvec3& c : body.corners) hull.push_back(glm::dvec3(lightView * glm::dvec4(c, 1.0)));
+  glm::dvec3 eye(camera.position);
+  glm::dvec3 forward = glm::normalize(glm::dvec3(camera.lookAt) - eye);
+  auto project = [&](double viewDepth) { return glm::dvec2(lightView * glm::dvec4(eye + forward * viewDepth, 1.0)); };
+  double focusDepth = body.zNear + double(method.tsmFocusDistance) * (body.zFar - body.zNear);
+  glm::vec3 sceneMin, sceneMax;
+  sceneBoundsIn(scene, lightViewFromWorld, sceneMin, sceneMax);
+  TsmMap map = tsmFit(hull, project(body.zNear), project(body.zFar), project(focusDepth), double(method.tsmFocus),
+                      double(sceneMin.z), double(sceneMax.z), method.mapSize);
+  if (!map.valid || !(map.lambda / map.eta >= kTsmMinWarp)) return false;
+  layer.texFromWorld = glm::mat4(map.texFromLight * lightView);
+  layer.texelWorldPerW = float(map.texelWorldPerW);
+  // The depth is the light's own (Martin & Tan): the shadow pass writes it, the resolve compares
+  // it; texFromWorld's z / w (the same depth over w) only places the vertices for the clipper.
+  layer.lightDepth = true;
+  layer.depthFromWorld = glm::vec4(map.depthFromLight * lightView);  // a row: (depth row) * lightView
+  return true;
+}
+
 }  // namespace
 
 glm::mat4 clipFromTex() {
@@ -219,10 +270,11 @@ LightSpace fitLight(const Scene& scene, const Light& light, const Method& method
       return out;
     }
     const Camera& camera = fitCamera;
-    if (method.fit == Fit::Lispsm || method.fit == Fit::Psm) {
+    if (method.fit == Fit::Lispsm || method.fit == Fit::Psm || method.fit == Fit::Tsm) {
       MapLayer layer;
       bool warped = method.fit == Fit::Lispsm ? lispsmLayer(scene, camera, viewFromWorld, method, layer)
-                                              : psmLayer(scene, camera, dir, method, layer);
+                    : method.fit == Fit::Psm  ? psmLayer(scene, camera, dir, method, layer)
+                                              : tsmLayer(scene, camera, viewFromWorld, method, layer);
       if (warped) {
         out.layers.push_back(layer);
         return out;

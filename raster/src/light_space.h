@@ -5,6 +5,8 @@
 //   the map's top row), depth in [0,1] from near to far (Vulkan), w > 0 in front.
 // The shadow pass renders layer i with clipFromTex() * texFromWorld, so texel (x, y) of the map
 // covers u in [x, x+1) / size, v in [y, y+1) / size exactly.
+// A layer with MapLayer::lightDepth (fit=tsm) takes its depth from depthFromWorld instead
+// (resolve_params.h): the light's own, unwarped.
 #include <vector>
 
 #include <glm/glm.hpp>
@@ -35,11 +37,14 @@ struct LightSpace {
 // direction), one perspective layer; where the warp is negligible (view nearly along the light)
 // exactly Fit::Tight. Fit::Psm: the perspective shadow map of psm.h, one projective layer in the
 // post-perspective space of the fit camera slid back behind every caster; where its map is
-// (nearly) orthographic (the view along the light) exactly Fit::Tight. The depth range is always the scene box's in
-// light space: casters between the light and the slice still cast. Spot: perspective with fov = cone angle, near =
-// light.nearPlane, far = the farthest corner of the scene's box. Point: six 90-degree faces. `fitCamera` is the camera
-// the tight and cascaded fits (and their splits) follow; normally scene.camera, another one to measure shimmer with a
-// fixed evaluation view (raster.h).
+// (nearly) orthographic (the view along the light) exactly Fit::Tight. Fit::Tsm: the trapezoidal
+// warp of tsm.h (Martin & Tan) of the same part of the scene, one perspective layer; with no
+// center line or no eta for the 80 % rule, exactly Fit::Tight. The depth range is always the
+// scene box's in light space: casters between the light and the slice still cast. Spot:
+// perspective with fov = cone angle, near = light.nearPlane, far = the farthest corner of the
+// scene's box. Point: six 90-degree faces. `fitCamera` is the camera the tight and cascaded fits
+// (and their splits) follow; normally scene.camera, another one to measure shimmer with a fixed
+// evaluation view (raster.h).
 LightSpace fitLight(const Scene& scene, const Light& light, const Method& method, const Camera& fitCamera);
 MapLayer projectorLayer(const Projector& projector, int mapSize);
 

@@ -60,6 +60,8 @@
 #include "id_frag.h"
 #include "id_vert.h"
 #include "fullscreen_vert.h"
+#include "id_light_depth_frag.h"
+#include "id_light_depth_vert.h"
 #include "id_plain_frag.h"
 #include "id_plain_vert.h"
 #include "moments_cols_frag.h"
@@ -130,6 +132,17 @@ constexpr VkFormat kCameraDepthFormat = VK_FORMAT_D32_SFLOAT;
 struct DrawPush {
   glm::mat4 clipFromWorld;
   uint32_t objectIndex, triangleBase, pad0, pad1;
+  // id_light_depth.vert/.frag only (layers with MapLayer::lightDepth): the light's depth row and the
+  // depth bias the fragment shader applies: x bias.constant * r (a float format: w = 1 and x the
+  // constant factor alone, r from the depth's exponent in the shader), y bias.slope, z bias.clamp.
+  glm::vec4 depthRow{0.0f}, depthBias{0.0f};
+};
+
+// One shadow-pass layer: its clip matrix and, for a light-depth layer, the depth row.
+struct LayerDraw {
+  glm::mat4 clip;
+  bool lightDepth = false;
+  glm::vec4 depthRow{0.0f};
 };
 
 VkFormat vkDepthFormat(DepthFormat f) {
@@ -184,6 +197,8 @@ constexpr VkShaderStageFlags kBindingStages = VK_SHADER_STAGE_FRAGMENT_BIT;
 // (alpha cutoff, one-sided back faces), for the shadow pass and for the camera pass.
 struct IdPipelines {
   VkPipeline shadowPlain, shadowTested, cameraPlain, cameraTested;
+  // Light-depth layers (fit=tsm): the same two, with id_light_depth.vert/.frag.
+  VkPipeline shadowLightDepthPlain = VK_NULL_HANDLE, shadowLightDepthTested = VK_NULL_HANDLE;
 };
 
 struct Rasterizer::Impl {
@@ -194,11 +209,12 @@ struct Rasterizer::Impl {
   vk::DescriptorPool descriptorPool;
   VkDescriptorSet descriptorSet = VK_NULL_HANDLE;
   vk::Sampler nearestSampler, compareSampler, linearSampler;
-  vk::ShaderModule idVert, idFrag, idPlainVert, idPlainFrag, fullscreenVert, resolveFrag, momentsRowsFrag,
-      momentsColsFrag;
+  vk::ShaderModule idVert, idFrag, idPlainVert, idPlainFrag, idLightDepthVert, idLightDepthFrag, fullscreenVert,
+      resolveFrag, momentsRowsFrag, momentsColsFrag;
   vk::QueryPool queries;
-  // Keyed by what needs a new pipeline: (depth format, depth clamp, material tests, depth bias).
-  std::map<std::tuple<VkFormat, bool, bool, bool>, vk::PipelineHandle> idPipelines;
+  // Keyed by what needs a new pipeline: (depth format, depth clamp, material tests, depth bias,
+  // light depth).
+  std::map<std::tuple<VkFormat, bool, bool, bool, bool>, vk::PipelineHandle> idPipelines;
   // Keyed by resolve.frag's specialization constants (resolve_abi.h's kSpec*).
   using ResolveKey = raster::ResolveSpecialization;
   std::map<ResolveKey, vk::PipelineHandle> resolvePipelines;
@@ -286,14 +302,14 @@ struct Rasterizer::Impl {
   PassTimes readTimestamps(bool drewVisibility);
 
   void createLayouts();
-  VkPipeline idPipeline(VkFormat format, bool depthClamp, bool materialTests, bool depthBias);
+  VkPipeline idPipeline(VkFormat format, bool depthClamp, bool materialTests, bool depthBias, bool lightDepth = false);
   VkPipeline resolvePipeline(const ResolveKey& key);
   void ensureImages(int mapSize, VkFormat mapFormat, int layers, int width, int height, bool momentChannels);
   void writeDescriptors();
   void ensureMoments(Filter filter, int mapSize, int lightLayers);
   VkPipeline momentsPipeline(Filter filter, bool cols);
   Frame readback(const Scene& scene, const Light* light, const Method& method, int width, int height);
-  void record(VkCommandBuffer cmd, const std::vector<glm::mat4>& layerClip, int lightLayers, const IdPipelines& pipes,
+  void record(VkCommandBuffer cmd, const std::vector<LayerDraw>& layerDraws, int lightLayers, const IdPipelines& pipes,
               VkPipeline resolve, VkPipeline lookup, const Method& method, const glm::mat4& cameraClip, int width,
               int height, bool drawVisibility);
 
@@ -317,6 +333,8 @@ Rasterizer::Impl::Impl(const RasterDeviceOptions& options) {
   idFrag = vk::createShaderModule(*context, kSpv_id_frag, sizeof(kSpv_id_frag));
   idPlainVert = vk::createShaderModule(*context, kSpv_id_plain_vert, sizeof(kSpv_id_plain_vert));
   idPlainFrag = vk::createShaderModule(*context, kSpv_id_plain_frag, sizeof(kSpv_id_plain_frag));
+  idLightDepthVert = vk::createShaderModule(*context, kSpv_id_light_depth_vert, sizeof(kSpv_id_light_depth_vert));
+  idLightDepthFrag = vk::createShaderModule(*context, kSpv_id_light_depth_frag, sizeof(kSpv_id_light_depth_frag));
   fullscreenVert = vk::createShaderModule(*context, kSpv_fullscreen_vert, sizeof(kSpv_fullscreen_vert));
   resolveFrag = vk::createShaderModule(*context, kSpv_resolve_frag, sizeof(kSpv_resolve_frag));
   momentsRowsFrag = vk::createShaderModule(*context, kSpv_moments_rows_frag, sizeof(kSpv_moments_rows_frag));
@@ -395,23 +413,24 @@ void Rasterizer::Impl::createLayouts() {
   VK_CHECK(vkAllocateDescriptorSets(device, &alloc, &descriptorSet));
 }
 
-VkPipeline Rasterizer::Impl::idPipeline(VkFormat format, bool depthClamp, bool materialTests, bool depthBias) {
-  auto key = std::make_tuple(format, depthClamp, materialTests, depthBias);
+VkPipeline Rasterizer::Impl::idPipeline(VkFormat format, bool depthClamp, bool materialTests, bool depthBias,
+                                        bool lightDepth) {
+  auto key = std::make_tuple(format, depthClamp, materialTests, depthBias, lightDepth);
   auto it = idPipelines.find(key);
   if (it != idPipelines.end()) return it->second.get();
   vk::GraphicsPipelineDesc d;
   // Without material tests, the plain shaders: no uv varying to set up per triangle.
-  d.vertex = materialTests ? idVert.get() : idPlainVert.get();
-  d.fragment = materialTests ? idFrag.get() : idPlainFrag.get();
+  d.vertex = lightDepth ? idLightDepthVert.get() : materialTests ? idVert.get() : idPlainVert.get();
+  d.fragment = lightDepth ? idLightDepthFrag.get() : materialTests ? idFrag.get() : idPlainFrag.get();
   d.layout = pipelineLayout.get();
   d.bindings = {{0, 5 * sizeof(float), VK_VERTEX_INPUT_RATE_VERTEX}};
   d.attributes = {{0, 0, VK_FORMAT_R32G32B32_SFLOAT, 0}};
-  if (materialTests) d.attributes.push_back({1, 0, VK_FORMAT_R32G32_SFLOAT, 3 * sizeof(float)});
+  if (materialTests || lightDepth) d.attributes.push_back({1, 0, VK_FORMAT_R32G32_SFLOAT, 3 * sizeof(float)});
   d.colorFormats = {kIdFormat};
   d.depthFormat = format;
   d.depthClamp = depthClamp;
   d.depthBias = depthBias;
-  if (materialTests) d.fragmentSpecialization = {1u};
+  if (materialTests || lightDepth) d.fragmentSpecialization = {materialTests ? 1u : 0u};
   return idPipelines.emplace(key, vk::createGraphicsPipeline(*context, d)).first->second.get();
 }
 
@@ -543,7 +562,7 @@ void Rasterizer::Impl::writeDescriptors() {
   vkUpdateDescriptorSets(context->device(), uint32_t(writes.size()), writes.data(), 0, nullptr);
 }
 
-void Rasterizer::Impl::record(VkCommandBuffer cmd, const std::vector<glm::mat4>& layerClip, int lightLayers,
+void Rasterizer::Impl::record(VkCommandBuffer cmd, const std::vector<LayerDraw>& layerDraws, int lightLayers,
                               const IdPipelines& pipes, VkPipeline resolve, VkPipeline lookup, const Method& method,
                               const glm::mat4& cameraClip, int width, int height, bool drawVisibility) {
   const raster::SceneGpu& s = *scene;
@@ -559,7 +578,12 @@ void Rasterizer::Impl::record(VkCommandBuffer cmd, const std::vector<glm::mat4>&
 
   // Plain draws first, then those that need the material tests (discard turns early depth
   // testing off, so only the draws that need it pay for it).
-  auto drawAll = [&](const glm::mat4& clip, bool shadowPass) {
+  // A light-depth layer draws with its own pipelines and the depth bias in the push constants (its
+  // fragment shader writes the depth, which replaces the rasterizer's bias).
+  glm::vec4 shaderBias(method.biasConstant * raster::depthResolution(method.mapFormat), method.biasSlope,
+                       method.biasClamp, raster::depthResolution(method.mapFormat) > 0.0f ? 0.0f : 1.0f);
+  if (shaderBias.w > 0.5f) shaderBias.x = method.biasConstant;
+  auto drawAll = [&](const glm::mat4& clip, bool shadowPass, const LayerDraw* lightDepth = nullptr) {
     VkPipeline bound = VK_NULL_HANDLE;
     for (int tested = 0; tested < 2; ++tested)
       for (const raster::Draw& d : s.draws) {
@@ -571,11 +595,13 @@ void Rasterizer::Impl::record(VkCommandBuffer cmd, const std::vector<glm::mat4>&
         if (!shadowPass && d.allOneSided) cull = VK_CULL_MODE_BACK_BIT, backCulled = true;
         bool needsTests = d.hasAlpha || (d.anyOneSided && !backCulled);
         if (needsTests != (tested == 1)) continue;
-        VkPipeline p = shadowPass ? (needsTests ? pipes.shadowTested : pipes.shadowPlain)
-                                  : (needsTests ? pipes.cameraTested : pipes.cameraPlain);
+        VkPipeline p = lightDepth   ? (needsTests ? pipes.shadowLightDepthTested : pipes.shadowLightDepthPlain)
+                       : shadowPass ? (needsTests ? pipes.shadowTested : pipes.shadowPlain)
+                                    : (needsTests ? pipes.cameraTested : pipes.cameraPlain);
         if (p != bound) vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_GRAPHICS, p), bound = p;
         vkCmdSetCullMode(cmd, cull);
         DrawPush push{clip, d.objectIndex, d.triangleBase, 0, 0};
+        if (lightDepth) push.depthRow = lightDepth->depthRow, push.depthBias = shaderBias;
         vkCmdPushConstants(cmd, pipelineLayout.get(), VK_SHADER_STAGE_VERTEX_BIT | VK_SHADER_STAGE_FRAGMENT_BIT, 0,
                            sizeof(push), &push);
         vkCmdDrawIndexed(cmd, d.indexCount, 1, d.firstIndex, d.vertexOffset, 0);
@@ -616,10 +642,11 @@ void Rasterizer::Impl::record(VkCommandBuffer cmd, const std::vector<glm::mat4>&
   vk::transition(cmd, mapIds, VK_IMAGE_LAYOUT_UNDEFINED, VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL,
                  VK_PIPELINE_STAGE_2_FRAGMENT_SHADER_BIT, 0, VK_PIPELINE_STAGE_2_COLOR_ATTACHMENT_OUTPUT_BIT,
                  VK_ACCESS_2_COLOR_ATTACHMENT_WRITE_BIT);
-  for (size_t layer = 0; layer < layerClip.size(); ++layer) {
+  for (size_t layer = 0; layer < layerDraws.size(); ++layer) {
     beginRendering(mapDepth.layerView(int(layer)), mapIds.layerView(int(layer)), method.mapSize, method.mapSize);
     vkCmdSetDepthBias(cmd, method.biasConstant, method.biasClamp, method.biasSlope);
-    drawAll(layerClip[layer], true);
+    const LayerDraw& ld = layerDraws[layer];
+    drawAll(ld.clip, true, ld.lightDepth ? &ld : nullptr);
     vkCmdEndRendering(cmd);
   }
   vk::transition(cmd, mapDepth, VK_IMAGE_LAYOUT_DEPTH_ATTACHMENT_OPTIMAL, VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL,
@@ -993,6 +1020,11 @@ Rasterizer::Impl::FramePipelines Rasterizer::Impl::pipelinesFor(const Method& me
   FramePipelines p;
   p.ids = {idPipeline(mapFormat, depthClamp, false, true), idPipeline(mapFormat, depthClamp, true, true),
            idPipeline(kCameraDepthFormat, false, false, false), idPipeline(kCameraDepthFormat, false, true, false)};
+  for (const raster::MapLayer& l : layers.layers)
+    if (l.lightDepth) {
+      p.ids.shadowLightDepthPlain = idPipeline(mapFormat, depthClamp, false, false, true);
+      p.ids.shadowLightDepthTested = idPipeline(mapFormat, depthClamp, true, false, true);
+    }
   if (partial) {
     // Evidence on demand: the resolve over the listed pixels only (pass 5), no projectors.
     raster::ResolveSpecialization compactSpec = spec;
@@ -1023,16 +1055,17 @@ Rasterizer::Impl::FramePipelines Rasterizer::Impl::pipelinesFor(const Method& me
 bool Rasterizer::Impl::submit(const Scene& sc, const Method& method, const raster::FrameLayers& layers,
                               const FramePipelines& pipes) {
   const Camera& camera = sc.camera;
-  std::vector<glm::mat4> layerClip;
-  for (const raster::MapLayer& l : layers.layers) layerClip.push_back(raster::clipFromTex() * l.texFromWorld);
+  std::vector<LayerDraw> layerDraws;
+  for (const raster::MapLayer& l : layers.layers)
+    layerDraws.push_back({raster::clipFromTex() * l.texFromWorld, l.lightDepth, l.depthFromWorld});
   glm::mat4 cameraClip = camera.clipFromView() * camera.viewFromWorld();
   const std::string key = cameraKey(sc);
   const bool drawVisibility = visibilityKey != key;
   visibilityKey.clear();  // until this frame is through
   for (int run = 0; run < (pipes.firstUse ? 2 : 1); ++run) {
     VkCommandBuffer cmd = commands->begin();
-    record(cmd, layerClip, layers.lightLayers, pipes.ids, pipes.resolve, pipes.lookup, method, cameraClip, camera.width,
-           camera.height, drawVisibility);
+    record(cmd, layerDraws, layers.lightLayers, pipes.ids, pipes.resolve, pipes.lookup, method, cameraClip,
+           camera.width, camera.height, drawVisibility);
     commands->submitAndWait();
   }
   visibilityKey = key;

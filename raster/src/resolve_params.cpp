@@ -105,6 +105,8 @@ abi::Params packResolveParams(const Scene& scene, const Light* light, const Meth
   prm.bias =
       glm::vec4(method.biasCompare, method.biasNormal, method.biasReceiverPlane ? 1.0f : 0.0f, method.filterRadius);
   prm.adaptive = glm::vec4(method.biasAdaptiveEpsilon, 0.0f, 0.0f, 0.0f);
+  if (frameLayers.lightLayers > 0 && frameLayers.layers[0].lightDepth)
+    prm.lightDepth = frameLayers.layers[0].depthFromWorld;
   prm.depthBias = glm::vec4(method.biasConstant, method.biasSlope, method.biasClamp, depthResolution(method.mapFormat));
   prm.sizes = glm::ivec4(method.mapSize, frameLayers.lightLayers, projectorCount, method.filterSize);
   prm.sizes2 = glm::ivec4(width, height, method.filterTaps, method.projectorReverseGuard ? 1 : 0);
@@ -152,6 +154,8 @@ ResolveSpecialization resolveSpecialization(const Scene& scene, const Light* lig
   spec[abi::kSpecLightType] = lightTypeCode(light);
   spec[abi::kSpecAffine] = affine ? 1u : 0u;
   spec[abi::kSpecAdaptive] = method.biasAdaptive ? 1u : 0u;
+  // One light depth row for every light layer: only fit=tsm's single layer has one.
+  spec[abi::kSpecLightDepth] = frameLayers.lightLayers > 0 && frameLayers.layers[0].lightDepth ? 1u : 0u;
   return spec;
 }
 

@@ -187,6 +187,11 @@ const char* const kNScaleExpected = "a number > 0 and <= 1e6 (1: the optimal n o
 // psm.slide_back is in units of the visible body's view-depth range: at 1000 the warp is long gone.
 constexpr double kSlideBackLimit = 1e3;
 const char* const kSlideBackExpected = "a number 0..1000 (units of the visible view-depth range; 0: the paper's PSM)";
+// fit=tsm's 80 % rule: the target line strictly inside the map (0: q on the top line, 1: no warp
+// can reach it), the focus region's end a share of the view depth range past its near end.
+const char* const kTsmFocusExpected =
+    "a number > 0 and < 1 (the map line the focus region ends on; 0.8: the 80 % rule)";
+const char* const kTsmFocusDistanceExpected = "a number > 0 and <= 1 (share of the view depth range)";
 
 // EVSM's warp exponents: the 32F moments clamp them to 42 (raster/METHODS.md); beyond 100 is a typo.
 const char* const kExponentExpected = "a number > 0 and <= 100 (clamped to 42, what 32-bit moments hold)";
@@ -217,6 +222,15 @@ const std::vector<std::pair<std::string, Setter>>& setters() {
       {"psm.slide_back",
        [](Method& m, const Value& v, const Where& w) {
          m.psmSlideBack = floatIn(v, w, 0.0, kSlideBackLimit, false, kSlideBackExpected);
+       }},
+      {"tsm.focus",
+       [](Method& m, const Value& v, const Where& w) {
+         m.tsmFocus = floatIn(v, w, 0.0, 1.0, true, kTsmFocusExpected);
+         if (!(m.tsmFocus < 1.0f)) fail(w.file, w.place, v.got(), kTsmFocusExpected);  // open at 1 too
+       }},
+      {"tsm.focus_distance",
+       [](Method& m, const Value& v, const Where& w) {
+         m.tsmFocusDistance = floatIn(v, w, 0.0, 1.0, true, kTsmFocusDistanceExpected);
        }},
       {"bias.constant",
        [](Method& m, const Value& v, const Where& w) {
@@ -334,6 +348,10 @@ void crossCheck(const Method& m, const std::string& file, const std::string& pre
     bad("lispsm.n_scale", nlohmann::json(double(m.lispsmNScale)).dump(), kNScaleExpected);
   if (!(m.psmSlideBack >= 0.0f && m.psmSlideBack <= kSlideBackLimit))
     bad("psm.slide_back", nlohmann::json(double(m.psmSlideBack)).dump(), kSlideBackExpected);
+  if (!(m.tsmFocus > 0.0f && m.tsmFocus < 1.0f))
+    bad("tsm.focus", nlohmann::json(double(m.tsmFocus)).dump(), kTsmFocusExpected);
+  if (!(m.tsmFocusDistance > 0.0f && m.tsmFocusDistance <= 1.0f))
+    bad("tsm.focus_distance", nlohmann::json(double(m.tsmFocusDistance)).dump(), kTsmFocusDistanceExpected);
   if (m.filterBlur < 0 || m.filterBlur > 16) bad("filter.blur", std::to_string(m.filterBlur), "an integer 0..16");
   if (!(m.vsmMinVariance >= 0.0f && m.vsmMinVariance <= 1.0f))
     bad("vsm.min_variance", nlohmann::json(double(m.vsmMinVariance)).dump(), "a number 0..1");
@@ -400,6 +418,8 @@ nlohmann::json methodToJson(const Method& m) {
   j["cascades.stabilize"] = m.cascadeStabilize;
   j["lispsm.n_scale"] = m.lispsmNScale;
   j["psm.slide_back"] = m.psmSlideBack;
+  j["tsm.focus"] = m.tsmFocus;
+  j["tsm.focus_distance"] = m.tsmFocusDistance;
   j["bias.constant"] = m.biasConstant;
   j["bias.slope"] = m.biasSlope;
   j["bias.clamp"] = m.biasClamp;

@@ -57,7 +57,10 @@ SHADOWLAB_CONST(int, kSpecLookupOnly, 8)
 // (EvidencePixels below), fragment k of a compact target resolving listed pixel k instead of the
 // pixel under gl_FragCoord; the projectors compiled out (raster/METHODS.md, "Evidence on demand").
 SHADOWLAB_CONST(int, kSpecCompact, 9)
-SHADOWLAB_CONST(int, kSpecCount, 10)
+// 0/1: the light layers' depth is the light's own, dot(P.lightDepth, (p, 1)), not texFromWorld's
+// z / w (fit=tsm: MapLayer::lightDepth; the shadow pass writes it, id_light_depth.frag).
+SHADOWLAB_CONST(int, kSpecLightDepth, 10)
+SHADOWLAB_CONST(int, kSpecCount, 11)
 
 // The descriptor set (set 0), one row per binding: X(Name, binding, kind). The kinds name
 // Vulkan descriptor types (rasterizer.cpp maps them); the set layout, the pool and the writes
@@ -112,9 +115,10 @@ SHADOWLAB_BLOCK(Params) {
   vec4 cascadeFar[2];                 // C_1..C_8: far view depth of cascade 0..7, world units
   vec4 cascadeInfo;                   // x blend band (fraction of a cascade's depth range), y C_0,
                                       // z fit-camera view depth of the evaluation camera's origin
-  vec4 moments;   // filterable maps: x vsm.min_variance, y vsm.bleed_reduction, z, w the EVSM exponents (clamped)
-  vec4 moments2;  // x msm.moment_bias, y filter.blur (radius, texels)
-  vec4 adaptive;  // adaptive depth bias (on: kSpecAdaptive): x bias.adaptive_epsilon (world units)
+  vec4 moments;     // filterable maps: x vsm.min_variance, y vsm.bleed_reduction, z, w the EVSM exponents (clamped)
+  vec4 moments2;    // x msm.moment_bias, y filter.blur (radius, texels)
+  vec4 adaptive;    // adaptive depth bias (on: kSpecAdaptive): x bias.adaptive_epsilon (world units)
+  vec4 lightDepth;  // kSpecLightDepth: the light layers' depth = dot(lightDepth, (p, 1))
 }
 SHADOWLAB_BLOCK_END(P);
 #endif
@@ -143,7 +147,8 @@ static_assert(offsetof(Params, cascadeInfo) == offsetof(Params, cascadeFar) + 32
 static_assert(offsetof(Params, moments) == offsetof(Params, cascadeInfo) + 16);
 static_assert(offsetof(Params, moments2) == offsetof(Params, moments) + 16);
 static_assert(offsetof(Params, adaptive) == offsetof(Params, moments2) + 16);
-static_assert(sizeof(Params) == 2832, "std140 size of resolve.frag's Params (glslangValidator -q reports it)");
+static_assert(offsetof(Params, lightDepth) == offsetof(Params, adaptive) + 16);
+static_assert(sizeof(Params) == 2848, "std140 size of resolve.frag's Params (glslangValidator -q reports it)");
 static_assert(2 * 4 >= kMaxLightLayers, "cascadeFar holds one far split per light layer");
 static_assert(kMaxLightLayers + kMaxProjectors == kMaxLayers);
 }  // namespace shadowlab::raster::abi

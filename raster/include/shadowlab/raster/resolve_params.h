@@ -15,13 +15,19 @@
 namespace shadowlab::raster {
 
 // One map layer: texFromWorld * (p, 1) = (u*w, v*w, depth*w, w), u, v in [0,1] across the map
-// (v = 0 on the map's top row), depth in [0,1] from near to far, w > 0 in front.
+// (v = 0 on the map's top row), depth in [0,1] from near to far, w > 0 in front; with lightDepth,
+// depth = dot(depthFromWorld, (p, 1)) instead.
 struct MapLayer {
   glm::mat4 texFromWorld{1.0f};
-  // World size of one texel at w = 1 (orthographic: everywhere; fit=lispsm: an upper bound of the
-  // texel's larger side per unit of w, see lispsm.h; fit=psm: the largest of that ratio over the
-  // visible body's vertices, see psm.h).
+  // World size of one texel at w = 1 (orthographic: everywhere; fit=lispsm, fit=tsm: an upper bound
+  // of the texel's larger side per unit of w, see lispsm.h, tsm.h; fit=psm: the largest of that
+  // ratio over the visible body's vertices, see psm.h).
   float texelWorldPerW = 0;
+  // fit=tsm (tsm.h): the map's depth is the light's own, depth = dot(depthFromWorld, (p, 1)), not
+  // texFromWorld's z / w (u, v and w still come from texFromWorld): the shadow pass writes it as
+  // the fragment's depth and the resolve compares against it (kSpecLightDepth).
+  bool lightDepth = false;
+  glm::vec4 depthFromWorld{0.0f};
 };
 
 // The fit step's result: every map layer of a frame, the light's first, then one per projector.

@@ -25,12 +25,13 @@
   X(Msm, 8, "msm", "moment shadow map: Hamburger 4-moment reconstruction (msm.moment_bias, filter.blur)")
 
 // fit: how a directional light's orthographic map is fitted (spot and point lights ignore it).
-#define SHADOWLAB_FITS(X)                                                               \
-  X(Sphere, 0, "sphere", "the scene's bounding sphere")                                 \
-  X(Tight, 1, "tight", "the fit camera's view frustum intersected with the scene")      \
-  X(Cascades, 2, "cascades", "one tight crop per slice of the view depth (cascades.*)") \
+#define SHADOWLAB_FITS(X)                                                                        \
+  X(Sphere, 0, "sphere", "the scene's bounding sphere")                                          \
+  X(Tight, 1, "tight", "the fit camera's view frustum intersected with the scene")               \
+  X(Cascades, 2, "cascades", "one tight crop per slice of the view depth (cascades.*)")          \
   X(Lispsm, 3, "lispsm", "the tight body under a light-space perspective warp (lispsm.n_scale)") \
-  X(Psm, 4, "psm", "perspective shadow map: the map in the camera's post-perspective space (psm.slide_back)")
+  X(Psm, 4, "psm", "perspective shadow map: the map in the camera's post-perspective space (psm.slide_back)") \
+  X(Tsm, 5, "tsm", "the view frustum's trapezoid warped onto the map (tsm.focus, tsm.focus_distance)")
 
 // A scene light's "type".
 #define SHADOWLAB_LIGHT_TYPES(X)                                                  \

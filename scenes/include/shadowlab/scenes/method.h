@@ -41,6 +41,11 @@ struct Method {
   // Perspective shadow maps (fit=psm, directional lights): the virtual camera slides back, beyond
   // what keeps every caster in front of it, by psmSlideBack times the visible depth range.
   float psmSlideBack = 0.0f;       // psm.slide_back: 0..1000
+  // Trapezoidal shadow maps (fit=tsm, directional lights; raster/METHODS.md): the 80 % rule maps
+  // the end of the focus region (tsmFocusDistance of the view depth range, from its near end) to
+  // the map line tsmFocus (0.8: the paper's 80 % line).
+  float tsmFocus = 0.8f;           // tsm.focus: (0, 1)
+  float tsmFocusDistance = 0.5f;   // tsm.focus_distance: (0, 1]
   float biasConstant = 0.0f;       // bias.constant: Vulkan depthBiasConstantFactor (units of r)
   float biasSlope = 1.5f;          // bias.slope: Vulkan depthBiasSlopeFactor
   float biasClamp = 0.0f;          // bias.clamp: Vulkan depthBiasClamp (0 = no clamp)
