@@ -1,6 +1,7 @@
-// `shadowlab reference SCENE -o DIR [--spp N] [--threads N] [--set scene:/pointer=value ...]`: traces the Embree ground
-// truth and writes DIR/reference.exr (channels: scenes/frame.h), DIR/reference.png (a readable picture) and
-// DIR/reference.json (ray counts, timings, hashes).
+// `shadowlab reference SCENE -o DIR [--spp N] [--threads N] [--all-channels] [--set scene:/pointer=value ...]`: traces
+// the Embree ground truth and writes DIR/reference.exr (the Compare channel set, the reference cache's; every channel
+// with --all-channels: reference/README.md), DIR/reference.png (a readable picture) and DIR/reference.json (ray
+// counts, timings, hashes).
 #include <chrono>
 #include <cstdio>
 #include <exception>
@@ -24,6 +25,7 @@ struct Options {
   std::string outDir;
   int spp = 1;
   int threads = 0;
+  bool allChannels = false;
   std::vector<std::string> sets;
   double maxMemoryGiB = 0;
 };
@@ -55,10 +57,17 @@ int run(const Options& options) {
   shadowlab::ReferenceOptions referenceOptions;
   referenceOptions.spp = options.spp;
   referenceOptions.threads = options.threads;
+  // Traced with every channel: the picture needs prim_id, P and N. The EXR keeps the Compare set
+  // unless --all-channels (the values are the same either way).
+  referenceOptions.channels = shadowlab::ReferenceChannels::All;
   referenceOptions.progress = shadowlab::app::terminalProgress("reference: tracing");
   shadowlab::ReferenceStats stats;
-  const shadowlab::Frame frame = shadowlab::renderReference(scene, referenceOptions, &stats);
+  shadowlab::Frame frame = shadowlab::renderReference(scene, referenceOptions, &stats);
   const auto traced = Clock::now();
+  std::vector<uint8_t> picture = shadowlab::referencePicture(scene, frame);
+  const shadowlab::ReferenceChannels channelSet =
+      options.allChannels ? shadowlab::ReferenceChannels::All : shadowlab::ReferenceChannels::Compare;
+  shadowlab::keepReferenceChannels(frame, scene, channelSet);
 
   const std::string exrPath = options.outDir + "/reference.exr";
   const std::string pngPath = options.outDir + "/reference.png";
@@ -68,7 +77,7 @@ int run(const Options& options) {
   std::exception_ptr pngError;
   std::thread pngWriter([&] {
     try {
-      shadowlab::writeRgbPng(pngPath, frame.width, frame.height, shadowlab::referencePicture(scene, frame));
+      shadowlab::writeRgbPng(pngPath, frame.width, frame.height, picture);
     } catch (...) {
       pngError = std::current_exception();
     }
@@ -94,6 +103,7 @@ int run(const Options& options) {
       {"height", frame.height},
       {"spp", options.spp},
       {"threads", options.threads},
+      {"channels", shadowlab::referenceChannelsKey(channelSet)},
       {"lights", frame.meta["lights"]},
       {"projectors", frame.meta["projectors"]},
       {"triangles", scene.triangleCount()},
@@ -133,6 +143,9 @@ shadowlab::app::Registrar reg{
           ->capture_default_str();
       sub->add_option("--threads", options->threads, "worker threads, 0 = all; results are identical for any value")
           ->capture_default_str();
+      sub->add_flag("--all-channels", options->allChannels,
+                    "reference.exr with every channel (adds prim_id, P, N, proj.*.u/v to the Compare set that "
+                    "compare and the reference cache read)");
       return std::function<int()>([options] { return run(*options); });
     }};
 

@@ -20,6 +20,7 @@
 
 #include "shadowlab/reference/reference.h"
 #include "shadowlab/scenes/error.h"
+#include "shadowlab/scenes/io.h"
 #include "shadowlab/scenes/loader.h"
 
 namespace {
@@ -199,6 +200,85 @@ TEST(ReferenceRobustness, BitIdenticalForAnyThreadCount) {
   }
 }
 
+// The Compare channel set (what the reference cache holds) is the All set's channels, bit for bit,
+// in the same order, on every bundled scene at its own size (spp 1), and at spp 4 on the scenes
+// with alpha testing and a projector; the Compare frames with 2 threads, the All frames with 1.
+TEST(ReferenceRobustness, CompareSetEqualsAllSetOnEveryBundledScene) {
+  struct Case {
+    std::string scene;
+    int spp;
+  };
+  std::vector<Case> cases;
+  for (const std::string& name : bundledSceneNames()) cases.push_back({name, 1});
+  cases.push_back({"alpha_fence", 4});
+  cases.push_back({"projector", 4});
+  ASSERT_GE(cases.size(), 10u);
+  for (const Case& c : cases) {
+    SCOPED_TRACE(c.scene + " spp " + std::to_string(c.spp));
+    Scene scene = loadScene(resolveScenePath(c.scene));
+    if (c.spp > 1) scene = loadScene(resolveScenePath(c.scene), {{"/camera/width", 240}, {"/camera/height", 135}});
+    ReferenceOptions options;
+    options.spp = c.spp;
+    options.threads = 1;
+    options.channels = ReferenceChannels::All;
+    const Frame all = renderReference(scene, options);
+    options.threads = 2;
+    options.channels = ReferenceChannels::Compare;
+    const Frame compareSet = renderReference(scene, options);
+    EXPECT_EQ(all.names, referenceChannelNames(scene, ReferenceChannels::All));
+    EXPECT_EQ(compareSet.names, referenceChannelNames(scene, ReferenceChannels::Compare));
+    EXPECT_EQ(all.meta.at("channels"), "all");
+    EXPECT_EQ(compareSet.meta.at("channels"), "compare");
+    nlohmann::json meta = compareSet.meta;
+    meta["channels"] = "all";
+    EXPECT_EQ(meta, all.meta);
+    // Compare = hit, object_id, then per light vis and occluder_dist, per projector coverage, R, G, B.
+    const size_t expectedCount = 2 + 2 * scene.lights.size() + 4 * scene.projectors.size();
+    ASSERT_EQ(compareSet.names.size(), expectedCount);
+    EXPECT_EQ(all.names.size(), expectedCount + 7 + 2 * scene.projectors.size());
+    size_t from = 0;
+    for (size_t k = 0; k < compareSet.names.size(); ++k) {
+      const std::string& name = compareSet.names[k];
+      while (from < all.names.size() && all.names[from] != name) ++from;  // the same order
+      ASSERT_LT(from, all.names.size()) << name << " missing or out of order in the All set";
+      const auto& a = all.data[from];
+      const auto& b = compareSet.data[k];
+      ASSERT_EQ(a.size(), b.size());
+      EXPECT_EQ(std::memcmp(a.data(), b.data(), a.size() * sizeof(float)), 0) << "channel " << name;
+    }
+    // Not trivially equal: every scene has something hit and something that is not lit.
+    size_t hits = 0;
+    for (float h : compareSet.get("hit")) hits += h == 1.0f;
+    EXPECT_GT(hits, 0u);
+    EXPECT_LT(hits, compareSet.pixelCount());
+  }
+}
+
+// keepReferenceChannels turns an All frame into the Compare frame (the planes moved, not copied).
+TEST(ReferenceRobustness, KeepReferenceChannelsSelectsTheCompareSet) {
+  const Scene scene = loadScene(resolveScenePath("projector"), {{"/camera/width", 64}, {"/camera/height", 36}});
+  ReferenceOptions options;
+  options.channels = ReferenceChannels::All;
+  Frame frame = renderReference(scene, options);
+  const float* visPlane = frame.get("light.sun.vis").data();
+  options.channels = ReferenceChannels::Compare;
+  const Frame expected = renderReference(scene, options);
+  keepReferenceChannels(frame, scene, ReferenceChannels::Compare);
+  EXPECT_EQ(frame.names, expected.names);
+  EXPECT_EQ(frame.data, expected.data);
+  EXPECT_EQ(frame.meta, expected.meta);
+  EXPECT_EQ(frame.get("light.sun.vis").data(), visPlane);
+  EXPECT_EQ(referenceFrameBytes(scene, ReferenceChannels::Compare), 8.0 * 64 * 36 * 4);
+  EXPECT_EQ(referenceFrameBytes(scene, ReferenceChannels::All), 17.0 * 64 * 36 * 4);
+  // A Compare frame lacks what the All set adds: asking for it names the channel.
+  try {
+    keepReferenceChannels(frame, scene, ReferenceChannels::All);
+    FAIL() << "expected an InputError";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("prim_id"), std::string::npos) << e.what();
+  }
+}
+
 // The metadata and channel names exactly as scenes/frame.h documents them, and the hashes:
 // referenceHash changes with spp and camera but not with the thread count.
 TEST(ReferenceRobustness, ChannelsMetadataAndHashes) {
@@ -236,7 +316,12 @@ TEST(ReferenceRobustness, ChannelsMetadataAndHashes) {
 
   ReferenceOptions options;
   const std::string base = referenceHash(scene, options);
+  // The key's text (reference/README.md): version /2 since the cache holds the Compare set.
+  const std::string key = "shadowlab.reference/2;scene=" + scene.hash + ";camera=" + scene.camera.hash() + ";spp=1";
+  EXPECT_EQ(base, hashHex(fnv1a64(key.data(), key.size())));
   options.threads = 3;
+  EXPECT_EQ(referenceHash(scene, options), base);
+  options.channels = ReferenceChannels::Compare;  // the same values: the same key
   EXPECT_EQ(referenceHash(scene, options), base);
   options.spp = 4;
   EXPECT_NE(referenceHash(scene, options), base);

@@ -103,7 +103,8 @@ class Tracer {
   Tracer(const Scene& scene, const EmbreeScene& embree) : scene_(scene), embree_(embree), rays_(scene.camera) {}
 
   // Camera rays through (px + dx, py + dy) for the active lanes.
-  void tracePrimary(const int* px, const int* py, const bool* active, float dx, float dy, LaneHit* hits) {
+  // Without `surface` only hit, geom and prim are filled: no shadow ray or All channel needs the rest.
+  void tracePrimary(const int* px, const int* py, const bool* active, float dx, float dy, bool surface, LaneHit* hits) {
     RTCRayHit8 rayHit;
     alignas(32) int valid[kLanes];
     const Camera& camera = scene_.camera;
@@ -135,6 +136,7 @@ class Tracer {
       h.hit = true;
       h.geom = rayHit.hit.geomID[lane];
       h.prim = rayHit.hit.primID[lane];
+      if (!surface) continue;
       const GeometryData& geometry = embree_.geometry(h.geom);
       const Object& object = *geometry.object;
       const glm::uvec3& tri = object.triangles[h.prim];
@@ -324,35 +326,40 @@ class Tracer {
   const CameraRays rays_;  // Camera::rayDirection, bit for bit
 };
 
-// The output channels, one pointer each, in the frame's channel order (renderReference adds them in
-// this order): base[c] is channel c's first value.
+// The output channels, one pointer each, in the frame's channel order (referenceChannelNames):
+// base[c] is channel c's first value. Without the All set, primId, p, n, u and v are null.
 struct Planes {
-  float* hit;
-  float* objectId;
-  float* primId;
-  float* p[3];
-  float* n[3];
+  float* hit = nullptr;
+  float* objectId = nullptr;
+  float* primId = nullptr;
+  float* p[3] = {};
+  float* n[3] = {};
   std::vector<float*> vis, occluderDist;
   std::vector<float*> coverage, u, v, rgb[3];
 
-  Planes(float* const* base, size_t lightCount, size_t projectorCount)
+  Planes(float* const* base, size_t channelCount, size_t lightCount, size_t projectorCount, bool all)
       : vis(lightCount), occluderDist(lightCount), coverage(projectorCount), u(projectorCount), v(projectorCount) {
     size_t index = 0;
     hit = base[index++];
     objectId = base[index++];
-    primId = base[index++];
-    for (int a = 0; a < 3; ++a) p[a] = base[index++];
-    for (int a = 0; a < 3; ++a) n[a] = base[index++];
+    if (all) {
+      primId = base[index++];
+      for (int a = 0; a < 3; ++a) p[a] = base[index++];
+      for (int a = 0; a < 3; ++a) n[a] = base[index++];
+    }
     for (size_t l = 0; l < lightCount; ++l) {
       vis[l] = base[index++];
       occluderDist[l] = base[index++];
     }
     for (size_t q = 0; q < projectorCount; ++q) {
       coverage[q] = base[index++];
-      u[q] = base[index++];
-      v[q] = base[index++];
+      if (all) {
+        u[q] = base[index++];
+        v[q] = base[index++];
+      }
       for (int c = 0; c < 3; ++c) rgb[c].push_back(base[index++]);
     }
+    if (index != channelCount) throw DriverError("reference: channel layout out of step with referenceChannelNames");
   }
 };
 
@@ -392,9 +399,51 @@ float shadowOriginOffset(const glm::vec3& position, const glm::vec3& p0, const g
   return kOriginOffsetScale * std::max(std::max(maxAbs(position), maxAbs(p0)), std::max(maxAbs(p1), maxAbs(p2)));
 }
 
-double referenceFrameBytes(const Scene& scene) {
-  const double channels = 9.0 + 2.0 * double(scene.lights.size()) + 6.0 * double(scene.projectors.size());
-  return channels * 4.0 * double(scene.camera.width) * double(scene.camera.height);
+const char* referenceChannelsKey(ReferenceChannels channels) {
+  return channels == ReferenceChannels::All ? "all" : "compare";
+}
+
+std::vector<std::string> referenceChannelNames(const Scene& scene, ReferenceChannels channels) {
+  const bool all = channels == ReferenceChannels::All;
+  std::vector<std::string> names = {"hit", "object_id"};
+  if (all) {
+    names.push_back("prim_id");
+    for (const char* axis : {"x", "y", "z"}) names.push_back(std::string("P.") + axis);
+    for (const char* axis : {"x", "y", "z"}) names.push_back(std::string("N.") + axis);
+  }
+  for (const Light& light : scene.lights) {
+    names.push_back("light." + light.name + ".vis");
+    names.push_back("light." + light.name + ".occluder_dist");
+  }
+  for (const Projector& projector : scene.projectors) {
+    const std::string prefix = "proj." + projector.name + ".";
+    names.push_back(prefix + "coverage");
+    if (all) {
+      names.push_back(prefix + "u");
+      names.push_back(prefix + "v");
+    }
+    for (const char* color : {"R", "G", "B"}) names.push_back(prefix + color);
+  }
+  return names;
+}
+
+void keepReferenceChannels(Frame& frame, const Scene& scene, ReferenceChannels channels) {
+  Frame kept;
+  kept.width = frame.width;
+  kept.height = frame.height;
+  kept.meta = std::move(frame.meta);
+  for (const std::string& name : referenceChannelNames(scene, channels)) {
+    if (!frame.has(name)) throw InputError("reference: error: frame has no channel " + name);
+    kept.names.push_back(name);
+    kept.data.push_back(std::move(frame.get(name)));
+  }
+  kept.meta["channels"] = referenceChannelsKey(channels);
+  frame = std::move(kept);
+}
+
+double referenceFrameBytes(const Scene& scene, ReferenceChannels channels) {
+  const double count = double(referenceChannelNames(scene, channels).size());
+  return count * 4.0 * double(scene.camera.width) * double(scene.camera.height);
 }
 
 Frame renderReference(const Scene& scene, const ReferenceOptions& options, ReferenceStats* stats) {
@@ -425,19 +474,16 @@ Frame renderReference(const Scene& scene, const ReferenceOptions& options, Refer
     }
   }
 
+  const bool all = options.channels == ReferenceChannels::All;
   Frame frame;
   frame.width = width;
   frame.height = height;
-  frame.add("hit");
-  frame.add("object_id");
-  frame.add("prim_id");
-  const char* axes[3] = {"x", "y", "z"};
-  for (int a = 0; a < 3; ++a) frame.add(std::string("P.") + axes[a]);
-  for (int a = 0; a < 3; ++a) frame.add(std::string("N.") + axes[a]);
+  for (const std::string& name : referenceChannelNames(scene, options.channels)) {
+    const bool distance = name.size() > 14 && name.compare(name.size() - 14, 14, ".occluder_dist") == 0;
+    frame.add(name, distance ? -1.0f : 0.0f);
+  }
   std::vector<PreparedLight> lights;
   for (const Light& light : scene.lights) {
-    frame.add("light." + light.name + ".vis");
-    frame.add("light." + light.name + ".occluder_dist", -1.0f);
     PreparedLight prepared;
     prepared.light = &light;
     prepared.toLight = glm::normalize(-light.direction);
@@ -445,15 +491,8 @@ Frame renderReference(const Scene& scene, const ReferenceOptions& options, Refer
     lights.push_back(prepared);
   }
   std::vector<PreparedProjector> projectors;
-  for (const Projector& projector : scene.projectors) {
-    const std::string prefix = "proj." + projector.name + ".";
-    frame.add(prefix + "coverage");
-    frame.add(prefix + "u");
-    frame.add(prefix + "v");
-    const char* colors[3] = {"R", "G", "B"};
-    for (int c = 0; c < 3; ++c) frame.add(prefix + colors[c]);
+  for (const Projector& projector : scene.projectors)
     projectors.push_back({&projector, glm::dmat4(projector.texFromWorld())});
-  }
   // The channels in Planes' order (frame.add may move planes while channels are added: taken now).
   const size_t channelCount = frame.data.size();
   std::vector<float*> frameBase(channelCount);
@@ -462,11 +501,17 @@ Frame renderReference(const Scene& scene, const ReferenceOptions& options, Refer
   nlohmann::json lightNames = nlohmann::json::array(), projectorNames = nlohmann::json::array();
   for (const Light& light : scene.lights) lightNames.push_back(light.name);
   for (const Projector& projector : scene.projectors) projectorNames.push_back(projector.name);
-  frame.meta = {{"kind", "reference"},      {"scene", scene.name},
-                {"scene_hash", scene.hash}, {"camera_hash", scene.camera.hash()},
-                {"width", width},           {"height", height},
-                {"lights", lightNames},     {"projectors", projectorNames},
-                {"spp", options.spp},       {"reference_hash", referenceHash(scene, options)}};
+  frame.meta = {{"kind", "reference"},
+                {"scene", scene.name},
+                {"scene_hash", scene.hash},
+                {"camera_hash", scene.camera.hash()},
+                {"width", width},
+                {"height", height},
+                {"lights", lightNames},
+                {"projectors", projectorNames},
+                {"spp", options.spp},
+                {"reference_hash", referenceHash(scene, options)},
+                {"channels", referenceChannelsKey(options.channels)}};
 
   const int threads = options.threads > 0 ? options.threads : std::max(1, tbb::info::default_concurrency());
   // TBB caps its workers at the hardware concurrency; an explicit --threads above that (e.g. 4
@@ -513,7 +558,9 @@ Frame renderReference(const Scene& scene, const ReferenceOptions& options, Refer
       std::vector<float> tileBuffer(channelCount * kTilePixels);
       std::vector<float*> tileBase(channelCount);
       for (size_t c = 0; c < channelCount; ++c) tileBase[c] = tileBuffer.data() + c * kTilePixels;
-      const Planes planes(tileBase.data(), lightCount, projectorCount);
+      const Planes planes(tileBase.data(), channelCount, lightCount, projectorCount, all);
+      // Camera rays need the surface point and normal only for shadow rays and the All channels.
+      const bool surface = all || lightCount > 0 || projectorCount > 0;
       LaneHit center[kLanes], sample[kLanes];
       std::vector<float> centerVis(lightCount * kLanes), centerDist(lightCount * kLanes);
       std::vector<ProjectorSample> centerProj(projectorCount * kLanes);
@@ -533,7 +580,7 @@ Frame renderReference(const Scene& scene, const ReferenceOptions& options, Refer
               py[lane] = by + lane / kBlockWidth;
               active[lane] = px[lane] < x1 && py[lane] < y1;
             }
-            tracer.tracePrimary(px, py, active, 0.5f, 0.5f, center);
+            tracer.tracePrimary(px, py, active, 0.5f, 0.5f, surface, center);
             for (size_t l = 0; l < lightCount; ++l)
               tracer.evalLight(lights[l], center, true, &centerVis[l * kLanes], &centerDist[l * kLanes]);
             for (size_t p = 0; p < projectorCount; ++p)
@@ -546,7 +593,7 @@ Frame renderReference(const Scene& scene, const ReferenceOptions& options, Refer
               bool sampleActive[kLanes];
               for (int lane = 0; lane < kLanes; ++lane) sampleActive[lane] = active[lane] && center[lane].hit;
               for (const glm::vec2& offset : pattern) {
-                tracer.tracePrimary(px, py, sampleActive, offset.x, offset.y, sample);
+                tracer.tracePrimary(px, py, sampleActive, offset.x, offset.y, surface, sample);
                 // Only samples on the center's object count: the pixel's fractional visibility
                 // is that of the surface its id and position describe.
                 for (int lane = 0; lane < kLanes; ++lane) {
@@ -576,10 +623,12 @@ Frame renderReference(const Scene& scene, const ReferenceOptions& options, Refer
               const LaneHit& h = center[lane];
               planes.hit[pixel] = h.hit ? 1.0f : 0.0f;
               planes.objectId[pixel] = h.hit ? float(embree->geometry(h.geom).object->id) : 0.0f;
-              planes.primId[pixel] = h.hit ? float(h.prim) : 0.0f;
-              for (int a = 0; a < 3; ++a) {
-                planes.p[a][pixel] = h.position[a];
-                planes.n[a][pixel] = h.normal[a];
+              if (all) {
+                planes.primId[pixel] = h.hit ? float(h.prim) : 0.0f;
+                for (int a = 0; a < 3; ++a) {
+                  planes.p[a][pixel] = h.position[a];
+                  planes.n[a][pixel] = h.normal[a];
+                }
               }
               const int count = sameObject[lane];
               for (size_t l = 0; l < lightCount; ++l) {
@@ -590,8 +639,10 @@ Frame renderReference(const Scene& scene, const ReferenceOptions& options, Refer
               for (size_t p = 0; p < projectorCount; ++p) {
                 const size_t k = p * kLanes + lane;
                 const ProjectorSample& c = centerProj[k];
-                planes.u[p][pixel] = c.u;
-                planes.v[p][pixel] = c.v;
+                if (all) {
+                  planes.u[p][pixel] = c.u;
+                  planes.v[p][pixel] = c.v;
+                }
                 const ProjectorSample value =
                     count > 0 ? ProjectorSample{projSum[k].coverage / count, 0, 0, projSum[k].rgb / float(count)} : c;
                 planes.coverage[p][pixel] = value.coverage;
