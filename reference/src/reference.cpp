@@ -51,6 +51,7 @@ struct LaneHit {
   bool hit = false;
   unsigned geom = 0;
   unsigned prim = 0;
+  float objectId = 0.0f;     // Object::id of the geometry, as the object_id channel stores it
   glm::vec3 position{0.0f};  // world, on the triangle (barycentric interpolation in double)
   glm::vec3 normal{0.0f};    // unit geometric normal facing the camera
   float offset = 0.0f;       // world distance shadow origins move along `normal`
@@ -98,23 +99,30 @@ std::vector<glm::vec2> samplePattern(int spp) {
   return pattern;
 }
 
+// shadowOriginOffset, inlined into the trace.
+inline float maxAbs(const glm::vec3& p) { return std::max(std::fabs(p.x), std::max(std::fabs(p.y), std::fabs(p.z))); }
+inline float originOffset(const glm::vec3& position, const glm::vec3& p0, const glm::vec3& p1, const glm::vec3& p2) {
+  return kOriginOffsetScale * std::max(std::max(maxAbs(position), maxAbs(p0)), std::max(maxAbs(p1), maxAbs(p2)));
+}
+
 class Tracer {
  public:
-  Tracer(const Scene& scene, const EmbreeScene& embree) : scene_(scene), embree_(embree), rays_(scene.camera) {}
+  Tracer(const Scene& scene, const EmbreeScene& embree, const float* objectIds)
+      : scene_(scene), embree_(embree), rays_(scene.camera), objectIds_(objectIds) {}
 
   // Camera rays through (px + dx, py + dy) for the active lanes.
-  // Without `surface` only hit, geom and prim are filled: no shadow ray or All channel needs the rest.
+  // Without `surface` only hit, geom, prim and objectId are filled: no shadow ray or All channel
+  // needs the rest (position, normal, offset and origin are meaningful only where hit).
   void tracePrimary(const int* px, const int* py, const bool* active, float dx, float dy, bool surface, LaneHit* hits) {
     RTCRayHit8 rayHit;
     alignas(32) int valid[kLanes];
-    const Camera& camera = scene_.camera;
+    const glm::vec3 org = scene_.camera.position;
     for (int lane = 0; lane < kLanes; ++lane) {
-      hits[lane] = LaneHit{};
       valid[lane] = active[lane] ? -1 : 0;
       const glm::vec3 dir = active[lane] ? rays_.direction(px[lane] + dx, py[lane] + dy) : glm::vec3(0, 0, 1);
-      rayHit.ray.org_x[lane] = camera.position.x;
-      rayHit.ray.org_y[lane] = camera.position.y;
-      rayHit.ray.org_z[lane] = camera.position.z;
+      rayHit.ray.org_x[lane] = org.x;
+      rayHit.ray.org_y[lane] = org.y;
+      rayHit.ray.org_z[lane] = org.z;
       rayHit.ray.dir_x[lane] = dir.x;
       rayHit.ray.dir_y[lane] = dir.y;
       rayHit.ray.dir_z[lane] = dir.z;
@@ -126,41 +134,45 @@ class Tracer {
       rayHit.ray.flags[lane] = 0;
       rayHit.hit.geomID[lane] = RTC_INVALID_GEOMETRY_ID;
       rayHit.hit.primID[lane] = RTC_INVALID_GEOMETRY_ID;
-      if (active[lane]) ++primaryRays;
+      primaryRays += active[lane] ? 1 : 0;
     }
     TraceContext context(RayKind::Camera);
     rtcIntersect8(valid, embree_.handle(), &context.rtc, &rayHit);
     for (int lane = 0; lane < kLanes; ++lane) {
-      if (!active[lane] || rayHit.hit.geomID[lane] == RTC_INVALID_GEOMETRY_ID) continue;
       LaneHit& h = hits[lane];
-      h.hit = true;
+      h.hit = active[lane] && rayHit.hit.geomID[lane] != RTC_INVALID_GEOMETRY_ID;
+      if (!h.hit) continue;
       h.geom = rayHit.hit.geomID[lane];
       h.prim = rayHit.hit.primID[lane];
+      h.objectId = objectIds_[h.geom];
       if (!surface) continue;
-      const GeometryData& geometry = embree_.geometry(h.geom);
-      const Object& object = *geometry.object;
-      const glm::uvec3& tri = object.triangles[h.prim];
-      const glm::vec3& p0 = object.positions[tri.x];
-      const glm::vec3& p1 = object.positions[tri.y];
-      const glm::vec3& p2 = object.positions[tri.z];
+      const TriangleData& triangle = embree_.geometry(h.geom).triangles[h.prim];
       const double u = rayHit.hit.u[lane], v = rayHit.hit.v[lane];
-      h.position = glm::vec3((1.0 - u - v) * glm::dvec3(p0) + u * glm::dvec3(p1) + v * glm::dvec3(p2));
-      glm::vec3 normal = geometry.normals[h.prim];
+      h.position = glm::vec3((1.0 - u - v) * glm::dvec3(triangle.p[0]) + u * glm::dvec3(triangle.p[1]) +
+                             v * glm::dvec3(triangle.p[2]));
+      glm::vec3 normal = triangle.normal;
       if (normal == glm::vec3(0.0f)) {
         normal = glm::normalize(glm::vec3(rayHit.hit.Ng_x[lane], rayHit.hit.Ng_y[lane], rayHit.hit.Ng_z[lane]));
       }
       const glm::vec3 dir(rayHit.ray.dir_x[lane], rayHit.ray.dir_y[lane], rayHit.ray.dir_z[lane]);
       h.normal = glm::dot(normal, dir) > 0.0f ? -normal : normal;
-      h.offset = shadowOriginOffset(h.position, p0, p1, p2);
+      // shadowOriginOffset, with the vertices' part taken from the triangle's table.
+      h.offset = kOriginOffsetScale * std::max(maxAbs(h.position), triangle.maxAbs);
       h.origin = h.position + h.normal * h.offset;
     }
   }
 
   // Occlusion of the segments from each active lane's shadow origin along dir[lane] up to
-  // tfar[lane]. With wantDistance, occluded lanes are traced again for the nearest occluder.
+  // tfar[lane]. With wantDistance the packet is one closest-hit query (rtcIntersect8): a lane is
+  // occluded where it hits anything, and the hit's t gives the occluder distance. Without, an any-hit
+  // query (rtcOccluded8). Both run the same triangle test and filter on the same segment, so they
+  // agree on which lanes are occluded (every bundled scene's channels are bit-identical to the two
+  // passes this replaced: rtcOccluded8, then rtcIntersect8 again for the occluded lanes); lanes that
+  // reach the sky, usually most, cost a closest-hit query what they cost an any-hit one.
   void traceShadow(const LaneHit* hits, const glm::vec3* dir, const float* tfar, const bool* active, bool wantDistance,
                    bool* occluded, float* distance) {
-    RTCRay8 ray;
+    RTCRayHit8 rayHit;
+    RTCRay8& ray = rayHit.ray;
     alignas(32) int valid[kLanes];
     TraceContext& context = shadowContext_;
     int count = 0;
@@ -182,46 +194,23 @@ class Tracer {
       ray.mask[lane] = ~0u;
       ray.id[lane] = unsigned(lane);
       ray.flags[lane] = 0;
-      if (active[lane]) ++count;
+      count += active[lane] ? 1 : 0;
     }
     if (count == 0) return;
     shadowRays += count;
-    rtcOccluded8(valid, embree_.handle(), &context.rtc, &ray);
-    int occludedCount = 0;
-    for (int lane = 0; lane < kLanes; ++lane) {
+    if (!wantDistance) {
+      rtcOccluded8(valid, embree_.handle(), &context.rtc, &ray);
       // Embree marks an occluded ray by setting tfar to -inf.
-      occluded[lane] = active[lane] && ray.tfar[lane] < 0.0f;
-      if (occluded[lane]) ++occludedCount;
+      for (int lane = 0; lane < kLanes; ++lane) occluded[lane] = active[lane] && ray.tfar[lane] < 0.0f;
+      return;
     }
-    if (!wantDistance || occludedCount == 0) return;
-    // Only the occluded lanes need the closest hit; lit lanes (usually most) stay any-hit rays.
-    RTCRayHit8 rayHit;
-    for (int lane = 0; lane < kLanes; ++lane) {
-      valid[lane] = occluded[lane] ? -1 : 0;
-      const glm::vec3 origin = active[lane] ? hits[lane].origin : glm::vec3(0.0f);
-      const glm::vec3 d = active[lane] ? dir[lane] : glm::vec3(0, 1, 0);
-      rayHit.ray.org_x[lane] = origin.x;
-      rayHit.ray.org_y[lane] = origin.y;
-      rayHit.ray.org_z[lane] = origin.z;
-      rayHit.ray.dir_x[lane] = d.x;
-      rayHit.ray.dir_y[lane] = d.y;
-      rayHit.ray.dir_z[lane] = d.z;
-      rayHit.ray.tnear[lane] = 0.0f;
-      rayHit.ray.tfar[lane] = occluded[lane] ? tfar[lane] : 0.0f;
-      rayHit.ray.time[lane] = 0.0f;
-      rayHit.ray.mask[lane] = ~0u;
-      rayHit.ray.id[lane] = unsigned(lane);
-      rayHit.ray.flags[lane] = 0;
-      rayHit.hit.geomID[lane] = RTC_INVALID_GEOMETRY_ID;
-    }
-    shadowRays += occludedCount;
+    for (int lane = 0; lane < kLanes; ++lane) rayHit.hit.geomID[lane] = RTC_INVALID_GEOMETRY_ID;
     rtcIntersect8(valid, embree_.handle(), &context.rtc, &rayHit);
     for (int lane = 0; lane < kLanes; ++lane) {
-      if (!occluded[lane]) continue;
-      // Both passes apply the same filter to the same segment, so the closest hit exists. The
-      // distance is measured from the surface point itself, not from the offset origin.
-      const float t = rayHit.hit.geomID[lane] != RTC_INVALID_GEOMETRY_ID ? rayHit.ray.tfar[lane] : 0.0f;
-      distance[lane] = glm::length(hits[lane].normal * hits[lane].offset + dir[lane] * t);
+      occluded[lane] = active[lane] && rayHit.hit.geomID[lane] != RTC_INVALID_GEOMETRY_ID;
+      // The distance is measured from the surface point itself, not from the offset origin.
+      if (occluded[lane])
+        distance[lane] = glm::length(hits[lane].normal * hits[lane].offset + dir[lane] * ray.tfar[lane]);
     }
   }
 
@@ -323,7 +312,8 @@ class Tracer {
   TraceContext shadowContext_{RayKind::Shadow};
   const Scene& scene_;
   const EmbreeScene& embree_;
-  const CameraRays rays_;  // Camera::rayDirection, bit for bit
+  const CameraRays rays_;   // Camera::rayDirection, bit for bit
+  const float* objectIds_;  // per geometry id: Object::id as a float
 };
 
 // The output channels, one pointer each, in the frame's channel order (referenceChannelNames):
@@ -395,8 +385,7 @@ static double processCpuSeconds() {
 }
 
 float shadowOriginOffset(const glm::vec3& position, const glm::vec3& p0, const glm::vec3& p1, const glm::vec3& p2) {
-  auto maxAbs = [](const glm::vec3& p) { return std::max(std::fabs(p.x), std::max(std::fabs(p.y), std::fabs(p.z))); };
-  return kOriginOffsetScale * std::max(std::max(maxAbs(position), maxAbs(p0)), std::max(maxAbs(p1), maxAbs(p2)));
+  return originOffset(position, p0, p1, p2);
 }
 
 const char* referenceChannelsKey(ReferenceChannels channels) {
@@ -531,6 +520,8 @@ Frame renderReference(const Scene& scene, const ReferenceOptions& options, Refer
   const auto buildStart = Clock::now();
   std::unique_ptr<EmbreeScene> embree;
   arena.execute([&] { embree = std::make_unique<EmbreeScene>(scene); });
+  std::vector<float> objectIds(scene.objects.size());
+  for (size_t g = 0; g < objectIds.size(); ++g) objectIds[g] = float(embree->geometry(unsigned(g)).object->id);
   const auto traceStart = Clock::now();
   const double traceCpuStart = processCpuSeconds();
 
@@ -554,7 +545,7 @@ Frame renderReference(const Scene& scene, const ReferenceOptions& options, Refer
 
   arena.execute([&] {
     tbb::parallel_for(tbb::blocked_range<int>(0, tileCount), [&](const tbb::blocked_range<int>& range) {
-      Tracer tracer(scene, *embree);
+      Tracer tracer(scene, *embree, objectIds.data());
       std::vector<float> tileBuffer(channelCount * kTilePixels);
       std::vector<float*> tileBase(channelCount);
       for (size_t c = 0; c < channelCount; ++c) tileBase[c] = tileBuffer.data() + c * kTilePixels;
@@ -622,12 +613,12 @@ Frame renderReference(const Scene& scene, const ReferenceOptions& options, Refer
               const size_t pixel = size_t(py[lane] - y0) * kTileSize + size_t(px[lane] - x0);
               const LaneHit& h = center[lane];
               planes.hit[pixel] = h.hit ? 1.0f : 0.0f;
-              planes.objectId[pixel] = h.hit ? float(embree->geometry(h.geom).object->id) : 0.0f;
+              planes.objectId[pixel] = h.hit ? h.objectId : 0.0f;
               if (all) {
                 planes.primId[pixel] = h.hit ? float(h.prim) : 0.0f;
                 for (int a = 0; a < 3; ++a) {
-                  planes.p[a][pixel] = h.position[a];
-                  planes.n[a][pixel] = h.normal[a];
+                  planes.p[a][pixel] = h.hit ? h.position[a] : 0.0f;
+                  planes.n[a][pixel] = h.hit ? h.normal[a] : 0.0f;
                 }
               }
               const int count = sameObject[lane];
