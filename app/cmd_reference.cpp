@@ -57,17 +57,16 @@ int run(const Options& options) {
   shadowlab::ReferenceOptions referenceOptions;
   referenceOptions.spp = options.spp;
   referenceOptions.threads = options.threads;
-  // Traced with every channel: the picture needs prim_id, P and N. The EXR keeps the Compare set
-  // unless --all-channels (the values are the same either way).
-  referenceOptions.channels = shadowlab::ReferenceChannels::All;
-  referenceOptions.progress = shadowlab::app::terminalProgress("reference: tracing");
-  shadowlab::ReferenceStats stats;
-  shadowlab::Frame frame = shadowlab::renderReference(scene, referenceOptions, &stats);
-  const auto traced = Clock::now();
-  std::vector<uint8_t> picture = shadowlab::referencePicture(scene, frame);
+  // The picture is drawn during the trace (the same bytes as referencePicture draws from every
+  // channel), so only the channels written are traced: the Compare set unless --all-channels.
   const shadowlab::ReferenceChannels channelSet =
       options.allChannels ? shadowlab::ReferenceChannels::All : shadowlab::ReferenceChannels::Compare;
-  shadowlab::keepReferenceChannels(frame, scene, channelSet);
+  referenceOptions.channels = channelSet;
+  referenceOptions.progress = shadowlab::app::terminalProgress("reference: tracing");
+  shadowlab::ReferenceStats stats;
+  std::vector<uint8_t> picture;
+  const shadowlab::Frame frame = shadowlab::renderReference(scene, referenceOptions, &stats, &picture);
+  const auto traced = Clock::now();
 
   const std::string exrPath = options.outDir + "/reference.exr";
   const std::string pngPath = options.outDir + "/reference.png";

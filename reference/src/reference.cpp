@@ -20,6 +20,7 @@
 #include <xmmintrin.h>
 
 #include "embree_scene.h"
+#include "picture_shading.h"
 #include "shadowlab/scenes/error.h"
 #include "shadowlab/scenes/io.h"
 
@@ -416,26 +417,13 @@ std::vector<std::string> referenceChannelNames(const Scene& scene, ReferenceChan
   return names;
 }
 
-void keepReferenceChannels(Frame& frame, const Scene& scene, ReferenceChannels channels) {
-  Frame kept;
-  kept.width = frame.width;
-  kept.height = frame.height;
-  kept.meta = std::move(frame.meta);
-  for (const std::string& name : referenceChannelNames(scene, channels)) {
-    if (!frame.has(name)) throw InputError("reference: error: frame has no channel " + name);
-    kept.names.push_back(name);
-    kept.data.push_back(std::move(frame.get(name)));
-  }
-  kept.meta["channels"] = referenceChannelsKey(channels);
-  frame = std::move(kept);
-}
-
 double referenceFrameBytes(const Scene& scene, ReferenceChannels channels) {
   const double count = double(referenceChannelNames(scene, channels).size());
   return count * 4.0 * double(scene.camera.width) * double(scene.camera.height);
 }
 
-Frame renderReference(const Scene& scene, const ReferenceOptions& options, ReferenceStats* stats) {
+Frame renderReference(const Scene& scene, const ReferenceOptions& options, ReferenceStats* stats,
+                      std::vector<uint8_t>* picture) {
   if (options.spp < 1 || options.spp > 1024) {
     throw InputError("reference: error: spp " + std::to_string(options.spp) + "; expected 1..1024");
   }
@@ -520,6 +508,14 @@ Frame renderReference(const Scene& scene, const ReferenceOptions& options, Refer
   const auto buildStart = Clock::now();
   std::unique_ptr<EmbreeScene> embree;
   arena.execute([&] { embree = std::make_unique<EmbreeScene>(scene); });
+  // The picture, drawn in the tile loop from the values it writes (referencePicture's colours).
+  const reference_detail::PictureShader shader(scene);
+  const long pictureLight = shader.light() ? long(shader.light() - scene.lights.data()) : -1;
+  uint8_t* pictureBytes = nullptr;
+  if (picture) {
+    picture->assign(size_t(width) * size_t(height) * 3, 0);
+    pictureBytes = picture->data();
+  }
   std::vector<float> objectIds(scene.objects.size());
   for (size_t g = 0; g < objectIds.size(); ++g) objectIds[g] = float(embree->geometry(unsigned(g)).object->id);
   const auto traceStart = Clock::now();
@@ -551,7 +547,9 @@ Frame renderReference(const Scene& scene, const ReferenceOptions& options, Refer
       for (size_t c = 0; c < channelCount; ++c) tileBase[c] = tileBuffer.data() + c * kTilePixels;
       const Planes planes(tileBase.data(), channelCount, lightCount, projectorCount, all);
       // Camera rays need the surface point and normal only for shadow rays and the All channels.
-      const bool surface = all || lightCount > 0 || projectorCount > 0;
+      const bool surface = all || lightCount > 0 || projectorCount > 0 || pictureBytes;
+      std::vector<float> pictureCoverage(projectorCount);
+      std::vector<glm::vec3> pictureRgb(projectorCount);
       LaneHit center[kLanes], sample[kLanes];
       std::vector<float> centerVis(lightCount * kLanes), centerDist(lightCount * kLanes);
       std::vector<ProjectorSample> centerProj(projectorCount * kLanes);
@@ -638,6 +636,16 @@ Frame renderReference(const Scene& scene, const ReferenceOptions& options, Refer
                     count > 0 ? ProjectorSample{projSum[k].coverage / count, 0, 0, projSum[k].rgb / float(count)} : c;
                 planes.coverage[p][pixel] = value.coverage;
                 for (int ch = 0; ch < 3; ++ch) planes.rgb[ch][p][pixel] = value.rgb[ch];
+                pictureCoverage[p] = value.coverage;
+                pictureRgb[p] = value.rgb;
+              }
+              if (pictureBytes) {
+                const glm::vec3 albedo =
+                    h.hit ? shader.albedo(embree->geometry(h.geom).object, h.prim) : glm::vec3(0.8f);
+                const float vis = pictureLight >= 0 ? planes.vis[size_t(pictureLight)][pixel] : 1.0f;
+                shader.shade(h.hit, albedo, h.normal, h.position, vis, projectorCount, pictureCoverage.data(),
+                             pictureRgb.data(),
+                             pictureBytes + (size_t(py[lane]) * size_t(width) + size_t(px[lane])) * 3);
               }
             }
           }

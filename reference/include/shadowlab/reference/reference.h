@@ -35,10 +35,6 @@ struct ReferenceOptions {
 std::vector<std::string> referenceChannelNames(const Scene& scene, ReferenceChannels channels);
 const char* referenceChannelsKey(ReferenceChannels channels);
 
-// Drops every channel of `frame` (a reference with at least the Compare set) outside `channels` and
-// sets its metadata's "channels"; the planes kept are moved, not copied.
-void keepReferenceChannels(Frame& frame, const Scene& scene, ReferenceChannels channels);
-
 // Bytes a reference frame of this scene takes in memory: one float per pixel per channel
 // (All: 9 per frame, 2 per light, 6 per projector; Compare: 2, 2, 4).
 double referenceFrameBytes(const Scene& scene, ReferenceChannels channels = ReferenceChannels::All);
@@ -55,8 +51,10 @@ struct ReferenceStats {
 };
 
 // Traces every light and projector of the scene. Channels: see scenes/frame.h.
-// Throws DriverError when Embree reports an error.
-Frame renderReference(const Scene& scene, const ReferenceOptions& options, ReferenceStats* stats = nullptr);
+// With `picture`, also draws referencePicture's picture (the same bytes) during the trace, from the
+// values it computes, so a Compare frame suffices. Throws DriverError when Embree reports an error.
+Frame renderReference(const Scene& scene, const ReferenceOptions& options, ReferenceStats* stats = nullptr,
+                      std::vector<uint8_t>* picture = nullptr);
 
 // The shadow-ray origin rule (reference/README.md, "Shadow-ray origins"): a shadow ray from the hit
 // point `position` on the triangle (p0, p1, p2) starts at position + N * shadowOriginOffset(...),
