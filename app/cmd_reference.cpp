@@ -50,7 +50,9 @@ int run(const Options& options) {
                                   "\"; expected scene:/json/pointer=value (the reference takes no method keys)");
   const shadowlab::SetArguments set = shadowlab::applySetArguments("", options.sets);
   const shadowlab::Scene scene = shadowlab::loadScene(shadowlab::resolveScenePath(options.scene), set.sceneOverrides);
-  shadowlab::app::checkMemory("reference", shadowlab::app::referenceJobMemory(scene), options.maxMemoryGiB);
+  const shadowlab::ReferenceChannels channelSet =
+      options.allChannels ? shadowlab::ReferenceChannels::All : shadowlab::ReferenceChannels::Compare;
+  shadowlab::app::checkMemory("reference", shadowlab::app::referenceJobMemory(scene, channelSet), options.maxMemoryGiB);
   shadowlab::OutputFolder out(options.outDir);  // an unusable -o fails here, before the trace
   const auto loaded = Clock::now();
 
@@ -59,8 +61,6 @@ int run(const Options& options) {
   referenceOptions.threads = options.threads;
   // The picture is drawn during the trace (the same bytes as referencePicture draws from every
   // channel), so only the channels written are traced: the Compare set unless --all-channels.
-  const shadowlab::ReferenceChannels channelSet =
-      options.allChannels ? shadowlab::ReferenceChannels::All : shadowlab::ReferenceChannels::Compare;
   referenceOptions.channels = channelSet;
   referenceOptions.progress = shadowlab::app::terminalProgress("reference: tracing");
   shadowlab::ReferenceStats stats;
