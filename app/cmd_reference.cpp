@@ -1,6 +1,7 @@
-// `shadowlab reference SCENE -o DIR [--spp N] [--threads N] [--set scene:/pointer=value ...]`: traces the Embree ground
-// truth and writes DIR/reference.exr (channels: scenes/frame.h), DIR/reference.png (a readable picture) and
-// DIR/reference.json (ray counts, timings, hashes).
+// `shadowlab reference SCENE -o DIR [--spp N] [--threads N] [--all-channels] [--set scene:/pointer=value ...]`: traces
+// the Embree ground truth and writes DIR/reference.exr (the Compare channel set, the reference cache's; every channel
+// with --all-channels: reference/README.md), DIR/reference.png (a readable picture) and DIR/reference.json (ray
+// counts, timings, hashes).
 #include <chrono>
 #include <cstdio>
 #include <exception>
@@ -24,6 +25,7 @@ struct Options {
   std::string outDir;
   int spp = 1;
   int threads = 0;
+  bool allChannels = false;
   std::vector<std::string> sets;
   double maxMemoryGiB = 0;
 };
@@ -48,16 +50,22 @@ int run(const Options& options) {
                                   "\"; expected scene:/json/pointer=value (the reference takes no method keys)");
   const shadowlab::SetArguments set = shadowlab::applySetArguments("", options.sets);
   const shadowlab::Scene scene = shadowlab::loadScene(shadowlab::resolveScenePath(options.scene), set.sceneOverrides);
-  shadowlab::app::checkMemory("reference", shadowlab::app::referenceJobMemory(scene), options.maxMemoryGiB);
+  const shadowlab::ReferenceChannels channelSet =
+      options.allChannels ? shadowlab::ReferenceChannels::All : shadowlab::ReferenceChannels::Compare;
+  shadowlab::app::checkMemory("reference", shadowlab::app::referenceJobMemory(scene, channelSet), options.maxMemoryGiB);
   shadowlab::OutputFolder out(options.outDir);  // an unusable -o fails here, before the trace
   const auto loaded = Clock::now();
 
   shadowlab::ReferenceOptions referenceOptions;
   referenceOptions.spp = options.spp;
   referenceOptions.threads = options.threads;
+  // The picture is drawn during the trace (the same bytes as referencePicture draws from every
+  // channel), so only the channels written are traced: the Compare set unless --all-channels.
+  referenceOptions.channels = channelSet;
   referenceOptions.progress = shadowlab::app::terminalProgress("reference: tracing");
   shadowlab::ReferenceStats stats;
-  const shadowlab::Frame frame = shadowlab::renderReference(scene, referenceOptions, &stats);
+  std::vector<uint8_t> picture;
+  const shadowlab::Frame frame = shadowlab::renderReference(scene, referenceOptions, &stats, &picture);
   const auto traced = Clock::now();
 
   const std::string exrPath = options.outDir + "/reference.exr";
@@ -68,7 +76,7 @@ int run(const Options& options) {
   std::exception_ptr pngError;
   std::thread pngWriter([&] {
     try {
-      shadowlab::writeRgbPng(pngPath, frame.width, frame.height, shadowlab::referencePicture(scene, frame));
+      shadowlab::writeRgbPng(pngPath, frame.width, frame.height, picture);
     } catch (...) {
       pngError = std::current_exception();
     }
@@ -94,6 +102,7 @@ int run(const Options& options) {
       {"height", frame.height},
       {"spp", options.spp},
       {"threads", options.threads},
+      {"channels", shadowlab::referenceChannelsKey(channelSet)},
       {"lights", frame.meta["lights"]},
       {"projectors", frame.meta["projectors"]},
       {"triangles", scene.triangleCount()},
@@ -133,6 +142,9 @@ shadowlab::app::Registrar reg{
           ->capture_default_str();
       sub->add_option("--threads", options->threads, "worker threads, 0 = all; results are identical for any value")
           ->capture_default_str();
+      sub->add_flag("--all-channels", options->allChannels,
+                    "reference.exr with every channel (adds prim_id, P, N, proj.*.u/v to the Compare set that "
+                    "compare and the reference cache read)");
       return std::function<int()>([options] { return run(*options); });
     }};
 

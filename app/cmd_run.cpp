@@ -141,7 +141,9 @@ app::Registrar reg{"run", [](CLI::App& app) {
                      sub->add_option("--cache", opts->cacheDir,
                                      "Reference cache folder (default: $SHADOWLAB_CACHE, else .shadowlab-cache)");
                      sub->add_option("--device", opts->device, "Vulkan device name substring (default: lavapipe)");
-                     sub->add_flag("--keep-images", opts->keepImages, "Also write reference.exr and raster.exr");
+                     sub->add_flag("--keep-images", opts->keepImages,
+                                   "Also write reference.exr (the cached reference: the Compare channel set; "
+                                   "`shadowlab reference --all-channels` gives every channel) and raster.exr");
                      return std::function<int()>([opts] { return run(*opts); });
                    }};
 

@@ -63,10 +63,10 @@ void MemoryEstimate::add(double termBytes, const std::string& what) {
 // peak resident set is about 130 MB).
 constexpr double kProgramBytes = 0.15 * kGiB;
 
-MemoryEstimate referenceJobMemory(const Scene& scene) {
+MemoryEstimate referenceJobMemory(const Scene& scene, ReferenceChannels channels) {
   MemoryEstimate e;
   e.add(kProgramBytes, "program");
-  e.add(2.0 * referenceFrameBytes(scene), "reference frame x 2 (the EXR writer's interleaved copy)");
+  e.add(2.0 * referenceFrameBytes(scene, channels), "reference frame x 2 (the EXR writer's interleaved copy)");
   e.add(6.0 * pixels(scene), "picture");
   return e;
 }

@@ -7,6 +7,7 @@
 
 #include <CLI/CLI.hpp>
 
+#include "shadowlab/reference/reference.h"
 #include "shadowlab/scenes/method.h"
 #include "shadowlab/scenes/scene.h"
 
@@ -22,8 +23,9 @@ struct MemoryEstimate {
   void add(double termBytes, const std::string& what);
 };
 
-// The reference's frame, twice while the EXR is interleaved, plus its pictures.
-MemoryEstimate referenceJobMemory(const Scene& scene);
+// The reference's frame with the channels written (`shadowlab reference`: Compare, or All with
+// --all-channels), twice while the EXR is interleaved, plus its pictures.
+MemoryEstimate referenceJobMemory(const Scene& scene, ReferenceChannels channels);
 // The raster frame (twice while written), the device's images (camera targets and map layers).
 MemoryEstimate rasterJobMemory(const Scene& scene, const Method& method);
 // run, stability and each sweep row: reference and raster frames in memory together, the

@@ -8,8 +8,10 @@
 //                      ReferenceStats::traceCpuSeconds, the same clock around the bare loops), best
 //                      of the rounds each:
 //     ref_primary_ms   renderReference with the lights and projectors removed: camera rays only
-//                      (the trace, so the BVH build and the frame allocation are left out)
-//     ref_shadow_ms    renderReference as `shadowlab reference` runs it (1 spp), minus the above:
+//                      (the trace, so the BVH build and the frame allocation are left out), with
+//                      the Compare channel set (ReferenceOptions::channels), as the reference cache
+//                      (run, sweep, stability, tune) traces it
+//     ref_shadow_ms    renderReference with the scene's light (1 spp, Compare), minus the above:
 //                      everything shadow rays cost (facing test, origins, rtcOccluded8, the
 //                      closest-hit pass for occluder_dist, the vis and occluder_dist writes)
 //     bare_primary_ms  rtcIntersect8 over the same camera rays: the same 16 x 16 tiles of 4 x 2
@@ -20,6 +22,8 @@
 //                      (one per 4 x 2 block, lanes without a shadow ray masked off)
 //     primary_ratio    ref_primary_ms / bare_primary_ms   (goal <= 1.25)
 //     shadow_ratio     ref_shadow_ms / bare_shadow_ms     (goal <= 1.25)
+//     primary_ratio_all, shadow_ratio_all  the same with the All channel set (P, N, prim_id too), as
+//                      `shadowlab reference` traces it (its picture needs them)
 //   The bare loops trace a plain Embree scene (no filter functions, default flags). The reference's
 //   scene is built with RTC_SCENE_FLAG_ROBUST (watertight edges, a correctness rule); the
 //   *_ratio_robust counters divide by the same bare loops on a robust scene instead, i.e. they leave
@@ -240,15 +244,18 @@ void BM_Ratios(benchmark::State& state, const std::string& name) {
   cameraOnly.projectors.clear();
   ReferenceOptions options;
   options.threads = 1;
+  options.channels = ReferenceChannels::Compare;  // what the reference cache traces
+  ReferenceOptions allOptions = options;
+  allOptions.channels = ReferenceChannels::All;  // what `shadowlab reference` traces (the picture needs P, N)
   BareScene bare(scene, false), bareRobust(scene, true);
   ReferenceStats fullStats;
-  const std::vector<ShadowPacket> packets = shadowPackets(scene, renderReference(scene, options, &fullStats));
+  const std::vector<ShadowPacket> packets = shadowPackets(scene, renderReference(scene, allOptions, &fullStats));
   size_t bareShadowRays = 0;
   for (const ShadowPacket& packet : packets)
     for (int lane = 0; lane < 8; ++lane) bareShadowRays += packet.valid[lane] ? 1 : 0;
 
-  double refPrimary = 1e30, refFull = 1e30, barePrimary = 1e30, bareShadow = 1e30, barePrimaryRobust = 1e30,
-         bareShadowRobust = 1e30;
+  double refPrimary = 1e30, refFull = 1e30, allPrimary = 1e30, allFull = 1e30, barePrimary = 1e30, bareShadow = 1e30,
+         barePrimaryRobust = 1e30, bareShadowRobust = 1e30;
   for (auto _ : state) {
     double total = 0;
     for (int round = 0; round < kRounds; ++round) {
@@ -257,6 +264,11 @@ void BM_Ratios(benchmark::State& state, const std::string& name) {
       refPrimary = std::min(refPrimary, stats.traceCpuSeconds);
       benchmark::DoNotOptimize(renderReference(scene, options, &stats).data.data());
       refFull = std::min(refFull, stats.traceCpuSeconds);
+      const double compareFull = stats.traceCpuSeconds;
+      benchmark::DoNotOptimize(renderReference(cameraOnly, allOptions, &stats).data.data());
+      allPrimary = std::min(allPrimary, stats.traceCpuSeconds);
+      benchmark::DoNotOptimize(renderReference(scene, allOptions, &stats).data.data());
+      allFull = std::min(allFull, stats.traceCpuSeconds);
       const double seconds[4] = {bareIntersect(scene.camera, bare.scene), bareOccluded(packets, bare.scene),
                                  bareIntersect(scene.camera, bareRobust.scene),
                                  bareOccluded(packets, bareRobust.scene)};
@@ -264,7 +276,7 @@ void BM_Ratios(benchmark::State& state, const std::string& name) {
       bareShadow = std::min(bareShadow, seconds[1]);
       barePrimaryRobust = std::min(barePrimaryRobust, seconds[2]);
       bareShadowRobust = std::min(bareShadowRobust, seconds[3]);
-      total += stats.traceCpuSeconds;
+      total += compareFull;
     }
     state.SetIterationTime(total);
   }
@@ -273,6 +285,8 @@ void BM_Ratios(benchmark::State& state, const std::string& name) {
   state.counters["shadow_ratio"] = refShadow / bareShadow;
   state.counters["primary_ratio_robust"] = refPrimary / barePrimaryRobust;
   state.counters["shadow_ratio_robust"] = refShadow / bareShadowRobust;
+  state.counters["primary_ratio_all"] = allPrimary / barePrimary;
+  state.counters["shadow_ratio_all"] = (allFull - allPrimary) / bareShadow;
   state.counters["ref_primary_ms"] = refPrimary * 1e3;
   state.counters["ref_shadow_ms"] = refShadow * 1e3;
   state.counters["bare_primary_ms"] = barePrimary * 1e3;

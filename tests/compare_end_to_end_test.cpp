@@ -11,6 +11,7 @@
 
 #include "shadowlab/compare/run_pipeline.h"
 #include "shadowlab/scenes/error.h"
+#include "shadowlab/scenes/io.h"
 #include "shadowlab/scenes/loader.h"
 
 namespace shadowlab {
@@ -159,6 +160,52 @@ TEST(CompareEndToEnd, ReferenceCacheTracesOnce) {
   EXPECT_TRUE(a.referenceTraced);
   EXPECT_FALSE(b.referenceTraced);
   EXPECT_EQ(a.metrics.toJson().dump(), b.metrics.toJson().dump());
+  std::filesystem::remove_all(dir);
+}
+
+// The cache holds the Compare channel set under the /2 key. An entry written under the /1 key (every
+// channel) is never read: it has another name. A file at the /2 name that lacks a Compare channel (or
+// names another scene) is traced again and replaced, never compared against. No rasterizer needed.
+TEST(CompareEndToEnd, ReferenceCacheHoldsTheCompareSetUnderVersionTwo) {
+  const std::string dir =
+      (std::filesystem::temp_directory_path() / ("shadowlab-e2e-cache-v2-" + std::to_string(::getpid()))).string();
+  std::filesystem::remove_all(dir);
+  std::filesystem::create_directories(dir);
+  ReferenceCache c(dir);
+  const Scene s = loadScene(resolveScenePath("sphere_on_plane"), {{"/camera/width", 64}, {"/camera/height", 36}});
+  ReferenceOptions all;
+  all.channels = ReferenceChannels::All;
+  // A /1 entry as the previous build wrote it, with its vis planted all lit: read, it would be wrong.
+  Frame old = renderReference(s, all);
+  std::fill(old.get("light.sun.vis").begin(), old.get("light.sun.vis").end(), 1.0f);
+  const std::string oldKey = "shadowlab.reference/1;scene=" + s.hash + ";camera=" + s.camera.hash() + ";spp=1";
+  const std::string oldPath = dir + "/" + hashHex(fnv1a64(oldKey.data(), oldKey.size())) + ".exr";
+  writeFrameExr(old, oldPath);
+  const std::string path = dir + "/" + referenceHash(s, all) + ".exr";
+  ASSERT_NE(oldPath, path);
+
+  bool traced = false;
+  const Frame first = c.get(s, all, &traced);  // asks for All: the cache still holds Compare
+  EXPECT_TRUE(traced);
+  EXPECT_EQ(first.names, referenceChannelNames(s, ReferenceChannels::Compare));
+  EXPECT_EQ(first.meta.at("channels"), "compare");
+  const Frame truth = renderReference(s, all);
+  EXPECT_EQ(first.get("light.sun.vis"), truth.get("light.sun.vis"));
+  EXPECT_NE(first.get("light.sun.vis"), old.get("light.sun.vis"));
+  EXPECT_TRUE(std::filesystem::exists(oldPath));  // left alone
+  const Frame second = c.get(s, {}, &traced);
+  EXPECT_FALSE(traced);
+  EXPECT_EQ(second.data, first.data);
+
+  // A /2-named file without occluder_dist: traced again, replaced by a complete entry.
+  Frame partial = first;
+  partial.names.pop_back();
+  partial.data.pop_back();
+  writeFrameExr(partial, path);
+  const Frame third = c.get(s, {}, &traced);
+  EXPECT_TRUE(traced);
+  EXPECT_EQ(third.data, first.data);
+  EXPECT_EQ(readFrameExr(path).names, first.names);
   std::filesystem::remove_all(dir);
 }
 

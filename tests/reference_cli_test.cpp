@@ -160,9 +160,14 @@ TEST_F(ReferenceCli, GoodRunWritesConsistentOutputs) {
   EXPECT_NEAR(report.at("mrays_per_s").get<double>(),
               report.at("rays").get<double>() / report.at("trace_seconds").get<double>() * 1e-6, 1e-6);
 
-  // The EXR holds exactly what the library renders (any thread count gives the same bits).
+  // The EXR holds exactly what the library renders (any thread count gives the same bits): by
+  // default the Compare channel set, the one the reference cache holds.
+  EXPECT_EQ(report.at("channels"), "compare");
   const shadowlab::Frame written = shadowlab::readFrameExr((out / "reference.exr").string());
+  options.channels = shadowlab::ReferenceChannels::Compare;
   const shadowlab::Frame expected = shadowlab::renderReference(scene, options);
+  EXPECT_EQ(written.names, (std::vector<std::string>{"hit", "object_id", "light.sun.vis", "light.sun.occluder_dist"}));
+  EXPECT_EQ(written.meta.at("channels"), "compare");
   // spp 4: a center ray per pixel, plus 4 samples where the center hit something (a pixel whose
   // center sees the sky reports no hit, whatever its samples would see).
   size_t hits = 0;
@@ -175,6 +180,43 @@ TEST_F(ReferenceCli, GoodRunWritesConsistentOutputs) {
   ASSERT_EQ(written.names, expected.names);
   for (size_t c = 0; c < expected.names.size(); ++c)
     EXPECT_EQ(written.data[c], expected.data[c]) << "channel " << expected.names[c];
+}
+
+// --all-channels adds prim_id, P, N (and a projector's u, v) to the same values; the picture, drawn
+// from every channel in both cases, is the same file.
+TEST_F(ReferenceCli, AllChannelsAddsTheChannelsForPeople) {
+  const std::string scenePath = writeSmallScene();
+  const fs::path compareOut = dir_ / "compare", allOut = dir_ / "all";
+  const RunResult plain = runShadowlab("reference '" + scenePath + "' -o '" + compareOut.string() + "'");
+  ASSERT_EQ(plain.exitCode, 0) << plain.output;
+  const RunResult all =
+      runShadowlab("reference '" + scenePath + "' -o '" + allOut.string() + "' --all-channels --threads 1");
+  ASSERT_EQ(all.exitCode, 0) << all.output;
+
+  const shadowlab::Scene scene = shadowlab::loadScene(scenePath);
+  shadowlab::ReferenceOptions options;
+  options.channels = shadowlab::ReferenceChannels::All;
+  const shadowlab::Frame expected = shadowlab::renderReference(scene, options);
+  const shadowlab::Frame written = shadowlab::readFrameExr((allOut / "reference.exr").string());
+  EXPECT_EQ(written.names, (std::vector<std::string>{"hit", "object_id", "prim_id", "P.x", "P.y", "P.z", "N.x", "N.y",
+                                                     "N.z", "light.sun.vis", "light.sun.occluder_dist"}));
+  EXPECT_EQ(written.meta.at("channels"), "all");
+  ASSERT_EQ(written.names, expected.names);
+  for (size_t c = 0; c < expected.names.size(); ++c)
+    EXPECT_EQ(written.data[c], expected.data[c]) << "channel " << expected.names[c];
+  std::ifstream in(allOut / "reference.json");
+  EXPECT_EQ(nlohmann::json::parse(in).at("channels"), "all");
+
+  // The default run's channels are the same planes, bit for bit.
+  const shadowlab::Frame compareSet = shadowlab::readFrameExr((compareOut / "reference.exr").string());
+  ASSERT_EQ(compareSet.names.size(), 4u);
+  for (size_t c = 0; c < compareSet.names.size(); ++c)
+    EXPECT_EQ(compareSet.data[c], written.get(compareSet.names[c])) << "channel " << compareSet.names[c];
+  auto bytes = [](const fs::path& path) {
+    std::ifstream file(path, std::ios::binary);
+    return std::string((std::istreambuf_iterator<char>(file)), std::istreambuf_iterator<char>());
+  };
+  EXPECT_EQ(bytes(compareOut / "reference.png"), bytes(allOut / "reference.png"));
 }
 
 }  // namespace

@@ -20,6 +20,7 @@
 
 #include "shadowlab/reference/reference.h"
 #include "shadowlab/scenes/error.h"
+#include "shadowlab/scenes/io.h"
 #include "shadowlab/scenes/loader.h"
 
 namespace {
@@ -199,6 +200,92 @@ TEST(ReferenceRobustness, BitIdenticalForAnyThreadCount) {
   }
 }
 
+// The Compare channel set (what the reference cache holds) is the All set's channels, bit for bit,
+// in the same order, on every bundled scene at its own size (spp 1), and at spp 4 on the scenes
+// with alpha testing and a projector; the Compare frames with 2 threads, the All frames with 1.
+TEST(ReferenceRobustness, CompareSetEqualsAllSetOnEveryBundledScene) {
+  struct Case {
+    std::string scene;
+    int spp;
+  };
+  std::vector<Case> cases;
+  for (const std::string& name : bundledSceneNames()) cases.push_back({name, 1});
+  cases.push_back({"alpha_fence", 4});
+  cases.push_back({"projector", 4});
+  ASSERT_GE(cases.size(), 10u);
+  for (const Case& c : cases) {
+    SCOPED_TRACE(c.scene + " spp " + std::to_string(c.spp));
+    Scene scene = loadScene(resolveScenePath(c.scene));
+    if (c.spp > 1) scene = loadScene(resolveScenePath(c.scene), {{"/camera/width", 240}, {"/camera/height", 135}});
+    ReferenceOptions options;
+    options.spp = c.spp;
+    options.threads = 1;
+    options.channels = ReferenceChannels::All;
+    const Frame all = renderReference(scene, options);
+    options.threads = 2;
+    options.channels = ReferenceChannels::Compare;
+    const Frame compareSet = renderReference(scene, options);
+    EXPECT_EQ(all.names, referenceChannelNames(scene, ReferenceChannels::All));
+    EXPECT_EQ(compareSet.names, referenceChannelNames(scene, ReferenceChannels::Compare));
+    EXPECT_EQ(all.meta.at("channels"), "all");
+    EXPECT_EQ(compareSet.meta.at("channels"), "compare");
+    nlohmann::json meta = compareSet.meta;
+    meta["channels"] = "all";
+    EXPECT_EQ(meta, all.meta);
+    // Compare = hit, object_id, then per light vis and occluder_dist, per projector coverage, R, G, B.
+    const size_t expectedCount = 2 + 2 * scene.lights.size() + 4 * scene.projectors.size();
+    ASSERT_EQ(compareSet.names.size(), expectedCount);
+    EXPECT_EQ(all.names.size(), expectedCount + 7 + 2 * scene.projectors.size());
+    size_t from = 0;
+    for (size_t k = 0; k < compareSet.names.size(); ++k) {
+      const std::string& name = compareSet.names[k];
+      while (from < all.names.size() && all.names[from] != name) ++from;  // the same order
+      ASSERT_LT(from, all.names.size()) << name << " missing or out of order in the All set";
+      const auto& a = all.data[from];
+      const auto& b = compareSet.data[k];
+      ASSERT_EQ(a.size(), b.size());
+      EXPECT_EQ(std::memcmp(a.data(), b.data(), a.size() * sizeof(float)), 0) << "channel " << name;
+    }
+    // Not trivially equal: every scene has something hit and something that is not lit.
+    size_t hits = 0;
+    for (float h : compareSet.get("hit")) hits += h == 1.0f;
+    EXPECT_GT(hits, 0u);
+    EXPECT_LT(hits, compareSet.pixelCount());
+  }
+}
+
+// The picture renderReference draws during the trace (what `shadowlab reference` writes, from a
+// Compare trace) is referencePicture's, byte for byte, drawn from the All frame: with a projector,
+// at spp 4 (averaged visibility and colours), on a mesh, and without any light.
+TEST(ReferenceRobustness, PictureDrawnDuringTheTraceEqualsReferencePicture) {
+  struct Case {
+    const char* scene;
+    int spp;
+    bool dropLights;
+  };
+  for (const Case& c : {Case{"projector", 1, false}, Case{"alpha_fence", 4, false}, Case{"bunny", 1, false},
+                        Case{"projector", 1, true}}) {
+    SCOPED_TRACE(std::string(c.scene) + " spp " + std::to_string(c.spp) + (c.dropLights ? " without lights" : ""));
+    Scene scene = loadScene(resolveScenePath(c.scene), {{"/camera/width", 320}, {"/camera/height", 180}});
+    if (c.dropLights) scene.lights.clear();
+    ReferenceOptions options;
+    options.spp = c.spp;
+    options.channels = ReferenceChannels::All;
+    const std::vector<uint8_t> expected = referencePicture(scene, renderReference(scene, options));
+    options.channels = ReferenceChannels::Compare;
+    std::vector<uint8_t> picture;
+    const Frame compareSet = renderReference(scene, options, nullptr, &picture);
+    EXPECT_FALSE(compareSet.has("N.x"));
+    ASSERT_EQ(picture.size(), size_t(320 * 180 * 3));
+    EXPECT_EQ(picture, expected);
+    // Not blank: something lit, something dark.
+    EXPECT_NE(*std::max_element(picture.begin(), picture.end()), *std::min_element(picture.begin(), picture.end()));
+  }
+  const Scene scene = loadScene(resolveScenePath("projector"), {{"/camera/width", 64}, {"/camera/height", 36}});
+  EXPECT_EQ(referenceFrameBytes(scene, ReferenceChannels::Compare), 8.0 * 64 * 36 * 4);
+  EXPECT_EQ(referenceFrameBytes(scene, ReferenceChannels::All), 17.0 * 64 * 36 * 4);
+}
+
 // The metadata and channel names exactly as scenes/frame.h documents them, and the hashes:
 // referenceHash changes with spp and camera but not with the thread count.
 TEST(ReferenceRobustness, ChannelsMetadataAndHashes) {
@@ -236,7 +323,12 @@ TEST(ReferenceRobustness, ChannelsMetadataAndHashes) {
 
   ReferenceOptions options;
   const std::string base = referenceHash(scene, options);
+  // The key's text (reference/README.md): version /2 since the cache holds the Compare set.
+  const std::string key = "shadowlab.reference/2;scene=" + scene.hash + ";camera=" + scene.camera.hash() + ";spp=1";
+  EXPECT_EQ(base, hashHex(fnv1a64(key.data(), key.size())));
   options.threads = 3;
+  EXPECT_EQ(referenceHash(scene, options), base);
+  options.channels = ReferenceChannels::Compare;  // the same values: the same key
   EXPECT_EQ(referenceHash(scene, options), base);
   options.spp = 4;
   EXPECT_NE(referenceHash(scene, options), base);

@@ -1,5 +1,7 @@
 #include "embree_scene.h"
 
+#include <algorithm>
+#include <cmath>
 #include <cstring>
 
 #include "shadowlab/scenes/error.h"
@@ -38,7 +40,7 @@ void filterHits(const RTCFilterFunctionNArguments* args) {
     const uint8_t flags = geometry->flags[prim];
     if (flags == 0) continue;
     if (flags & kOneSided) {
-      const glm::vec3& normal = geometry->normals[prim];
+      const glm::vec3& normal = geometry->triangles[prim].normal;
       const float along = normal.x * RTCRayN_dir_x(args->ray, n, i) + normal.y * RTCRayN_dir_y(args->ray, n, i) +
                           normal.z * RTCRayN_dir_z(args->ray, n, i);
       // Camera rays see the front face when they travel against its normal. A shadow ray travels
@@ -129,7 +131,7 @@ EmbreeScene::EmbreeScene(const Scene& scene) {
                         std::to_string(object.triangleMaterial.size()) + " triangle materials for " +
                         std::to_string(triangleCount) + " triangles");
     }
-    data.normals.resize(triangleCount);
+    data.triangles.resize(triangleCount);
     data.flags.resize(triangleCount);
     for (size_t t = 0; t < triangleCount; ++t) {
       const glm::uvec3& tri = object.triangles[t];
@@ -146,7 +148,13 @@ EmbreeScene::EmbreeScene(const Scene& scene) {
       const glm::dvec3 p0(object.positions[tri.x]), p1(object.positions[tri.y]), p2(object.positions[tri.z]);
       const glm::dvec3 cross = glm::cross(p1 - p0, p2 - p0);
       const double length = glm::length(cross);
-      data.normals[t] = length > 0.0 ? glm::vec3(cross / length) : glm::vec3(0.0f);
+      TriangleData& triangle = data.triangles[t];
+      triangle.normal = length > 0.0 ? glm::vec3(cross / length) : glm::vec3(0.0f);
+      triangle.p[0] = object.positions[tri.x];
+      triangle.p[1] = object.positions[tri.y];
+      triangle.p[2] = object.positions[tri.z];
+      for (const glm::vec3& p : triangle.p)
+        triangle.maxAbs = std::max(triangle.maxAbs, std::max(std::fabs(p.x), std::max(std::fabs(p.y), std::fabs(p.z))));
       const Material& material = scene.materials[materialIndex];
       uint8_t flags = 0;
       if (!material.twoSided) flags |= kOneSided;

@@ -23,13 +23,21 @@ enum TriangleFlags : uint8_t {
   kAlpha = 2,     // material has an alpha texture (holes where alpha < cutoff)
 };
 
-// What the filter needs about one Object, reachable from Embree's geometry user pointer.
+// One triangle as a camera ray's hit needs it, in one place (one or two cache lines instead of the
+// index, three positions and the normal spread over four arrays).
+struct TriangleData {
+  glm::vec3 p[3];       // the object's positions at the triangle's indices
+  glm::vec3 normal;     // unit, cross(p1 - p0, p2 - p0) (CCW front); 0 for a degenerate triangle
+  float maxAbs = 0.0f;  // the largest coordinate magnitude among p[0..2] (the shadow-origin rule)
+};
+
+// What the filter and the trace need about one Object, reachable from Embree's geometry user pointer.
 struct GeometryData {
   unsigned geomId = 0;  // == index into Scene::objects
   const Object* object = nullptr;
   const std::vector<Material>* materials = nullptr;
-  std::vector<glm::vec3> normals;  // per triangle, unit, cross(p1 - p0, p2 - p0) (CCW front)
-  std::vector<uint8_t> flags;      // per triangle, TriangleFlags
+  std::vector<TriangleData> triangles;  // per triangle
+  std::vector<uint8_t> flags;           // per triangle, TriangleFlags
   bool castsShadow = true;
   bool anyFlags = false;  // some triangle has TriangleFlags: camera and shadow rays need the filter
 };

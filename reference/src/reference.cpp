@@ -20,6 +20,7 @@
 #include <xmmintrin.h>
 
 #include "embree_scene.h"
+#include "picture_shading.h"
 #include "shadowlab/scenes/error.h"
 #include "shadowlab/scenes/io.h"
 
@@ -51,6 +52,7 @@ struct LaneHit {
   bool hit = false;
   unsigned geom = 0;
   unsigned prim = 0;
+  float objectId = 0.0f;     // Object::id of the geometry, as the object_id channel stores it
   glm::vec3 position{0.0f};  // world, on the triangle (barycentric interpolation in double)
   glm::vec3 normal{0.0f};    // unit geometric normal facing the camera
   float offset = 0.0f;       // world distance shadow origins move along `normal`
@@ -98,22 +100,30 @@ std::vector<glm::vec2> samplePattern(int spp) {
   return pattern;
 }
 
+// shadowOriginOffset, inlined into the trace.
+inline float maxAbs(const glm::vec3& p) { return std::max(std::fabs(p.x), std::max(std::fabs(p.y), std::fabs(p.z))); }
+inline float originOffset(const glm::vec3& position, const glm::vec3& p0, const glm::vec3& p1, const glm::vec3& p2) {
+  return kOriginOffsetScale * std::max(std::max(maxAbs(position), maxAbs(p0)), std::max(maxAbs(p1), maxAbs(p2)));
+}
+
 class Tracer {
  public:
-  Tracer(const Scene& scene, const EmbreeScene& embree) : scene_(scene), embree_(embree), rays_(scene.camera) {}
+  Tracer(const Scene& scene, const EmbreeScene& embree, const float* objectIds)
+      : scene_(scene), embree_(embree), rays_(scene.camera), objectIds_(objectIds) {}
 
   // Camera rays through (px + dx, py + dy) for the active lanes.
-  void tracePrimary(const int* px, const int* py, const bool* active, float dx, float dy, LaneHit* hits) {
+  // Without `surface` only hit, geom, prim and objectId are filled: no shadow ray or All channel
+  // needs the rest (position, normal, offset and origin are meaningful only where hit).
+  void tracePrimary(const int* px, const int* py, const bool* active, float dx, float dy, bool surface, LaneHit* hits) {
     RTCRayHit8 rayHit;
     alignas(32) int valid[kLanes];
-    const Camera& camera = scene_.camera;
+    const glm::vec3 org = scene_.camera.position;
     for (int lane = 0; lane < kLanes; ++lane) {
-      hits[lane] = LaneHit{};
       valid[lane] = active[lane] ? -1 : 0;
       const glm::vec3 dir = active[lane] ? rays_.direction(px[lane] + dx, py[lane] + dy) : glm::vec3(0, 0, 1);
-      rayHit.ray.org_x[lane] = camera.position.x;
-      rayHit.ray.org_y[lane] = camera.position.y;
-      rayHit.ray.org_z[lane] = camera.position.z;
+      rayHit.ray.org_x[lane] = org.x;
+      rayHit.ray.org_y[lane] = org.y;
+      rayHit.ray.org_z[lane] = org.z;
       rayHit.ray.dir_x[lane] = dir.x;
       rayHit.ray.dir_y[lane] = dir.y;
       rayHit.ray.dir_z[lane] = dir.z;
@@ -125,40 +135,45 @@ class Tracer {
       rayHit.ray.flags[lane] = 0;
       rayHit.hit.geomID[lane] = RTC_INVALID_GEOMETRY_ID;
       rayHit.hit.primID[lane] = RTC_INVALID_GEOMETRY_ID;
-      if (active[lane]) ++primaryRays;
+      primaryRays += active[lane] ? 1 : 0;
     }
     TraceContext context(RayKind::Camera);
     rtcIntersect8(valid, embree_.handle(), &context.rtc, &rayHit);
     for (int lane = 0; lane < kLanes; ++lane) {
-      if (!active[lane] || rayHit.hit.geomID[lane] == RTC_INVALID_GEOMETRY_ID) continue;
       LaneHit& h = hits[lane];
-      h.hit = true;
+      h.hit = active[lane] && rayHit.hit.geomID[lane] != RTC_INVALID_GEOMETRY_ID;
+      if (!h.hit) continue;
       h.geom = rayHit.hit.geomID[lane];
       h.prim = rayHit.hit.primID[lane];
-      const GeometryData& geometry = embree_.geometry(h.geom);
-      const Object& object = *geometry.object;
-      const glm::uvec3& tri = object.triangles[h.prim];
-      const glm::vec3& p0 = object.positions[tri.x];
-      const glm::vec3& p1 = object.positions[tri.y];
-      const glm::vec3& p2 = object.positions[tri.z];
+      h.objectId = objectIds_[h.geom];
+      if (!surface) continue;
+      const TriangleData& triangle = embree_.geometry(h.geom).triangles[h.prim];
       const double u = rayHit.hit.u[lane], v = rayHit.hit.v[lane];
-      h.position = glm::vec3((1.0 - u - v) * glm::dvec3(p0) + u * glm::dvec3(p1) + v * glm::dvec3(p2));
-      glm::vec3 normal = geometry.normals[h.prim];
+      h.position = glm::vec3((1.0 - u - v) * glm::dvec3(triangle.p[0]) + u * glm::dvec3(triangle.p[1]) +
+                             v * glm::dvec3(triangle.p[2]));
+      glm::vec3 normal = triangle.normal;
       if (normal == glm::vec3(0.0f)) {
         normal = glm::normalize(glm::vec3(rayHit.hit.Ng_x[lane], rayHit.hit.Ng_y[lane], rayHit.hit.Ng_z[lane]));
       }
       const glm::vec3 dir(rayHit.ray.dir_x[lane], rayHit.ray.dir_y[lane], rayHit.ray.dir_z[lane]);
       h.normal = glm::dot(normal, dir) > 0.0f ? -normal : normal;
-      h.offset = shadowOriginOffset(h.position, p0, p1, p2);
+      // shadowOriginOffset, with the vertices' part taken from the triangle's table.
+      h.offset = kOriginOffsetScale * std::max(maxAbs(h.position), triangle.maxAbs);
       h.origin = h.position + h.normal * h.offset;
     }
   }
 
   // Occlusion of the segments from each active lane's shadow origin along dir[lane] up to
-  // tfar[lane]. With wantDistance, occluded lanes are traced again for the nearest occluder.
+  // tfar[lane]. With wantDistance the packet is one closest-hit query (rtcIntersect8): a lane is
+  // occluded where it hits anything, and the hit's t gives the occluder distance. Without, an any-hit
+  // query (rtcOccluded8). Both run the same triangle test and filter on the same segment, so they
+  // agree on which lanes are occluded (every bundled scene's channels are bit-identical to the two
+  // passes this replaced: rtcOccluded8, then rtcIntersect8 again for the occluded lanes); lanes that
+  // reach the sky, usually most, cost a closest-hit query what they cost an any-hit one.
   void traceShadow(const LaneHit* hits, const glm::vec3* dir, const float* tfar, const bool* active, bool wantDistance,
                    bool* occluded, float* distance) {
-    RTCRay8 ray;
+    RTCRayHit8 rayHit;
+    RTCRay8& ray = rayHit.ray;
     alignas(32) int valid[kLanes];
     TraceContext& context = shadowContext_;
     int count = 0;
@@ -180,46 +195,23 @@ class Tracer {
       ray.mask[lane] = ~0u;
       ray.id[lane] = unsigned(lane);
       ray.flags[lane] = 0;
-      if (active[lane]) ++count;
+      count += active[lane] ? 1 : 0;
     }
     if (count == 0) return;
     shadowRays += count;
-    rtcOccluded8(valid, embree_.handle(), &context.rtc, &ray);
-    int occludedCount = 0;
-    for (int lane = 0; lane < kLanes; ++lane) {
+    if (!wantDistance) {
+      rtcOccluded8(valid, embree_.handle(), &context.rtc, &ray);
       // Embree marks an occluded ray by setting tfar to -inf.
-      occluded[lane] = active[lane] && ray.tfar[lane] < 0.0f;
-      if (occluded[lane]) ++occludedCount;
+      for (int lane = 0; lane < kLanes; ++lane) occluded[lane] = active[lane] && ray.tfar[lane] < 0.0f;
+      return;
     }
-    if (!wantDistance || occludedCount == 0) return;
-    // Only the occluded lanes need the closest hit; lit lanes (usually most) stay any-hit rays.
-    RTCRayHit8 rayHit;
-    for (int lane = 0; lane < kLanes; ++lane) {
-      valid[lane] = occluded[lane] ? -1 : 0;
-      const glm::vec3 origin = active[lane] ? hits[lane].origin : glm::vec3(0.0f);
-      const glm::vec3 d = active[lane] ? dir[lane] : glm::vec3(0, 1, 0);
-      rayHit.ray.org_x[lane] = origin.x;
-      rayHit.ray.org_y[lane] = origin.y;
-      rayHit.ray.org_z[lane] = origin.z;
-      rayHit.ray.dir_x[lane] = d.x;
-      rayHit.ray.dir_y[lane] = d.y;
-      rayHit.ray.dir_z[lane] = d.z;
-      rayHit.ray.tnear[lane] = 0.0f;
-      rayHit.ray.tfar[lane] = occluded[lane] ? tfar[lane] : 0.0f;
-      rayHit.ray.time[lane] = 0.0f;
-      rayHit.ray.mask[lane] = ~0u;
-      rayHit.ray.id[lane] = unsigned(lane);
-      rayHit.ray.flags[lane] = 0;
-      rayHit.hit.geomID[lane] = RTC_INVALID_GEOMETRY_ID;
-    }
-    shadowRays += occludedCount;
+    for (int lane = 0; lane < kLanes; ++lane) rayHit.hit.geomID[lane] = RTC_INVALID_GEOMETRY_ID;
     rtcIntersect8(valid, embree_.handle(), &context.rtc, &rayHit);
     for (int lane = 0; lane < kLanes; ++lane) {
-      if (!occluded[lane]) continue;
-      // Both passes apply the same filter to the same segment, so the closest hit exists. The
-      // distance is measured from the surface point itself, not from the offset origin.
-      const float t = rayHit.hit.geomID[lane] != RTC_INVALID_GEOMETRY_ID ? rayHit.ray.tfar[lane] : 0.0f;
-      distance[lane] = glm::length(hits[lane].normal * hits[lane].offset + dir[lane] * t);
+      occluded[lane] = active[lane] && rayHit.hit.geomID[lane] != RTC_INVALID_GEOMETRY_ID;
+      // The distance is measured from the surface point itself, not from the offset origin.
+      if (occluded[lane])
+        distance[lane] = glm::length(hits[lane].normal * hits[lane].offset + dir[lane] * ray.tfar[lane]);
     }
   }
 
@@ -321,38 +313,44 @@ class Tracer {
   TraceContext shadowContext_{RayKind::Shadow};
   const Scene& scene_;
   const EmbreeScene& embree_;
-  const CameraRays rays_;  // Camera::rayDirection, bit for bit
+  const CameraRays rays_;   // Camera::rayDirection, bit for bit
+  const float* objectIds_;  // per geometry id: Object::id as a float
 };
 
-// The output channels, one pointer each, in the frame's channel order (renderReference adds them in
-// this order): base[c] is channel c's first value.
+// The output channels, one pointer each, in the frame's channel order (referenceChannelNames):
+// base[c] is channel c's first value. Without the All set, primId, p, n, u and v are null.
 struct Planes {
-  float* hit;
-  float* objectId;
-  float* primId;
-  float* p[3];
-  float* n[3];
+  float* hit = nullptr;
+  float* objectId = nullptr;
+  float* primId = nullptr;
+  float* p[3] = {};
+  float* n[3] = {};
   std::vector<float*> vis, occluderDist;
   std::vector<float*> coverage, u, v, rgb[3];
 
-  Planes(float* const* base, size_t lightCount, size_t projectorCount)
+  Planes(float* const* base, size_t channelCount, size_t lightCount, size_t projectorCount, bool all)
       : vis(lightCount), occluderDist(lightCount), coverage(projectorCount), u(projectorCount), v(projectorCount) {
     size_t index = 0;
     hit = base[index++];
     objectId = base[index++];
-    primId = base[index++];
-    for (int a = 0; a < 3; ++a) p[a] = base[index++];
-    for (int a = 0; a < 3; ++a) n[a] = base[index++];
+    if (all) {
+      primId = base[index++];
+      for (int a = 0; a < 3; ++a) p[a] = base[index++];
+      for (int a = 0; a < 3; ++a) n[a] = base[index++];
+    }
     for (size_t l = 0; l < lightCount; ++l) {
       vis[l] = base[index++];
       occluderDist[l] = base[index++];
     }
     for (size_t q = 0; q < projectorCount; ++q) {
       coverage[q] = base[index++];
-      u[q] = base[index++];
-      v[q] = base[index++];
+      if (all) {
+        u[q] = base[index++];
+        v[q] = base[index++];
+      }
       for (int c = 0; c < 3; ++c) rgb[c].push_back(base[index++]);
     }
+    if (index != channelCount) throw DriverError("reference: channel layout out of step with referenceChannelNames");
   }
 };
 
@@ -388,16 +386,44 @@ static double processCpuSeconds() {
 }
 
 float shadowOriginOffset(const glm::vec3& position, const glm::vec3& p0, const glm::vec3& p1, const glm::vec3& p2) {
-  auto maxAbs = [](const glm::vec3& p) { return std::max(std::fabs(p.x), std::max(std::fabs(p.y), std::fabs(p.z))); };
-  return kOriginOffsetScale * std::max(std::max(maxAbs(position), maxAbs(p0)), std::max(maxAbs(p1), maxAbs(p2)));
+  return originOffset(position, p0, p1, p2);
 }
 
-double referenceFrameBytes(const Scene& scene) {
-  const double channels = 9.0 + 2.0 * double(scene.lights.size()) + 6.0 * double(scene.projectors.size());
-  return channels * 4.0 * double(scene.camera.width) * double(scene.camera.height);
+const char* referenceChannelsKey(ReferenceChannels channels) {
+  return channels == ReferenceChannels::All ? "all" : "compare";
 }
 
-Frame renderReference(const Scene& scene, const ReferenceOptions& options, ReferenceStats* stats) {
+std::vector<std::string> referenceChannelNames(const Scene& scene, ReferenceChannels channels) {
+  const bool all = channels == ReferenceChannels::All;
+  std::vector<std::string> names = {"hit", "object_id"};
+  if (all) {
+    names.push_back("prim_id");
+    for (const char* axis : {"x", "y", "z"}) names.push_back(std::string("P.") + axis);
+    for (const char* axis : {"x", "y", "z"}) names.push_back(std::string("N.") + axis);
+  }
+  for (const Light& light : scene.lights) {
+    names.push_back("light." + light.name + ".vis");
+    names.push_back("light." + light.name + ".occluder_dist");
+  }
+  for (const Projector& projector : scene.projectors) {
+    const std::string prefix = "proj." + projector.name + ".";
+    names.push_back(prefix + "coverage");
+    if (all) {
+      names.push_back(prefix + "u");
+      names.push_back(prefix + "v");
+    }
+    for (const char* color : {"R", "G", "B"}) names.push_back(prefix + color);
+  }
+  return names;
+}
+
+double referenceFrameBytes(const Scene& scene, ReferenceChannels channels) {
+  const double count = double(referenceChannelNames(scene, channels).size());
+  return count * 4.0 * double(scene.camera.width) * double(scene.camera.height);
+}
+
+Frame renderReference(const Scene& scene, const ReferenceOptions& options, ReferenceStats* stats,
+                      std::vector<uint8_t>* picture) {
   if (options.spp < 1 || options.spp > 1024) {
     throw InputError("reference: error: spp " + std::to_string(options.spp) + "; expected 1..1024");
   }
@@ -425,19 +451,16 @@ Frame renderReference(const Scene& scene, const ReferenceOptions& options, Refer
     }
   }
 
+  const bool all = options.channels == ReferenceChannels::All;
   Frame frame;
   frame.width = width;
   frame.height = height;
-  frame.add("hit");
-  frame.add("object_id");
-  frame.add("prim_id");
-  const char* axes[3] = {"x", "y", "z"};
-  for (int a = 0; a < 3; ++a) frame.add(std::string("P.") + axes[a]);
-  for (int a = 0; a < 3; ++a) frame.add(std::string("N.") + axes[a]);
+  for (const std::string& name : referenceChannelNames(scene, options.channels)) {
+    const bool distance = name.size() > 14 && name.compare(name.size() - 14, 14, ".occluder_dist") == 0;
+    frame.add(name, distance ? -1.0f : 0.0f);
+  }
   std::vector<PreparedLight> lights;
   for (const Light& light : scene.lights) {
-    frame.add("light." + light.name + ".vis");
-    frame.add("light." + light.name + ".occluder_dist", -1.0f);
     PreparedLight prepared;
     prepared.light = &light;
     prepared.toLight = glm::normalize(-light.direction);
@@ -445,15 +468,8 @@ Frame renderReference(const Scene& scene, const ReferenceOptions& options, Refer
     lights.push_back(prepared);
   }
   std::vector<PreparedProjector> projectors;
-  for (const Projector& projector : scene.projectors) {
-    const std::string prefix = "proj." + projector.name + ".";
-    frame.add(prefix + "coverage");
-    frame.add(prefix + "u");
-    frame.add(prefix + "v");
-    const char* colors[3] = {"R", "G", "B"};
-    for (int c = 0; c < 3; ++c) frame.add(prefix + colors[c]);
+  for (const Projector& projector : scene.projectors)
     projectors.push_back({&projector, glm::dmat4(projector.texFromWorld())});
-  }
   // The channels in Planes' order (frame.add may move planes while channels are added: taken now).
   const size_t channelCount = frame.data.size();
   std::vector<float*> frameBase(channelCount);
@@ -462,11 +478,17 @@ Frame renderReference(const Scene& scene, const ReferenceOptions& options, Refer
   nlohmann::json lightNames = nlohmann::json::array(), projectorNames = nlohmann::json::array();
   for (const Light& light : scene.lights) lightNames.push_back(light.name);
   for (const Projector& projector : scene.projectors) projectorNames.push_back(projector.name);
-  frame.meta = {{"kind", "reference"},      {"scene", scene.name},
-                {"scene_hash", scene.hash}, {"camera_hash", scene.camera.hash()},
-                {"width", width},           {"height", height},
-                {"lights", lightNames},     {"projectors", projectorNames},
-                {"spp", options.spp},       {"reference_hash", referenceHash(scene, options)}};
+  frame.meta = {{"kind", "reference"},
+                {"scene", scene.name},
+                {"scene_hash", scene.hash},
+                {"camera_hash", scene.camera.hash()},
+                {"width", width},
+                {"height", height},
+                {"lights", lightNames},
+                {"projectors", projectorNames},
+                {"spp", options.spp},
+                {"reference_hash", referenceHash(scene, options)},
+                {"channels", referenceChannelsKey(options.channels)}};
 
   const int threads = options.threads > 0 ? options.threads : std::max(1, tbb::info::default_concurrency());
   // TBB caps its workers at the hardware concurrency; an explicit --threads above that (e.g. 4
@@ -486,6 +508,16 @@ Frame renderReference(const Scene& scene, const ReferenceOptions& options, Refer
   const auto buildStart = Clock::now();
   std::unique_ptr<EmbreeScene> embree;
   arena.execute([&] { embree = std::make_unique<EmbreeScene>(scene); });
+  // The picture, drawn in the tile loop from the values it writes (referencePicture's colours).
+  const reference_detail::PictureShader shader(scene);
+  const long pictureLight = shader.light() ? long(shader.light() - scene.lights.data()) : -1;
+  uint8_t* pictureBytes = nullptr;
+  if (picture) {
+    picture->assign(size_t(width) * size_t(height) * 3, 0);
+    pictureBytes = picture->data();
+  }
+  std::vector<float> objectIds(scene.objects.size());
+  for (size_t g = 0; g < objectIds.size(); ++g) objectIds[g] = float(embree->geometry(unsigned(g)).object->id);
   const auto traceStart = Clock::now();
   const double traceCpuStart = processCpuSeconds();
 
@@ -509,11 +541,15 @@ Frame renderReference(const Scene& scene, const ReferenceOptions& options, Refer
 
   arena.execute([&] {
     tbb::parallel_for(tbb::blocked_range<int>(0, tileCount), [&](const tbb::blocked_range<int>& range) {
-      Tracer tracer(scene, *embree);
+      Tracer tracer(scene, *embree, objectIds.data());
       std::vector<float> tileBuffer(channelCount * kTilePixels);
       std::vector<float*> tileBase(channelCount);
       for (size_t c = 0; c < channelCount; ++c) tileBase[c] = tileBuffer.data() + c * kTilePixels;
-      const Planes planes(tileBase.data(), lightCount, projectorCount);
+      const Planes planes(tileBase.data(), channelCount, lightCount, projectorCount, all);
+      // Camera rays need the surface point and normal only for shadow rays and the All channels.
+      const bool surface = all || lightCount > 0 || projectorCount > 0 || pictureBytes;
+      std::vector<float> pictureCoverage(projectorCount);
+      std::vector<glm::vec3> pictureRgb(projectorCount);
       LaneHit center[kLanes], sample[kLanes];
       std::vector<float> centerVis(lightCount * kLanes), centerDist(lightCount * kLanes);
       std::vector<ProjectorSample> centerProj(projectorCount * kLanes);
@@ -533,7 +569,7 @@ Frame renderReference(const Scene& scene, const ReferenceOptions& options, Refer
               py[lane] = by + lane / kBlockWidth;
               active[lane] = px[lane] < x1 && py[lane] < y1;
             }
-            tracer.tracePrimary(px, py, active, 0.5f, 0.5f, center);
+            tracer.tracePrimary(px, py, active, 0.5f, 0.5f, surface, center);
             for (size_t l = 0; l < lightCount; ++l)
               tracer.evalLight(lights[l], center, true, &centerVis[l * kLanes], &centerDist[l * kLanes]);
             for (size_t p = 0; p < projectorCount; ++p)
@@ -546,7 +582,7 @@ Frame renderReference(const Scene& scene, const ReferenceOptions& options, Refer
               bool sampleActive[kLanes];
               for (int lane = 0; lane < kLanes; ++lane) sampleActive[lane] = active[lane] && center[lane].hit;
               for (const glm::vec2& offset : pattern) {
-                tracer.tracePrimary(px, py, sampleActive, offset.x, offset.y, sample);
+                tracer.tracePrimary(px, py, sampleActive, offset.x, offset.y, surface, sample);
                 // Only samples on the center's object count: the pixel's fractional visibility
                 // is that of the surface its id and position describe.
                 for (int lane = 0; lane < kLanes; ++lane) {
@@ -575,11 +611,13 @@ Frame renderReference(const Scene& scene, const ReferenceOptions& options, Refer
               const size_t pixel = size_t(py[lane] - y0) * kTileSize + size_t(px[lane] - x0);
               const LaneHit& h = center[lane];
               planes.hit[pixel] = h.hit ? 1.0f : 0.0f;
-              planes.objectId[pixel] = h.hit ? float(embree->geometry(h.geom).object->id) : 0.0f;
-              planes.primId[pixel] = h.hit ? float(h.prim) : 0.0f;
-              for (int a = 0; a < 3; ++a) {
-                planes.p[a][pixel] = h.position[a];
-                planes.n[a][pixel] = h.normal[a];
+              planes.objectId[pixel] = h.hit ? h.objectId : 0.0f;
+              if (all) {
+                planes.primId[pixel] = h.hit ? float(h.prim) : 0.0f;
+                for (int a = 0; a < 3; ++a) {
+                  planes.p[a][pixel] = h.hit ? h.position[a] : 0.0f;
+                  planes.n[a][pixel] = h.hit ? h.normal[a] : 0.0f;
+                }
               }
               const int count = sameObject[lane];
               for (size_t l = 0; l < lightCount; ++l) {
@@ -590,12 +628,24 @@ Frame renderReference(const Scene& scene, const ReferenceOptions& options, Refer
               for (size_t p = 0; p < projectorCount; ++p) {
                 const size_t k = p * kLanes + lane;
                 const ProjectorSample& c = centerProj[k];
-                planes.u[p][pixel] = c.u;
-                planes.v[p][pixel] = c.v;
+                if (all) {
+                  planes.u[p][pixel] = c.u;
+                  planes.v[p][pixel] = c.v;
+                }
                 const ProjectorSample value =
                     count > 0 ? ProjectorSample{projSum[k].coverage / count, 0, 0, projSum[k].rgb / float(count)} : c;
                 planes.coverage[p][pixel] = value.coverage;
                 for (int ch = 0; ch < 3; ++ch) planes.rgb[ch][p][pixel] = value.rgb[ch];
+                pictureCoverage[p] = value.coverage;
+                pictureRgb[p] = value.rgb;
+              }
+              if (pictureBytes) {
+                const glm::vec3 albedo =
+                    h.hit ? shader.albedo(embree->geometry(h.geom).object, h.prim) : glm::vec3(0.8f);
+                const float vis = pictureLight >= 0 ? planes.vis[size_t(pictureLight)][pixel] : 1.0f;
+                shader.shade(h.hit, albedo, h.normal, h.position, vis, projectorCount, pictureCoverage.data(),
+                             pictureRgb.data(),
+                             pictureBytes + (size_t(py[lane]) * size_t(width) + size_t(px[lane])) * 3);
               }
             }
           }

@@ -25,16 +25,19 @@ ReferenceCache::ReferenceCache(std::string dir) : dir_(std::move(dir)) {
 
 namespace {
 
-// The cached frame at `path` when it reads back and names `scene` (the hash names the content, so
-// a mismatch means a foreign or damaged file: the caller traces again and replaces it rather than
-// compare against the wrong truth); else nothing.
+// The cached frame at `path` when it reads back, names `scene` and holds the Compare channels (the
+// hash names the content, so a mismatch means a foreign or damaged file: the caller traces again
+// and replaces it rather than compare against the wrong truth); else nothing.
 std::optional<Frame> loadEntry(const std::string& path, const Scene& scene) {
   std::error_code ec;
   if (!std::filesystem::is_regular_file(path, ec)) return std::nullopt;
   try {
     Frame cached = readFrameExr(path);
     auto it = cached.meta.find("scene_hash");
-    if (it != cached.meta.end() && it->is_string() && it->get<std::string>() == scene.hash) return cached;
+    if (it == cached.meta.end() || !it->is_string() || it->get<std::string>() != scene.hash) return std::nullopt;
+    for (const std::string& name : referenceChannelNames(scene, ReferenceChannels::Compare))
+      if (!cached.has(name)) return std::nullopt;
+    return cached;
   } catch (const InputError&) {
     // unreadable entry (e.g. written by an older build, or truncated): trace it again
   }
@@ -74,7 +77,9 @@ class EntryLock {
 
 }  // namespace
 
-Frame ReferenceCache::get(const Scene& scene, const ReferenceOptions& options, bool* traced, ReferenceStats* stats) {
+Frame ReferenceCache::get(const Scene& scene, const ReferenceOptions& requested, bool* traced, ReferenceStats* stats) {
+  ReferenceOptions options = requested;
+  options.channels = ReferenceChannels::Compare;  // what compare and stability read (reference/README.md)
   const std::string path = dir_ + "/" + referenceHash(scene, options) + ".exr";
   if (auto cached = loadEntry(path, scene)) {
     if (traced) *traced = false;

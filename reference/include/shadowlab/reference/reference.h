@@ -3,23 +3,41 @@
 #include <cstdint>
 #include <functional>
 #include <string>
+#include <vector>
 
 #include "shadowlab/scenes/frame.h"
 #include "shadowlab/scenes/scene.h"
 
 namespace shadowlab {
 
+// Which channels renderReference writes (reference/README.md, "Channels"). Every channel has the same
+// values in both sets; Compare leaves out those no later stage reads.
+enum class ReferenceChannels {
+  // What compare, stability and the pictures of compare read: hit, object_id, light.L.vis,
+  // light.L.occluder_dist, proj.P.coverage and proj.P.R/G/B. The reference cache holds this set.
+  Compare,
+  // Compare's plus prim_id, P.x/y/z, N.x/y/z and proj.P.u/v: for people, tests and referencePicture.
+  All,
+};
+
 struct ReferenceOptions {
   int spp = 1;      // stratified samples per pixel (1 = the pixel center); visibility becomes fractional
   int threads = 0;  // 0 = all hardware threads; results are bit-identical for any value
+  // Not part of the cache key (referenceHash): the values are the same, the cache always holds Compare.
+  ReferenceChannels channels = ReferenceChannels::All;
   // Called with the fraction of tiles traced (0..1], at most once per percent, from one thread
   // at a time (the caller's terminal progress line). Not part of the result or its hash.
   std::function<void(double)> progress;
 };
 
+// The channel names of a reference of this scene, in the frame's order ("channels" in the frame's
+// metadata names the set: "compare" or "all").
+std::vector<std::string> referenceChannelNames(const Scene& scene, ReferenceChannels channels);
+const char* referenceChannelsKey(ReferenceChannels channels);
+
 // Bytes a reference frame of this scene takes in memory: one float per pixel per channel
-// (scenes/frame.h: 9 per frame, 2 per light, 6 per projector).
-double referenceFrameBytes(const Scene& scene);
+// (All: 9 per frame, 2 per light, 6 per projector; Compare: 2, 2, 4).
+double referenceFrameBytes(const Scene& scene, ReferenceChannels channels = ReferenceChannels::All);
 
 struct ReferenceStats {
   uint64_t primaryRays = 0;
@@ -33,19 +51,23 @@ struct ReferenceStats {
 };
 
 // Traces every light and projector of the scene. Channels: see scenes/frame.h.
-// Throws DriverError when Embree reports an error.
-Frame renderReference(const Scene& scene, const ReferenceOptions& options, ReferenceStats* stats = nullptr);
+// With `picture`, also draws referencePicture's picture (the same bytes) during the trace, from the
+// values it computes, so a Compare frame suffices. Throws DriverError when Embree reports an error.
+Frame renderReference(const Scene& scene, const ReferenceOptions& options, ReferenceStats* stats = nullptr,
+                      std::vector<uint8_t>* picture = nullptr);
 
 // The shadow-ray origin rule (reference/README.md, "Shadow-ray origins"): a shadow ray from the hit
 // point `position` on the triangle (p0, p1, p2) starts at position + N * shadowOriginOffset(...),
 // N the camera-facing unit normal. 2^-17 times the largest coordinate magnitude among the four.
 float shadowOriginOffset(const glm::vec3& position, const glm::vec3& p0, const glm::vec3& p1, const glm::vec3& p2);
 
-// A hash of everything the reference depends on (scene hash, camera, spp): the cache key.
+// A hash of everything the reference depends on (scene hash, camera, spp): the cache key. The channel
+// set is left out (the values are the same; the cache holds Compare).
 std::string referenceHash(const Scene& scene, const ReferenceOptions& options);
 
 // A readable picture: grey shading times the first light's visibility (plus a little ambient),
-// projector colors added where covered; background dark blue. width*height*3 bytes.
+// projector colors added where covered; background dark blue. width*height*3 bytes. Needs the All set
+// (prim_id, P, N).
 std::vector<uint8_t> referencePicture(const Scene& scene, const Frame& frame);
 
 }  // namespace shadowlab

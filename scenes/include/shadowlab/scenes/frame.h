@@ -10,13 +10,13 @@
 //   both renderers
 //     hit                      1 where the camera ray hits geometry, else 0
 //     object_id                Object::id of the visible surface, 0 where no hit
-//     prim_id                  triangle index within that object, 0 where no hit
+//     prim_id                  triangle index within that object, 0 where no hit (reference: All set only)
 //     light.LIGHT.vis          visibility of LIGHT at the visible point in [0, 1] (1 = lit);
 //                              for spot lights 0 outside the cone. 0 where no hit.
 //     proj.PROJ.coverage       projector coverage in [0, 1]: in front of it, inside its frustum,
 //                              unoccluded from it
 //     proj.PROJ.R|G|B          projected color (0 where not covered)
-//   reference only (reference/)
+//   reference only (reference/); P, N and u|v only in its All channel set (reference/README.md)
 //     P.x P.y P.z              world-space hit point
 //     N.x N.y N.z              unit geometric normal, facing the camera
 //     light.LIGHT.occluder_dist  world distance from the point to the nearest occluder along the

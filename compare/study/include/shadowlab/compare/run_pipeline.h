@@ -11,7 +11,9 @@
 
 namespace shadowlab {
 
-// Reference frames stored as DIR/<referenceHash>.exr. Default DIR: $SHADOWLAB_CACHE, else
+// Reference frames stored as DIR/<referenceHash>.exr, with the Compare channel set (hit, object_id,
+// light.L.vis, light.L.occluder_dist, proj.P.coverage/R/G/B; reference/README.md) whatever
+// ReferenceOptions::channels says. Default DIR: $SHADOWLAB_CACHE, else
 // ".shadowlab-cache" in the current folder. Writes are atomic, so concurrent or interrupted runs
 // never leave a truncated entry; processes that miss the same entry at once trace it once (the
 // others wait on DIR/<referenceHash>.exr.lock, then read it).
