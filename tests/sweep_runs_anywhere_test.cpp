@@ -35,7 +35,8 @@ std::string noSharedPrefix(const fs::path& dir) {
   return "SHADOWLAB_SHARED_DIR='" + (dir / "no_such_shared_folder").string() + "' ";
 }
 
-const char* kSmallGrid = "--grid map.size=512 --grid bias.slope=1 --grid filter=pcf";
+// fit=sphere: the default sweep's second grid (the fits) collapses onto the first one's row.
+const char* kSmallGrid = "--grid map.size=512 --grid bias.slope=1 --grid filter=pcf --grid fit=sphere";
 
 }  // namespace
 
