@@ -11,45 +11,21 @@
 #include "shadowlab/raster/raster.h"
 #include "shadowlab/reference/reference.h"
 #include "shadowlab/scenes/loader.h"
+#include "support/fit_reference.h"
 #include "support/raster_device.h"
 #include "support/reference_score.h"
 
 using namespace shadowlab;
+using shadowlab::testing::expectAllFinite;
+using shadowlab::testing::expectSameGeometry;
+using shadowlab::testing::fitted;
+using shadowlab::testing::sceneFromText;
 using shadowlab::testing::Score;
 using shadowlab::testing::score;
 
 namespace {
 
 using LispsmVsReference = shadowlab::testing::ValidatedRasterTest;
-
-void expectAllFinite(const Frame& f, const std::string& what) {
-  for (size_t c = 0; c < f.names.size(); ++c)
-    for (float v : f.data[c]) ASSERT_TRUE(std::isfinite(v)) << what << ": " << f.names[c];
-}
-
-// The camera pass does not depend on the fit: the same surfaces in the same pixels.
-void expectSameGeometry(const Frame& a, const Frame& b) {
-  for (const char* ch : {"hit", "object_id", "prim_id"}) EXPECT_EQ(a.get(ch), b.get(ch)) << ch;
-}
-
-// fit=tight and fit=lispsm at the same map size, everything else the defaults.
-Method fitted(Fit fit) {
-  Method m;
-  m.mapSize = 1024;
-  m.fit = fit;
-  return m;
-}
-
-Scene sceneFromText(const std::string& name, const std::string& text) {
-  namespace fs = std::filesystem;
-  fs::path dir = fs::temp_directory_path() / ("shadowlab_lispsm_" + std::to_string(::getpid()));
-  fs::create_directories(dir);
-  fs::path file = dir / (name + ".json");
-  std::ofstream(file) << text;
-  Scene s = loadScene(file.string());
-  fs::remove_all(dir);
-  return s;
-}
 
 }  // namespace
 

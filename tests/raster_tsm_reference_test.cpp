@@ -13,28 +13,20 @@
 #include "shadowlab/raster/raster.h"
 #include "shadowlab/reference/reference.h"
 #include "shadowlab/scenes/loader.h"
+#include "support/fit_reference.h"
 #include "support/raster_device.h"
 #include "support/reference_score.h"
 
 using namespace shadowlab;
+using shadowlab::testing::expectAllFinite;
+using shadowlab::testing::fitted;
+using shadowlab::testing::sceneFromText;
 using shadowlab::testing::Score;
 using shadowlab::testing::score;
 
 namespace {
 
 using TsmVsReference = shadowlab::testing::ValidatedRasterTest;
-
-void expectAllFinite(const Frame& f, const std::string& what) {
-  for (size_t c = 0; c < f.names.size(); ++c)
-    for (float v : f.data[c]) ASSERT_TRUE(std::isfinite(v)) << what << ": " << f.names[c];
-}
-
-Method fitted(Fit fit) {
-  Method m;
-  m.mapSize = 1024;
-  m.fit = fit;
-  return m;
-}
 
 // Nearest-rank percentile of light.L.m over the pixels showing object `id`.
 double mOn(const Frame& f, const std::string& light, float id, double q) {
@@ -48,17 +40,6 @@ double mOn(const Frame& f, const std::string& light, float id, double q) {
   size_t rank = size_t(std::ceil(q * double(v.size()))) - 1;
   std::nth_element(v.begin(), v.begin() + std::ptrdiff_t(rank), v.end());
   return v[rank];
-}
-
-Scene sceneFromText(const std::string& name, const std::string& text) {
-  namespace fs = std::filesystem;
-  fs::path dir = fs::temp_directory_path() / ("shadowlab_tsm_" + std::to_string(::getpid()));
-  fs::create_directories(dir);
-  fs::path file = dir / (name + ".json");
-  std::ofstream(file) << text;
-  Scene s = loadScene(file.string());
-  fs::remove_all(dir);
-  return s;
 }
 
 }  // namespace
