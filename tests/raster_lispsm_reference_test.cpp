@@ -16,6 +16,7 @@
 #include "support/reference_score.h"
 
 using namespace shadowlab;
+using shadowlab::testing::alongTheLightScene;
 using shadowlab::testing::expectAllFinite;
 using shadowlab::testing::expectSameGeometry;
 using shadowlab::testing::fitted;
@@ -97,19 +98,7 @@ TEST_F(LispsmVsReference, ViewAlongTheLightFallsBackToTight) {
       {"ten_degrees", "[0, -1, 0]", "[-1.616, 12, 0.25]", "[0.5, 0, 0.25]", false},
   };
   for (const Case& c : cases) {
-    std::string text = std::string(R"({
-  "camera": {"position": )") +
-                       c.position + R"(, "look_at": )" + c.lookAt +
-                       R"(, "up": [0, 0, -1], "vfov_deg": 50, "width": 320, "height": 180, "near": 0.1, "far": 100},
-  "objects": [
-    {"type": "plane", "name": "ground", "size": [20, 20]},
-    {"type": "sphere", "name": "ball", "radius": 1, "transform": {"translate": [0, 2, 0]}},
-    {"type": "box", "name": "crate", "size": [1, 1, 1], "transform": {"translate": [3, 0.5, 2], "rotate_deg": [0, 30, 0]}}
-  ],
-  "lights": [{"type": "directional", "name": "sun", "direction": )" +
-                       c.light + R"(}]
-})";
-    Scene s = sceneFromText(c.name, text);
+    Scene s = alongTheLightScene(c.name, c.light, c.position, c.lookAt, 320, 180);
     Frame ft = R->render(s, fitted(Fit::Tight)), fl = R->render(s, fitted(Fit::Lispsm));
     expectAllFinite(fl, c.name);
     if (c.exact) {

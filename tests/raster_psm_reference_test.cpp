@@ -21,6 +21,7 @@
 #include "support/reference_score.h"
 
 using namespace shadowlab;
+using shadowlab::testing::alongTheLightScene;
 using shadowlab::testing::expectAllFinite;
 using shadowlab::testing::expectSameGeometry;
 using shadowlab::testing::fitted;
@@ -112,20 +113,8 @@ TEST_F(PsmVsReference, ViewAlongTheLightFallsBackToTight) {
   REQUIRE_DEVICE();
   for (const char* light : {"[0, -1, 0]", "[0, 1, 0]", "[0.3, -1, 0.2]"}) {
     const bool tilted = std::string(light) == "[0.3, -1, 0.2]";
-    std::string text = std::string(R"({
-  "camera": {"position": )") +
-                       (tilted ? "[-3, 10, -2]" : "[0.5, 12, 0.25]") + R"(, "look_at": )" +
-                       (tilted ? "[0, 0, 0]" : "[0.5, 0, 0.25]") +
-                       R"(, "up": [0, 0, -1], "vfov_deg": 50, "width": 320, "height": 180, "near": 0.1, "far": 100},
-  "objects": [
-    {"type": "plane", "name": "ground", "size": [20, 20]},
-    {"type": "sphere", "name": "ball", "radius": 1, "transform": {"translate": [0, 2, 0]}},
-    {"type": "box", "name": "crate", "size": [1, 1, 1], "transform": {"translate": [3, 0.5, 2], "rotate_deg": [0, 30, 0]}}
-  ],
-  "lights": [{"type": "directional", "name": "sun", "direction": )" +
-                       light + R"(}]
-})";
-    Scene s = sceneFromText("along", text);
+    Scene s = alongTheLightScene("along", light, tilted ? "[-3, 10, -2]" : "[0.5, 12, 0.25]",
+                                 tilted ? "[0, 0, 0]" : "[0.5, 0, 0.25]", 320, 180);
     Frame ft = R->render(s, fitted(Fit::Tight)), fp = R->render(s, fitted(Fit::Psm));
     expectAllFinite(fp, light);
     for (size_t k = 0; k < ft.names.size(); ++k) EXPECT_EQ(ft.data[k], fp.get(ft.names[k])) << light << ft.names[k];

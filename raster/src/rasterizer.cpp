@@ -89,6 +89,18 @@ VkRenderingAttachmentInfo overwrittenColor(VkImageView view, VkImageLayout layou
   color.storeOp = VK_ATTACHMENT_STORE_OP_STORE;
   return color;
 }
+// Makes the writes of `srcStage` (`srcAccess`) visible to the host's reads after the submit.
+void barrierToHost(VkCommandBuffer cmd, VkPipelineStageFlags2 srcStage, VkAccessFlags2 srcAccess) {
+  VkMemoryBarrier2 toHost{VK_STRUCTURE_TYPE_MEMORY_BARRIER_2};
+  toHost.srcStageMask = srcStage;
+  toHost.srcAccessMask = srcAccess;
+  toHost.dstStageMask = VK_PIPELINE_STAGE_2_HOST_BIT;
+  toHost.dstAccessMask = VK_ACCESS_2_HOST_READ_BIT;
+  VkDependencyInfo dep{VK_STRUCTURE_TYPE_DEPENDENCY_INFO};
+  dep.memoryBarrierCount = 1;
+  dep.pMemoryBarriers = &toHost;
+  vkCmdPipelineBarrier2(cmd, &dep);
+}
 // A full-screen pass (the moments, the resolve, the lookup): one triangle drawn with `pipeline`
 // over width x height into `count` colour attachments; `beforeDraw` (optional) runs after the
 // pipeline is bound, e.g. for push constants.
@@ -722,15 +734,8 @@ void Rasterizer::Impl::record(VkCommandBuffer cmd, const std::vector<LayerDraw>&
     }
     drawFullscreen(cmd, colors, uint32_t(attachments), uint32_t(width), uint32_t(height), resolve);
   }
-  VkMemoryBarrier2 toHost{VK_STRUCTURE_TYPE_MEMORY_BARRIER_2};
-  toHost.srcStageMask = VK_PIPELINE_STAGE_2_FRAGMENT_SHADER_BIT | VK_PIPELINE_STAGE_2_COLOR_ATTACHMENT_OUTPUT_BIT;
-  toHost.srcAccessMask = VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT | VK_ACCESS_2_COLOR_ATTACHMENT_WRITE_BIT;
-  toHost.dstStageMask = VK_PIPELINE_STAGE_2_HOST_BIT;
-  toHost.dstAccessMask = VK_ACCESS_2_HOST_READ_BIT;
-  VkDependencyInfo dep{VK_STRUCTURE_TYPE_DEPENDENCY_INFO};
-  dep.memoryBarrierCount = 1;
-  dep.pMemoryBarriers = &toHost;
-  vkCmdPipelineBarrier2(cmd, &dep);
+  barrierToHost(cmd, VK_PIPELINE_STAGE_2_FRAGMENT_SHADER_BIT | VK_PIPELINE_STAGE_2_COLOR_ATTACHMENT_OUTPUT_BIT,
+                VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT | VK_ACCESS_2_COLOR_ATTACHMENT_WRITE_BIT);
   vkCmdWriteTimestamp2(cmd, VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT, pool, 4);
 
   // ---- Pass 4: the lookup, the method's visibility alone (1 byte per pixel), timed on its own ----
@@ -739,7 +744,8 @@ void Rasterizer::Impl::record(VkCommandBuffer cmd, const std::vector<LayerDraw>&
                    VK_PIPELINE_STAGE_2_COLOR_ATTACHMENT_OUTPUT_BIT, VK_ACCESS_2_COLOR_ATTACHMENT_WRITE_BIT);
     const VkRenderingAttachmentInfo color = overwrittenColor(lookupOut.layerView(0), VK_IMAGE_LAYOUT_GENERAL);
     drawFullscreen(cmd, &color, 1, uint32_t(width), uint32_t(height), lookup);
-    vkCmdPipelineBarrier2(cmd, &dep);
+    barrierToHost(cmd, VK_PIPELINE_STAGE_2_FRAGMENT_SHADER_BIT | VK_PIPELINE_STAGE_2_COLOR_ATTACHMENT_OUTPUT_BIT,
+                  VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT | VK_ACCESS_2_COLOR_ATTACHMENT_WRITE_BIT);
   }
   vkCmdWriteTimestamp2(cmd, VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT, pool, 2);
 }
@@ -1220,15 +1226,7 @@ Frame Rasterizer::Impl::partialFrame(const Scene& sc, const Light& light, const 
         vkCmdPushConstants(cmd, pipelineLayout.get(), VK_SHADER_STAGE_VERTEX_BIT | VK_SHADER_STAGE_FRAGMENT_BIT, 0,
                            sizeof(push), &push);
       });
-      VkMemoryBarrier2 toHost{VK_STRUCTURE_TYPE_MEMORY_BARRIER_2};
-      toHost.srcStageMask = VK_PIPELINE_STAGE_2_COLOR_ATTACHMENT_OUTPUT_BIT;
-      toHost.srcAccessMask = VK_ACCESS_2_COLOR_ATTACHMENT_WRITE_BIT;
-      toHost.dstStageMask = VK_PIPELINE_STAGE_2_HOST_BIT;
-      toHost.dstAccessMask = VK_ACCESS_2_HOST_READ_BIT;
-      VkDependencyInfo dep{VK_STRUCTURE_TYPE_DEPENDENCY_INFO};
-      dep.memoryBarrierCount = 1;
-      dep.pMemoryBarriers = &toHost;
-      vkCmdPipelineBarrier2(cmd, &dep);
+      barrierToHost(cmd, VK_PIPELINE_STAGE_2_COLOR_ATTACHMENT_OUTPUT_BIT, VK_ACCESS_2_COLOR_ATTACHMENT_WRITE_BIT);
       vkCmdWriteTimestamp2(cmd, VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT, pool, 1);
       commands->submitAndWait();
     }

@@ -46,4 +46,23 @@ inline void expectSameGeometry(const Frame& a, const Frame& b) {
   for (const char* ch : {"hit", "object_id", "prim_id"}) EXPECT_EQ(a.get(ch), b.get(ch)) << ch;
 }
 
+// The fall-back tests' scene: a ground, a ball and a crate seen from `position` towards `lookAt`
+// (up -z), lit by a sun travelling along `light` (JSON arrays as text).
+inline Scene alongTheLightScene(const std::string& name, const std::string& light, const std::string& position,
+                                const std::string& lookAt, int width, int height) {
+  return sceneFromText(name, R"({
+  "camera": {"position": )" + position +
+                                 R"(, "look_at": )" + lookAt + R"(, "up": [0, 0, -1], "vfov_deg": 50, "width": )" +
+                                 std::to_string(width) + R"(, "height": )" + std::to_string(height) +
+                                 R"(, "near": 0.1, "far": 100},
+  "objects": [
+    {"type": "plane", "name": "ground", "size": [20, 20]},
+    {"type": "sphere", "name": "ball", "radius": 1, "transform": {"translate": [0, 2, 0]}},
+    {"type": "box", "name": "crate", "size": [1, 1, 1], "transform": {"translate": [3, 0.5, 2], "rotate_deg": [0, 30, 0]}}
+  ],
+  "lights": [{"type": "directional", "name": "sun", "direction": )" +
+                                 light + R"(}]
+})");
+}
+
 }  // namespace shadowlab::testing
