@@ -160,6 +160,29 @@ TEST(SweepShard, FingerprintFollowsThePlanNotThePaths) {
   EXPECT_EQ(planFingerprint(planSweep(back)), planFingerprint(p));
 }
 
+// A union of grids (sweep files' "grid" as an array) survives the shard description: each axis keeps
+// its block, so a shard plans the same configurations (without the block, block 1's fit axis would
+// join block 0 and the plan would grow).
+TEST(SweepShard, UnionOfGridsRoundTripsThroughTheShardDescription) {
+  SweepSpec spec;
+  spec.scenes = {"sphere_on_plane"};
+  SweepAxis size = parseGridArgument("map.size=256,512"), filter = parseGridArgument("filter=none,pcf"),
+            fit = parseGridArgument("fit=lispsm,tight");
+  size.block = 0;
+  filter.block = 0;
+  fit.block = 1;
+  spec.grid = {size, filter, fit};
+  SweepPlan p = planSweep(spec);
+  ASSERT_EQ(p.configs.size(), 6u);  // 2 x 2, then 2
+  SweepSpec back = sweepSpecFromJson(sweepSpecToJson(p), "shard.json");
+  ASSERT_EQ(back.grid.size(), 3u);
+  EXPECT_EQ(back.grid[2].block, 1);
+  SweepPlan again = planSweep(back);
+  ASSERT_EQ(again.configs.size(), p.configs.size());
+  for (size_t i = 0; i < p.configs.size(); ++i) EXPECT_EQ(again.configs[i].config, p.configs[i].config);
+  EXPECT_EQ(planFingerprint(again), planFingerprint(p));
+}
+
 TEST(SweepShard, MergedShardsEqualAnUnshardedRun) {
   const std::string one = tempDir("unsharded"), many = tempDir("merged");
   SweepPlan p = plan();
