@@ -20,7 +20,7 @@ using shadowlab::testing::alongTheLightScene;
 using shadowlab::testing::expectAllFinite;
 using shadowlab::testing::expectSameGeometry;
 using shadowlab::testing::fitted;
-using shadowlab::testing::sceneFromText;
+using shadowlab::testing::poleBehindScene;
 using shadowlab::testing::Score;
 using shadowlab::testing::score;
 
@@ -132,14 +132,7 @@ TEST_F(LispsmVsReference, CasterOutsideTheViewFrustumStillCastsIntoView) {
   // Camera 3 up looking down the -z axis; the pole at z = +6, 6 tall; the light travels
   // (0.4, -0.3, -1): the pole's top shadows the ground at (8, 0, -14), the shadow runs from
   // (0, 0, 6) to there, in view from z = -3.4 on. Not along the view: the warp is on.
-  Scene s = sceneFromText("pole_behind", R"({
-  "camera": {"position": [0, 3, 0], "look_at": [0, 0, -10], "vfov_deg": 50, "width": 320, "height": 240, "near": 0.1, "far": 100},
-  "objects": [
-    {"type": "plane", "name": "ground", "size": [40, 60], "transform": {"translate": [0, 0, -15]}},
-    {"type": "cylinder", "name": "pole", "radius": 0.3, "height": 6, "segments": 32, "transform": {"translate": [0, 3, 6]}}
-  ],
-  "lights": [{"type": "directional", "name": "sun", "direction": [0.4, -0.3, -1]}]
-})");
+  Scene s = poleBehindScene();
   Frame ref = renderReference(s, ReferenceOptions{});
   Frame ft = R->render(s, fitted(Fit::Tight)), fl = R->render(s, fitted(Fit::Lispsm));
   Score a = score(ref, ft, "sun"), b = score(ref, fl, "sun");

@@ -65,4 +65,18 @@ inline Scene alongTheLightScene(const std::string& name, const std::string& ligh
 })");
 }
 
+// A pole behind the camera (outside the view frustum) whose shadow falls forward into view: camera
+// 3 up looking down -z; the pole at z = +6, 6 tall; the light travels (0.4, -0.3, -1), so the
+// shadow runs from (0, 0, 6) to (8, 0, -14), in view from z = -3.4 on.
+inline Scene poleBehindScene() {
+  return sceneFromText("pole_behind", R"({
+  "camera": {"position": [0, 3, 0], "look_at": [0, 0, -10], "vfov_deg": 50, "width": 320, "height": 240, "near": 0.1, "far": 100},
+  "objects": [
+    {"type": "plane", "name": "ground", "size": [40, 60], "transform": {"translate": [0, 0, -15]}},
+    {"type": "cylinder", "name": "pole", "radius": 0.3, "height": 6, "segments": 32, "transform": {"translate": [0, 3, 6]}}
+  ],
+  "lights": [{"type": "directional", "name": "sun", "direction": [0.4, -0.3, -1]}]
+})");
+}
+
 }  // namespace shadowlab::testing
