@@ -10,7 +10,7 @@ layout(location = 0) out vec4 outMoments;
 
 void main() {
   ivec2 t = ivec2(gl_FragCoord.xy);
-  int radius = int(P.moments2.y), last = P.sizes.x - 1;
+  int radius = int(PLoops.moments2.y), last = P.sizes.x - 1;
   vec4 sum = vec4(0.0);
   float weights = 0.0;
   for (int k = -radius; k <= radius; ++k) {

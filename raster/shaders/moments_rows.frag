@@ -30,7 +30,7 @@ vec4 momentsOf(float z) {
 
 void main() {
   ivec2 t = ivec2(gl_FragCoord.xy);
-  int radius = int(P.moments2.y), last = P.sizes.x - 1;
+  int radius = int(PLoops.moments2.y), last = P.sizes.x - 1;
   vec4 sum = vec4(0.0);
   float weights = 0.0;
   for (int k = -radius; k <= radius; ++k) {

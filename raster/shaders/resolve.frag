@@ -263,7 +263,7 @@ float filterVisibility(Lookup L) {
   } else if (kFilter == kFilterPcf) {
     // The (2h + 1)^2 taps as 2x2 gathers; the last row and column of gathers use half their
     // texels. The sum counts whole taps, so its order does not change it.
-    int h = P.sizes.w / 2;
+    int h = PLoops.sizes.w / 2;  // not P's: see ParamsLoops in resolve_abi.h
     float sum = 0.0;
     for (int by = -h; by <= h; by += 2)
       for (int bx = -h; bx <= h; bx += 2) {
@@ -278,7 +278,7 @@ float filterVisibility(Lookup L) {
     float n = float(2 * h + 1);
     return sum / (n * n);
   } else if (kFilter == kFilterPoisson) {
-    int taps = P.sizes2.z;
+    int taps = PLoops.sizes2.z;
     float sum = 0.0;
     for (int i = 0; i < taps; ++i) {
       ivec2 t = ivec2(floor(L.st + P.poisson[i].xy * P.bias.w));

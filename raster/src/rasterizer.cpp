@@ -377,7 +377,8 @@ Rasterizer::Impl::Impl(const RasterDeviceOptions& options) {
   VkQueryPool pool;
   VK_CHECK(vkCreateQueryPool(device, &q, nullptr, &pool));
   queries = vk::QueryPool(device, pool);
-  params = vk::Buffer(*context, sizeof(abi::Params), VK_BUFFER_USAGE_UNIFORM_BUFFER_BIT);
+  params = vk::Buffer(*context, sizeof(abi::Params),
+                      VK_BUFFER_USAGE_UNIFORM_BUFFER_BIT | VK_BUFFER_USAGE_STORAGE_BUFFER_BIT);  // ParamsLoops too
   evidencePixels = vk::Buffer(*context, 4096 * sizeof(uint32_t), VK_BUFFER_USAGE_STORAGE_BUFFER_BIT);
   q.queryCount = 2;
   VK_CHECK(vkCreateQueryPool(device, &q, nullptr, &pool));
@@ -536,6 +537,7 @@ void Rasterizer::Impl::writeDescriptors() {
   resources[abi::kBindingMaterials].buffer = &s.materials;
   resources[abi::kBindingAlphaTexels].buffer = &s.alphaTexels;
   resources[abi::kBindingParams].buffer = &params;
+  resources[abi::kBindingParamsLoops].buffer = &params;
   resources[abi::kBindingMapDepth].image =
       image(nearestSampler, mapDepth.arrayView(), VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL);
   resources[abi::kBindingMapShadow].image =

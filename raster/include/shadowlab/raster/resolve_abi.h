@@ -79,7 +79,8 @@ SHADOWLAB_CONST(int, kSpecCount, 11)
   X(OutPlanes, 10, StorageBuffer)          /* the projector channels, one plane each */          \
   X(MomentsRows, 11, CombinedImageSampler) /* moments pass: the rows-blurred moments, NEAREST */ \
   X(Moments, 12, CombinedImageSampler)     /* the blurred moments per light layer, LINEAR */     \
-  X(EvidencePixels, 13, StorageBuffer)     /* evidence pass: the listed pixels (y * width + x) */
+  X(EvidencePixels, 13, StorageBuffer)     /* evidence pass: the listed pixels (y * width + x) */ \
+  X(ParamsLoops, 14, StorageBuffer)        /* Params again: its loop counts (ParamsLoops below) */
 #define SHADOWLAB_ABI_BINDING(name, binding, kind) SHADOWLAB_CONST(int, kBinding##name, binding)
 SHADOWLAB_RESOLVE_BINDINGS(SHADOWLAB_ABI_BINDING)
 #undef SHADOWLAB_ABI_BINDING
@@ -121,6 +122,23 @@ SHADOWLAB_BLOCK(Params) {
   vec4 lightDepth;  // kSpecLightDepth: the light layers' depth = dot(lightDepth, (p, 1))
 }
 SHADOWLAB_BLOCK_END(P);
+
+// The loop counts of the filters and the blur, read through a second binding of the same Params
+// buffer as a storage buffer (the same std140 bytes, explicit offsets). lavapipe (Mesa 22.3)
+// inlines uniform-buffer values that bound a loop: at every draw after the descriptors or push
+// constants are bound again it compiles a new shader variant with the values folded in, and
+// never frees it (1 MB and ~1.3 ms per evidence-on-demand frame with filter=pcf or poisson,
+// tests/raster_memory_test.cpp). A storage buffer's values are never inlined.
+SHADOWLAB_CONST(int, kParamsSizesOffset, 1408)     // Params::sizes (then sizes2)
+SHADOWLAB_CONST(int, kParamsMoments2Offset, 2800)  // Params::moments2
+#ifndef __cplusplus
+layout(std140, set = 0, binding = kBindingParamsLoops) readonly buffer ParamsLoops {
+  layout(offset = kParamsSizesOffset) ivec4 sizes;       // w: the pcf size
+  ivec4 sizes2;                                          // z: the Poisson taps
+  layout(offset = kParamsMoments2Offset) vec4 moments2;  // y: filter.blur (radius, texels)
+}
+PLoops;
+#endif
 #endif
 
 #ifdef __cplusplus
@@ -148,6 +166,7 @@ static_assert(offsetof(Params, moments) == offsetof(Params, cascadeInfo) + 16);
 static_assert(offsetof(Params, moments2) == offsetof(Params, moments) + 16);
 static_assert(offsetof(Params, adaptive) == offsetof(Params, moments2) + 16);
 static_assert(offsetof(Params, lightDepth) == offsetof(Params, adaptive) + 16);
+static_assert(offsetof(Params, sizes) == kParamsSizesOffset && offsetof(Params, moments2) == kParamsMoments2Offset);
 static_assert(sizeof(Params) == 2848, "std140 size of resolve.frag's Params (glslangValidator -q reports it)");
 static_assert(2 * 4 >= kMaxLightLayers, "cascadeFar holds one far split per light layer");
 static_assert(kMaxLightLayers + kMaxProjectors == kMaxLayers);
