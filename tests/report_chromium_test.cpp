@@ -283,3 +283,64 @@ TEST(ReportChromium, FailingChartScriptIsANoteNotACrash) {
   EXPECT_TRUE(fs::is_regular_file(s.resultsJson));
   fs::remove_all(dir);
 }
+
+// The chart script runs in the Python prestarted before the loop (sweep.h, PrestartedCharts): it
+// finds matplotlib imported by the warm-up before its first line, gets its arguments as
+// `python SCRIPT RESULTS_JSON FIGURES_DIR` would (as __main__, its folder first on sys.path), and
+// its exit status and output still reach the report's note.
+TEST(ReportChromium, ChartScriptRunsInThePrestartedPython) {
+  const std::string dir = tempDir("prestart");
+  const std::string script = dir + "/probe_charts.py";
+  std::ofstream(script) << "import os, sys\n"
+                           "warm = 'matplotlib.pyplot' in sys.modules\n"
+                           "open(os.path.join(sys.argv[2], 'probe.txt'), 'w').write(\n"
+                           "    f'{warm} {__name__} {len(sys.argv)} {sys.path[0] == os.path.dirname(__file__)}')\n"
+                           "sys.stderr.write('probe ran\\n')\n"
+                           "sys.exit(3)\n";
+  SweepSpec spec;
+  spec.scenes = {"sphere_on_plane"};
+  FakeRunner runner;
+  SweepOptions o;
+  o.outDir = dir + "/sweep";
+  o.progress = nullptr;
+  o.reportScript = script;
+  SweepSummary s = runSweep(planSweep(spec), runner, o);
+  EXPECT_EQ(slurp(o.outDir + "/figures/probe.txt"), "True __main__ 3 True");
+  ASSERT_FALSE(s.notes.empty());
+  EXPECT_NE(s.notes[0].find("exited with 3"), std::string::npos) << s.notes[0];
+  EXPECT_NE(s.notes[0].find("probe ran"), std::string::npos) << s.notes[0];
+  fs::remove_all(dir);
+}
+
+// A prestarted Python that is never handed the script (here: the sweep is interrupted before its
+// report) writes nothing and is reaped: no figures folder, no child process left behind.
+TEST(ReportChromium, UnusedPrestartedPythonWritesNothingAndIsReaped) {
+  const std::string dir = tempDir("unused");
+  SweepSpec spec;
+  spec.scenes = {"sphere_on_plane"};
+  spec.grid = {parseGridArgument("map.size=256,1024")};
+  FakeRunner runner;
+  std::atomic<bool> stop{true};
+  SweepOptions o;
+  o.outDir = dir + "/sweep";
+  o.progress = nullptr;
+  o.stop = &stop;
+  o.reportScript = defaultReportScript(SHADOWLAB_SOURCE_DIR);
+  SweepSummary s = runSweep(planSweep(spec), runner, o);
+  EXPECT_TRUE(s.interrupted);
+  EXPECT_FALSE(fs::exists(o.outDir + "/figures"));
+  EXPECT_FALSE(fs::exists(o.outDir + "/report.html"));
+  errno = 0;
+  EXPECT_EQ(::waitpid(-1, nullptr, WNOHANG), -1) << "a child process is left";
+  EXPECT_EQ(errno, ECHILD);
+  // The prestarted Python is ended without a report in a fraction of its warm-up, not waited for.
+  {
+    auto charts = prestartCharts(o);
+    ASSERT_NE(charts, nullptr);
+    const auto t0 = std::chrono::steady_clock::now();
+    charts.reset();
+    EXPECT_LT(std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count(), 5.0);
+  }
+  EXPECT_EQ(::waitpid(-1, nullptr, WNOHANG), -1);
+  fs::remove_all(dir);
+}

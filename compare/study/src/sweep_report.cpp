@@ -6,6 +6,9 @@
 // marks document.body.dataset.imagesOk after checking every <img>, so a headless browser can tell
 // a broken report from a good one (tests/report_chromium_test.cpp).
 #include <fcntl.h>
+#include <signal.h>
+#include <spawn.h>
+#include <sys/socket.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -142,6 +145,66 @@ int waitExit(pid_t pid) {
   return -1;
 }
 
+// The interpreter the chart script runs in: SweepOptions::python, else $SHADOWLAB_PYTHON, else
+// /usr/bin/python3.
+std::string chartPython(const SweepOptions& options) {
+  if (!options.python.empty()) return options.python;
+  const char* env = std::getenv("SHADOWLAB_PYTHON");
+  return env && *env ? env : "/usr/bin/python3";
+}
+
+// What the prestarted Python runs (`python -c`): with SIGINT ignored and its output discarded, the
+// imports and one throw-away figure in every format (fonts, the mathtext parser, the backends),
+// the same first-use work charts.py would pay; then it reads "LOG\0SCRIPT\0ARG\0...\0run" from
+// stdin (the sweep's report) and runs SCRIPT as `python SCRIPT ARG...` would, stdout and stderr
+// into LOG, SIGINT back to its default. End of input without that message (the sweep ended
+// without a report): it exits, having written nothing. A failing warm-up is ignored: the script
+// meets the same problem and reports it into LOG.
+const char* kChartBootstrap = R"PY(
+import os, signal, sys
+signal.signal(signal.SIGINT, signal.SIG_IGN)
+try:
+    import io
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    fig, ax = plt.subplots(figsize=(3, 2))
+    ax.plot([1, 2, 4], [1e-3, 1e-2, 1e-1], marker="o", label="warm-up")
+    ax.set_xscale("log", base=2)
+    ax.set_yscale("log")
+    ax.set_title("warm-up")
+    ax.set_xlabel("x")
+    ax.legend()
+    fig.tight_layout()
+    for ext in ("png", "pdf", "svg"):
+        fig.savefig(io.BytesIO(), format=ext)
+    plt.close(fig)
+    del fig, ax
+except Exception:
+    pass
+data = b""
+while True:
+    chunk = os.read(0, 65536)
+    if not chunk:
+        break
+    data += chunk
+fields = data.split(b"\0")
+if len(fields) < 3 or fields[-1] != b"run":
+    os._exit(0)
+fd = os.open(fields[0], os.O_WRONLY | os.O_CREAT | os.O_TRUNC | os.O_CLOEXEC, 0o644)
+os.dup2(fd, 1)
+os.dup2(fd, 2)
+os.close(fd)
+fd = os.open(os.devnull, os.O_RDONLY | os.O_CLOEXEC)
+os.dup2(fd, 0)
+os.close(fd)
+signal.signal(signal.SIGINT, signal.default_int_handler)
+sys.argv = [os.fsdecode(f) for f in fields[1:-1]]
+sys.path[0] = os.path.dirname(os.path.abspath(sys.argv[0]))
+import runpy
+runpy.run_path(sys.argv[0], run_name="__main__")
+)PY";
+
 std::string tailOf(const std::string& path, size_t lines) {
   std::string text;
   try {
@@ -197,6 +260,68 @@ window.addEventListener('load', function () {
 )JS";
 
 }  // namespace
+
+PrestartedCharts::~PrestartedCharts() {
+  if (goFd_ >= 0) ::close(goFd_);
+  if (pid_ > 0) {
+    ::kill(pid_, SIGTERM);  // no need to wait for its imports to finish
+    waitExit(pid_);
+  }
+}
+
+int PrestartedCharts::run(const std::vector<std::string>& argv, const std::string& logPath) {
+  if (pid_ <= 0 || goFd_ < 0) return -1;
+  std::string message = logPath;
+  for (const auto& a : argv) message += std::string(1, '\0') + a;
+  message += std::string(1, '\0') + "run";
+  const char* p = message.data();
+  size_t left = message.size();
+  bool sent = true;
+  while (left > 0) {
+    ssize_t n = ::send(goFd_, p, left, MSG_NOSIGNAL);  // a Python gone away is EPIPE, not SIGPIPE
+    if (n < 0 && errno == EINTR) continue;
+    if (n <= 0) {
+      sent = false;
+      break;
+    }
+    p += n;
+    left -= size_t(n);
+  }
+  ::close(goFd_);  // end of the message
+  goFd_ = -1;
+  const int pid = pid_;
+  if (!sent) return -1;  // the destructor ends and reaps it
+  pid_ = -1;
+  return pid;
+}
+
+std::unique_ptr<PrestartedCharts> prestartCharts(const SweepOptions& options) {
+  std::error_code ec;
+  if (!options.writeResults || !options.writeReport || options.shard.active() || options.reportScript.empty() ||
+      !fs::is_regular_file(options.reportScript, ec))
+    return nullptr;
+  int sv[2];
+  if (::socketpair(AF_UNIX, SOCK_STREAM | SOCK_CLOEXEC, 0, sv) != 0) return nullptr;
+  posix_spawn_file_actions_t actions;
+  posix_spawn_file_actions_init(&actions);
+  posix_spawn_file_actions_adddup2(&actions, sv[1], 0);
+  posix_spawn_file_actions_addopen(&actions, 1, "/dev/null", O_WRONLY, 0);
+  posix_spawn_file_actions_adddup2(&actions, 1, 2);
+  const std::string python = chartPython(options);
+  std::vector<std::string> argv = {python, "-c", kChartBootstrap};
+  std::vector<char*> args;
+  for (auto& a : argv) args.push_back(a.data());
+  args.push_back(nullptr);
+  pid_t pid = -1;
+  const int rc = ::posix_spawn(&pid, python.c_str(), &actions, nullptr, args.data(), environ);
+  posix_spawn_file_actions_destroy(&actions);
+  ::close(sv[1]);
+  if (rc != 0) {
+    ::close(sv[0]);
+    return nullptr;
+  }
+  return std::make_unique<PrestartedCharts>(int(pid), sv[0]);
+}
 
 // The report's time axis: the method's cost, what an engine would pay (method_gpu_ms = shadow pass
 // + lookup pass, compare/TIMINGS.md), not the harness's evidence resolve, readback and compare;
@@ -275,7 +400,7 @@ std::vector<size_t> paretoFront(const std::vector<ResultRow>& rows, const std::s
 
 std::vector<std::string> writeSweepReport(const SweepPlan& plan, const std::vector<ResultRow>& rows,
                                           const nlohmann::json& results, SweepRunner& runner,
-                                          const SweepOptions& options) {
+                                          const SweepOptions& options, PrestartedCharts* prestarted) {
   std::vector<std::string> notes;
   const std::string figuresDir = joinPath(options.outDir, "figures");
   makeDirs(figuresDir);
@@ -300,12 +425,9 @@ std::vector<std::string> writeSweepReport(const SweepPlan& plan, const std::vect
   } else if (!fs::is_regular_file(options.reportScript, ec)) {
     notes.push_back("charts skipped: chart script " + options.reportScript + " not found");
   } else {
-    std::string python = options.python;
-    if (python.empty()) {
-      const char* env = std::getenv("SHADOWLAB_PYTHON");
-      python = env && *env ? env : "/usr/bin/python3";
-    }
-    charts = spawnLogged({python, options.reportScript, resultsPath, figuresDir}, logPath);
+    const std::string python = chartPython(options);
+    if (prestarted) charts = prestarted->run({options.reportScript, resultsPath, figuresDir}, logPath);
+    if (charts < 0) charts = spawnLogged({python, options.reportScript, resultsPath, figuresDir}, logPath);
     chartsCommand = python + " " + options.reportScript;
     if (charts < 0) notes.push_back("charts failed: cannot start " + chartsCommand + ": " + std::strerror(errno));
   }

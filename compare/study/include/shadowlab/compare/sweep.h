@@ -262,13 +262,41 @@ std::map<std::string, SweepJournalRow> readSweepJournal(const std::string& path)
 // measured on different devices.
 SweepSummary mergeSweepShards(const SweepPlan& plan, SweepRunner& runner, const SweepOptions& options);
 
+// The chart script's Python, started before the configuration loop (prestartCharts): the
+// interpreter starts, imports matplotlib and draws one throw-away figure (fonts, mathtext parser:
+// ~0.6 s of CPU) while the sweep starts its device and runs rows, then waits on its stdin. The
+// report hands it the chart script's command line, and it runs the script exactly as
+// `python SCRIPT RESULTS_JSON FIGURES_DIR` would (same files, same exit status, output into
+// figures/charts.log). Destroyed unused (an error, an interruption, no report), it is ended
+// (SIGTERM) and reaped, having written nothing.
+class PrestartedCharts {
+ public:
+  PrestartedCharts(int pid, int goFd) : pid_(pid), goFd_(goFd) {}
+  ~PrestartedCharts();
+  PrestartedCharts(const PrestartedCharts&) = delete;
+  PrestartedCharts& operator=(const PrestartedCharts&) = delete;
+  // Hands over `argv` (the interpreter's arguments: script, results.json, figures folder) with its
+  // output into `logPath`; the pid to wait for, or -1 when the Python is gone (the caller then
+  // starts the script afresh). Once only.
+  int run(const std::vector<std::string>& argv, const std::string& logPath);
+
+ private:
+  int pid_ = -1;
+  int goFd_ = -1;
+};
+// The Python of options.python ($SHADOWLAB_PYTHON, /usr/bin/python3) waiting as above; null when
+// no report would be written (options.writeReport or options.writeResults off, a shard), no chart
+// script is configured or found, or it cannot be started (the report then starts the script as before).
+std::unique_ptr<PrestartedCharts> prestartCharts(const SweepOptions& options);
+
 // The report of a finished sweep whose results.json is written: runs the chart script into
 // outDir/figures (PNG, PDF, SVG and figures/charts.json), renders the best and worst configuration
 // of each scene again for triptychs (figures/triptych_*.png) and writes outDir/report.html.
-// Returns notes (charts skipped, script failures) that the report also shows.
+// Returns notes (charts skipped, script failures) that the report also shows. `charts`: a Python
+// started earlier by prestartCharts to run the chart script in (null: started here).
 std::vector<std::string> writeSweepReport(const SweepPlan& plan, const std::vector<ResultRow>& rows,
                                           const nlohmann::json& results, SweepRunner& runner,
-                                          const SweepOptions& options);
+                                          const SweepOptions& options, PrestartedCharts* charts = nullptr);
 
 // Pieces of the report, usable on their own.
 void writeResultsCsv(const std::string& path, const std::vector<ResultRow>& rows);
