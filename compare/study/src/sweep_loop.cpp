@@ -14,10 +14,12 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <condition_variable>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <map>
+#include <mutex>
 #include <thread>
 
 #include "shadowlab/compare/sweep.h"
@@ -122,21 +124,27 @@ std::map<std::string, StoredRow> readJournal(const std::string& path, bool repai
   return rows;
 }
 
-// Appends with one write() on an O_APPEND descriptor and fsyncs, so a finished row survives a
-// kill or a power cut right after.
+// Appends with one write() on an O_APPEND descriptor: once append returns, the row is in the
+// file for any later reader, so a killed sweep (SIGKILL included) keeps it. Durability against a
+// power cut comes from fdatasync, run by a thread of its own after each append so the next row
+// need not wait for the disk (a few ms per row on a busy disk); close() waits for the last sync
+// and the results are written only after it. A failed sync is an error at the next append or at close.
 class Journal {
  public:
   explicit Journal(const std::string& path) : path_(path) {
     fd_ = ::open(path.c_str(), O_WRONLY | O_CREAT | O_APPEND | O_CLOEXEC, 0644);
     if (fd_ < 0)
       throw InputError(formatError(path, "", std::string("cannot open for appending: ") + std::strerror(errno)));
+    syncer_ = std::thread([this] { syncLoop(); });
   }
   ~Journal() {
+    stopSyncer();
     if (fd_ >= 0) ::close(fd_);
   }
   Journal(const Journal&) = delete;
   Journal& operator=(const Journal&) = delete;
-  void append(const std::string& line, bool sync) {
+  void append(const std::string& line) {
+    throwSyncError();
     std::string bytes = line + "\n";
     const char* p = bytes.data();
     size_t left = bytes.size();
@@ -149,13 +157,54 @@ class Journal {
       p += n;
       left -= size_t(n);
     }
-    if (sync && ::fdatasync(fd_) != 0)
-      throw InputError(formatError(path_, "", std::string("cannot sync: ") + std::strerror(errno)));
+    {
+      std::lock_guard<std::mutex> lock(mutex_);
+      ++appended_;
+    }
+    wake_.notify_one();
+  }
+  // Waits until every appended row is synced; throws the sync's error if one failed.
+  void close() {
+    stopSyncer();
+    throwSyncError();
   }
 
  private:
+  void syncLoop() {
+    std::unique_lock<std::mutex> lock(mutex_);
+    for (;;) {
+      wake_.wait(lock, [&] { return stop_ || synced_ < appended_; });
+      if (synced_ == appended_) return;  // stop_ with nothing left to sync
+      const size_t upTo = appended_;
+      lock.unlock();
+      const int err = ::fdatasync(fd_) == 0 ? 0 : errno;
+      lock.lock();
+      synced_ = upTo;
+      if (err != 0 && syncError_.empty()) syncError_ = std::strerror(err);
+    }
+  }
+  void stopSyncer() {
+    if (!syncer_.joinable()) return;
+    {
+      std::lock_guard<std::mutex> lock(mutex_);
+      stop_ = true;
+    }
+    wake_.notify_one();
+    syncer_.join();
+  }
+  void throwSyncError() {
+    std::lock_guard<std::mutex> lock(mutex_);
+    if (!syncError_.empty()) throw InputError(formatError(path_, "", "cannot sync: " + syncError_));
+  }
+
   std::string path_;
   int fd_ = -1;
+  std::mutex mutex_;
+  std::condition_variable wake_;
+  size_t appended_ = 0, synced_ = 0;  // rows written, rows known synced
+  bool stop_ = false;
+  std::string syncError_;
+  std::thread syncer_;
 };
 
 // One sweep per folder at a time: two writers would run the same rows twice.
@@ -292,7 +341,7 @@ nlohmann::json sweepDescription(const SweepPlan& plan) {
 // runSweep and of mergeSweepShards. `extra` keys are added to results.json (e.g. "shards").
 void writeSweepOutputs(const SweepPlan& plan, const std::vector<const StoredRow*>& have, SweepRunner& runner,
                        const SweepOptions& options, double loopSeconds, Clock::time_point t0,
-                       const nlohmann::json& extra, SweepSummary& summary) {
+                       const nlohmann::json& extra, SweepSummary& summary, PrestartedCharts* charts = nullptr) {
   std::vector<ResultRow> rows;
   nlohmann::json configSeconds = nlohmann::json::array();
   double secondsSum = 0;
@@ -339,7 +388,7 @@ void writeSweepOutputs(const SweepPlan& plan, const std::vector<const StoredRow*
       std::fflush(options.progress);
     }
     const auto r0 = Clock::now();
-    summary.notes = writeSweepReport(plan, rows, results, runner, options);
+    summary.notes = writeSweepReport(plan, rows, results, runner, options, charts);
     summary.reportHtml = joinPath(options.outDir, "report.html");
     // Written again so command_wall_seconds covers the report too (charts and triptychs included).
     results["report_wall_seconds"] = secondsSince(r0);
@@ -372,6 +421,9 @@ SweepSummary runSweep(const SweepPlan& plan, SweepRunner& runner, const SweepOpt
   if (shard.active() && shard.index >= shard.count) throw InputError("--shard: error: I >= N; expected 0 <= I < N");
   for (size_t i = 0; i < plan.jobs.size(); ++i) summary.configurations += shard.owns(i) ? 1 : 0;
   if (options.outDir.empty()) throw InputError("shadowlab sweep: error: no output folder; expected -o DIR");
+  // The report's Python starts now and imports matplotlib while the device starts and the rows run
+  // (a core is mostly free then); it writes nothing unless the report hands it the chart script.
+  const std::unique_ptr<PrestartedCharts> charts = prestartCharts(options);
   // Device limits are input errors too: found before the output folder exists.
   for (const auto& c : plan.configs) runner.checkMethod(c.method, "shadowlab sweep: configuration " + c.config);
   // A shard works in its own folder with its own lock and journal: two shards never write one file.
@@ -479,7 +531,7 @@ SweepSummary runSweep(const SweepPlan& plan, SweepRunner& runner, const SweepOpt
                            {"device", device},
                            {"row", s.row.toJson()}};
     if (shard.active()) line["shard"] = std::to_string(shard.index) + "/" + std::to_string(shard.count);
-    journal.append(line.dump(), /*sync=*/true);
+    journal.append(line.dump());
     if (log) log << "pid " << pid << " done " << job.key() << " " << seconds << " s\n" << std::flush;
     double errorRate = out.metrics.value("error_rate", 0.0);
     fresh[i] = std::move(s);
@@ -488,6 +540,7 @@ SweepSummary runSweep(const SweepPlan& plan, SweepRunner& runner, const SweepOpt
     progress.finish(what, errorRate, seconds);
   }
   progress.end();
+  journal.close();  // every row run is synced before anything is read from or written about them
   const double loopSeconds = secondsSince(loop0);
   if (!options.writeResults && !shard.active()) {
     summary.rows.resize(plan.jobs.size());
@@ -507,7 +560,7 @@ SweepSummary runSweep(const SweepPlan& plan, SweepRunner& runner, const SweepOpt
   }
 
   if (options.writeResults)
-    writeSweepOutputs(plan, have, runner, options, loopSeconds, t0, nlohmann::json::object(), summary);
+    writeSweepOutputs(plan, have, runner, options, loopSeconds, t0, nlohmann::json::object(), summary, charts.get());
   summary.commandWallSeconds = secondsSince(t0);
   if (log) log << "pid " << pid << " end: " << summary.ran << " rows run, " << summary.commandWallSeconds << " s\n";
   return summary;
