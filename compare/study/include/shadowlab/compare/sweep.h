@@ -234,9 +234,10 @@ struct SweepSummary {
 };
 
 // Checks every configuration with runner.checkMethod, then runs the plan into options.outDir
-// (created), appending each finished row durably to outDir/rows.jsonl (one write + fdatasync per
-// row); rows already there for the same scene content and method are not
-// run again; a torn last line is dropped. A row to resume that was measured on another device
+// (created), appending each finished row to outDir/rows.jsonl (one write per row before the next
+// starts; fdatasync'd by a thread of its own, every row synced before the results are written);
+// rows already there for the same scene content and method are not run again; a torn last line
+// is dropped. A row to resume that was measured on another device
 // than runner.deviceName() is an InputError naming both devices (nothing is run or rewritten). At the end writes
 // results.json, results.csv, figures/ and report.html. Log of starts/finishes: outDir/sweep.log.
 SweepSummary runSweep(const SweepPlan& plan, SweepRunner& runner, const SweepOptions& options);
