@@ -368,7 +368,7 @@ struct CascadePick {
 CascadePick pickCascade(vec3 p) {
   CascadePick c = CascadePick(0, 0.0);
   if (kCascaded) {
-    int cascadeCount = int(P.cascadeView.w);
+    int cascadeCount = int(PLoops.cascadeView.w);  // a loop bound: not P's (ParamsLoops in resolve_abi.h)
     float viewDepth = dot(p - P.cameraOrigin.xyz, P.cascadeView.xyz) + P.cascadeInfo.z;  // fit camera depth
     for (int k = 0; k + 1 < cascadeCount; ++k)
       if (viewDepth > cascadeFar(k)) c.cascade = k + 1;

@@ -136,13 +136,15 @@ SHADOWLAB_BLOCK_END(P);
 // constants are bound again it compiles a new shader variant with the values folded in, and
 // never frees it (1 MB and ~1.3 ms per evidence-on-demand frame with filter=pcf or poisson,
 // tests/raster_memory_test.cpp). A storage buffer's values are never inlined.
-SHADOWLAB_CONST(int, kParamsSizesOffset, 1408)     // Params::sizes (then sizes2)
-SHADOWLAB_CONST(int, kParamsMoments2Offset, 2800)  // Params::moments2
+SHADOWLAB_CONST(int, kParamsSizesOffset, 1408)        // Params::sizes (then sizes2)
+SHADOWLAB_CONST(int, kParamsCascadeViewOffset, 2720)  // Params::cascadeView
+SHADOWLAB_CONST(int, kParamsMoments2Offset, 2800)     // Params::moments2
 #ifndef __cplusplus
 layout(std140, set = 0, binding = kBindingParamsLoops) readonly buffer ParamsLoops {
-  layout(offset = kParamsSizesOffset) ivec4 sizes;       // w: the pcf size
-  ivec4 sizes2;                                          // z: the Poisson taps
-  layout(offset = kParamsMoments2Offset) vec4 moments2;  // y: filter.blur (radius, texels)
+  layout(offset = kParamsSizesOffset) ivec4 sizes;             // w: the pcf size
+  ivec4 sizes2;                                                // z: the Poisson taps
+  layout(offset = kParamsCascadeViewOffset) vec4 cascadeView;  // w: the cascade count
+  layout(offset = kParamsMoments2Offset) vec4 moments2;        // y: filter.blur (radius, texels)
 }
 PLoops;
 #endif
@@ -173,7 +175,8 @@ static_assert(offsetof(Params, moments) == offsetof(Params, cascadeInfo) + 16);
 static_assert(offsetof(Params, moments2) == offsetof(Params, moments) + 16);
 static_assert(offsetof(Params, adaptive) == offsetof(Params, moments2) + 16);
 static_assert(offsetof(Params, lightDepth) == offsetof(Params, adaptive) + 16);
-static_assert(offsetof(Params, sizes) == kParamsSizesOffset && offsetof(Params, moments2) == kParamsMoments2Offset);
+static_assert(offsetof(Params, sizes) == kParamsSizesOffset && offsetof(Params, moments2) == kParamsMoments2Offset &&
+              offsetof(Params, cascadeView) == kParamsCascadeViewOffset);
 static_assert(sizeof(Params) == 2848, "std140 size of resolve.frag's Params (glslangValidator -q reports it)");
 static_assert(2 * 4 >= kMaxLightLayers, "cascadeFar holds one far split per light layer");
 static_assert(kMaxLightLayers + kMaxProjectors == kMaxLayers);
