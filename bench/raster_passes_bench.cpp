@@ -3,15 +3,19 @@
 // GPU time of the two passes (manual time); readback and total CPU time are counters.
 // The yardstick: a bare Vulkan program does ~24 ms (shadow) + ~45 ms (camera) for
 // ~100k triangles on lavapipe; the goal is within 1.3x of that for filters none and hw2x2.
+// lookup/*: the lookup pass alone (lookup_gpu_ms), per filter and bias specialization.
 #include <benchmark/benchmark.h>
 
 #include <algorithm>
 #include <cstdio>
+#include <ctime>
 #include <map>
 #include <memory>
+#include <vector>
 
 #include "bench_scene.h"
 #include "shadowlab/raster/raster.h"
+#include "shadowlab/scenes/loader.h"
 
 using namespace shadowlab;
 using shadowlab::bench::benchScene;
@@ -48,7 +52,57 @@ void passes(benchmark::State& state, Filter filter, int copies) {
   state.SetLabel(rasterizer().deviceName());
 }
 
+// The lookup pass alone (pass 4: the method's visibility, 1 byte per pixel), as evidence on demand
+// runs it per configuration, on sphere_on_plane at 1920x1080 with a 2048^2 map: the iteration time
+// is lookup_gpu_ms. `edit` switches a bias on (the receiver plane, the normal offset), so the cost
+// of each specialization shows beside the default's.
+void lookup(benchmark::State& state, Filter filter, int edit) {
+  static const Scene s = [] {
+    Scene scene = loadScene(resolveScenePath("sphere_on_plane"));
+    scene.camera.width = 1920;
+    scene.camera.height = 1080;
+    return scene;
+  }();
+  Method m;
+  m.mapSize = 2048;
+  m.filter = filter;
+  m.biasReceiverPlane = edit == 1;
+  m.biasNormal = edit == 2 ? 1.0f : 0.0f;
+  const EvidenceSelector none = [](const uint8_t*, int, int, std::vector<uint32_t>&) {};
+  RasterTimings t;
+  for (int i = 0; i < 2; ++i)  // warm-up: pipelines, upload, the group's planes
+    rasterizer().recycle(rasterizer().render(s, m, "", &t, nullptr, &none));
+  std::vector<double> ms, cpu;
+  auto cpuMs = [] {
+    timespec ts{};
+    clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &ts);
+    return double(ts.tv_sec) * 1e3 + double(ts.tv_nsec) * 1e-6;
+  };
+  for (auto _ : state) {
+    const double c0 = cpuMs();
+    rasterizer().recycle(rasterizer().render(s, m, "", &t, nullptr, &none));
+    cpu.push_back(cpuMs() - c0);
+    state.SetIterationTime(t.lookupGpuMs * 1e-3);
+    ms.push_back(t.lookupGpuMs);
+  }
+  auto median = [](std::vector<double> v) {
+    std::sort(v.begin(), v.end());
+    return v.empty() ? 0.0 : v[v.size() / 2];
+  };
+  state.counters["lookup_gpu_ms"] = median(ms);
+  // The process's CPU time per frame (every thread, llvmpipe's included: shadow, lookup, evidence,
+  // readback): less sensitive than the GPU timestamps to other processes on a shared machine.
+  state.counters["frame_cpu_ms"] = median(cpu);
+  state.counters["partial"] = t.partialEvidence;
+  state.SetLabel(rasterizer().deviceName());
+}
+
 }  // namespace
+
+BENCHMARK_CAPTURE(lookup, none_sphere, Filter::None, 0)->UseManualTime()->Unit(benchmark::kMillisecond);
+BENCHMARK_CAPTURE(lookup, hw2x2_sphere, Filter::Hw2x2, 0)->UseManualTime()->Unit(benchmark::kMillisecond);
+BENCHMARK_CAPTURE(lookup, none_sphere_receiver_plane, Filter::None, 1)->UseManualTime()->Unit(benchmark::kMillisecond);
+BENCHMARK_CAPTURE(lookup, none_sphere_normal_offset, Filter::None, 2)->UseManualTime()->Unit(benchmark::kMillisecond);
 
 #define SHADOWLAB_PASSES(filter, name)                                                                \
   BENCHMARK_CAPTURE(passes, name##_bunny, filter, 1)->UseManualTime()->Unit(benchmark::kMillisecond); \

@@ -31,6 +31,8 @@ Scene smallScene(const std::string& name) {
 
 struct Check {
   size_t listed = 0, fractional = 0, mismatches = 0;
+  size_t changedBytes = 0;  // lookup bytes that differ between the acne frame and m's
+  bool acnePartial = false;
   std::string first;
 };
 
@@ -38,19 +40,34 @@ struct Check {
 // The first render with a selector keeps the group's planes (a full frame when the group is new);
 // handed back, a partial frame's planes are reused, its evidence planes zeroed again only where it
 // listed pixels (every 5th here, so a value left over would show at the 7th's unlisted pixels).
+// Between the two, a partial frame of the same group with another bias (acne: no bias at all,
+// listing every 3rd pixel) is handed back: the checked frame's vis plane is that frame's,
+// rewritten only where the bytes changed.
 Check renderBoth(Rasterizer& r, const Scene& s, const Method& m, bool* partial) {
   auto everyNth = [](uint32_t step) {
     return EvidenceSelector([step](const uint8_t*, int width, int height, std::vector<uint32_t>& pixels) {
       for (uint32_t i = 0; i < uint32_t(width * height); i += step) pixels.push_back(i);
     });
   };
-  const EvidenceSelector every5th = everyNth(5), every7th = everyNth(7);
+  const EvidenceSelector every3rd = everyNth(3), every5th = everyNth(5), every7th = everyNth(7);
   r.recycle(r.render(s, m, "", nullptr, nullptr, &every5th));
+  const std::vector<uint8_t> bytes = r.lookupVisibility();
+  Method acne = m;
+  acne.biasCompare = 0.0f;
+  acne.biasSlope = 0.0f;
+  acne.biasConstant = 0.0f;
+  acne.biasNormal = 0.0f;
+  acne.biasReceiverPlane = false;
+  RasterTimings acneTimings;
+  r.recycle(r.render(s, acne, "", &acneTimings, nullptr, &every3rd));
+  const std::vector<uint8_t> acneBytes = r.lookupVisibility();
+  Check c;
+  c.acnePartial = acneTimings.partialEvidence;
+  for (size_t i = 0; i < bytes.size() && i < acneBytes.size(); ++i) c.changedBytes += bytes[i] != acneBytes[i];
   const Frame full = r.render(s, m);
   RasterTimings t;
   Frame part = r.render(s, m, "", &t, nullptr, &every7th);
   *partial = t.partialEvidence;
-  Check c;
   EXPECT_EQ(full.names, part.names);
   if (full.names != part.names) return c;
   const std::string p = "light." + s.lights.front().name + ".";
@@ -114,6 +131,8 @@ TEST_F(RasterEvidence, ListedPixelsGetTheFullResolvesBits) {
     partials += partial;
     EXPECT_EQ(k.mismatches, 0u) << c.what << "; first: " << k.first;
     EXPECT_GT(k.listed, 1000u) << c.what;
+    EXPECT_TRUE(k.acnePartial) << c.what;
+    EXPECT_GT(k.changedBytes, 500u) << c.what;
     if (c.m.filter != Filter::None) {
       EXPECT_GT(k.fractional, 0u) << c.what;
     }

@@ -10,6 +10,7 @@
 #include <gtest/gtest.h>
 #include <malloc.h>
 
+#include <algorithm>
 #include <cstdint>
 #include <string>
 #include <vector>
@@ -80,9 +81,11 @@ TEST_F(RasterMemory, RepeatedFramesDoNotGrowTheHeap) {
   constexpr int kWarm = 3, kFrames = 12;
   for (bool onDemand : {true, false}) {
     for (Case& c : cases) {
-      size_t before = 0;
+      // The least the heap held over the first and over the last three frames: lavapipe holds a
+      // 3.21 MB buffer now and then while it works (allocated and freed again, seen on a loaded
+      // machine with main's binary too), which a single sample may catch.
+      size_t before = SIZE_MAX, after = SIZE_MAX;
       for (int f = 0; f < kWarm + kFrames; ++f) {
-        if (f == kWarm) before = heapBytes();
         c.m.biasCompare = 1e-4f * float(f % 4);  // the uniform buffer changes every frame
         RasterTimings t;
         Frame frame = R->render(s, c.m, "", &t, nullptr, onDemand ? &every11th : nullptr);
@@ -90,11 +93,14 @@ TEST_F(RasterMemory, RepeatedFramesDoNotGrowTheHeap) {
           EXPECT_TRUE(t.partialEvidence) << c.what;
         }
         R->recycle(std::move(frame));
+        if (f >= kWarm && f < kWarm + 3) before = std::min(before, heapBytes());
+        if (f >= kWarm + kFrames - 3) after = std::min(after, heapBytes());
       }
-      const long long grown = (long long)heapBytes() - (long long)before;
-      // A leaked shader variant per frame grows it by ~1 MB a frame (12 MB here); a frame's planes
-      // are 0.9 MB at most, and the pools keep a bounded number of them.
-      EXPECT_LT(grown, (long long)(2 * planeBytes + (1 << 20)))
+      const long long grown = (long long)after - (long long)before;
+      // A leaked shader variant per frame grows it by ~1 MB a frame (9 MB between the two ends); a
+      // frame's planes are 0.9 MB at most, the pools keep a bounded number of them, and the three
+      // samples at each end may all catch lavapipe's buffer (3.21 MB).
+      EXPECT_LT(grown, (long long)(2 * planeBytes + (4 << 20)))
           << c.what << (onDemand ? " on demand" : " full frames") << ": the heap grew by " << grown << " bytes over "
           << kFrames << " frames";
     }

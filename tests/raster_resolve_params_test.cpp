@@ -134,6 +134,16 @@ TEST(RasterResolveParams, MethodFieldsLandWhereTheShaderReadsThem) {
   EXPECT_EQ(resolveSpecialization(s, &s.lights[0], m, layers)[raster::abi::kSpecAdaptive], 1u);
   m.biasAdaptive = false;
   EXPECT_EQ(resolveSpecialization(s, &s.lights[0], m, layers)[raster::abi::kSpecAdaptive], 0u);
+  // The receiver plane and the normal offset switch their code on through specialization constants.
+  EXPECT_EQ(resolveSpecialization(s, &s.lights[0], m, layers)[raster::abi::kSpecReceiverPlane], 1u);
+  EXPECT_EQ(resolveSpecialization(s, &s.lights[0], m, layers)[raster::abi::kSpecNormalOffset], 1u);
+  Method plain = m;
+  plain.biasReceiverPlane = false;
+  plain.biasNormal = 0.0f;
+  EXPECT_EQ(resolveSpecialization(s, &s.lights[0], plain, layers)[raster::abi::kSpecReceiverPlane], 0u);
+  EXPECT_EQ(resolveSpecialization(s, &s.lights[0], plain, layers)[raster::abi::kSpecNormalOffset], 0u);
+  plain.biasNormal = -0.5f;  // any offset, either way
+  EXPECT_EQ(resolveSpecialization(s, &s.lights[0], plain, layers)[raster::abi::kSpecNormalOffset], 1u);
   EXPECT_EQ(prm.depthBias, glm::vec4(2.0f, 3.0f, 0.01f, std::ldexp(1.0f, -16)));
   EXPECT_EQ(prm.sizes, glm::ivec4(1024, 1, 0, m.filterSize));
   EXPECT_EQ(prm.sizes2, glm::ivec4(160, 120, 24, 0));

@@ -35,6 +35,12 @@ layout(constant_id = kSpecAffine) const bool kAffine = false;
 layout(constant_id = kSpecLightDepth) const bool kLightDepth = false;
 // bias.adaptive (adaptiveEpsilon): off, its code is compiled out.
 layout(constant_id = kSpecAdaptive) const bool kAdaptive = false;
+// bias.receiver_plane and bias.normal != 0 (P.bias.z, P.bias.y): off, the lookup uses no slope and
+// looks up the visible point itself, and the lookup pass computes neither the slope nor a second
+// projection (as uniform-buffer tests, lavapipe ran both for every pixel). The same bits: with
+// bias.normal = 0 the offset point is the visible point, and a zero slope adds zero.
+layout(constant_id = kSpecReceiverPlane) const bool kReceiverPlane = false;
+layout(constant_id = kSpecNormalOffset) const bool kNormalOffset = false;
 // The lookup pass: what an engine pays for the method, the same lookup and filter as the resolve
 // (shadeLight below) with only the visibility written, 1 byte per pixel into outA's R8 attachment;
 // the unread evidence is dead code the compiler removes.
@@ -331,13 +337,13 @@ LayerHit lookUp(int layerIndex, Surface s) {
   Layer l = layerAt(layerIndex);
   h.tP = project(l, s.p);
   h.texelWorld = P.layerInfo[layerIndex].x * abs(h.tP.w);
-  vec3 q = s.p + s.normal * (P.bias.y * h.texelWorld);  // normal-offset lookup point
-  h.tQ = project(l, q);
+  vec3 q = kNormalOffset ? s.p + s.normal * (P.bias.y * h.texelWorld) : s.p;  // normal-offset lookup point
+  h.tQ = kNormalOffset ? project(l, q) : h.tP;
   h.uvz = h.tQ.xyz / h.tQ.w;
   h.inMap = h.tQ.w > 0.0 && all(greaterThanEqual(h.uvz.xy, vec2(0.0))) && all(lessThanEqual(h.uvz.xy, vec2(1.0)));
   h.planeSlope = planeSlope(l, h.tQ, s.normal, s.e1, h.texelWorld);
   float ref = kAdaptive ? h.uvz.z - adaptiveEpsilon(l, q, h.tQ, h.uvz.z) : h.uvz.z - P.bias.x;
-  h.lookup = Lookup(l, h.uvz.xy * l.size, ref, P.bias.z > 0.5 || kAdaptive ? h.planeSlope : vec2(0.0));
+  h.lookup = Lookup(l, h.uvz.xy * l.size, ref, kReceiverPlane || kAdaptive ? h.planeSlope : vec2(0.0));
   return h;
 }
 
@@ -362,7 +368,7 @@ struct CascadePick {
 CascadePick pickCascade(vec3 p) {
   CascadePick c = CascadePick(0, 0.0);
   if (kCascaded) {
-    int cascadeCount = int(P.cascadeView.w);
+    int cascadeCount = int(PLoops.cascadeView.w);  // a loop bound: not P's (ParamsLoops in resolve_abi.h)
     float viewDepth = dot(p - P.cameraOrigin.xyz, P.cascadeView.xyz) + P.cascadeInfo.z;  // fit camera depth
     for (int k = 0; k + 1 < cascadeCount; ++k)
       if (viewDepth > cascadeFar(k)) c.cascade = k + 1;

@@ -179,6 +179,41 @@ double msSince(std::chrono::steady_clock::time_point t0) {
   return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
 }
 
+// Evidence on demand: the lookup's bytes into the frame's vis plane (1 at 255, 0 elsewhere; the
+// fractional pixels get their floats from the evidence pass afterwards) and the sorted list of the
+// fractional bytes (1..254), in one pass over the bytes, 8 at a time. `held` holds the bytes that
+// `plane` already encodes (a plane recycle() handed back): only the words that differ are
+// written; `full` (no such plane) writes every pixel. `held` then holds `bytes`.
+void visFromBytes(const uint8_t* bytes, size_t n, bool full, uint8_t* held, float* plane,
+                  std::vector<uint32_t>& fractional) {
+  constexpr uint64_t kLow = 0x0101010101010101ull;
+  auto encode = [&](size_t i, size_t count) {
+    for (size_t j = 0; j < count; ++j) plane[i + j] = bytes[i + j] == 255 ? 1.0f : 0.0f;
+  };
+  fractional.clear();
+  size_t i = 0;
+  for (; i + 8 <= n; i += 8) {
+    uint64_t w, h;
+    std::memcpy(&w, bytes + i, 8);
+    std::memcpy(&h, held + i, 8);
+    if (full || w != h) {
+      encode(i, 8);
+      std::memcpy(held + i, &w, 8);
+    }
+    // A byte is 0 or 255 exactly where it equals its top bit spread over the byte.
+    uint64_t frac = w ^ (((w >> 7) & kLow) * 0xFF);
+    while (frac) {
+      const int byte = __builtin_ctzll(frac) / 8;
+      fractional.push_back(uint32_t(i) + uint32_t(byte));
+      frac &= ~(uint64_t(0xFF) << (8 * byte));
+    }
+  }
+  for (; i < n; ++i) {
+    if (full || bytes[i] != held[i]) encode(i, 1), held[i] = bytes[i];
+    if (bytes[i] != 0 && bytes[i] != 255) fractional.push_back(uint32_t(i));
+  }
+}
+
 // The descriptor set's bindings, from resolve_abi.h's table.
 enum class DescriptorKind { StorageBuffer, UniformBuffer, CombinedImageSampler, UniformTexelBuffer };
 
@@ -268,9 +303,19 @@ struct Rasterizer::Impl {
     std::string footprintKey;
     const float* kept[5] = {};         // hit, object_id, prim_id, m, cascade
     std::vector<const float*> zeroed;  // evidence planes: 0 except at `listed`
+    const float* vis = nullptr;        // the vis plane: the bytes' values except at `listed`
     std::vector<uint32_t> listed;
   } lent;
   std::vector<std::vector<float>> zeroSpare;  // planes of zeros (recycled evidence planes)
+  // The vis plane of the last partial frame, handed back by recycle() with its listed pixels set
+  // back to what the bytes say, and the lookup bytes it encodes: the next partial frame rewrites
+  // only the pixels whose byte changed. `plane` is empty while lent (or never handed back).
+  struct VisPlane {
+    std::vector<float> plane;
+    std::vector<uint8_t> bytes;
+  } visKept;
+  std::vector<uint8_t> lookupRows;  // the lookup's bytes when its rows are padded (a copy without the padding)
+  std::vector<uint32_t> asked, fractional;
 
   explicit Impl(const RasterDeviceOptions& options);
   // Work may still be in flight when a render throws (a failed call after a submission): wait for
@@ -909,6 +954,12 @@ void Rasterizer::recycle(Frame&& frame) {
         back = true;
       }
     if (back) continue;
+    if (data == lent.vis && im.visKept.plane.empty() && im.visKept.bytes.size() == n) {
+      for (uint32_t i : lent.listed) plane[i] = im.visKept.bytes[i] == 255 ? 1.0f : 0.0f;  // the evidence's floats
+      im.visKept.plane = std::move(plane);
+      lent.vis = nullptr;
+      continue;
+    }
     if (std::find(lent.zeroed.begin(), lent.zeroed.end(), data) != lent.zeroed.end() && im.zeroSpare.size() < 16) {
       for (uint32_t i : lent.listed) plane[i] = 0.0f;  // the only non-zero values
       im.zeroSpare.push_back(std::move(plane));
@@ -1162,21 +1213,50 @@ Frame Rasterizer::Impl::partialFrame(const Scene& sc, const Light& light, const 
   const size_t n = size_t(width) * size_t(height);
   auto t0 = std::chrono::steady_clock::now();
   lookupOut.invalidate(*context);
-  std::vector<uint8_t> vis8(n);
-  for (int y = 0; y < height; ++y) {
-    const uint8_t* row = static_cast<const uint8_t*>(lookupOut.mapped()) + size_t(y) * lookupOut.rowPitch();
-    std::copy(row, row + width, vis8.data() + size_t(y) * size_t(width));
+  // The bytes in place when the rows are not padded (the mapped image is the row-major plane).
+  const uint8_t* vis8 = static_cast<const uint8_t*>(lookupOut.mapped());
+  if (lookupOut.rowPitch() != size_t(width)) {
+    lookupRows.resize(n);
+    for (int y = 0; y < height; ++y)
+      std::memcpy(lookupRows.data() + size_t(y) * size_t(width), vis8 + size_t(y) * lookupOut.rowPitch(),
+                  size_t(width));
+    vis8 = lookupRows.data();
   }
-  std::vector<uint32_t> asked;
-  select(vis8.data(), width, height, asked);
+  // The vis plane: the one handed back (only the changed bytes rewritten), else a spare one.
+  std::vector<float> visPlane;
+  const bool visFull = visKept.plane.size() != n || visKept.bytes.size() != n;
+  if (!visFull) {
+    visPlane = std::move(visKept.plane);
+  } else if (!spare.empty()) {
+    visPlane = std::move(spare.back());
+    spare.pop_back();
+  }
+  visKept.plane.clear();
+  visPlane.resize(n);
+  visKept.bytes.resize(n);
+  // Two threads: the vis plane and the fractional bytes beside the selector.
+  std::thread visHelper(visFromBytes, vis8, n, visFull, visKept.bytes.data(), visPlane.data(), std::ref(fractional));
+  asked.clear();
+  try {
+    select(vis8, width, height, asked);
+  } catch (...) {
+    visHelper.join();
+    throw;
+  }
+  visHelper.join();
   if (!std::is_sorted(asked.begin(), asked.end())) std::sort(asked.begin(), asked.end());
+  // The listed pixels: the fractional ones and those asked for, sorted, once each.
   std::vector<uint32_t> listed;
+  listed.reserve(fractional.size() + asked.size());
   {
-    size_t a = 0;
-    for (uint32_t i = 0; i < uint32_t(n); ++i) {
-      while (a < asked.size() && asked[a] < i) ++a;
-      const bool fractional = vis8[i] != 0 && vis8[i] != 255;
-      if (fractional || (a < asked.size() && asked[a] == i)) listed.push_back(i);
+    size_t a = 0, f = 0;
+    const auto endAsked = std::lower_bound(asked.begin(), asked.end(), uint32_t(n)) - asked.begin();
+    while (a < size_t(endAsked) || f < fractional.size()) {
+      const uint32_t i =
+          f == fractional.size() || (a < size_t(endAsked) && asked[a] < fractional[f]) ? asked[a] : fractional[f];
+      listed.push_back(i);
+      while (a < size_t(endAsked) && asked[a] == i) ++a;
+      if (f < fractional.size() && fractional[f] == i) ++f;
     }
   }
   const size_t count = listed.size();
@@ -1255,8 +1335,8 @@ Frame Rasterizer::Impl::partialFrame(const Scene& sc, const Light& light, const 
   frame.data.resize(frame.names.size());
   // Planes: 0 hit, 1 object_id, 2 prim_id, 3 vis, 4 receiver_depth, 5 map_depth, 6 m, 7 bias_depth,
   // 8 bias_world, 9 occluder_id, 10 occluder_prim, 11 in_map, 12 cascade, 13.. the moments'.
-  // The kept ones are lent to the frame, the evidence planes come zeroed from zeroSpare when a
-  // frame handed them back, the rest from spare.
+  // The kept ones are lent to the frame, vis is the plane filled from the bytes above, the
+  // evidence planes come zeroed from zeroSpare when a frame handed them back, the rest from spare.
   std::vector<float>* kept[13] = {&cameraPlanes.hit, &cameraPlanes.objectId, &cameraPlanes.primId};
   kept[6] = &footprint.m;
   kept[12] = &footprint.cascade;
@@ -1264,6 +1344,7 @@ Frame Rasterizer::Impl::partialFrame(const Scene& sc, const Light& light, const 
   lent = Lent();
   lent.footprintKey = footprint.key;
   std::vector<uint8_t> zeroed(frame.data.size(), 0);
+  bool toFill = false;
   for (size_t c = 0; c < frame.data.size(); ++c) {
     std::vector<float>* from = c < 13 ? kept[c] : nullptr;
     if (from) {
@@ -1272,8 +1353,14 @@ Frame Rasterizer::Impl::partialFrame(const Scene& sc, const Light& light, const 
       lent.kept[c == 6 ? 3 : c == 12 ? 4 : c] = frame.data[c].data();
       continue;
     }
-    std::vector<std::vector<float>>& pool = c != 3 && !zeroSpare.empty() ? zeroSpare : spare;
+    if (c == 3) {
+      frame.data[c] = std::move(visPlane);  // filled above
+      lent.vis = frame.data[c].data();
+      continue;
+    }
+    std::vector<std::vector<float>>& pool = !zeroSpare.empty() ? zeroSpare : spare;
     zeroed[c] = &pool == &zeroSpare;
+    toFill = toFill || !zeroed[c];
     if (!pool.empty()) {
       frame.data[c] = std::move(pool.back());
       pool.pop_back();
@@ -1283,16 +1370,11 @@ Frame Rasterizer::Impl::partialFrame(const Scene& sc, const Light& light, const 
   auto fill = [&](size_t first, size_t step) {
     for (size_t c = first; c < frame.data.size(); c += step) {
       std::vector<float>& plane = frame.data[c];
-      if ((c < 13 && kept[c]) || zeroed[c]) continue;
-      if (c == 3) {
-        plane.resize(n);
-        for (size_t i = 0; i < n; ++i) plane[i] = vis8[i] == 255 ? 1.0f : 0.0f;  // fractional: listed below
-      } else {
-        plane.assign(n, 0.0f);
-      }
+      if ((c < 13 && kept[c]) || zeroed[c] || c == 3) continue;
+      plane.assign(n, 0.0f);
     }
   };
-  {
+  if (toFill) {  // evidence planes not handed back zeroed
     std::thread helper(fill, 1, 2);
     fill(0, 2);
     helper.join();

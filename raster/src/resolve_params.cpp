@@ -156,6 +156,10 @@ ResolveSpecialization resolveSpecialization(const Scene& scene, const Light* lig
   spec[abi::kSpecAdaptive] = method.biasAdaptive ? 1u : 0u;
   // One light depth row for every light layer: only fit=tsm's single layer has one.
   spec[abi::kSpecLightDepth] = frameLayers.lightLayers > 0 && frameLayers.layers[0].lightDepth ? 1u : 0u;
+  // Uniform switches as specialization constants: lavapipe runs both sides of a branch on a
+  // uniform-buffer value, so their code costs every pixel even when off.
+  spec[abi::kSpecReceiverPlane] = method.biasReceiverPlane ? 1u : 0u;
+  spec[abi::kSpecNormalOffset] = method.biasNormal != 0.0f ? 1u : 0u;
   return spec;
 }
 

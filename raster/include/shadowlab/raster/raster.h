@@ -63,7 +63,9 @@ class Rasterizer {
   // Number of validation-layer messages (warnings and errors) seen so far (validation only).
   int validationMessages() const;
   // Hands a finished frame's channel planes back for the next render() to fill: a frame of the
-  // same size then needs no fresh (zero-filled) memory. Optional; a sweep calls it per row.
+  // same size then needs no fresh (zero-filled) memory. Optional; a sweep calls it per row. The
+  // planes must be as render() returned them: an evidence-on-demand frame's planes are reused
+  // knowing their values (zeros and the lookup's bytes, rewritten only where they change).
   void recycle(Frame&& frame);
   // The last render()'s lookup pass output: the light's visibility, one byte (UNORM, 255 = lit)
   // per pixel, row-major; empty before the first render, stale after a render without a light.

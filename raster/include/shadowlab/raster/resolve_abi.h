@@ -60,25 +60,31 @@ SHADOWLAB_CONST(int, kSpecCompact, 9)
 // 0/1: the light layers' depth is the light's own, dot(P.lightDepth, (p, 1)), not texFromWorld's
 // z / w (fit=tsm: MapLayer::lightDepth; the shadow pass writes it, id_light_depth.frag).
 SHADOWLAB_CONST(int, kSpecLightDepth, 10)
-SHADOWLAB_CONST(int, kSpecCount, 11)
+// 0/1: bias.receiver_plane (the lookup's taps use the receiver plane's slope). Off, the lookup
+// pass computes no slope at all (the full resolve still does, for bias_depth's slope term).
+SHADOWLAB_CONST(int, kSpecReceiverPlane, 11)
+// 0/1: bias.normal != 0 (the normal-offset lookup point). Off, the lookup point is the visible
+// point itself: one projection instead of two.
+SHADOWLAB_CONST(int, kSpecNormalOffset, 12)
+SHADOWLAB_CONST(int, kSpecCount, 13)
 
 // The descriptor set (set 0), one row per binding: X(Name, binding, kind). The kinds name
 // Vulkan descriptor types (rasterizer.cpp maps them); the set layout, the pool and the writes
 // are built from these rows. id.frag reads bindings 0..2 for its material tests.
-#define SHADOWLAB_RESOLVE_BINDINGS(X)                                                            \
-  X(TriangleMaterials, 0, StorageBuffer)   /* per triangle: its material index */                \
-  X(Materials, 1, StorageBuffer)           /* MaterialGpu per material */                        \
-  X(AlphaTexels, 2, StorageBuffer)         /* alpha textures, concatenated */                    \
-  X(Params, 3, UniformBuffer)              /* Params below */                                    \
-  X(MapDepth, 4, CombinedImageSampler)     /* map depths, NEAREST */                             \
-  X(MapShadow, 5, CombinedImageSampler)    /* map depths, LINEAR, compare LESS_OR_EQUAL */       \
-  X(MapIds, 6, CombinedImageSampler)       /* map ids (global triangle + 1) */                   \
-  X(CameraIds, 7, CombinedImageSampler)    /* the camera's visibility buffer */                  \
-  X(TrianglePlanes, 8, UniformTexelBuffer) /* per triangle: its plane */                         \
-  X(ProjectorTexels, 9, StorageBuffer)     /* projector images, RGB floats */                    \
-  X(OutPlanes, 10, StorageBuffer)          /* the projector channels, one plane each */          \
-  X(MomentsRows, 11, CombinedImageSampler) /* moments pass: the rows-blurred moments, NEAREST */ \
-  X(Moments, 12, CombinedImageSampler)     /* the blurred moments per light layer, LINEAR */     \
+#define SHADOWLAB_RESOLVE_BINDINGS(X)                                                             \
+  X(TriangleMaterials, 0, StorageBuffer)   /* per triangle: its material index */                 \
+  X(Materials, 1, StorageBuffer)           /* MaterialGpu per material */                         \
+  X(AlphaTexels, 2, StorageBuffer)         /* alpha textures, concatenated */                     \
+  X(Params, 3, UniformBuffer)              /* Params below */                                     \
+  X(MapDepth, 4, CombinedImageSampler)     /* map depths, NEAREST */                              \
+  X(MapShadow, 5, CombinedImageSampler)    /* map depths, LINEAR, compare LESS_OR_EQUAL */        \
+  X(MapIds, 6, CombinedImageSampler)       /* map ids (global triangle + 1) */                    \
+  X(CameraIds, 7, CombinedImageSampler)    /* the camera's visibility buffer */                   \
+  X(TrianglePlanes, 8, UniformTexelBuffer) /* per triangle: its plane */                          \
+  X(ProjectorTexels, 9, StorageBuffer)     /* projector images, RGB floats */                     \
+  X(OutPlanes, 10, StorageBuffer)          /* the projector channels, one plane each */           \
+  X(MomentsRows, 11, CombinedImageSampler) /* moments pass: the rows-blurred moments, NEAREST */  \
+  X(Moments, 12, CombinedImageSampler)     /* the blurred moments per light layer, LINEAR */      \
   X(EvidencePixels, 13, StorageBuffer)     /* evidence pass: the listed pixels (y * width + x) */ \
   X(ParamsLoops, 14, StorageBuffer)        /* Params again: its loop counts (ParamsLoops below) */
 #define SHADOWLAB_ABI_BINDING(name, binding, kind) SHADOWLAB_CONST(int, kBinding##name, binding)
@@ -105,7 +111,8 @@ SHADOWLAB_BLOCK(Params) {
   vec4 rayX;                      // unnormalized ray direction through image point (x, y):
   vec4 rayY;                      //   rayX * x + rayY * y + rayC (x, y in pixels)
   vec4 rayC;
-  vec4 bias;       // x compare (depth), y normal (texels), z receiver plane (0/1), w poisson radius (texels)
+  vec4 bias;       // x compare (depth), y normal (texels; on: kSpecNormalOffset), z receiver plane (0/1; the shader
+                   // takes it from kSpecReceiverPlane), w poisson radius (texels)
   vec4 depthBias;  // x constant factor, y slope factor, z clamp, w r of the format (0: float format)
   ivec4 sizes;     // x map size, y light layers, z projector count, w pcf size
   ivec4 sizes2;    // x width, y height, z poisson taps, w reverse guard (0/1)
@@ -129,13 +136,15 @@ SHADOWLAB_BLOCK_END(P);
 // constants are bound again it compiles a new shader variant with the values folded in, and
 // never frees it (1 MB and ~1.3 ms per evidence-on-demand frame with filter=pcf or poisson,
 // tests/raster_memory_test.cpp). A storage buffer's values are never inlined.
-SHADOWLAB_CONST(int, kParamsSizesOffset, 1408)     // Params::sizes (then sizes2)
-SHADOWLAB_CONST(int, kParamsMoments2Offset, 2800)  // Params::moments2
+SHADOWLAB_CONST(int, kParamsSizesOffset, 1408)        // Params::sizes (then sizes2)
+SHADOWLAB_CONST(int, kParamsCascadeViewOffset, 2720)  // Params::cascadeView
+SHADOWLAB_CONST(int, kParamsMoments2Offset, 2800)     // Params::moments2
 #ifndef __cplusplus
 layout(std140, set = 0, binding = kBindingParamsLoops) readonly buffer ParamsLoops {
-  layout(offset = kParamsSizesOffset) ivec4 sizes;       // w: the pcf size
-  ivec4 sizes2;                                          // z: the Poisson taps
-  layout(offset = kParamsMoments2Offset) vec4 moments2;  // y: filter.blur (radius, texels)
+  layout(offset = kParamsSizesOffset) ivec4 sizes;             // w: the pcf size
+  ivec4 sizes2;                                                // z: the Poisson taps
+  layout(offset = kParamsCascadeViewOffset) vec4 cascadeView;  // w: the cascade count
+  layout(offset = kParamsMoments2Offset) vec4 moments2;        // y: filter.blur (radius, texels)
 }
 PLoops;
 #endif
@@ -166,7 +175,8 @@ static_assert(offsetof(Params, moments) == offsetof(Params, cascadeInfo) + 16);
 static_assert(offsetof(Params, moments2) == offsetof(Params, moments) + 16);
 static_assert(offsetof(Params, adaptive) == offsetof(Params, moments2) + 16);
 static_assert(offsetof(Params, lightDepth) == offsetof(Params, adaptive) + 16);
-static_assert(offsetof(Params, sizes) == kParamsSizesOffset && offsetof(Params, moments2) == kParamsMoments2Offset);
+static_assert(offsetof(Params, sizes) == kParamsSizesOffset && offsetof(Params, moments2) == kParamsMoments2Offset &&
+              offsetof(Params, cascadeView) == kParamsCascadeViewOffset);
 static_assert(sizeof(Params) == 2848, "std140 size of resolve.frag's Params (glslangValidator -q reports it)");
 static_assert(2 * 4 >= kMaxLightLayers, "cascadeFar holds one far split per light layer");
 static_assert(kMaxLightLayers + kMaxProjectors == kMaxLayers);
