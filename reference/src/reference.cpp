@@ -72,7 +72,8 @@ inline IntN load(const int* p) { return IntN(p, kAligned); }
 
 // The camera hits of one packet, one array per quantity across its 8 lanes (structure of arrays):
 // the per-hit work is a few SIMD operations over the lanes instead of a branchy pass per lane.
-// Lanes without a hit hold zeros (and the zero triangle's values).
+// Lanes without a hit hold 0 in hitValue, objectId, geom and prim, and values of no meaning in the
+// surface arrays (every reader selects hit lanes).
 struct HitPacket {
   alignas(kSimdAlign) float hitValue[kLanes];  // 1 where the camera ray hit (the `hit` channel), 0 elsewhere
   alignas(kSimdAlign) float objectId[kLanes];  // Object::id of the geometry (the object_id channel); 0 where no hit
@@ -337,11 +338,22 @@ class Tracer {
   // lane's triangle is gathered from its table into registers (the zero triangle where no hit),
   // then each quantity is a few SIMD operations, the scalar rule's operations in its order.
   [[gnu::flatten]] void computeSurface(const RTCRayHit8& rayHit, const MaskN& hit, HitPacket& hits) const {
+    // Lanes without a hit take the first hit lane's triangle: their values are never read, and a
+    // packet whose hits all lie on one triangle (most of a ground plane's) then broadcasts it
+    // instead of gathering it lane by lane.
     static const TriangleData kNoTriangle{};
+    const TriangleData* first = &kNoTriangle;
+    for (int lane = kLanes - 1; lane >= 0; --lane)
+      if (hit[lane]) first = &triangleTables_[hits.geom[lane]][hits.prim[lane]];
     const TriangleData* triangle[kLanes];
-    for (int lane = 0; lane < kLanes; ++lane)
-      triangle[lane] = hit[lane] ? &triangleTables_[hits.geom[lane]][hits.prim[lane]] : &kNoTriangle;
-    auto gather = [&](auto field) { return FloatN([&](auto lane) { return field(*triangle[lane]); }); };
+    bool one = true;
+    for (int lane = 0; lane < kLanes; ++lane) {
+      triangle[lane] = hit[lane] ? &triangleTables_[hits.geom[lane]][hits.prim[lane]] : first;
+      one = one && triangle[lane] == first;
+    }
+    auto gather = [&](auto field) {
+      return one ? FloatN(field(*first)) : FloatN([&](auto lane) { return field(*triangle[lane]); });
+    };
     // (1 - u - v) p0 + u p1 + v p2, in double, with Embree's barycentrics (undefined where no hit).
     const FloatN zero = 0.0f;
     const DoubleN u = stdx::static_simd_cast<DoubleN>(select(hit, load(rayHit.hit.u), zero));
