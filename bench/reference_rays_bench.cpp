@@ -12,8 +12,9 @@
 //                      the Compare channel set (ReferenceOptions::channels), as the reference cache
 //                      (run, sweep, stability, tune) traces it
 //     ref_shadow_ms    renderReference with the scene's light (1 spp, Compare), minus the above:
-//                      everything shadow rays cost (facing test, origins, rtcOccluded8, the
-//                      closest-hit pass for occluder_dist, the vis and occluder_dist writes)
+//                      everything shadow rays cost (hit point, normal and origin, facing test, the
+//                      one closest-hit rtcIntersect8 per packet that also gives occluder_dist, the
+//                      vis and occluder_dist writes)
 //     bare_primary_ms  rtcIntersect8 over the same camera rays: the same 16 x 16 tiles of 4 x 2
 //                      pixel packets, CameraRays::direction per lane (as the reference), nothing kept
 //     bare_shadow_ms   rtcOccluded8 over the same shadow rays, bit for bit: origins P + N * offset
@@ -22,6 +23,12 @@
 //                      (one per 4 x 2 block, lanes without a shadow ray masked off)
 //     primary_ratio    ref_primary_ms / bare_primary_ms   (goal <= 1.25)
 //     shadow_ratio     ref_shadow_ms / bare_shadow_ms     (goal <= 1.25)
+//     bare_shadow_closest_ms, shadow_ratio_closest  rtcIntersect8 (closest hit) over the same shadow
+//                      rays: the bare price of occluder_dist, which an any-hit query cannot give
+//     bare_shadow_setup_ms, shadow_ratio_embree  the bare loop without its Embree call (reading its
+//                      stored packets, which do not fit in the cache, into RTCRay8): a loop making
+//                      its rays in registers would not pay it; shadow_ratio_embree divides by
+//                      bare_shadow_ms minus it, the strictest baseline
 //     primary_ratio_all, shadow_ratio_all  the same with the All channel set (P, N, prim_id too), as
 //                      `shadowlab reference` traces it (its picture needs them)
 //   The bare loops trace a plain Embree scene (no filter functions, default flags). The reference's
@@ -361,7 +368,7 @@ void BM_Ratios(benchmark::State& state, const std::string& name) {
   state.counters["bare_primary_ms"] = barePrimary * 1e3;
   state.counters["bare_shadow_ms"] = bareShadow * 1e3;
   state.counters["camera_rays"] = double(fullStats.primaryRays);
-  // The reference's count includes the closest-hit rays it traces again for occluder_dist.
+  // The same count as bare_shadow_rays: the reference traces each shadow ray once.
   state.counters["ref_shadow_rays"] = double(fullStats.shadowRays);
   state.counters["bare_shadow_rays"] = double(bareShadowRays);
 }
