@@ -188,9 +188,8 @@ class Tracer {
     value = load(reinterpret_cast<const int*>(rayHit.hit.primID));
     stdx::where(!hit, value) = zero;
     value.copy_to(hits.prim, kAligned);
-    // Lanes without a hit read geometry 0's id (there is one: the ray hit nothing otherwise) and drop it.
-    const FloatN objectId([&](auto lane) { return objectIds_[hits.geom[lane]]; });
-    select(hit, objectId, FloatN(0.0f)).copy_to(hits.objectId, kAligned);
+    const FloatN objectId([&](auto lane) { return hit[lane] ? objectIds_[hits.geom[lane]] : 0.0f; });
+    objectId.copy_to(hits.objectId, kAligned);
     if (surface) computeSurface(rayHit, hit, hits);
   }
 
