@@ -12,8 +12,9 @@
 //                      the Compare channel set (ReferenceOptions::channels), as the reference cache
 //                      (run, sweep, stability, tune) traces it
 //     ref_shadow_ms    renderReference with the scene's light (1 spp, Compare), minus the above:
-//                      everything shadow rays cost (facing test, origins, rtcOccluded8, the
-//                      closest-hit pass for occluder_dist, the vis and occluder_dist writes)
+//                      everything shadow rays cost (hit point, normal and origin, facing test, the
+//                      one closest-hit rtcIntersect8 per packet that also gives occluder_dist, the
+//                      vis and occluder_dist writes)
 //     bare_primary_ms  rtcIntersect8 over the same camera rays: the same 16 x 16 tiles of 4 x 2
 //                      pixel packets, CameraRays::direction per lane (as the reference), nothing kept
 //     bare_shadow_ms   rtcOccluded8 over the same shadow rays, bit for bit: origins P + N * offset
@@ -22,6 +23,12 @@
 //                      (one per 4 x 2 block, lanes without a shadow ray masked off)
 //     primary_ratio    ref_primary_ms / bare_primary_ms   (goal <= 1.25)
 //     shadow_ratio     ref_shadow_ms / bare_shadow_ms     (goal <= 1.25)
+//     bare_shadow_closest_ms, shadow_ratio_closest  rtcIntersect8 (closest hit) over the same shadow
+//                      rays: the bare price of occluder_dist, which an any-hit query cannot give
+//     bare_shadow_setup_ms, shadow_ratio_embree  the bare loop without its Embree call (reading its
+//                      stored packets, which do not fit in the cache, into RTCRay8): a loop making
+//                      its rays in registers would not pay it; shadow_ratio_embree divides by
+//                      bare_shadow_ms minus it, the strictest baseline
 //     primary_ratio_all, shadow_ratio_all  the same with the All channel set (P, N, prim_id too), as
 //                      `shadowlab reference` traces it (its picture needs them)
 //   The bare loops trace a plain Embree scene (no filter functions, default flags). The reference's
@@ -208,6 +215,69 @@ double bareIntersect(const Camera& camera, RTCScene scene) {
   return processCpuSeconds() - start;
 }
 
+// rtcIntersect8 (closest hit) over the same shadow rays: what a bare loop that also needs the
+// occluder's distance (occluder_dist) pays.
+double bareClosest(const std::vector<ShadowPacket>& packets, RTCScene scene) {
+  const double start = processCpuSeconds();
+  RTCIntersectContext context;
+  rtcInitIntersectContext(&context);
+  context.flags = RTC_INTERSECT_CONTEXT_FLAG_COHERENT;
+  for (const ShadowPacket& packet : packets) {
+    RTCRayHit8 rh;
+    alignas(32) int valid[8];
+    for (int lane = 0; lane < 8; ++lane) {
+      valid[lane] = packet.valid[lane];
+      rh.ray.org_x[lane] = packet.org[0][lane];
+      rh.ray.org_y[lane] = packet.org[1][lane];
+      rh.ray.org_z[lane] = packet.org[2][lane];
+      rh.ray.dir_x[lane] = packet.dir[0][lane];
+      rh.ray.dir_y[lane] = packet.dir[1][lane];
+      rh.ray.dir_z[lane] = packet.dir[2][lane];
+      rh.ray.tnear[lane] = 0;
+      rh.ray.tfar[lane] = packet.tfar[lane];
+      rh.ray.mask[lane] = ~0u;
+      rh.ray.time[lane] = 0;
+      rh.ray.id[lane] = lane;
+      rh.ray.flags[lane] = 0;
+      rh.hit.geomID[lane] = RTC_INVALID_GEOMETRY_ID;
+    }
+    rtcIntersect8(valid, scene, &context, &rh);
+    benchmark::DoNotOptimize(rh.hit.geomID[0]);
+  }
+  return processCpuSeconds() - start;
+}
+
+// bareOccluded's loop without the Embree call: what reading the stored packets (one per 4 x 2
+// block, from memory: they do not fit in the cache) and filling RTCRay8 costs the bare loop. A loop
+// that made its rays from hits in registers would not pay it, so bare_shadow_ms minus this is the
+// strictest bare baseline (shadow_ratio_embree).
+double bareShadowSetup(const std::vector<ShadowPacket>& packets) {
+  const double start = processCpuSeconds();
+  for (const ShadowPacket& packet : packets) {
+    RTCRay8 ray;
+    alignas(32) int valid[8];
+    for (int lane = 0; lane < 8; ++lane) {
+      valid[lane] = packet.valid[lane];
+      ray.org_x[lane] = packet.org[0][lane];
+      ray.org_y[lane] = packet.org[1][lane];
+      ray.org_z[lane] = packet.org[2][lane];
+      ray.dir_x[lane] = packet.dir[0][lane];
+      ray.dir_y[lane] = packet.dir[1][lane];
+      ray.dir_z[lane] = packet.dir[2][lane];
+      ray.tnear[lane] = 0;
+      ray.tfar[lane] = packet.tfar[lane];
+      ray.mask[lane] = ~0u;
+      ray.time[lane] = 0;
+      ray.id[lane] = lane;
+      ray.flags[lane] = 0;
+    }
+    benchmark::DoNotOptimize(valid);
+    benchmark::DoNotOptimize(ray);
+    benchmark::ClobberMemory();
+  }
+  return processCpuSeconds() - start;
+}
+
 double bareOccluded(const std::vector<ShadowPacket>& packets, RTCScene scene) {
   const double start = processCpuSeconds();
   RTCIntersectContext context;
@@ -255,7 +325,7 @@ void BM_Ratios(benchmark::State& state, const std::string& name) {
     for (int lane = 0; lane < 8; ++lane) bareShadowRays += packet.valid[lane] ? 1 : 0;
 
   double refPrimary = 1e30, refFull = 1e30, allPrimary = 1e30, allFull = 1e30, barePrimary = 1e30, bareShadow = 1e30,
-         barePrimaryRobust = 1e30, bareShadowRobust = 1e30;
+         barePrimaryRobust = 1e30, bareShadowRobust = 1e30, bareClosestHit = 1e30, bareSetup = 1e30;
   for (auto _ : state) {
     double total = 0;
     for (int round = 0; round < kRounds; ++round) {
@@ -274,6 +344,8 @@ void BM_Ratios(benchmark::State& state, const std::string& name) {
                                  bareOccluded(packets, bareRobust.scene)};
       barePrimary = std::min(barePrimary, seconds[0]);
       bareShadow = std::min(bareShadow, seconds[1]);
+      bareClosestHit = std::min(bareClosestHit, bareClosest(packets, bare.scene));
+      bareSetup = std::min(bareSetup, bareShadowSetup(packets));
       barePrimaryRobust = std::min(barePrimaryRobust, seconds[2]);
       bareShadowRobust = std::min(bareShadowRobust, seconds[3]);
       total += compareFull;
@@ -283,6 +355,10 @@ void BM_Ratios(benchmark::State& state, const std::string& name) {
   const double refShadow = refFull - refPrimary;
   state.counters["primary_ratio"] = refPrimary / barePrimary;
   state.counters["shadow_ratio"] = refShadow / bareShadow;
+  state.counters["shadow_ratio_closest"] = refShadow / bareClosestHit;
+  state.counters["bare_shadow_closest_ms"] = bareClosestHit * 1e3;
+  state.counters["shadow_ratio_embree"] = refShadow / (bareShadow - bareSetup);
+  state.counters["bare_shadow_setup_ms"] = bareSetup * 1e3;
   state.counters["primary_ratio_robust"] = refPrimary / barePrimaryRobust;
   state.counters["shadow_ratio_robust"] = refShadow / bareShadowRobust;
   state.counters["primary_ratio_all"] = allPrimary / barePrimary;
@@ -292,7 +368,7 @@ void BM_Ratios(benchmark::State& state, const std::string& name) {
   state.counters["bare_primary_ms"] = barePrimary * 1e3;
   state.counters["bare_shadow_ms"] = bareShadow * 1e3;
   state.counters["camera_rays"] = double(fullStats.primaryRays);
-  // The reference's count includes the closest-hit rays it traces again for occluder_dist.
+  // The same count as bare_shadow_rays: the reference traces each shadow ray once.
   state.counters["ref_shadow_rays"] = double(fullStats.shadowRays);
   state.counters["bare_shadow_rays"] = double(bareShadowRays);
 }

@@ -385,6 +385,39 @@ TEST(ReferenceRobustness, EmptySceneRendersAllMisses) {
   }
 }
 
+// No object at all (a library caller's scene; the loader never makes one): the packet code reads
+// per-geometry tables only for lanes that hit, so there is nothing to read past; every pixel a miss,
+// with the light's and the projector's channels at their no-hit values, with the Compare and the
+// All set.
+TEST(ReferenceRobustness, SceneWithoutObjectsRendersAllMisses) {
+  Scene scene;
+  scene.name = "nothing";
+  scene.hash = "0000000000000000";
+  scene.camera.width = 24;
+  scene.camera.height = 10;
+  scene.materials.push_back(Material{});
+  Light sun;
+  sun.name = "sun";
+  scene.lights.push_back(sun);
+  Projector projector;
+  projector.name = "slide";
+  scene.projectors.push_back(projector);
+  for (ReferenceChannels channels : {ReferenceChannels::Compare, ReferenceChannels::All}) {
+    ReferenceOptions options;
+    options.channels = channels;
+    options.spp = 4;
+    ReferenceStats stats;
+    const Frame frame = renderReference(scene, options, &stats);
+    EXPECT_EQ(stats.primaryRays, 24u * 10u);
+    EXPECT_EQ(stats.shadowRays, 0u);
+    ASSERT_EQ(frame.names, referenceChannelNames(scene, channels));
+    for (size_t c = 0; c < frame.names.size(); ++c) {
+      const float expected = frame.names[c] == "light.sun.occluder_dist" ? -1.0f : 0.0f;
+      for (float value : frame.data[c]) ASSERT_EQ(value, expected) << frame.names[c];
+    }
+  }
+}
+
 // Inconsistent meshes are reported, never traced into a crash: an index past the positions or a
 // missing per-triangle material is an internal error (the loader never makes one), an
 // alpha-tested material on an object without texture coordinates is bad input.

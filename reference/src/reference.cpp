@@ -8,6 +8,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstring>
+#include <experimental/simd>
 #include <limits>
 #include <set>
 
@@ -28,6 +29,7 @@ namespace shadowlab {
 namespace {
 
 using namespace reference_detail;
+namespace stdx = std::experimental;
 
 static_assert(sizeof(glm::vec3) == 3 * sizeof(float), "positions are copied to Embree as packed float3");
 static_assert(sizeof(glm::uvec3) == 3 * sizeof(unsigned), "triangles are copied to Embree as packed uint3");
@@ -48,15 +50,47 @@ constexpr float kInf = std::numeric_limits<float>::infinity();
 // needed, so opaque geometry is traced without a filter callback.
 constexpr float kOriginOffsetScale = 1.0f / 131072.0f;
 
-struct LaneHit {
-  bool hit = false;
-  unsigned geom = 0;
-  unsigned prim = 0;
-  float objectId = 0.0f;     // Object::id of the geometry, as the object_id channel stores it
-  glm::vec3 position{0.0f};  // world, on the triangle (barycentric interpolation in double)
-  glm::vec3 normal{0.0f};    // unit geometric normal facing the camera
-  float offset = 0.0f;       // world distance shadow origins move along `normal`
-  glm::vec3 origin{0.0f};    // shadow-ray origin: position + normal * offset
+// The packet's lanes as one SIMD value each (std::experimental::simd, libstdc++'s Parallelism TS
+// v2: 8 lanes, in as many native registers as the target has, two SSE registers on x86-64).
+// Every operation is the IEEE operation of the scalar code in the scalar code's order (no FMA
+// contraction: ISO C++ mode), so the lanes compute the same bits the scalar code did.
+using FloatN = stdx::fixed_size_simd<float, kLanes>;
+using DoubleN = stdx::fixed_size_simd<double, kLanes>;
+using IntN = stdx::fixed_size_simd<int, kLanes>;
+using MaskN = FloatN::mask_type;  // fixed_size masks convert into each other (IntN's, DoubleN's)
+constexpr auto kAligned = stdx::vector_aligned;
+constexpr size_t kSimdAlign = stdx::memory_alignment_v<FloatN>;
+static_assert(stdx::memory_alignment_v<IntN> <= kSimdAlign && kSimdAlign <= alignof(RTCRay8),
+              "HitPacket arrays and RTCRay8 fields take aligned SIMD loads and stores");
+
+inline FloatN load(const float* p) { return FloatN(p, kAligned); }
+inline IntN load(const int* p) { return IntN(p, kAligned); }
+[[gnu::always_inline]] inline FloatN select(const MaskN& mask, const FloatN& yes, FloatN no) {
+  stdx::where(mask, no) = yes;
+  return no;
+}
+
+// The camera hits of one packet, one array per quantity across its 8 lanes (structure of arrays):
+// the per-hit work is a few SIMD operations over the lanes instead of a branchy pass per lane.
+// Lanes without a hit hold 0 in hitValue, objectId, geom and prim, and values of no meaning in the
+// surface arrays (every reader selects hit lanes).
+struct HitPacket {
+  alignas(kSimdAlign) float hitValue[kLanes];  // 1 where the camera ray hit (the `hit` channel), 0 elsewhere
+  alignas(kSimdAlign) float objectId[kLanes];  // Object::id of the geometry (the object_id channel); 0 where no hit
+  alignas(kSimdAlign) int geom[kLanes];        // Embree geomID, primID; 0 where no hit
+  alignas(kSimdAlign) int prim[kLanes];
+  // With tracePrimary's `surface` only:
+  alignas(kSimdAlign) float position[3][kLanes];  // world, on the triangle (barycentric interpolation in double)
+  alignas(kSimdAlign) float normal[3][kLanes];    // unit geometric normal facing the camera
+  alignas(kSimdAlign) float offset[kLanes];       // world distance shadow origins move along `normal`
+  alignas(kSimdAlign) float origin[3][kLanes];    // shadow-ray origin: position + normal * offset
+
+  bool hit(int lane) const { return hitValue[lane] != 0.0f; }
+  MaskN hitMask() const { return load(hitValue) != 0.0f; }
+  void drop(int lane) { hitValue[lane] = 0.0f; }  // a sample that does not count (another object than the center's)
+  glm::vec3 positionAt(int lane) const { return {position[0][lane], position[1][lane], position[2][lane]}; }
+  glm::vec3 normalAt(int lane) const { return {normal[0][lane], normal[1][lane], normal[2][lane]}; }
+  glm::vec3 originAt(int lane) const { return {origin[0][lane], origin[1][lane], origin[2][lane]}; }
 };
 
 struct PreparedLight {
@@ -106,17 +140,22 @@ inline float originOffset(const glm::vec3& position, const glm::vec3& p0, const 
   return kOriginOffsetScale * std::max(std::max(maxAbs(position), maxAbs(p0)), std::max(maxAbs(p1), maxAbs(p2)));
 }
 
+// The per-packet methods that do SIMD work are [[gnu::flatten]]: libstdc++'s fixed_size simd is a
+// tree of small functions, and GCC left some out of line (a call per multiply, per where()), which
+// cost the shadow side about a fifth of its time.
 class Tracer {
  public:
-  Tracer(const Scene& scene, const EmbreeScene& embree, const float* objectIds)
-      : scene_(scene), embree_(embree), rays_(scene.camera), objectIds_(objectIds) {}
+  Tracer(const Scene& scene, const EmbreeScene& embree, const float* objectIds,
+         const TriangleData* const* triangleTables)
+      : scene_(scene), embree_(embree), rays_(scene.camera), objectIds_(objectIds), triangleTables_(triangleTables) {}
 
   // Camera rays through (px + dx, py + dy) for the active lanes.
-  // Without `surface` only hit, geom, prim and objectId are filled: no shadow ray or All channel
-  // needs the rest (position, normal, offset and origin are meaningful only where hit).
-  void tracePrimary(const int* px, const int* py, const bool* active, float dx, float dy, bool surface, LaneHit* hits) {
+  // Without `surface` only hitValue, objectId, geom and prim are filled: no shadow ray or All
+  // channel needs the rest.
+  void tracePrimary(const int* px, const int* py, const bool* active, float dx, float dy, bool surface,
+                    HitPacket& hits) {
     RTCRayHit8 rayHit;
-    alignas(32) int valid[kLanes];
+    alignas(kSimdAlign) int valid[kLanes];
     const glm::vec3 org = scene_.camera.position;
     for (int lane = 0; lane < kLanes; ++lane) {
       valid[lane] = active[lane] ? -1 : 0;
@@ -139,142 +178,124 @@ class Tracer {
     }
     TraceContext context(RayKind::Camera);
     rtcIntersect8(valid, embree_.handle(), &context.rtc, &rayHit);
-    for (int lane = 0; lane < kLanes; ++lane) {
-      LaneHit& h = hits[lane];
-      h.hit = active[lane] && rayHit.hit.geomID[lane] != RTC_INVALID_GEOMETRY_ID;
-      if (!h.hit) continue;
-      h.geom = rayHit.hit.geomID[lane];
-      h.prim = rayHit.hit.primID[lane];
-      h.objectId = objectIds_[h.geom];
-      if (!surface) continue;
-      const TriangleData& triangle = embree_.geometry(h.geom).triangles[h.prim];
-      const double u = rayHit.hit.u[lane], v = rayHit.hit.v[lane];
-      h.position = glm::vec3((1.0 - u - v) * glm::dvec3(triangle.p[0]) + u * glm::dvec3(triangle.p[1]) +
-                             v * glm::dvec3(triangle.p[2]));
-      glm::vec3 normal = triangle.normal;
-      if (normal == glm::vec3(0.0f)) {
-        normal = glm::normalize(glm::vec3(rayHit.hit.Ng_x[lane], rayHit.hit.Ng_y[lane], rayHit.hit.Ng_z[lane]));
-      }
-      const glm::vec3 dir(rayHit.ray.dir_x[lane], rayHit.ray.dir_y[lane], rayHit.ray.dir_z[lane]);
-      h.normal = glm::dot(normal, dir) > 0.0f ? -normal : normal;
-      // shadowOriginOffset, with the vertices' part taken from the triangle's table.
-      h.offset = kOriginOffsetScale * std::max(maxAbs(h.position), triangle.maxAbs);
-      h.origin = h.position + h.normal * h.offset;
-    }
+    const IntN geom = load(reinterpret_cast<const int*>(rayHit.hit.geomID));
+    const MaskN hit = load(valid) != 0 && geom != int(RTC_INVALID_GEOMETRY_ID);
+    IntN zero = 0;
+    select(hit, FloatN(1.0f), FloatN(0.0f)).copy_to(hits.hitValue, kAligned);
+    IntN value = geom;
+    stdx::where(!hit, value) = zero;
+    value.copy_to(hits.geom, kAligned);
+    value = load(reinterpret_cast<const int*>(rayHit.hit.primID));
+    stdx::where(!hit, value) = zero;
+    value.copy_to(hits.prim, kAligned);
+    const FloatN objectId([&](auto lane) { return hit[lane] ? objectIds_[hits.geom[lane]] : 0.0f; });
+    objectId.copy_to(hits.objectId, kAligned);
+    if (surface) computeSurface(rayHit, hit, hits);
   }
 
-  // Occlusion of the segments from each active lane's shadow origin along dir[lane] up to
-  // tfar[lane]. With wantDistance the packet is one closest-hit query (rtcIntersect8): a lane is
-  // occluded where it hits anything, and the hit's t gives the occluder distance. Without, an any-hit
-  // query (rtcOccluded8). Both run the same triangle test and filter on the same segment, so they
-  // agree on which lanes are occluded (every bundled scene's channels are bit-identical to the two
-  // passes this replaced: rtcOccluded8, then rtcIntersect8 again for the occluded lanes); lanes that
-  // reach the sky, usually most, cost a closest-hit query what they cost an any-hit one.
-  void traceShadow(const LaneHit* hits, const glm::vec3* dir, const float* tfar, const bool* active, bool wantDistance,
-                   bool* occluded, float* distance) {
+  // Occlusion of the segments from each active lane's shadow origin along dir up to tfar. With
+  // wantDistance the packet is one closest-hit query (rtcIntersect8): a lane is occluded where it
+  // hits anything, and the hit's t gives the occluder distance, measured from the surface point
+  // itself (|normal offset + t dir|), not from the offset origin. Without, an any-hit query
+  // (rtcOccluded8). Both run the same triangle test and filter on the same segment, so they agree
+  // on which lanes are occluded; lanes that reach the sky, usually most, cost a closest-hit query
+  // what they cost an any-hit one. Returns the occluded lanes (none, untraced, where none is active).
+  [[gnu::flatten]] MaskN traceShadow(const HitPacket& hits, const FloatN (&dir)[3], const FloatN& tfar,
+                                     const MaskN& active, bool wantDistance, FloatN& distance) {
+    const int count = stdx::popcount(active);
+    if (count == 0) return MaskN(false);
+    shadowRays += unsigned(count);
     RTCRayHit8 rayHit;
     RTCRay8& ray = rayHit.ray;
-    alignas(32) int valid[kLanes];
-    TraceContext& context = shadowContext_;
-    int count = 0;
-    for (int lane = 0; lane < kLanes; ++lane) {
-      occluded[lane] = false;
-      distance[lane] = -1.0f;
-      valid[lane] = active[lane] ? -1 : 0;
-      const glm::vec3 origin = active[lane] ? hits[lane].origin : glm::vec3(0.0f);
-      const glm::vec3 d = active[lane] ? dir[lane] : glm::vec3(0, 1, 0);
-      ray.org_x[lane] = origin.x;
-      ray.org_y[lane] = origin.y;
-      ray.org_z[lane] = origin.z;
-      ray.dir_x[lane] = d.x;
-      ray.dir_y[lane] = d.y;
-      ray.dir_z[lane] = d.z;
-      ray.tnear[lane] = 0.0f;
-      ray.tfar[lane] = active[lane] ? tfar[lane] : 0.0f;
-      ray.time[lane] = 0.0f;
-      ray.mask[lane] = ~0u;
-      ray.id[lane] = unsigned(lane);
-      ray.flags[lane] = 0;
-      count += active[lane] ? 1 : 0;
-    }
-    if (count == 0) return;
-    shadowRays += count;
+    alignas(kSimdAlign) int valid[kLanes];
+    const FloatN zero = 0.0f;
+    IntN validN = 0;
+    stdx::where(active, validN) = -1;
+    validN.copy_to(valid, kAligned);
+    select(active, load(hits.origin[0]), zero).copy_to(ray.org_x, kAligned);
+    select(active, load(hits.origin[1]), zero).copy_to(ray.org_y, kAligned);
+    select(active, load(hits.origin[2]), zero).copy_to(ray.org_z, kAligned);
+    select(active, dir[0], zero).copy_to(ray.dir_x, kAligned);
+    select(active, dir[1], FloatN(1.0f)).copy_to(ray.dir_y, kAligned);
+    select(active, dir[2], zero).copy_to(ray.dir_z, kAligned);
+    zero.copy_to(ray.tnear, kAligned);
+    select(active, tfar, zero).copy_to(ray.tfar, kAligned);
+    zero.copy_to(ray.time, kAligned);
+    IntN(-1).copy_to(reinterpret_cast<int*>(ray.mask), kAligned);
+    IntN([](int lane) { return lane; }).copy_to(reinterpret_cast<int*>(ray.id), kAligned);
+    IntN(0).copy_to(reinterpret_cast<int*>(ray.flags), kAligned);
     if (!wantDistance) {
-      rtcOccluded8(valid, embree_.handle(), &context.rtc, &ray);
+      rtcOccluded8(valid, embree_.handle(), &shadowContext_.rtc, &ray);
       // Embree marks an occluded ray by setting tfar to -inf.
-      for (int lane = 0; lane < kLanes; ++lane) occluded[lane] = active[lane] && ray.tfar[lane] < 0.0f;
-      return;
+      return active && load(ray.tfar) < 0.0f;
     }
-    for (int lane = 0; lane < kLanes; ++lane) rayHit.hit.geomID[lane] = RTC_INVALID_GEOMETRY_ID;
-    rtcIntersect8(valid, embree_.handle(), &context.rtc, &rayHit);
-    for (int lane = 0; lane < kLanes; ++lane) {
-      occluded[lane] = active[lane] && rayHit.hit.geomID[lane] != RTC_INVALID_GEOMETRY_ID;
-      // The distance is measured from the surface point itself, not from the offset origin.
-      if (occluded[lane])
-        distance[lane] = glm::length(hits[lane].normal * hits[lane].offset + dir[lane] * ray.tfar[lane]);
-    }
+    IntN(int(RTC_INVALID_GEOMETRY_ID)).copy_to(reinterpret_cast<int*>(rayHit.hit.geomID), kAligned);
+    rtcIntersect8(valid, embree_.handle(), &shadowContext_.rtc, &rayHit);
+    const MaskN occluded =
+        active && MaskN(load(reinterpret_cast<const int*>(rayHit.hit.geomID)) != int(RTC_INVALID_GEOMETRY_ID));
+    const FloatN t = select(occluded, load(ray.tfar), zero);
+    const FloatN offset = load(hits.offset);
+    FloatN v[3];
+    for (int a = 0; a < 3; ++a) v[a] = load(hits.normal[a]) * offset + dir[a] * t;
+    distance = stdx::sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]);  // glm::length's order
+    return occluded;
   }
 
   // Visibility (exactly 0 or 1) of one light at each hit lane; distance to the nearest occluder
   // (-1 where none; 0 where the visible side of the surface faces away from the light).
-  void evalLight(const PreparedLight& prepared, const LaneHit* hits, bool wantDistance, float* vis, float* distance) {
+  [[gnu::flatten]] void evalLight(const PreparedLight& prepared, const HitPacket& hits, bool wantDistance, float* vis,
+                                  float* distance) {
     const Light& light = *prepared.light;
-    glm::vec3 dir[kLanes];
-    float tfar[kLanes];
-    bool active[kLanes];
-    for (int lane = 0; lane < kLanes; ++lane) {
-      active[lane] = false;
-      vis[lane] = 0.0f;
-      distance[lane] = -1.0f;
-      const LaneHit& h = hits[lane];
-      if (!h.hit) continue;
-      glm::vec3 toLight;
-      if (light.type == LightType::Directional) {
-        toLight = prepared.toLight;
-        tfar[lane] = kInf;
-        dir[lane] = toLight;
-      } else {
-        toLight = light.position - h.position;
-        if (light.type == LightType::Spot) {
-          const glm::dvec3 fromLight = glm::dvec3(h.position) - glm::dvec3(light.position);
-          const double length = glm::length(fromLight);
-          const double cosAngle = length > 0.0 ? glm::dot(fromLight, glm::dvec3(light.direction)) / length : -1.0;
-          if (cosAngle < prepared.cosHalfCone) continue;  // outside the cone: unlit, no occluder
-        }
-        const glm::vec3 segment = light.position - h.origin;
-        tfar[lane] = glm::length(segment);
-        if (!(tfar[lane] > 0.0f)) continue;
-        dir[lane] = segment / tfar[lane];
+    FloatN dir[3], toLight[3], tfar;
+    MaskN reached = hits.hitMask();  // the light reaches the point: inside a spot's cone, a segment > 0
+    if (light.type == LightType::Directional) {
+      for (int a = 0; a < 3; ++a) toLight[a] = dir[a] = prepared.toLight[a];
+      tfar = kInf;
+    } else {
+      FloatN segment[3];
+      for (int a = 0; a < 3; ++a) {
+        toLight[a] = light.position[a] - load(hits.position[a]);
+        segment[a] = light.position[a] - load(hits.origin[a]);
       }
-      // The camera sees the side `normal` points to; light arriving from the other side lights
-      // only the hidden side. The surface itself is the occluder, at distance 0.
-      if (!(glm::dot(h.normal, toLight) > 0.0f)) {
-        distance[lane] = 0.0f;
-        continue;
+      tfar = stdx::sqrt(segment[0] * segment[0] + segment[1] * segment[1] + segment[2] * segment[2]);
+      for (int a = 0; a < 3; ++a) dir[a] = segment[a] / tfar;
+      reached = reached && tfar > 0.0f;
+      if (light.type == LightType::Spot) {
+        // Outside the cone (tested in double): unlit, no occluder.
+        DoubleN fromLight[3];
+        for (int a = 0; a < 3; ++a)
+          fromLight[a] = stdx::static_simd_cast<DoubleN>(load(hits.position[a])) - double(light.position[a]);
+        const DoubleN length =
+            stdx::sqrt(fromLight[0] * fromLight[0] + fromLight[1] * fromLight[1] + fromLight[2] * fromLight[2]);
+        const DoubleN along = fromLight[0] * double(light.direction.x) + fromLight[1] * double(light.direction.y) +
+                              fromLight[2] * double(light.direction.z);
+        DoubleN cosAngle = -1.0;
+        stdx::where(length > 0.0, cosAngle) = along / length;
+        reached = reached && !MaskN(cosAngle < prepared.cosHalfCone);
       }
-      active[lane] = true;
     }
-    bool occluded[kLanes];
-    float occluderDistance[kLanes];
-    traceShadow(hits, dir, tfar, active, wantDistance, occluded, occluderDistance);
-    for (int lane = 0; lane < kLanes; ++lane) {
-      if (!active[lane]) continue;
-      vis[lane] = occluded[lane] ? 0.0f : 1.0f;
-      distance[lane] = occluded[lane] ? occluderDistance[lane] : -1.0f;
-    }
+    // The camera sees the side `normal` points to; light arriving from the other side lights only
+    // the hidden side. The surface itself is the occluder there, at distance 0.
+    const FloatN facing =
+        load(hits.normal[0]) * toLight[0] + load(hits.normal[1]) * toLight[1] + load(hits.normal[2]) * toLight[2];
+    const MaskN active = reached && facing > 0.0f;
+    FloatN occluderDistance = 0.0f;
+    const MaskN occluded = traceShadow(hits, dir, tfar, active, wantDistance, occluderDistance);
+    select(active && !occluded, FloatN(1.0f), FloatN(0.0f)).copy_to(vis, stdx::element_aligned);
+    FloatN value = select(reached && !active, FloatN(0.0f), FloatN(-1.0f));
+    if (wantDistance) stdx::where(occluded, value) = occluderDistance;
+    value.copy_to(distance, stdx::element_aligned);
   }
 
-  void evalProjector(const PreparedProjector& prepared, const LaneHit* hits, ProjectorSample* out) {
+  void evalProjector(const PreparedProjector& prepared, const HitPacket& hits, ProjectorSample* out) {
     const Projector& projector = *prepared.projector;
-    glm::vec3 dir[kLanes];
-    float tfar[kLanes];
-    bool active[kLanes];
+    alignas(kSimdAlign) float dir[3][kLanes] = {}, tfar[kLanes] = {};
+    alignas(kSimdAlign) int active[kLanes] = {};
     for (int lane = 0; lane < kLanes; ++lane) {
-      active[lane] = false;
       out[lane] = ProjectorSample{};
-      const LaneHit& h = hits[lane];
-      if (!h.hit) continue;
-      const glm::dvec4 clip = prepared.texFromWorld * glm::dvec4(glm::dvec3(h.position), 1.0);
+      if (!hits.hit(lane)) continue;
+      const glm::vec3 position = hits.positionAt(lane);
+      const glm::dvec4 clip = prepared.texFromWorld * glm::dvec4(glm::dvec3(position), 1.0);
       const double w = clip.w;
       const double u = w != 0.0 ? clip.x / w : 0.0;
       const double v = w != 0.0 ? clip.y / w : 0.0;
@@ -283,16 +304,18 @@ class Tracer {
       out[lane].v = float(v);
       const bool inside = w > 0.0 && u >= 0.0 && u <= 1.0 && v >= 0.0 && v <= 1.0 && depth >= 0.0 && depth <= 1.0;
       if (!inside) continue;
-      if (!(glm::dot(h.normal, projector.position - h.position) > 0.0f)) continue;  // lights the hidden side
-      const glm::vec3 segment = projector.position - h.origin;
+      // Lights the hidden side.
+      if (!(glm::dot(hits.normalAt(lane), projector.position - position) > 0.0f)) continue;
+      const glm::vec3 segment = projector.position - hits.originAt(lane);
       tfar[lane] = glm::length(segment);
       if (!(tfar[lane] > 0.0f)) continue;
-      dir[lane] = segment / tfar[lane];
-      active[lane] = true;
+      for (int a = 0; a < 3; ++a) dir[a][lane] = segment[a] / tfar[lane];
+      active[lane] = -1;
     }
-    bool occluded[kLanes];
-    float unusedDistance[kLanes];
-    traceShadow(hits, dir, tfar, active, false, occluded, unusedDistance);
+    const FloatN dirN[3] = {load(dir[0]), load(dir[1]), load(dir[2])};
+    const MaskN activeN = load(active) != 0;
+    FloatN unusedDistance = 0.0f;
+    const MaskN occluded = traceShadow(hits, dirN, load(tfar), activeN, false, unusedDistance);
     const Image& image = projector.image;
     for (int lane = 0; lane < kLanes; ++lane) {
       if (!active[lane] || occluded[lane]) continue;
@@ -310,11 +333,74 @@ class Tracer {
   uint64_t shadowRays = 0;
 
  private:
+  // The hit point, the camera-facing normal and the shadow origin of every lane at once: each
+  // lane's triangle is gathered from its table into registers (the zero triangle where no hit),
+  // then each quantity is a few SIMD operations, the scalar rule's operations in its order.
+  [[gnu::flatten]] void computeSurface(const RTCRayHit8& rayHit, const MaskN& hit, HitPacket& hits) const {
+    // Lanes without a hit take the first hit lane's triangle: their values are never read, and a
+    // packet whose hits all lie on one triangle (most of a ground plane's) then broadcasts it
+    // instead of gathering it lane by lane.
+    static const TriangleData kNoTriangle{};
+    const TriangleData* first = &kNoTriangle;
+    for (int lane = kLanes - 1; lane >= 0; --lane)
+      if (hit[lane]) first = &triangleTables_[hits.geom[lane]][hits.prim[lane]];
+    const TriangleData* triangle[kLanes];
+    bool one = true;
+    for (int lane = 0; lane < kLanes; ++lane) {
+      triangle[lane] = hit[lane] ? &triangleTables_[hits.geom[lane]][hits.prim[lane]] : first;
+      one = one && triangle[lane] == first;
+    }
+    auto gather = [&](auto field) {
+      return one ? FloatN(field(*first)) : FloatN([&](auto lane) { return field(*triangle[lane]); });
+    };
+    // (1 - u - v) p0 + u p1 + v p2, in double, with Embree's barycentrics (undefined where no hit).
+    const FloatN zero = 0.0f;
+    const DoubleN u = stdx::static_simd_cast<DoubleN>(select(hit, load(rayHit.hit.u), zero));
+    const DoubleN v = stdx::static_simd_cast<DoubleN>(select(hit, load(rayHit.hit.v), zero));
+    const DoubleN w = 1.0 - u - v;
+    FloatN position[3], n[3];
+    for (int a = 0; a < 3; ++a) {
+      const DoubleN p0 = stdx::static_simd_cast<DoubleN>(gather([a](const TriangleData& t) { return t.p[0][a]; }));
+      const DoubleN p1 = stdx::static_simd_cast<DoubleN>(gather([a](const TriangleData& t) { return t.p[1][a]; }));
+      const DoubleN p2 = stdx::static_simd_cast<DoubleN>(gather([a](const TriangleData& t) { return t.p[2][a]; }));
+      position[a] = stdx::static_simd_cast<FloatN>(w * p0 + u * p1 + v * p2);
+      n[a] = gather([a](const TriangleData& t) { return t.normal[a]; });
+    }
+    // A degenerate triangle (zero normal in its table) takes Embree's geometric normal: it never
+    // happens on a bundled scene.
+    const MaskN degenerate = hit && n[0] == 0.0f && n[1] == 0.0f && n[2] == 0.0f;
+    if (stdx::any_of(degenerate)) {
+      for (int lane = 0; lane < kLanes; ++lane) {
+        if (!degenerate[lane]) continue;
+        const glm::vec3 ng =
+            glm::normalize(glm::vec3(rayHit.hit.Ng_x[lane], rayHit.hit.Ng_y[lane], rayHit.hit.Ng_z[lane]));
+        for (int a = 0; a < 3; ++a) n[a][lane] = ng[a];
+      }
+    }
+    // Facing the camera: flipped where it points along the camera ray (glm::dot's order).
+    const FloatN along = n[0] * load(rayHit.ray.dir_x) + n[1] * load(rayHit.ray.dir_y) + n[2] * load(rayHit.ray.dir_z);
+    const MaskN flip = along > 0.0f;
+    for (int a = 0; a < 3; ++a) stdx::where(flip, n[a]) = -n[a];
+    // shadowOriginOffset, with the vertices' part taken from the triangle's table (std::max's
+    // operand order does not matter here: no NaN, and fabs leaves no -0).
+    const FloatN pointMax =
+        stdx::max(stdx::abs(position[0]), stdx::max(stdx::abs(position[1]), stdx::abs(position[2])));
+    const FloatN offset =
+        kOriginOffsetScale * stdx::max(pointMax, gather([](const TriangleData& t) { return t.maxAbs; }));
+    offset.copy_to(hits.offset, kAligned);
+    for (int a = 0; a < 3; ++a) {
+      position[a].copy_to(hits.position[a], kAligned);
+      n[a].copy_to(hits.normal[a], kAligned);
+      (position[a] + n[a] * offset).copy_to(hits.origin[a], kAligned);
+    }
+  }
+
   TraceContext shadowContext_{RayKind::Shadow};
   const Scene& scene_;
   const EmbreeScene& embree_;
-  const CameraRays rays_;   // Camera::rayDirection, bit for bit
-  const float* objectIds_;  // per geometry id: Object::id as a float
+  const CameraRays rays_;                      // Camera::rayDirection, bit for bit
+  const float* objectIds_;                     // per geometry id: Object::id as a float
+  const TriangleData* const* triangleTables_;  // per geometry id: its triangles (EmbreeScene::geometry)
 };
 
 // The output channels, one pointer each, in the frame's channel order (referenceChannelNames):
@@ -355,6 +441,36 @@ struct Planes {
 };
 
 constexpr int kTilePixels = kTileSize * kTileSize;
+
+// A packet's values (lanes in the block's row-major order) into a tile plane at the block's first
+// pixel: `rows` rows of `rowLanes` values (all of a 4 x 2 block but at a tile's ragged edge).
+inline void putBlock(float* tilePlane, const float* values, int rowLanes, int rows) {
+  for (int r = 0; r < rows; ++r) {
+    float* dst = tilePlane + r * kTileSize;
+    const float* src = values + r * kBlockWidth;
+    if (rowLanes == kBlockWidth) {
+      std::memcpy(dst, src, kBlockWidth * sizeof(float));
+    } else {
+      for (int i = 0; i < rowLanes; ++i) dst[i] = src[i];
+    }
+  }
+}
+
+// The All set's prim_id, P and N of a packet (out of line: inlined, it slowed the camera rays'
+// loop of the Compare set, which does not run it, by several percent).
+[[gnu::noinline]] void putSurface(const HitPacket& hits, const Planes& planes, size_t blockPixel, int rowLanes,
+                                  int rows) {
+  alignas(kSimdAlign) float values[kLanes];
+  const MaskN hit = hits.hitMask();
+  stdx::static_simd_cast<FloatN>(load(hits.prim)).copy_to(values, kAligned);
+  putBlock(planes.primId + blockPixel, values, rowLanes, rows);
+  for (int a = 0; a < 3; ++a) {
+    select(hit, load(hits.position[a]), FloatN(0.0f)).copy_to(values, kAligned);
+    putBlock(planes.p[a] + blockPixel, values, rowLanes, rows);
+    select(hit, load(hits.normal[a]), FloatN(0.0f)).copy_to(values, kAligned);
+    putBlock(planes.n[a] + blockPixel, values, rowLanes, rows);
+  }
+}
 
 // A tile's values are written to a small buffer first (kTileSize x kTileSize floats per channel,
 // in cache), then copied to the frame's planes row by row. A full row of a 16-pixel tile is 64
@@ -517,7 +633,11 @@ Frame renderReference(const Scene& scene, const ReferenceOptions& options, Refer
     pictureBytes = picture->data();
   }
   std::vector<float> objectIds(scene.objects.size());
-  for (size_t g = 0; g < objectIds.size(); ++g) objectIds[g] = float(embree->geometry(unsigned(g)).object->id);
+  std::vector<const TriangleData*> triangleTables(scene.objects.size());
+  for (size_t g = 0; g < objectIds.size(); ++g) {
+    objectIds[g] = float(embree->geometry(unsigned(g)).object->id);
+    triangleTables[g] = embree->geometry(unsigned(g)).triangles.data();
+  }
   const auto traceStart = Clock::now();
   const double traceCpuStart = processCpuSeconds();
 
@@ -541,7 +661,7 @@ Frame renderReference(const Scene& scene, const ReferenceOptions& options, Refer
 
   arena.execute([&] {
     tbb::parallel_for(tbb::blocked_range<int>(0, tileCount), [&](const tbb::blocked_range<int>& range) {
-      Tracer tracer(scene, *embree, objectIds.data());
+      Tracer tracer(scene, *embree, objectIds.data(), triangleTables.data());
       std::vector<float> tileBuffer(channelCount * kTilePixels);
       std::vector<float*> tileBase(channelCount);
       for (size_t c = 0; c < channelCount; ++c) tileBase[c] = tileBuffer.data() + c * kTilePixels;
@@ -550,12 +670,12 @@ Frame renderReference(const Scene& scene, const ReferenceOptions& options, Refer
       const bool surface = all || lightCount > 0 || projectorCount > 0 || pictureBytes;
       std::vector<float> pictureCoverage(projectorCount);
       std::vector<glm::vec3> pictureRgb(projectorCount);
-      LaneHit center[kLanes], sample[kLanes];
+      HitPacket center, sample;
       std::vector<float> centerVis(lightCount * kLanes), centerDist(lightCount * kLanes);
       std::vector<ProjectorSample> centerProj(projectorCount * kLanes);
       std::vector<double> visSum(lightCount * kLanes);
       std::vector<ProjectorSample> projSum(projectorCount * kLanes);
-      float sampleVis[kLanes], sampleDist[kLanes];
+      alignas(kSimdAlign) float sampleVis[kLanes], sampleDist[kLanes];
       ProjectorSample sampleProj[kLanes];
       for (int tile = range.begin(); tile != range.end(); ++tile) {
         const int x0 = (tile % tilesX) * kTileSize, y0 = (tile / tilesX) * kTileSize;
@@ -580,24 +700,24 @@ Frame renderReference(const Scene& scene, const ReferenceOptions& options, Refer
               std::fill(visSum.begin(), visSum.end(), 0.0);
               std::fill(projSum.begin(), projSum.end(), ProjectorSample{});
               bool sampleActive[kLanes];
-              for (int lane = 0; lane < kLanes; ++lane) sampleActive[lane] = active[lane] && center[lane].hit;
+              for (int lane = 0; lane < kLanes; ++lane) sampleActive[lane] = active[lane] && center.hit(lane);
               for (const glm::vec2& offset : pattern) {
                 tracer.tracePrimary(px, py, sampleActive, offset.x, offset.y, surface, sample);
                 // Only samples on the center's object count: the pixel's fractional visibility
                 // is that of the surface its id and position describe.
                 for (int lane = 0; lane < kLanes; ++lane) {
-                  if (sample[lane].hit && sample[lane].geom != center[lane].geom) sample[lane].hit = false;
-                  if (sample[lane].hit) ++sameObject[lane];
+                  if (sample.hit(lane) && sample.geom[lane] != center.geom[lane]) sample.drop(lane);
+                  if (sample.hit(lane)) ++sameObject[lane];
                 }
                 for (size_t l = 0; l < lightCount; ++l) {
                   tracer.evalLight(lights[l], sample, false, sampleVis, sampleDist);
                   for (int lane = 0; lane < kLanes; ++lane)
-                    if (sample[lane].hit) visSum[l * kLanes + lane] += sampleVis[lane];
+                    if (sample.hit(lane)) visSum[l * kLanes + lane] += sampleVis[lane];
                 }
                 for (size_t p = 0; p < projectorCount; ++p) {
                   tracer.evalProjector(projectors[p], sample, sampleProj);
                   for (int lane = 0; lane < kLanes; ++lane) {
-                    if (!sample[lane].hit) continue;
+                    if (!sample.hit(lane)) continue;
                     ProjectorSample& sum = projSum[p * kLanes + lane];
                     sum.coverage += sampleProj[lane].coverage;
                     sum.rgb += sampleProj[lane].rgb;
@@ -606,46 +726,58 @@ Frame renderReference(const Scene& scene, const ReferenceOptions& options, Refer
               }
             }
 
-            for (int lane = 0; lane < kLanes; ++lane) {
-              if (!active[lane]) continue;
-              const size_t pixel = size_t(py[lane] - y0) * kTileSize + size_t(px[lane] - x0);
-              const LaneHit& h = center[lane];
-              planes.hit[pixel] = h.hit ? 1.0f : 0.0f;
-              planes.objectId[pixel] = h.hit ? h.objectId : 0.0f;
-              if (all) {
-                planes.primId[pixel] = h.hit ? float(h.prim) : 0.0f;
-                for (int a = 0; a < 3; ++a) {
-                  planes.p[a][pixel] = h.hit ? h.position[a] : 0.0f;
-                  planes.n[a][pixel] = h.hit ? h.normal[a] : 0.0f;
+            // The packet's values, then into the tile's planes a block row at a time. The values
+            // are stored as SIMD values where they are made lane by lane otherwise: putBlock reads
+            // a row as one 16-byte load, which a CPU cannot forward from four scalar stores (it
+            // waits for them to reach the cache).
+            const int rowLanes = std::min(kBlockWidth, x1 - bx), rows = std::min(kBlockHeight, y1 - by);
+            const size_t blockPixel = size_t(by - y0) * kTileSize + size_t(bx - x0);
+            auto put = [&](float* plane, const float* values) { putBlock(plane + blockPixel, values, rowLanes, rows); };
+            alignas(kSimdAlign) float values[kLanes];
+            put(planes.hit, center.hitValue);
+            put(planes.objectId, center.objectId);
+            if (all) putSurface(center, planes, blockPixel, rowLanes, rows);
+            for (size_t l = 0; l < lightCount; ++l) {
+              const float* vis = &centerVis[l * kLanes];
+              if (!pattern.empty()) {
+                for (int lane = 0; lane < kLanes; ++lane) {
+                  const int count = sameObject[lane];
+                  values[lane] = count > 0 ? float(visSum[l * kLanes + lane] / count) : vis[lane];
                 }
+                vis = values;
               }
-              const int count = sameObject[lane];
-              for (size_t l = 0; l < lightCount; ++l) {
-                const size_t k = l * kLanes + lane;
-                planes.vis[l][pixel] = count > 0 ? float(visSum[k] / count) : centerVis[k];
-                planes.occluderDist[l][pixel] = centerDist[k];
-              }
-              for (size_t p = 0; p < projectorCount; ++p) {
-                const size_t k = p * kLanes + lane;
-                const ProjectorSample& c = centerProj[k];
-                if (all) {
-                  planes.u[p][pixel] = c.u;
-                  planes.v[p][pixel] = c.v;
+              put(planes.vis[l], vis);
+              put(planes.occluderDist[l], &centerDist[l * kLanes]);
+            }
+            if (projectorCount > 0 || pictureBytes) {
+              for (int lane = 0; lane < kLanes; ++lane) {
+                if (!active[lane]) continue;
+                const size_t pixel = size_t(py[lane] - y0) * kTileSize + size_t(px[lane] - x0);
+                const int count = sameObject[lane];
+                for (size_t p = 0; p < projectorCount; ++p) {
+                  const size_t k = p * kLanes + lane;
+                  const ProjectorSample& c = centerProj[k];
+                  if (all) {
+                    planes.u[p][pixel] = c.u;
+                    planes.v[p][pixel] = c.v;
+                  }
+                  const ProjectorSample value =
+                      count > 0 ? ProjectorSample{projSum[k].coverage / count, 0, 0, projSum[k].rgb / float(count)} : c;
+                  planes.coverage[p][pixel] = value.coverage;
+                  for (int ch = 0; ch < 3; ++ch) planes.rgb[ch][p][pixel] = value.rgb[ch];
+                  pictureCoverage[p] = value.coverage;
+                  pictureRgb[p] = value.rgb;
                 }
-                const ProjectorSample value =
-                    count > 0 ? ProjectorSample{projSum[k].coverage / count, 0, 0, projSum[k].rgb / float(count)} : c;
-                planes.coverage[p][pixel] = value.coverage;
-                for (int ch = 0; ch < 3; ++ch) planes.rgb[ch][p][pixel] = value.rgb[ch];
-                pictureCoverage[p] = value.coverage;
-                pictureRgb[p] = value.rgb;
-              }
-              if (pictureBytes) {
-                const glm::vec3 albedo =
-                    h.hit ? shader.albedo(embree->geometry(h.geom).object, h.prim) : glm::vec3(0.8f);
-                const float vis = pictureLight >= 0 ? planes.vis[size_t(pictureLight)][pixel] : 1.0f;
-                shader.shade(h.hit, albedo, h.normal, h.position, vis, projectorCount, pictureCoverage.data(),
-                             pictureRgb.data(),
-                             pictureBytes + (size_t(py[lane]) * size_t(width) + size_t(px[lane])) * 3);
+                if (pictureBytes) {
+                  const bool hit = center.hit(lane);
+                  const glm::vec3 albedo =
+                      hit ? shader.albedo(embree->geometry(center.geom[lane]).object, center.prim[lane])
+                          : glm::vec3(0.8f);
+                  const float vis = pictureLight >= 0 ? planes.vis[size_t(pictureLight)][pixel] : 1.0f;
+                  shader.shade(hit, albedo, center.normalAt(lane), center.positionAt(lane), vis, projectorCount,
+                               pictureCoverage.data(), pictureRgb.data(),
+                               pictureBytes + (size_t(py[lane]) * size_t(width) + size_t(px[lane])) * 3);
+                }
               }
             }
           }
