@@ -100,6 +100,9 @@ class PipelineRunner final : public SweepRunner {
     j["references_loaded"] = loaded_;
     j["reference_wall_seconds"] = referenceWallSeconds_;  // references traced or loaded, summed
     j["reference_spp"] = referenceOptions_.spp;
+    // Rows compared through a group's CompareContext, and contexts built (compareRow).
+    j["compare_context_rows"] = contextRows_;
+    j["compare_contexts_built"] = contextsBuilt_;
     return j;
   }
 
@@ -142,20 +145,32 @@ class PipelineRunner final : public SweepRunner {
     if (group == raster.meta.end() || !group->is_string())
       return compareFrames(reference, raster, options, classification);
     const std::string key = referenceKey + "\n" + options.light + "\n" + group->get<std::string>();
+    bool again = false;  // a context of this key, made from a reference since read again
     for (auto it = contexts_.begin(); it != contexts_.end(); ++it)
       if (it->first == key) {
+        if (!it->second.appliesTo(reference, raster)) {
+          contexts_.erase(it);
+          again = true;
+          break;
+        }
         contexts_.splice(contexts_.begin(), contexts_, it);  // most recently used first
+        ++contextRows_;
         return compareFrames(it->second, reference, raster, classification);
       }
     auto seen = std::find(seen_.begin(), seen_.end(), key);
-    if (seen == seen_.end()) {
+    if (again) {
+      if (seen != seen_.end()) seen_.erase(seen);
+    } else if (seen == seen_.end()) {
       seen_.push_front(key);
       if (seen_.size() > 2 * kKeptContexts) seen_.pop_back();
       return compareFrames(reference, raster, options, classification);
+    } else {
+      seen_.erase(seen);
     }
-    seen_.erase(seen);
     while (contexts_.size() >= kKeptContexts) contexts_.pop_back();
     contexts_.emplace_front(key, CompareContext(reference, raster, options));
+    ++contextsBuilt_;
+    contextRows_ += contexts_.front().second.appliesTo(reference, raster);
     return compareFrames(contexts_.front().second, reference, raster, classification);
   }
 
@@ -163,7 +178,8 @@ class PipelineRunner final : public SweepRunner {
   // alternates up to 4 groups keeps each one's context. ~22 MB each at 1920x1080.
   static constexpr size_t kKeptContexts = 4;
   std::list<std::pair<std::string, CompareContext>> contexts_;  // key -> context, most recently used first
-  std::list<std::string> seen_;                                 // keys seen once, without a context yet
+  int contextRows_ = 0, contextsBuilt_ = 0;
+  std::list<std::string> seen_;  // keys seen once, without a context yet
 
   ReferenceCache cache_;
   ReferenceOptions referenceOptions_;
