@@ -230,6 +230,15 @@ TEST(CompareContext, FallsBackWhereItDoesNotApply) {
   EXPECT_NE(compareFrames(moonContext, referenceTwo, twoLights).toJson(),
             compareFrames(sunContext, referenceTwo, twoLights).toJson());
   expectSameAsFull(moonContext, referenceTwo, twoLights, "light moon");
+  // A context that applies to nothing still compares with its options (the moon, not the sun).
+  Frame twoLightsNoKey = twoLights;
+  twoLightsNoKey.meta.erase("evidence_group");
+  const CompareContext moonNoKey(referenceTwo, twoLightsNoKey, moon);
+  EXPECT_FALSE(moonNoKey.appliesTo(referenceTwo, twoLightsNoKey));
+  EXPECT_EQ(compareFrames(moonNoKey, referenceTwo, twoLightsNoKey).toJson(),
+            compareFrames(referenceTwo, twoLightsNoKey, moon).toJson());
+  EXPECT_NE(compareFrames(moonNoKey, referenceTwo, twoLightsNoKey).toJson(),
+            compareFrames(referenceTwo, twoLightsNoKey).toJson());
 
   // A default context applies to nothing.
   EXPECT_FALSE(CompareContext().appliesTo(g.reference, good));

@@ -962,7 +962,8 @@ struct ContextBlockSums {
 
 }  // namespace
 
-CompareContext::CompareContext(const Frame& reference, const Frame& raster, const CompareOptions& options) {
+CompareContext::CompareContext(const Frame& reference, const Frame& raster, const CompareOptions& options)
+    : options_(options) {
   const Channels ch = readChannels(reference, raster, options);  // throws as compareFrames does
   const std::string group = metaString(raster, "evidence_group");
   const int width = reference.width, height = reference.height;
@@ -1027,10 +1028,7 @@ const std::string& CompareContext::group() const {
   return data_ ? data_->group : kNone;
 }
 
-const CompareOptions& CompareContext::options() const {
-  static const CompareOptions kDefault;
-  return data_ ? data_->options : kDefault;
-}
+const CompareOptions& CompareContext::options() const { return options_; }
 
 Metrics compareFrames(const CompareContext& context, const Frame& reference, const Frame& raster,
                       Classification* classification) {

@@ -138,6 +138,7 @@ class CompareContext {
   struct Data;
 
  private:
+  CompareOptions options_;  // also where the context applies to nothing: the full path's
   std::shared_ptr<const Data> data_;
   friend Metrics compareFrames(const CompareContext&, const Frame&, const Frame&, Classification*);
 };
