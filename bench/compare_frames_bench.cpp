@@ -100,6 +100,45 @@ void BM_CompareFramesOneThread(benchmark::State& state) {
 }
 BENCHMARK(BM_CompareFramesOneThread)->Args({1920, 1080, 2})->Args({1920, 1080, 32})->Unit(benchmark::kMillisecond);
 
+// compareFrames through a CompareContext (compare.h) made once from the same pair, as a sweep
+// keeps one per evidence group: per frame only the raster vis and the disagreeing pixels'
+// evidence are read. Checks the metrics equal compareFrames' before timing.
+void BM_CompareFramesContext(benchmark::State& state) {
+  const int width = int(state.range(0)), height = int(state.range(1));
+  const float texelPx = float(state.range(2));
+  Pair p = makeFrames(width, height, texelPx);
+  p.raster.meta["evidence_group"] = "bench";
+  const shadowlab::CompareContext context(p.reference, p.raster);
+  if (!context.appliesTo(p.reference, p.raster) || shadowlab::compareFrames(context, p.reference, p.raster).toJson() !=
+                                                       shadowlab::compareFrames(p.reference, p.raster).toJson()) {
+    state.SkipWithError("the context does not apply, or gives other metrics");
+    return;
+  }
+  shadowlab::Metrics m;
+  for (auto _ : state) {
+    m = shadowlab::compareFrames(context, p.reference, p.raster);
+    benchmark::DoNotOptimize(m);
+  }
+  state.counters["pixels"] = double(m.pixelsCompared);
+  state.counters["Mpix/s"] =
+      benchmark::Counter(double(width) * height * state.iterations() * 1e-6, benchmark::Counter::kIsRate);
+}
+BENCHMARK(BM_CompareFramesContext)
+    ->Args({1920, 1080, 2})
+    ->Args({1920, 1080, 32})
+    ->Unit(benchmark::kMillisecond)
+    ->MeasureProcessCPUTime()
+    ->UseRealTime();
+
+void BM_CompareFramesContextOneThread(benchmark::State& state) {
+  tbb::global_control one(tbb::global_control::max_allowed_parallelism, 1);
+  BM_CompareFramesContext(state);
+}
+BENCHMARK(BM_CompareFramesContextOneThread)
+    ->Args({1920, 1080, 2})
+    ->Args({1920, 1080, 32})
+    ->Unit(benchmark::kMillisecond);
+
 // Real frames: the bundled bunny scene rendered at 1920x1080 by both renderers (2048^2 map),
 // once, then compared repeatedly. Skipped when there is no Vulkan device.
 void BM_CompareBunny1080p(benchmark::State& state) {

@@ -221,6 +221,48 @@ TEST(SweepCli, SmallSweepRowsMatchShadowlabRunExactly) {
   fs::remove_all(dir);
 }
 
+// Rows rendered on demand are compared through a CompareContext kept per evidence group
+// (compare/METRICS.md "Comparing a group"): the filter fastest, then the map size, so two groups
+// alternate every two rows and each keeps its context. Every row's metrics equal those of the
+// same sweep with --full-evidence (full frames, no group, the full compareFrames).
+TEST(SweepCli, RowsComparedThroughGroupContextsMatchFullEvidence) {
+  const std::string dir = tempDir("contexts");
+  const std::string scene = smallScene(dir);
+  auto sweepInto = [&](const std::string& out, bool full) {
+    std::vector<std::string> args =
+        sweepArgs({scene, "--grid", "bias.slope=0,1.5,4", "--grid", "map.size=256,512", "--grid", "filter=none,pcf",
+                   "-o", dir + "/" + out, "--cache", dir + "/cache", "--no-report"});
+    if (full) args.push_back("--full-evidence");
+    Child sweep = spawn(args, dir + "/" + out);
+    return std::make_pair(waitFor(sweep), slurp(sweep.err));
+  };
+  auto [rc, err] = sweepInto("demand", false);
+  if (rc == 3) GTEST_SKIP() << "no Vulkan device (shadowlab exit 3): " << err;
+  ASSERT_EQ(rc, 0) << err;
+  auto [rcFull, errFull] = sweepInto("full", true);
+  ASSERT_EQ(rcFull, 0) << errFull;
+  const auto demand = loadResultRows(dir + "/demand/results.json");
+  const auto full = loadResultRows(dir + "/full/results.json");
+  ASSERT_EQ(demand.size(), 12u);
+  ASSERT_EQ(full.size(), 12u);
+  for (size_t i = 0; i < demand.size(); ++i) {
+    EXPECT_EQ(demand[i].config, full[i].config);
+    EXPECT_EQ(demand[i].metrics, full[i].metrics)
+        << demand[i].config << "\non demand: " << demand[i].metrics.dump() << "\nfull:      " << full[i].metrics.dump();
+  }
+  // Two groups (map sizes 256 and 512), each with a context from its second row on: 12 rows, the
+  // first of each group compared in full.
+  const auto runner = nlohmann::json::parse(readFile(dir + "/demand/results.json")).at("runner");
+  EXPECT_EQ(runner.at("compare_contexts_built"), 2) << runner.dump();
+  EXPECT_EQ(runner.at("compare_context_rows"), 10) << runner.dump();
+  const auto runnerFull = nlohmann::json::parse(readFile(dir + "/full/results.json")).at("runner");
+  EXPECT_EQ(runnerFull.at("compare_context_rows"), 0) << runnerFull.dump();
+  // The biases and filters matter (else equal rows prove little): slope 0 shows acne that 4 removes.
+  EXPECT_GT(demand[0].metrics.at("acne_rate").get<double>(), demand[8].metrics.at("acne_rate").get<double>());
+  EXPECT_NE(demand[0].metrics, demand[1].metrics);
+  fs::remove_all(dir);
+}
+
 // `run` takes scene: values like a sweep (the same --set parser, shadowlab::applySetArguments) and
 // names the row the same way: a run with a smaller image equals the sweep row that swept it.
 TEST(SweepCli, RunWithASceneValueMatchesTheSweepRowThatSweptIt) {

@@ -1486,6 +1486,7 @@ Frame Rasterizer::render(const Scene& scene, const Method& method, const std::st
     if (onDemand) im.keepFootprint(group, camera, frame, *light);
   }
   frame.meta = frameMeta(scene, light, fit, method, deviceName());
+  if (onDemand) frame.meta["evidence_group"] = group;  // CompareContext (compare.h): same hit, ids, m, cascade
   if (t.partialEvidence) {
     frame.meta["evidence"] = "partial";
     frame.meta["evidence_pixels"] = t.evidencePixels;

@@ -823,4 +823,312 @@ Metrics compareFrames(const Frame& reference, const Frame& raster, const Compare
   return out;
 }
 
+// ---- a group's constant planes (compare.h, CompareContext) ----------------------------------
+
+struct CompareContext::Data {
+  int width = 0, height = 0;
+  std::string group, light;
+  CompareOptions options;
+  // The reference the context was built from: its `vis` plane (identity, not contents).
+  const float* referenceVis = nullptr;
+  // Which optional planes the raster frames of the group carry (readChannels), so that a frame
+  // with others takes the full path.
+  bool hasM = false, hasCascade = false;
+  int cascadeCount = 0;
+  // Per pixel: kDecisionNone (not compared), kDecisionLit, kDecisionShadowed, plus kFractional
+  // where the clamped reference vis is neither 0 nor 1 (a frame reads referenceVisClamped only
+  // there: 5 bytes per pixel in all with the raster vis); clamp01 of the reference vis (0 where
+  // not compared); the class before the decisions (not compared, geometry mismatch, Correct for
+  // compared pixels); whether the reference decides lit.
+  static constexpr uint8_t kFractional = 4;
+  std::vector<uint8_t> decision;
+  std::vector<float> referenceVisClamped;
+  std::vector<uint8_t> scoredClass;
+  std::vector<uint8_t> referenceLit;
+  // Exact squared distance (pixels^2) from each pixel to the nearest boundary pixel (pass 2's
+  // definition), clamped to UINT32_MAX (only compared with limits under the image diagonal).
+  std::vector<uint32_t> boundaryDist2;
+  bool anyBoundary = false;
+  PerPixelClass<uint64_t> scoredCounts{};  // not compared and geometry mismatch
+  uint64_t compared = 0, referenceShadow = 0;
+  double mMedian = 0, mP95 = 0, mMax = 0;
+  std::vector<CascadeMetrics> cascades;  // pixels and m_p95; errors 0
+};
+
+namespace {
+
+// Boundary pixels as pass 2 defines them (resolveCandidates) and the exact squared Euclidean
+// distance transform to them (Meijster et al.: column scans, then per row the lower envelope of
+// parabolas, as resolveCandidates does within its bands), over the whole image.
+void boundaryDistances(const uint8_t* decision, int width, int height, std::vector<uint32_t>& out, bool* anyBoundary) {
+  const size_t n = size_t(width) * size_t(height);
+  // Vertical distance to the nearest boundary pixel of the column; `none` when the column has none
+  // (larger than any distance in the image, so the envelope treats it as infinite).
+  const uint32_t none = uint32_t(width) + uint32_t(height) + 1;
+  std::vector<uint32_t> g(n);
+  std::vector<uint8_t> columnHasBoundary(size_t(std::max(width, 0)), 0);
+  constexpr int kStrip = 256;
+  const int strips = (width + kStrip - 1) / kStrip;
+  tbb::parallel_for(0, strips, [&](int job) {
+    const int x0 = job * kStrip, x1 = std::min(width, x0 + kStrip);
+    for (int y = 0; y < height; ++y) {
+      const uint8_t* d = decision + size_t(y) * width;
+      const uint8_t* du = y > 0 ? d - width : d;
+      const uint8_t* dd = y + 1 < height ? d + width : d;
+      uint32_t* row = g.data() + size_t(y) * width;
+      const uint32_t* above = y > 0 ? row - width : nullptr;
+      for (int x = x0; x < x1; ++x) {
+        const uint8_t c = d[x];
+        const bool boundary = (c ^ du[x]) == 3 || (c ^ dd[x]) == 3 || (x > 0 && (c ^ d[x - 1]) == 3) ||
+                              (x + 1 < width && (c ^ d[x + 1]) == 3);
+        columnHasBoundary[size_t(x)] |= boundary;
+        row[x] = boundary ? 0u : above ? std::min(none, above[x] + 1) : none;
+      }
+    }
+    for (int y = height - 2; y >= 0; --y) {
+      uint32_t* row = g.data() + size_t(y) * width;
+      const uint32_t* below = row + width;
+      for (int x = x0; x < x1; ++x) row[x] = std::min(row[x], below[x] + 1);
+    }
+  });
+  *anyBoundary = std::find(columnHasBoundary.begin(), columnHasBoundary.end(), 1) != columnHasBoundary.end();
+  out.assign(n, std::numeric_limits<uint32_t>::max());
+  if (!*anyBoundary) return;
+  struct RowScratch {
+    std::vector<int> v;
+    std::vector<double> z;
+  };
+  tbb::enumerable_thread_specific<RowScratch> scratch;
+  tbb::parallel_for(0, height, [&](int y) {
+    const uint32_t* grow = g.data() + size_t(y) * width;
+    RowScratch& rs = scratch.local();
+    rs.v.resize(size_t(width));
+    rs.z.resize(size_t(width) + 1);
+    int* v = rs.v.data();
+    double* z = rs.z.data();
+    auto f = [&](int q) { return double(grow[q]) * double(grow[q]); };
+    auto intersect = [&](int q, int p) { return ((f(q) + double(q) * q) - (f(p) + double(p) * p)) / (2.0 * (q - p)); };
+    int k = 0;
+    v[0] = 0;
+    z[0] = -std::numeric_limits<double>::infinity();
+    z[1] = std::numeric_limits<double>::infinity();
+    for (int q = 1; q < width; ++q) {
+      double sq = intersect(q, v[k]);
+      while (sq <= z[k]) {
+        --k;
+        sq = intersect(q, v[k]);
+      }
+      ++k;
+      v[k] = q;
+      z[k] = sq;
+      z[k + 1] = std::numeric_limits<double>::infinity();
+    }
+    k = 0;
+    uint32_t* orow = out.data() + size_t(y) * width;
+    for (int x = 0; x < width; ++x) {
+      while (z[k + 1] < x) ++k;
+      const int p = v[k];
+      const double dist2 = double(x - p) * double(x - p) + f(p);
+      orow[x] = dist2 < 4294967295.0 ? uint32_t(dist2) : std::numeric_limits<uint32_t>::max();
+    }
+  });
+}
+
+// The channels of these frames when `data` applies to them (CompareContext::appliesTo), else false.
+bool contextChannels(const CompareContext::Data* data, const Frame& reference, const Frame& raster, Channels* out) {
+  if (!data || data->group.empty()) return false;
+  if (raster.width != data->width || raster.height != data->height || reference.width != data->width ||
+      reference.height != data->height)
+    return false;
+  if (metaString(raster, "evidence_group") != data->group) return false;
+  const std::string lp = "light." + data->light + ".vis";
+  if (!reference.has(lp) || reference.get(lp).data() != data->referenceVis) return false;
+  if (resolveCompareLight(reference, raster, data->options) != data->light) return false;
+  Channels ch = readChannels(reference, raster, data->options);  // validates as the full path does
+  if (ch.hasProjector || !ch.noLightVis.empty() || (ch.m != nullptr) != data->hasM ||
+      (ch.cascade != nullptr) != data->hasCascade || ch.cascadeCount != data->cascadeCount)
+    return false;
+  *out = std::move(ch);
+  return true;
+}
+
+// The per-frame sums of the context path over one block of rows (the same blocks as pass 1).
+struct ContextBlockSums {
+  PerPixelClass<uint64_t> counts{};  // the disagreeing pixels' final classes
+  uint64_t disagreements = 0, rasShadow = 0, bothShadow = 0;
+  double sumAbs = 0, sumSq = 0;
+  std::array<uint64_t, 8> cascadeErrors{};
+};
+
+}  // namespace
+
+CompareContext::CompareContext(const Frame& reference, const Frame& raster, const CompareOptions& options)
+    : options_(options) {
+  const Channels ch = readChannels(reference, raster, options);  // throws as compareFrames does
+  const std::string group = metaString(raster, "evidence_group");
+  const int width = reference.width, height = reference.height;
+  const double diagonal2 = double(width) * width + double(height) * height;
+  // Without a group, with projectors or without a light the full path runs every time; so does a
+  // frame whose squared diagonal does not fit the distances' 32 bits.
+  if (group.empty() || ch.hasProjector || !ch.noLightVis.empty() || !(diagonal2 < 4.0e9)) return;
+  auto d = std::make_shared<Data>();
+  d->width = width;
+  d->height = height;
+  d->group = group;
+  d->options = options;
+  d->light = resolveCompareLight(reference, raster, options);
+  d->referenceVis = ch.refVis;
+  d->hasM = ch.m != nullptr;
+  d->hasCascade = ch.cascade != nullptr;
+  d->cascadeCount = ch.cascadeCount;
+  // The constant parts come from the full path itself: the same classes, m statistics, cascades.
+  Classification cls;
+  const Metrics full = compareFrames(reference, raster, options, &cls);
+  const size_t n = reference.pixelCount();
+  d->decision.resize(n);
+  d->referenceVisClamped.assign(n, 0.0f);
+  d->scoredClass.resize(n);
+  d->referenceLit = std::move(cls.referenceLit);
+  for (size_t i = 0; i < n; ++i) {
+    const PixelClass c = cls.classes[i];
+    const bool compared = c != PixelClass::NotCompared && c != PixelClass::GeometryMismatch;
+    d->scoredClass[i] = uint8_t(compared ? PixelClass::Correct : c);
+    if (!compared) {
+      ++d->scoredCounts[classIndex(c)];
+      d->decision[i] = kDecisionNone;
+      continue;
+    }
+    ++d->compared;
+    d->decision[i] = d->referenceLit[i] ? kDecisionLit : kDecisionShadowed;
+    d->referenceShadow += !d->referenceLit[i];
+    d->referenceVisClamped[i] = clamp01(ch.refVis[i]);
+  }
+  if (d->compared != full.pixelsCompared) throw DriverError("compare: context counts differ from compareFrames");
+  d->mMedian = full.mMedian;
+  d->mP95 = full.mP95;
+  d->mMax = full.mMax;
+  d->cascades = full.cascades;
+  for (CascadeMetrics& c : d->cascades) c.errors = 0, c.errorRate = 0;
+  boundaryDistances(d->decision.data(), width, height, d->boundaryDist2, &d->anyBoundary);
+  for (size_t i = 0; i < n; ++i) {
+    const float rv = d->referenceVisClamped[i];
+    if (d->decision[i] != kDecisionNone && rv != (d->decision[i] == kDecisionLit ? 1.0f : 0.0f))
+      d->decision[i] |= Data::kFractional;
+  }
+  data_ = std::move(d);
+}
+
+bool CompareContext::appliesTo(const Frame& reference, const Frame& raster) const {
+  Channels ch;
+  return contextChannels(data_.get(), reference, raster, &ch);
+}
+
+const std::string& CompareContext::group() const {
+  static const std::string kNone;
+  return data_ ? data_->group : kNone;
+}
+
+const CompareOptions& CompareContext::options() const { return options_; }
+
+Metrics compareFrames(const CompareContext& context, const Frame& reference, const Frame& raster,
+                      Classification* classification) {
+  const CompareContext::Data* data = context.data_.get();
+  Channels channels;
+  if (!contextChannels(data, reference, raster, &channels))
+    return compareFrames(reference, raster, context.options(), classification);
+  const CompareContext::Data& d = *data;
+  const int width = d.width, height = d.height;
+  const size_t n = size_t(width) * size_t(height);
+  if (classification) {
+    classification->width = width;
+    classification->height = height;
+    classification->classes.resize(n);
+    classification->referenceLit = d.referenceLit;
+  }
+  uint8_t* klass = classification ? reinterpret_cast<uint8_t*>(classification->classes.data()) : nullptr;
+  const float leakFactor = d.options.leakBiasFactor;
+  const double diagonalPx = std::sqrt(double(width) * width + double(height) * height);
+  const int blocks = (height + kBlockRows - 1) / kBlockRows;
+  std::vector<ContextBlockSums> sums(size_t(std::max(blocks, 0)));
+  // The same blocks and, within each, the same order of the double sums as pass 1 (mae and rmse
+  // to the bit); the pixels not compared are skipped as pass 1 skips them.
+  tbb::parallel_for(0, blocks, [&](int b) {
+    ContextBlockSums s;
+    const Channels& ch = channels;
+    const float* const rasVis = ch.rasVis;
+    const float* const refV = d.referenceVisClamped.data();
+    const uint8_t* const decision = d.decision.data();
+    const size_t begin = size_t(b) * kBlockRows * width;
+    const size_t end = std::min(n, size_t(b + 1) * kBlockRows * width);
+    if (klass) std::memcpy(klass + begin, d.scoredClass.data() + begin, end - begin);
+    for (size_t i = begin; i < end; ++i) {
+      // Branch-free counts; the rest only where the clamped visibilities differ, which is rare
+      // (fractional pixels and disagreements). Elsewhere pass 1 adds exactly 0.0 to sums that
+      // are >= +0.0: no bit changes, so skipping those pixels keeps mae and rmse to the bit.
+      const uint8_t code = decision[i], dec = code & 3;
+      const float v = rasVis[i];
+      const bool sLit = litDecision(v);
+      s.rasShadow += (dec != kDecisionNone) & !sLit;
+      s.bothShadow += (dec == kDecisionShadowed) & !sLit;
+      const bool rLit = dec == kDecisionLit;
+      const float sv = clamp01(v);
+      const float rv = code & CompareContext::Data::kFractional ? refV[i] : rLit ? 1.0f : 0.0f;
+      if (dec == kDecisionNone || rv == sv) continue;  // equal clamped values: equal decisions
+      const double diff = double(rv) - double(sv);
+      s.sumAbs += std::fabs(diff);
+      s.sumSq += diff * diff;
+      if (rLit == sLit) continue;
+      // A disagreement: step 2 on its evidence, and pass 2's decision from the kept distances.
+      ++s.disagreements;
+      const DisagreementClass dc = classifyDisagreement(ch.evidence(i), leakFactor);
+      PixelClass c = dc.cls;
+      if (dc.candidate) {
+        const double limit = double(d.options.boundaryTexels) * (ch.m ? double(sanitizeM(ch.m[i])) : 1.0);
+        const bool within = limit >= diagonalPx ? d.anyBoundary : double(d.boundaryDist2[i]) <= limit * limit;
+        c = resolveCandidate(dc.leakEvidence, within, dc.bleedEvidence);
+      }
+      ++s.counts[classIndex(c)];
+      if (klass) klass[i] = uint8_t(c);
+      if (ch.cascade && isErrorClass(c)) {
+        const float v = ch.cascade[i];
+        const int k = v >= 0.0f ? (v < 7.0f ? int(v + 0.5f) : 7) : 0;  // as cascadeMetrics reads it
+        ++s.cascadeErrors[size_t(k)];
+      }
+    }
+    sums[size_t(b)] = s;
+  });
+  ContextBlockSums t;
+  PerPixelClass<uint64_t> counts = d.scoredCounts;
+  for (const auto& s : sums) {
+    for (size_t k = 0; k < kPixelClassCount; ++k) counts[k] += s.counts[k];
+    t.disagreements += s.disagreements;
+    t.rasShadow += s.rasShadow;
+    t.bothShadow += s.bothShadow;
+    t.sumAbs += s.sumAbs;
+    t.sumSq += s.sumSq;
+    for (size_t k = 0; k < t.cascadeErrors.size(); ++k) t.cascadeErrors[k] += s.cascadeErrors[k];
+  }
+  counts[classIndex(PixelClass::Correct)] += d.compared - t.disagreements;
+  Metrics out;
+  setClassMetrics(out, counts);
+  if (out.pixelsCompared != d.compared) {
+    throw DriverError("compare: " + std::to_string(out.pixelsCompared) + " pixels classified as compared, " +
+                      std::to_string(d.compared) + " counted; expected the same");
+  }
+  out.cascades = d.cascades;
+  for (CascadeMetrics& c : out.cascades) {
+    c.errors = t.cascadeErrors[size_t(c.index)];
+    c.errorRate = c.pixels ? double(c.errors) / double(c.pixels) : 0.0;
+  }
+  const double denom = double(d.compared);
+  const uint64_t shadowUnion = d.referenceShadow + t.rasShadow - t.bothShadow;
+  out.shadowIou = shadowUnion ? double(t.bothShadow) / double(shadowUnion) : 1.0;
+  out.mae = d.compared ? t.sumAbs / denom : 0.0;
+  out.rmse = d.compared ? std::sqrt(t.sumSq / denom) : 0.0;
+  out.mMedian = d.mMedian;
+  out.mP95 = d.mP95;
+  out.mMax = d.mMax;
+  return out;
+}
+
 }  // namespace shadowlab

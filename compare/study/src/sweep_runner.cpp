@@ -2,9 +2,11 @@
 // in memory between configurations of the same scene. runPipeline asks the ReferenceCache for
 // every call, which reads a 1080p multi-channel EXR from disk each time (hundreds of ms); a sweep
 // of a hundred configurations cannot afford that. The metrics are the same: the same cached
-// reference frame, the same Rasterizer::render, the same compareFrames with the same light
+// reference frame, the same Rasterizer::render, the same compareFrames with the same light, through
+// a CompareContext kept per evidence group (compareRow below; the same bits)
 // (SweepCli.SmallSweepRowsMatchShadowlabRunExactly in tests/sweep_cli_test.cpp checks the numbers
 // against `shadowlab run`).
+#include <algorithm>
 #include <chrono>
 #include <list>
 #include <memory>
@@ -35,7 +37,8 @@ class PipelineRunner final : public SweepRunner {
 
   SweepRunOutput run(const Scene& scene, const Method& method, const std::string& light,
                      const std::string& imagesDir) override {
-    const Frame& reference = referenceFor(scene);
+    std::string referenceKey;
+    const Frame& reference = referenceFor(scene, &referenceKey);
     RasterTimings t;
     CompareOptions options;
     options.light = scene.lightOrDefault(light);
@@ -47,7 +50,7 @@ class PipelineRunner final : public SweepRunner {
     Frame raster = rasterizer().render(scene, method, light, &t, nullptr, select ? &select : nullptr);
     Classification classification;
     const auto c0 = Clock::now();
-    Metrics m = compareFrames(reference, raster, options, keep ? &classification : nullptr);
+    Metrics m = compareRow(referenceKey, reference, raster, options, keep ? &classification : nullptr);
     const double compareMs = msSince(c0);
     if (keep) {
       writeFrameExr(raster, imagesDir + "/raster.exr");
@@ -97,6 +100,9 @@ class PipelineRunner final : public SweepRunner {
     j["references_loaded"] = loaded_;
     j["reference_wall_seconds"] = referenceWallSeconds_;  // references traced or loaded, summed
     j["reference_spp"] = referenceOptions_.spp;
+    // Rows compared through a group's CompareContext, and contexts built (compareRow).
+    j["compare_context_rows"] = contextRows_;
+    j["compare_contexts_built"] = contextsBuilt_;
     return j;
   }
 
@@ -109,8 +115,9 @@ class PipelineRunner final : public SweepRunner {
   // Only the last `keep_` scenes' references are held (1 for a sweep): a 1080p reference frame
   // with all its channels is well over 100 MB, and the plan visits scenes one after another.
   // shadowlab tune alternates scenes per configuration and keeps one per scene.
-  const Frame& referenceFor(const Scene& scene) {
+  const Frame& referenceFor(const Scene& scene, std::string* key = nullptr) {
     const std::string hash = referenceHash(scene, referenceOptions_);
+    if (key) *key = hash;
     for (auto it = held_.begin(); it != held_.end(); ++it)
       if (it->first == hash) {
         held_.splice(held_.begin(), held_, it);  // most recently used first
@@ -125,6 +132,54 @@ class PipelineRunner final : public SweepRunner {
     held_.emplace_front(hash, std::move(frame));
     return held_.front().second;
   }
+
+  // compareFrames for one row. A frame rendered on demand names its evidence group (the
+  // configurations sharing hit, ids, m and cascade: map size, fit, light); from a group's second
+  // row on, a CompareContext (compare.h) of that reference, light and group holds what does not
+  // change and the row reads only its vis and the disagreeing pixels' evidence: the same metrics.
+  // The context is built on the second row, not the first, so that a plan whose every row is a new
+  // group (map.size the fastest axis, more sizes than are kept) pays nothing for it.
+  Metrics compareRow(const std::string& referenceKey, const Frame& reference, const Frame& raster,
+                     const CompareOptions& options, Classification* classification) {
+    auto group = raster.meta.find("evidence_group");
+    if (group == raster.meta.end() || !group->is_string())
+      return compareFrames(reference, raster, options, classification);
+    const std::string key = referenceKey + "\n" + options.light + "\n" + group->get<std::string>();
+    bool again = false;  // a context of this key, made from a reference since read again
+    for (auto it = contexts_.begin(); it != contexts_.end(); ++it)
+      if (it->first == key) {
+        if (!it->second.appliesTo(reference, raster)) {
+          contexts_.erase(it);
+          again = true;
+          break;
+        }
+        contexts_.splice(contexts_.begin(), contexts_, it);  // most recently used first
+        ++contextRows_;
+        return compareFrames(it->second, reference, raster, classification);
+      }
+    auto seen = std::find(seen_.begin(), seen_.end(), key);
+    if (again) {
+      if (seen != seen_.end()) seen_.erase(seen);
+    } else if (seen == seen_.end()) {
+      seen_.push_front(key);
+      if (seen_.size() > 2 * kKeptContexts) seen_.pop_back();
+      return compareFrames(reference, raster, options, classification);
+    } else {
+      seen_.erase(seen);
+    }
+    while (contexts_.size() >= kKeptContexts) contexts_.pop_back();
+    contexts_.emplace_front(key, CompareContext(reference, raster, options));
+    ++contextsBuilt_;
+    contextRows_ += contexts_.front().second.appliesTo(reference, raster);
+    return compareFrames(contexts_.front().second, reference, raster, classification);
+  }
+
+  // As many as the rasterizer keeps groups (raster/METHODS.md): a plan whose fastest axis
+  // alternates up to 4 groups keeps each one's context. ~22 MB each at 1920x1080.
+  static constexpr size_t kKeptContexts = 4;
+  std::list<std::pair<std::string, CompareContext>> contexts_;  // key -> context, most recently used first
+  int contextRows_ = 0, contextsBuilt_ = 0;
+  std::list<std::string> seen_;  // keys seen once, without a context yet
 
   ReferenceCache cache_;
   ReferenceOptions referenceOptions_;

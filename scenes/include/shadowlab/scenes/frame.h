@@ -40,7 +40,10 @@
 //
 // Metadata keys (meta): "kind" ("reference" | "raster"), "scene" (name), "scene_hash",
 // "camera_hash", "width", "height", "lights" (names), "projectors" (names); raster adds
-// "light" (the light it rendered), "method" (resolved method JSON), "device".
+// "light" (the light it rendered), "method" (resolved method JSON), "device"; frames rendered with
+// evidence on demand (raster.h) add "evidence" ("partial" when only the listed pixels' evidence is
+// there), "evidence_pixels" and "evidence_group" (the configurations whose hit, ids, m and cascade
+// planes are the same: compare's CompareContext keys on it).
 #include <string>
 #include <vector>
 

@@ -2,6 +2,7 @@
 // Per-pixel classification of shadow errors and the metrics built on it. Documented in
 // compare/METRICS.md (numerator, denominator, exclusions, sources). compare reads only Frames.
 #include <cstdint>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -99,6 +100,48 @@ nlohmann::json pixelClassesJson();
 // Throws InputError on mismatched sizes, scene hashes or missing channels.
 Metrics compareFrames(const Frame& reference, const Frame& raster, const CompareOptions& options = {},
                       Classification* classification = nullptr);
+
+// What compareFrames computes from the planes that do not change between the configurations of
+// one evidence-on-demand group (raster.h: frames rendered with a selector carry meta
+// "evidence_group", the same for every configuration sharing the light's layers: map size, fit,
+// light; only biases and filters differ): per pixel the scored class (not compared, geometry
+// mismatch), the reference decision and clamped visibility, the exact squared distance to the
+// nearest reference shadow boundary (pass 2's distance transform); per frame the compared count,
+// the reference's shadow count, the m statistics and each cascade's pixels and m_p95.
+// compareFrames(context, reference, raster) then reads the raster `vis` of every pixel and the
+// evidence only where the decisions disagree (compare/METRICS.md "Comparing a group": ~4x less
+// memory traffic at 1080p) and returns the same Metrics bit for bit.
+//
+// The guard: the context applies only to the reference it was built from (same frame object and
+// plane) and to a raster frame of the same size, light, options and non-empty evidence_group, with
+// the same optional planes (m, cascade); anything else (a frame without the key, projectors, a
+// projector-only scene, another group) goes through the full compareFrames. The group key is the
+// rasterizer's promise that hit, object_id, m and cascade are the same planes: a frame whose key
+// was copied onto other planes is the caller's fault and is not detected.
+class CompareContext;
+// The same Metrics (and classification) as compareFrames(reference, raster, context.options()),
+// from the context's planes where it applies to these frames, by the full path otherwise.
+Metrics compareFrames(const CompareContext& context, const Frame& reference, const Frame& raster,
+                      Classification* classification = nullptr);
+
+class CompareContext {
+ public:
+  CompareContext() = default;  // applies to nothing
+  // Throws what compareFrames(reference, raster, options) throws. Costs about two full
+  // compareFrames (the classification and the distance transform).
+  CompareContext(const Frame& reference, const Frame& raster, const CompareOptions& options = {});
+  // Whether compareFrames(*this, reference, raster) takes the fast path for these frames.
+  bool appliesTo(const Frame& reference, const Frame& raster) const;
+  const std::string& group() const;  // "" when the context applies to nothing
+  const CompareOptions& options() const;
+
+  struct Data;
+
+ private:
+  CompareOptions options_;  // also where the context applies to nothing: the full path's
+  std::shared_ptr<const Data> data_;
+  friend Metrics compareFrames(const CompareContext&, const Frame&, const Frame&, Classification*);
+};
 
 // Pictures (8-bit RGB, width*height*3): each class in its own color with a legend drawn in;
 // the triptych is reference | raster | errors side by side.
