@@ -6,7 +6,9 @@
 #include <cerrno>
 #include <chrono>
 #include <cstdlib>
+#include <algorithm>
 #include <filesystem>
+#include <memory>
 #include <optional>
 
 #include "shadowlab/compare/run_pipeline.h"
@@ -100,12 +102,24 @@ Frame ReferenceCache::get(const Scene& scene, const ReferenceOptions& requested,
 EvidenceSelector disagreementSelector(const Frame& reference, const std::string& light) {
   const std::string name = "light." + light + ".vis";
   if (light.empty() || !reference.has(name) || reference.get(name).size() != reference.pixelCount()) return {};
-  const float* refVis = reference.get(name).data();
-  const size_t n = reference.pixelCount();
-  return [refVis, n](const uint8_t* vis8, int width, int height, std::vector<uint32_t>& pixels) {
+  // The reference's decisions as bytes (1 lit, 0 shadowed), made once: a byte's decision is its
+  // top bit, so 32 pixels at a time are checked for any disagreement before any is listed.
+  const std::vector<float>& refVis = reference.get(name);
+  auto lit = std::make_shared<std::vector<uint8_t>>(refVis.size());
+  for (size_t i = 0; i < refVis.size(); ++i) (*lit)[i] = litDecision(refVis[i]) ? 1 : 0;
+  return [lit](const uint8_t* vis8, int width, int height, std::vector<uint32_t>& pixels) {
+    const size_t n = lit->size();
     if (size_t(width) * size_t(height) != n) return;  // another frame: the rasterizer's own pixels only
-    for (size_t i = 0; i < n; ++i)
-      if (litDecision(refVis[i]) != (vis8[i] >= 128)) pixels.push_back(uint32_t(i));
+    const uint8_t* ref = lit->data();
+    constexpr size_t kBlock = 32;
+    for (size_t b = 0; b < n; b += kBlock) {
+      const size_t e = std::min(n, b + kBlock);
+      uint8_t any = 0;
+      for (size_t i = b; i < e; ++i) any |= uint8_t((vis8[i] >> 7) ^ ref[i]);
+      if (!any) continue;
+      for (size_t i = b; i < e; ++i)
+        if ((vis8[i] >> 7) != ref[i]) pixels.push_back(uint32_t(i));
+    }
   };
 }
 

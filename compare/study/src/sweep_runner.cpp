@@ -45,9 +45,9 @@ class PipelineRunner final : public SweepRunner {
     const bool keep = !imagesDir.empty();
     // A row that keeps no pictures needs the metrics only: evidence on demand (raster.h), the
     // same metrics (tests/compare_on_demand_test.cpp). Pictures and --full-evidence: every channel.
-    const EvidenceSelector select =
-        keep || fullEvidence_ ? EvidenceSelector() : disagreementSelector(reference, options.light);
-    Frame raster = rasterizer().render(scene, method, light, &t, nullptr, select ? &select : nullptr);
+    const EvidenceSelector* select =
+        keep || fullEvidence_ ? nullptr : &selectorFor(referenceKey, reference, options.light);
+    Frame raster = rasterizer().render(scene, method, light, &t, nullptr, select && *select ? select : nullptr);
     Classification classification;
     const auto c0 = Clock::now();
     Metrics m = compareRow(referenceKey, reference, raster, options, keep ? &classification : nullptr);
@@ -107,6 +107,18 @@ class PipelineRunner final : public SweepRunner {
   }
 
  private:
+  // The disagreement selector of the reference and light, kept while they stay: it holds the
+  // reference's decisions as bytes, made once rather than per row.
+  const EvidenceSelector& selectorFor(const std::string& referenceKey, const Frame& reference,
+                                      const std::string& light) {
+    const std::string key = referenceKey + "\n" + light;
+    if (key != selectorKey_) {
+      selector_ = disagreementSelector(reference, light);
+      selectorKey_ = key;
+    }
+    return selector_;
+  }
+
   Rasterizer& rasterizer() {
     if (!rasterizer_) rasterizer_ = std::make_unique<Rasterizer>(deviceOptions_);
     return *rasterizer_;
@@ -179,6 +191,8 @@ class PipelineRunner final : public SweepRunner {
   static constexpr size_t kKeptContexts = 4;
   std::list<std::pair<std::string, CompareContext>> contexts_;  // key -> context, most recently used first
   int contextRows_ = 0, contextsBuilt_ = 0;
+  std::string selectorKey_;  // selectorFor: the reference hash and light of selector_
+  EvidenceSelector selector_;
   std::list<std::string> seen_;  // keys seen once, without a context yet
 
   ReferenceCache cache_;
