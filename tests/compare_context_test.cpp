@@ -16,6 +16,7 @@
 #include "shadowlab/reference/reference.h"
 #include "shadowlab/scenes/loader.h"
 #include "support/raster_device.h"
+#include "support/tiny_scenes.h"
 
 using namespace shadowlab;
 
@@ -23,27 +24,8 @@ namespace {
 
 using ContextOnFrames = shadowlab::testing::ValidatedRasterTest;
 
-Scene tinyScene(const std::string& name) {
-  Scene s = loadScene(resolveScenePath(name));
-  s.camera.width = 160;
-  s.camera.height = 90;
-  return s;
-}
-
-// The scene's first light made a spot (kind 1) or a point light (kind 2), as
-// tests/compare_on_demand_test.cpp places them.
-Scene withLight(Scene s, int kind) {
-  if (kind == 0) return s;
-  Light& l = s.lights.front();
-  const glm::vec3 lo = s.boundsMin(), hi = s.boundsMax();
-  const glm::vec3 centre = 0.5f * (lo + hi);
-  const float radius = 0.5f * glm::length(hi - lo);
-  l.position = centre - l.direction * (kind == 1 ? 1.6f : 1.2f) * radius;
-  l.type = kind == 1 ? LightType::Spot : LightType::Point;
-  l.coneDeg = 90.0f;
-  l.nearPlane = 0.02f * radius;
-  return s;
-}
+using shadowlab::testing::tinyScene;
+using shadowlab::testing::withLight;
 
 struct GroupCase {
   std::string what;

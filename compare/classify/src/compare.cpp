@@ -402,6 +402,31 @@ void setClassMetrics(Metrics& m, const PerPixelClass<uint64_t>& counts) {
 
 namespace {
 
+// One row's lower envelope of the parabolas (x - q)^2 + g[q]^2, q in [q0, q1) (Felzenszwalb &
+// Huttenlocher 2012): v[k] the k-th parabola's q, z[k]..z[k + 1] where it is the lowest. Both
+// distance transforms below (pass 2's, bounded to the candidates' reach, and CompareContext's
+// whole image) walk it left to right.
+template <typename T>
+void lowerEnvelope(const T* g, int q0, int q1, int* v, double* z) {
+  auto f = [&](int q) { return double(g[q]) * double(g[q]); };
+  auto intersect = [&](int q, int p) { return ((f(q) + double(q) * q) - (f(p) + double(p) * p)) / (2.0 * (q - p)); };
+  int k = 0;
+  v[0] = q0;
+  z[0] = -std::numeric_limits<double>::infinity();
+  z[1] = std::numeric_limits<double>::infinity();
+  for (int q = q0 + 1; q < q1; ++q) {
+    double sq = intersect(q, v[k]);
+    while (sq <= z[k]) {  // z[0] = -inf stops this at k = 0
+      --k;
+      sq = intersect(q, v[k]);
+    }
+    ++k;
+    v[k] = q;
+    z[k] = sq;
+    z[k + 1] = std::numeric_limits<double>::infinity();
+  }
+}
+
 // Pass 2: aliasing = remaining disagreements near a reference shadow boundary; resolves every
 // candidate of `klass` and adds its class to `counts`.
 // Boundary pixels: compared pixels with a 4-neighbour compared pixel of the other reference
@@ -516,23 +541,8 @@ void resolveCandidates(uint8_t* klass, const uint8_t* decision, const float* mPl
     int* v = rs.v.data();
     double* z = rs.z.data();
     auto f = [&](int q) { return double(grow[q]) * double(grow[q]); };
-    auto intersect = [&](int q, int p) { return ((f(q) + double(q) * q) - (f(p) + double(p) * p)) / (2.0 * (q - p)); };
+    lowerEnvelope(grow, q0, q1, v, z);
     int k = 0;
-    v[0] = q0;
-    z[0] = -std::numeric_limits<double>::infinity();
-    z[1] = std::numeric_limits<double>::infinity();
-    for (int q = q0 + 1; q < q1; ++q) {
-      double sq = intersect(q, v[k]);
-      while (sq <= z[k]) {  // z[0] = -inf stops this at k = 0
-        --k;
-        sq = intersect(q, v[k]);
-      }
-      ++k;
-      v[k] = q;
-      z[k] = sq;
-      z[k + 1] = std::numeric_limits<double>::infinity();
-    }
-    k = 0;
     for (int x = xFirst; x <= xLast; ++x) {
       while (z[k + 1] < x) ++k;
       if (krow[x] < kFirstCandidate) continue;  // not a candidate, or resolved above
@@ -907,23 +917,8 @@ void boundaryDistances(const uint8_t* decision, int width, int height, std::vect
     int* v = rs.v.data();
     double* z = rs.z.data();
     auto f = [&](int q) { return double(grow[q]) * double(grow[q]); };
-    auto intersect = [&](int q, int p) { return ((f(q) + double(q) * q) - (f(p) + double(p) * p)) / (2.0 * (q - p)); };
+    lowerEnvelope(grow, 0, width, v, z);
     int k = 0;
-    v[0] = 0;
-    z[0] = -std::numeric_limits<double>::infinity();
-    z[1] = std::numeric_limits<double>::infinity();
-    for (int q = 1; q < width; ++q) {
-      double sq = intersect(q, v[k]);
-      while (sq <= z[k]) {
-        --k;
-        sq = intersect(q, v[k]);
-      }
-      ++k;
-      v[k] = q;
-      z[k] = sq;
-      z[k + 1] = std::numeric_limits<double>::infinity();
-    }
-    k = 0;
     uint32_t* orow = out.data() + size_t(y) * width;
     for (int x = 0; x < width; ++x) {
       while (z[k + 1] < x) ++k;
