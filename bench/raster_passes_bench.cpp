@@ -54,7 +54,7 @@ void passes(benchmark::State& state, Filter filter, int copies) {
 
 // The lookup pass alone (pass 4: the method's visibility, 1 byte per pixel), as evidence on demand
 // runs it per configuration, on sphere_on_plane at 1920x1080 with a 2048^2 map: the iteration time
-// is lookup_gpu_ms. `edit` switches a bias on (the receiver plane, the normal offset), so the cost
+// is lookup_gpu_ms. `edit` switches a bias on (1 the receiver plane, 2 the normal offset; 3: pcf 5), so the cost
 // of each specialization shows beside the default's.
 void lookup(benchmark::State& state, Filter filter, int edit) {
   static const Scene s = [] {
@@ -68,6 +68,7 @@ void lookup(benchmark::State& state, Filter filter, int edit) {
   m.filter = filter;
   m.biasReceiverPlane = edit == 1;
   m.biasNormal = edit == 2 ? 1.0f : 0.0f;
+  if (edit == 3) m.filterSize = 5;
   const EvidenceSelector none = [](const uint8_t*, int, int, std::vector<uint32_t>&) {};
   RasterTimings t;
   for (int i = 0; i < 2; ++i)  // warm-up: pipelines, upload, the group's planes
@@ -103,6 +104,8 @@ BENCHMARK_CAPTURE(lookup, none_sphere, Filter::None, 0)->UseManualTime()->Unit(b
 BENCHMARK_CAPTURE(lookup, hw2x2_sphere, Filter::Hw2x2, 0)->UseManualTime()->Unit(benchmark::kMillisecond);
 BENCHMARK_CAPTURE(lookup, none_sphere_receiver_plane, Filter::None, 1)->UseManualTime()->Unit(benchmark::kMillisecond);
 BENCHMARK_CAPTURE(lookup, none_sphere_normal_offset, Filter::None, 2)->UseManualTime()->Unit(benchmark::kMillisecond);
+BENCHMARK_CAPTURE(lookup, pcf3_sphere, Filter::Pcf, 0)->UseManualTime()->Unit(benchmark::kMillisecond);
+BENCHMARK_CAPTURE(lookup, pcf5_sphere, Filter::Pcf, 3)->UseManualTime()->Unit(benchmark::kMillisecond);
 
 #define SHADOWLAB_PASSES(filter, name)                                                                \
   BENCHMARK_CAPTURE(passes, name##_bunny, filter, 1)->UseManualTime()->Unit(benchmark::kMillisecond); \

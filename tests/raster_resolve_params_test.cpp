@@ -144,6 +144,11 @@ TEST(RasterResolveParams, MethodFieldsLandWhereTheShaderReadsThem) {
   EXPECT_EQ(resolveSpecialization(s, &s.lights[0], plain, layers)[raster::abi::kSpecNormalOffset], 0u);
   plain.biasNormal = -0.5f;  // any offset, either way
   EXPECT_EQ(resolveSpecialization(s, &s.lights[0], plain, layers)[raster::abi::kSpecNormalOffset], 1u);
+  // pcf's size is compiled in (its loops unroll); every other filter shares the pipelines of 0.
+  EXPECT_EQ(resolveSpecialization(s, &s.lights[0], plain, layers)[raster::abi::kSpecPcfSize], 0u);
+  plain.filter = Filter::Pcf;
+  plain.filterSize = 7;
+  EXPECT_EQ(resolveSpecialization(s, &s.lights[0], plain, layers)[raster::abi::kSpecPcfSize], 7u);
   EXPECT_EQ(prm.depthBias, glm::vec4(2.0f, 3.0f, 0.01f, std::ldexp(1.0f, -16)));
   EXPECT_EQ(prm.sizes, glm::ivec4(1024, 1, 0, m.filterSize));
   EXPECT_EQ(prm.sizes2, glm::ivec4(160, 120, 24, 0));

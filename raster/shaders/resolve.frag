@@ -41,6 +41,7 @@ layout(constant_id = kSpecAdaptive) const bool kAdaptive = false;
 // bias.normal = 0 the offset point is the visible point, and a zero slope adds zero.
 layout(constant_id = kSpecReceiverPlane) const bool kReceiverPlane = false;
 layout(constant_id = kSpecNormalOffset) const bool kNormalOffset = false;
+layout(constant_id = kSpecPcfSize) const int kPcfSize = 1;
 // The lookup pass: what an engine pays for the method, the same lookup and filter as the resolve
 // (shadeLight below) with only the visibility written, 1 byte per pixel into outA's R8 attachment;
 // the unread evidence is dead code the compiler removes.
@@ -269,7 +270,7 @@ float filterVisibility(Lookup L) {
   } else if (kFilter == kFilterPcf) {
     // The (2h + 1)^2 taps as 2x2 gathers; the last row and column of gathers use half their
     // texels. The sum counts whole taps, so its order does not change it.
-    int h = PLoops.sizes.w / 2;  // not P's: see ParamsLoops in resolve_abi.h
+    const int h = kPcfSize / 2;  // a constant: the loops unroll (never a uniform-buffer bound: ParamsLoops)
     float sum = 0.0;
     for (int by = -h; by <= h; by += 2)
       for (int bx = -h; bx <= h; bx += 2) {

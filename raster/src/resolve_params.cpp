@@ -160,6 +160,7 @@ ResolveSpecialization resolveSpecialization(const Scene& scene, const Light* lig
   // uniform-buffer value, so their code costs every pixel even when off.
   spec[abi::kSpecReceiverPlane] = method.biasReceiverPlane ? 1u : 0u;
   spec[abi::kSpecNormalOffset] = method.biasNormal != 0.0f ? 1u : 0u;
+  spec[abi::kSpecPcfSize] = method.filter == Filter::Pcf ? uint32_t(method.filterSize) : 0u;
   return spec;
 }
 

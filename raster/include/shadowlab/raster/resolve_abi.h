@@ -66,7 +66,10 @@ SHADOWLAB_CONST(int, kSpecReceiverPlane, 11)
 // 0/1: bias.normal != 0 (the normal-offset lookup point). Off, the lookup point is the visible
 // point itself: one projection instead of two.
 SHADOWLAB_CONST(int, kSpecNormalOffset, 12)
-SHADOWLAB_CONST(int, kSpecCount, 13)
+// filter=pcf: filter.size (0 for the other filters, so they share pipelines). A compile-time loop
+// bound lets the compiler unroll pcf's gathers; a sweep over filter.size compiles a pipeline per size.
+SHADOWLAB_CONST(int, kSpecPcfSize, 13)
+SHADOWLAB_CONST(int, kSpecCount, 14)
 
 // The descriptor set (set 0), one row per binding: X(Name, binding, kind). The kinds name
 // Vulkan descriptor types (rasterizer.cpp maps them); the set layout, the pool and the writes
@@ -114,7 +117,7 @@ SHADOWLAB_BLOCK(Params) {
   vec4 bias;       // x compare (depth), y normal (texels; on: kSpecNormalOffset), z receiver plane (0/1; the shader
                    // takes it from kSpecReceiverPlane), w poisson radius (texels)
   vec4 depthBias;  // x constant factor, y slope factor, z clamp, w r of the format (0: float format)
-  ivec4 sizes;     // x map size, y light layers, z projector count, w pcf size
+  ivec4 sizes;     // x map size, y light layers, z projector count, w pcf size (the shader reads kSpecPcfSize)
   ivec4 sizes2;    // x width, y height, z poisson taps, w reverse guard (0/1)
   ivec4 projector[kMaxProjectors];    // x first texel in projectorTexels, y width, z height, w layer
   vec4 poisson[kMaxTaps];             // xy: unit-disc offsets
@@ -141,7 +144,7 @@ SHADOWLAB_CONST(int, kParamsCascadeViewOffset, 2720)  // Params::cascadeView
 SHADOWLAB_CONST(int, kParamsMoments2Offset, 2800)     // Params::moments2
 #ifndef __cplusplus
 layout(std140, set = 0, binding = kBindingParamsLoops) readonly buffer ParamsLoops {
-  layout(offset = kParamsSizesOffset) ivec4 sizes;             // w: the pcf size
+  layout(offset = kParamsSizesOffset) ivec4 sizes;             // (w, the pcf size, is kSpecPcfSize)
   ivec4 sizes2;                                                // z: the Poisson taps
   layout(offset = kParamsCascadeViewOffset) vec4 cascadeView;  // w: the cascade count
   layout(offset = kParamsMoments2Offset) vec4 moments2;        // y: filter.blur (radius, texels)
