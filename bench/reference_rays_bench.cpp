@@ -112,6 +112,25 @@ struct ShadowPacket {
   float org[3][8], dir[3][8], tfar[8];
 };
 
+// A stored packet as Embree's ray packet: what every bare shadow loop below does first.
+inline void fillRay8(const ShadowPacket& packet, RTCRay8& ray, int valid[8]) {
+  for (int lane = 0; lane < 8; ++lane) {
+    valid[lane] = packet.valid[lane];
+    ray.org_x[lane] = packet.org[0][lane];
+    ray.org_y[lane] = packet.org[1][lane];
+    ray.org_z[lane] = packet.org[2][lane];
+    ray.dir_x[lane] = packet.dir[0][lane];
+    ray.dir_y[lane] = packet.dir[1][lane];
+    ray.dir_z[lane] = packet.dir[2][lane];
+    ray.tnear[lane] = 0;
+    ray.tfar[lane] = packet.tfar[lane];
+    ray.mask[lane] = ~0u;
+    ray.time[lane] = 0;
+    ray.id[lane] = lane;
+    ray.flags[lane] = 0;
+  }
+}
+
 // A plain Embree scene of the same triangles: no filter functions; robust only when asked.
 struct BareScene {
   RTCDevice device = nullptr;
@@ -225,22 +244,8 @@ double bareClosest(const std::vector<ShadowPacket>& packets, RTCScene scene) {
   for (const ShadowPacket& packet : packets) {
     RTCRayHit8 rh;
     alignas(32) int valid[8];
-    for (int lane = 0; lane < 8; ++lane) {
-      valid[lane] = packet.valid[lane];
-      rh.ray.org_x[lane] = packet.org[0][lane];
-      rh.ray.org_y[lane] = packet.org[1][lane];
-      rh.ray.org_z[lane] = packet.org[2][lane];
-      rh.ray.dir_x[lane] = packet.dir[0][lane];
-      rh.ray.dir_y[lane] = packet.dir[1][lane];
-      rh.ray.dir_z[lane] = packet.dir[2][lane];
-      rh.ray.tnear[lane] = 0;
-      rh.ray.tfar[lane] = packet.tfar[lane];
-      rh.ray.mask[lane] = ~0u;
-      rh.ray.time[lane] = 0;
-      rh.ray.id[lane] = lane;
-      rh.ray.flags[lane] = 0;
-      rh.hit.geomID[lane] = RTC_INVALID_GEOMETRY_ID;
-    }
+    fillRay8(packet, rh.ray, valid);
+    for (int lane = 0; lane < 8; ++lane) rh.hit.geomID[lane] = RTC_INVALID_GEOMETRY_ID;
     rtcIntersect8(valid, scene, &context, &rh);
     benchmark::DoNotOptimize(rh.hit.geomID[0]);
   }
@@ -256,21 +261,7 @@ double bareShadowSetup(const std::vector<ShadowPacket>& packets) {
   for (const ShadowPacket& packet : packets) {
     RTCRay8 ray;
     alignas(32) int valid[8];
-    for (int lane = 0; lane < 8; ++lane) {
-      valid[lane] = packet.valid[lane];
-      ray.org_x[lane] = packet.org[0][lane];
-      ray.org_y[lane] = packet.org[1][lane];
-      ray.org_z[lane] = packet.org[2][lane];
-      ray.dir_x[lane] = packet.dir[0][lane];
-      ray.dir_y[lane] = packet.dir[1][lane];
-      ray.dir_z[lane] = packet.dir[2][lane];
-      ray.tnear[lane] = 0;
-      ray.tfar[lane] = packet.tfar[lane];
-      ray.mask[lane] = ~0u;
-      ray.time[lane] = 0;
-      ray.id[lane] = lane;
-      ray.flags[lane] = 0;
-    }
+    fillRay8(packet, ray, valid);
     benchmark::DoNotOptimize(valid);
     benchmark::DoNotOptimize(ray);
     benchmark::ClobberMemory();
@@ -286,21 +277,7 @@ double bareOccluded(const std::vector<ShadowPacket>& packets, RTCScene scene) {
   for (const ShadowPacket& packet : packets) {
     RTCRay8 ray;
     alignas(32) int valid[8];
-    for (int lane = 0; lane < 8; ++lane) {
-      valid[lane] = packet.valid[lane];
-      ray.org_x[lane] = packet.org[0][lane];
-      ray.org_y[lane] = packet.org[1][lane];
-      ray.org_z[lane] = packet.org[2][lane];
-      ray.dir_x[lane] = packet.dir[0][lane];
-      ray.dir_y[lane] = packet.dir[1][lane];
-      ray.dir_z[lane] = packet.dir[2][lane];
-      ray.tnear[lane] = 0;
-      ray.tfar[lane] = packet.tfar[lane];
-      ray.mask[lane] = ~0u;
-      ray.time[lane] = 0;
-      ray.id[lane] = lane;
-      ray.flags[lane] = 0;
-    }
+    fillRay8(packet, ray, valid);
     rtcOccluded8(valid, scene, &context, &ray);
     benchmark::DoNotOptimize(ray.tfar[0]);
   }
