@@ -16,8 +16,11 @@
 #include "support/reference_score.h"
 
 using namespace shadowlab;
+using shadowlab::testing::AlongTheLightCase;
+using shadowlab::testing::alongTheLightCases;
 using shadowlab::testing::alongTheLightScene;
 using shadowlab::testing::expectAllFinite;
+using shadowlab::testing::expectSameFrame;
 using shadowlab::testing::expectSameGeometry;
 using shadowlab::testing::fitted;
 using shadowlab::testing::poleBehindScene;
@@ -84,26 +87,14 @@ TEST_F(LispsmVsReference, LowerFootprintThanTightOnLongView) {
 // finite, and its shadows agree with the reference as tight's do.
 TEST_F(LispsmVsReference, ViewAlongTheLightFallsBackToTight) {
   REQUIRE_DEVICE();
-  struct Case {
-    const char* name;
-    const char* light;     // direction of travel
-    const char* position;  // camera
-    const char* lookAt;
-    bool exact;  // exactly along the light: the same frame as tight
-  } cases[] = {
-      {"down_down", "[0, -1, 0]", "[0.5, 12, 0.25]", "[0.5, 0, 0.25]", true},
-      {"down_up", "[0, 1, 0]", "[0.5, 12, 0.25]", "[0.5, 0, 0.25]", true},
-      {"tilted", "[0.3, -1, 0.2]", "[-3, 10, -2]", "[0, 0, 0]", true},
-      {"one_degree", "[0, -1, 0]", "[0.2905, 12, 0.25]", "[0.5, 0, 0.25]", false},
-      {"ten_degrees", "[0, -1, 0]", "[-1.616, 12, 0.25]", "[0.5, 0, 0.25]", false},
-  };
-  for (const Case& c : cases) {
+  std::vector<AlongTheLightCase> cases = alongTheLightCases();
+  cases.push_back({"ten_degrees", "[0, -1, 0]", "[-1.616, 12, 0.25]", "[0.5, 0, 0.25]", false});
+  for (const AlongTheLightCase& c : cases) {
     Scene s = alongTheLightScene(c.name, c.light, c.position, c.lookAt, 320, 180);
     Frame ft = R->render(s, fitted(Fit::Tight)), fl = R->render(s, fitted(Fit::Lispsm));
     expectAllFinite(fl, c.name);
     if (c.exact) {
-      for (size_t k = 0; k < ft.names.size(); ++k)
-        EXPECT_EQ(ft.data[k], fl.get(ft.names[k])) << c.name << ": " << ft.names[k];
+      expectSameFrame(ft, fl, c.name);
       continue;
     }
     Frame ref = renderReference(s, ReferenceOptions{});

@@ -18,8 +18,11 @@
 #include "support/reference_score.h"
 
 using namespace shadowlab;
+using shadowlab::testing::AlongTheLightCase;
+using shadowlab::testing::alongTheLightCases;
 using shadowlab::testing::alongTheLightScene;
 using shadowlab::testing::expectAllFinite;
+using shadowlab::testing::expectSameFrame;
 using shadowlab::testing::fitted;
 using shadowlab::testing::sceneFromText;
 using shadowlab::testing::Score;
@@ -133,25 +136,13 @@ TEST_F(TsmVsReference, LowerFootprintThanTightOnLongViewsFloor) {
 // center line and the fit is fit=tight's: the same frame, bit for bit, as fit=lispsm falls back.
 TEST_F(TsmVsReference, ViewAlongTheLightFallsBackToTight) {
   REQUIRE_DEVICE();
-  struct Case {
-    const char* name;
-    const char* light;
-    const char* position;
-    const char* lookAt;
-    bool exact;  // exactly along the light: the same frame as tight
-  } cases[] = {
-      {"down_down", "[0, -1, 0]", "[0.5, 12, 0.25]", "[0.5, 0, 0.25]", true},
-      {"down_up", "[0, 1, 0]", "[0.5, 12, 0.25]", "[0.5, 0, 0.25]", true},
-      {"tilted", "[0.3, -1, 0.2]", "[-3, 10, -2]", "[0, 0, 0]", true},
-      {"one_degree", "[0, -1, 0]", "[0.2905, 12, 0.25]", "[0.5, 0, 0.25]", false},
-  };
-  for (const Case& c : cases) {
+  std::vector<AlongTheLightCase> cases = alongTheLightCases();
+  for (const AlongTheLightCase& c : cases) {
     Scene s = alongTheLightScene(c.name, c.light, c.position, c.lookAt, 160, 90);
     Frame ft = R->render(s, fitted(Fit::Tight)), fs = R->render(s, fitted(Fit::Tsm));
     expectAllFinite(fs, c.name);
     if (c.exact) {
-      for (size_t k = 0; k < ft.names.size(); ++k)
-        EXPECT_EQ(ft.data[k], fs.get(ft.names[k])) << c.name << ": " << ft.names[k];
+      expectSameFrame(ft, fs, c.name);
       continue;
     }
     // One degree off: the trapezoid is built (the frames differ) and still agrees with the

@@ -9,6 +9,7 @@
 #include <filesystem>
 #include <fstream>
 #include <string>
+#include <vector>
 
 #include "shadowlab/scenes/frame.h"
 #include "shadowlab/scenes/loader.h"
@@ -63,6 +64,30 @@ inline Scene alongTheLightScene(const std::string& name, const std::string& ligh
   "lights": [{"type": "directional", "name": "sun", "direction": )" +
                                  light + R"(}]
 })");
+}
+
+// The fall-back tests' views of alongTheLightScene: exactly along the light (either way, or
+// tilted with it: a warped fit must give tight's frame) and one degree off it (the warp is built).
+struct AlongTheLightCase {
+  const char* name;
+  const char* light;     // direction of travel
+  const char* position;  // camera
+  const char* lookAt;
+  bool exact;  // exactly along the light: the same frame as tight
+};
+inline std::vector<AlongTheLightCase> alongTheLightCases() {
+  return {
+      {"down_down", "[0, -1, 0]", "[0.5, 12, 0.25]", "[0.5, 0, 0.25]", true},
+      {"down_up", "[0, 1, 0]", "[0.5, 12, 0.25]", "[0.5, 0, 0.25]", true},
+      {"tilted", "[0.3, -1, 0.2]", "[-3, 10, -2]", "[0, 0, 0]", true},
+      {"one_degree", "[0, -1, 0]", "[0.2905, 12, 0.25]", "[0.5, 0, 0.25]", false},
+  };
+}
+
+// Every channel of `tight` equal in `other`, bit for bit (the fall-back to tight's matrix).
+inline void expectSameFrame(const Frame& tight, const Frame& other, const std::string& what) {
+  for (size_t k = 0; k < tight.names.size(); ++k)
+    EXPECT_EQ(tight.data[k], other.get(tight.names[k])) << what << ": " << tight.names[k];
 }
 
 // A pole behind the camera (outside the view frustum) whose shadow falls forward into view: camera
