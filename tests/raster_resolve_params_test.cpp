@@ -5,6 +5,7 @@
 #include <cmath>
 
 #include "shadowlab/raster/resolve_params.h"
+#include "support/quad.h"
 
 using namespace shadowlab;
 using namespace shadowlab::raster;
@@ -16,17 +17,8 @@ Scene roofScene() {
   Scene s;
   s.name = "roof";
   s.materials.push_back(Material{});
-  auto quad = [&](uint32_t id, glm::vec3 corner, glm::vec3 u, glm::vec3 v) {
-    Object o;
-    o.name = "quad" + std::to_string(id);
-    o.id = id;
-    o.positions = {corner, corner + u, corner + u + v, corner + v};
-    o.triangles = {{0, 1, 2}, {0, 2, 3}};
-    o.triangleMaterial = {0, 0};
-    s.objects.push_back(o);
-  };
-  quad(1, {-5, 0, 5}, {10, 0, 0}, {0, 0, -10});
-  quad(2, {-1, 1, 1}, {2, 0, 0}, {0, 0, -2});
+  shadowlab::testing::addQuad(s, 1, {-5, 0, 5}, {10, 0, 0}, {0, 0, -10});
+  shadowlab::testing::addQuad(s, 2, {-1, 1, 1}, {2, 0, 0}, {0, 0, -2});
   s.camera.position = {0, 6, 6};
   s.camera.lookAt = {0, 0, 0};
   s.camera.width = 160;

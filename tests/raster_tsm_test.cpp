@@ -12,6 +12,7 @@
 #include "shadowlab/raster/lispsm.h"
 #include "shadowlab/raster/resolve_params.h"
 #include "shadowlab/raster/tsm.h"
+#include "support/quad.h"
 
 using namespace shadowlab;
 using namespace shadowlab::raster;
@@ -180,17 +181,8 @@ Scene groundScene(glm::vec3 cameraPosition, glm::vec3 lookAt, glm::vec3 lightDir
   Scene s;
   s.name = "ground";
   s.materials.push_back(Material{});
-  auto quad = [&](uint32_t id, glm::vec3 corner, glm::vec3 u, glm::vec3 v) {
-    Object o;
-    o.name = "quad" + std::to_string(id);
-    o.id = id;
-    o.positions = {corner, corner + u, corner + u + v, corner + v};
-    o.triangles = {{0, 1, 2}, {0, 2, 3}};
-    o.triangleMaterial = {0, 0};
-    s.objects.push_back(o);
-  };
-  quad(1, {-10, 0, 10}, {20, 0, 0}, {0, 0, -20});
-  quad(2, {-1, 2, 1}, {2, 0, 0}, {0, 0, -2});
+  shadowlab::testing::addQuad(s, 1, {-10, 0, 10}, {20, 0, 0}, {0, 0, -20});
+  shadowlab::testing::addQuad(s, 2, {-1, 2, 1}, {2, 0, 0}, {0, 0, -2});
   s.camera.position = cameraPosition;
   s.camera.lookAt = lookAt;
   s.camera.up = {0, 0, -1};
