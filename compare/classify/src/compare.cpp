@@ -402,6 +402,16 @@ void setClassMetrics(Metrics& m, const PerPixelClass<uint64_t>& counts) {
 
 namespace {
 
+// Whether pixel x of row d (rows du above, dd below: d itself at the image's edge) is a boundary
+// pixel: compared, with a compared 4-neighbour of the other decision. Decisions are 1 (lit) and 2
+// (shadowed), 0 for not compared: two pixels hold different decisions, both compared, exactly
+// when their xor is 3.
+inline bool isBoundary(const uint8_t* d, const uint8_t* du, const uint8_t* dd, int x, int width) {
+  const uint8_t c = d[x];
+  return (c ^ du[x]) == 3 || (c ^ dd[x]) == 3 || (x > 0 && (c ^ d[x - 1]) == 3) ||
+         (x + 1 < width && (c ^ d[x + 1]) == 3);
+}
+
 // One row's lower envelope of the parabolas (x - q)^2 + g[q]^2, q in [q0, q1) (Felzenszwalb &
 // Huttenlocher 2012): v[k] the k-th parabola's q, z[k]..z[k + 1] where it is the lowest. Both
 // distance transforms below (pass 2's, bounded to the candidates' reach, and CompareContext's
@@ -490,11 +500,7 @@ void resolveCandidates(uint8_t* klass, const uint8_t* decision, const float* mPl
       uint16_t* row = g + size_t(y) * width;
       const uint16_t* above = y > y0 ? row - width : nullptr;
       for (int x = x0; x < x1; ++x) {
-        // Decisions are 1 (lit) and 2 (shadowed), 0 for not compared: two pixels hold
-        // different decisions, both compared, exactly when their xor is 3.
-        const uint8_t c = d[x];
-        const bool boundary = (c ^ du[x]) == 3 || (c ^ dd[x]) == 3 || (x > 0 && (c ^ d[x - 1]) == 3) ||
-                              (x + 1 < width && (c ^ d[x + 1]) == 3);
+        const bool boundary = isBoundary(d, du, dd, x, width);
         const uint16_t up = above ? uint16_t(std::min<int>(far, above[x] + 1)) : far;
         row[x] = boundary ? uint16_t(0) : up;
       }
@@ -888,9 +894,7 @@ void boundaryDistances(const uint8_t* decision, int width, int height, std::vect
       uint32_t* row = g.data() + size_t(y) * width;
       const uint32_t* above = y > 0 ? row - width : nullptr;
       for (int x = x0; x < x1; ++x) {
-        const uint8_t c = d[x];
-        const bool boundary = (c ^ du[x]) == 3 || (c ^ dd[x]) == 3 || (x > 0 && (c ^ d[x - 1]) == 3) ||
-                              (x + 1 < width && (c ^ d[x + 1]) == 3);
+        const bool boundary = isBoundary(d, du, dd, x, width);
         columnHasBoundary[size_t(x)] |= boundary;
         row[x] = boundary ? 0u : above ? std::min(none, above[x] + 1) : none;
       }
