@@ -8,6 +8,10 @@
 // The bare program draws the whole scene with one indexed draw from a position-only vertex buffer
 // and no per-pixel evidence: it is what the rasterizer's numbers are compared with, not a mode of it.
 //
+// versusBare also times bare shadow passes that write the object of each draw into a D24S8 or
+// D32FS8 map's stencil (bare_stencil_shadow_gpu_ms, bare_stencil32_shadow_gpu_ms, beside depth-only
+// passes timed in between): what shadowlab's stencil ids cost on evidence-on-demand frames.
+//
 // harnessVsBare: the whole per-configuration yardstick, the bare harness (that shadow pass,
 // that camera pass writing 1 byte (R8) of visibility per pixel, a 1-byte-per-pixel readback, a CPU
 // count of the pixels that disagree with the reference) against shadowlab's configuration as a sweep
@@ -128,6 +132,19 @@ class BareProgram {
     shadowIdsPipe_ =
         pipeline(shadowVert_.get(), shadowIdsFrag_.get(), {VK_FORMAT_R32_UINT}, VK_FORMAT_X8_D24_UNORM_PACK32, true);
     cameraPipe_ = pipeline(cameraVert_.get(), cameraFrag_.get(), {VK_FORMAT_R8_UNORM}, VK_FORMAT_D32_SFLOAT, false);
+    {
+      vk::GraphicsPipelineDesc p;
+      p.vertex = shadowVert_.get();
+      p.fragment = shadowFrag_.get();
+      p.layout = layout;
+      p.bindings = {{0, 3 * sizeof(float), VK_VERTEX_INPUT_RATE_VERTEX}};
+      p.attributes = {{0, 0, VK_FORMAT_R32G32B32_SFLOAT, 0}};
+      p.depthFormat = p.stencilFormat = VK_FORMAT_D24_UNORM_S8_UINT;
+      p.depthBias = true;
+      shadowStencilPipe_ = vk::createGraphicsPipeline(c, p);
+      p.depthFormat = p.stencilFormat = VK_FORMAT_D32_SFLOAT_S8_UINT;
+      shadowStencil32Pipe_ = vk::createGraphicsPipeline(c, p);
+    }
     for (int linear = 0; linear < 2; ++linear) {
       VkSamplerCreateInfo s{VK_STRUCTURE_TYPE_SAMPLER_CREATE_INFO};
       s.magFilter = s.minFilter = linear ? VK_FILTER_LINEAR : VK_FILTER_NEAREST;
@@ -182,6 +199,12 @@ class BareProgram {
                   VK_IMAGE_USAGE_DEPTH_STENCIL_ATTACHMENT_BIT | VK_IMAGE_USAGE_SAMPLED_BIT, VK_IMAGE_ASPECT_DEPTH_BIT);
     mapIds_ = vk::Image(c_, kMapSize, kMapSize, 1, VK_FORMAT_R32_UINT, VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT,
                         VK_IMAGE_ASPECT_COLOR_BIT);
+    mapStencil_ = vk::Image(c_, kMapSize, kMapSize, 1, VK_FORMAT_D24_UNORM_S8_UINT,
+                            VK_IMAGE_USAGE_DEPTH_STENCIL_ATTACHMENT_BIT | VK_IMAGE_USAGE_SAMPLED_BIT,
+                            VK_IMAGE_ASPECT_DEPTH_BIT | VK_IMAGE_ASPECT_STENCIL_BIT);
+    mapStencil32_ = vk::Image(c_, kMapSize, kMapSize, 1, VK_FORMAT_D32_SFLOAT_S8_UINT,
+                              VK_IMAGE_USAGE_DEPTH_STENCIL_ATTACHMENT_BIT | VK_IMAGE_USAGE_SAMPLED_BIT,
+                              VK_IMAGE_ASPECT_DEPTH_BIT | VK_IMAGE_ASPECT_STENCIL_BIT);
     // 1 byte of visibility per pixel, host-readable: readback() and coverage() read it in place.
     color_ = vk::Image(c_, width_, height_, 1, VK_FORMAT_R8_UNORM, VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT,
                        VK_IMAGE_ASPECT_COLOR_BIT, true);
@@ -253,6 +276,57 @@ class BareProgram {
     return {double(t[1] - t[0]) * ms, double(t[2] - t[1]) * ms};
   }
 
+  // The shadow pass alone into a depth+stencil map, the draw split into `draws` parts each writing
+  // its own stencil reference (the object id): its GPU time.
+  double stencilShadow(int draws, bool d32) {
+    const vk::Image& map = d32 ? mapStencil32_ : mapStencil_;
+    VkCommandBuffer cmd = commands_.begin();
+    VkQueryPool pool = queries_.get();
+    vkCmdResetQueryPool(cmd, pool, 0, 3);
+    vkCmdWriteTimestamp2(cmd, VK_PIPELINE_STAGE_2_TOP_OF_PIPE_BIT, pool, 0);
+    VkDeviceSize offset = 0;
+    VkBuffer vb = vertices_.get();
+    vkCmdBindVertexBuffers(cmd, 0, 1, &vb, &offset);
+    vkCmdBindIndexBuffer(cmd, indices_.get(), 0, VK_INDEX_TYPE_UINT32);
+    vk::transition(cmd, map, VK_IMAGE_LAYOUT_UNDEFINED, VK_IMAGE_LAYOUT_DEPTH_STENCIL_ATTACHMENT_OPTIMAL,
+                   VK_PIPELINE_STAGE_2_FRAGMENT_SHADER_BIT, 0, VK_PIPELINE_STAGE_2_EARLY_FRAGMENT_TESTS_BIT,
+                   VK_ACCESS_2_DEPTH_STENCIL_ATTACHMENT_WRITE_BIT);
+    VkRenderingAttachmentInfo d{VK_STRUCTURE_TYPE_RENDERING_ATTACHMENT_INFO};
+    d.imageView = map.layerView(0);
+    d.imageLayout = VK_IMAGE_LAYOUT_DEPTH_STENCIL_ATTACHMENT_OPTIMAL;
+    d.loadOp = VK_ATTACHMENT_LOAD_OP_CLEAR;
+    d.storeOp = VK_ATTACHMENT_STORE_OP_STORE;
+    d.clearValue.depthStencil = {1.0f, 0};
+    VkRenderingInfo info{VK_STRUCTURE_TYPE_RENDERING_INFO};
+    info.renderArea = {{0, 0}, {uint32_t(kMapSize), uint32_t(kMapSize)}};
+    info.layerCount = 1;
+    info.pDepthAttachment = &d;
+    info.pStencilAttachment = &d;
+    vkCmdBeginRendering(cmd, &info);
+    VkViewport viewport{0, 0, float(kMapSize), float(kMapSize), 0.0f, 1.0f};
+    VkRect2D scissor{{0, 0}, {uint32_t(kMapSize), uint32_t(kMapSize)}};
+    vkCmdSetViewport(cmd, 0, 1, &viewport);
+    vkCmdSetScissor(cmd, 0, 1, &scissor);
+    vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_GRAPHICS, (d32 ? shadowStencil32Pipe_ : shadowStencilPipe_).get());
+    vkCmdSetCullMode(cmd, VK_CULL_MODE_NONE);
+    vkCmdSetDepthBias(cmd, 1.0f, 0.0f, 1.0f);
+    Push p{lightClip_, lightTex_};
+    vkCmdPushConstants(cmd, layout_.get(), VK_SHADER_STAGE_VERTEX_BIT, 0, sizeof(p), &p);
+    uint32_t per = (indexCount_ / 3 + uint32_t(draws) - 1) / uint32_t(draws) * 3;
+    for (int k = 0; k < draws; ++k) {
+      uint32_t first = uint32_t(k) * per, count = std::min(per, indexCount_ - std::min(indexCount_, first));
+      vkCmdSetStencilReference(cmd, VK_STENCIL_FACE_FRONT_AND_BACK, uint32_t(k + 1));
+      if (count) vkCmdDrawIndexed(cmd, count, 1, first, 0, 0);
+    }
+    vkCmdEndRendering(cmd);
+    vkCmdWriteTimestamp2(cmd, VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT, pool, 1);
+    commands_.submitAndWait();
+    uint64_t t[2];
+    VK_CHECK(vkGetQueryPoolResults(c_.device(), pool, 0, 2, sizeof(t), t, sizeof(uint64_t),
+                                   VK_QUERY_RESULT_64_BIT | VK_QUERY_RESULT_WAIT_BIT));
+    return double(t[1] - t[0]) * c_.properties().limits.timestampPeriod * 1e-6;
+  }
+
   // Of the image's pixels, the fraction drawn (not the clear value) and, of those, the fraction in
   // shadow: evidence that the bare program renders the scene and looks its map up.
   std::pair<double, double> coverage() const {
@@ -312,14 +386,14 @@ class BareProgram {
   vk::DescriptorPool pool_;
   VkDescriptorSet set_ = VK_NULL_HANDLE;
   vk::ShaderModule shadowVert_, shadowFrag_, shadowIdsFrag_, cameraVert_, cameraFrag_;
-  vk::PipelineHandle shadowPipe_, shadowIdsPipe_, cameraPipe_;
+  vk::PipelineHandle shadowPipe_, shadowIdsPipe_, cameraPipe_, shadowStencilPipe_, shadowStencil32Pipe_;
   vk::Sampler samplers_[2];
   vk::QueryPool queries_;
   vk::Buffer vertices_, indices_;
   uint32_t indexCount_ = 0;
   glm::mat4 lightClip_{1.0f}, lightTex_{1.0f}, cameraClip_{1.0f};
   int width_ = 0, height_ = 0;
-  vk::Image map_, mapIds_, color_, depth_;
+  vk::Image map_, mapIds_, color_, depth_, mapStencil_, mapStencil32_;
 };
 
 vk::Context& bareContext() {
@@ -368,6 +442,13 @@ void versusBare(benchmark::State& state, Filter filter, int copies) {
   for (int i = 0; i < 9; ++i) withIds.push_back(bare.frame(linear, true).shadowGpuMs);
   state.counters["bare_ids_shadow_gpu_ms"] = median(withIds);
   state.counters["shadow_ratio_ids"] = median(ss) / median(withIds);
+  for (int d32 = 0; d32 < 2; ++d32) {
+    std::vector<double> st, dep;
+    for (int i = 0; i < 3; ++i) bare.stencilShadow(4, d32);
+    for (int i = 0; i < 9; ++i) st.push_back(bare.stencilShadow(4, d32)), dep.push_back(bare.frame(linear).shadowGpuMs);
+    state.counters[d32 ? "bare_stencil32_shadow_gpu_ms" : "bare_stencil_shadow_gpu_ms"] = median(st);
+    state.counters[d32 ? "bare_depth_shadow_gpu_ms_2" : "bare_depth_shadow_gpu_ms"] = median(dep);
+  }
   auto [drawn, shadowed] = bare.coverage();
   state.counters["bare_drawn"] = drawn;
   state.counters["bare_shadowed"] = shadowed;

@@ -3,7 +3,9 @@
 // only (pass 5, resolve.frag with kSpecCompact) must hold, at every listed or fractional pixel,
 // the full resolve's bits in every light channel (hw2x2's implicit LOD and the compact target's
 // quads included), elsewhere the full frame's vis (exactly 0 or 1), hit, object_id, prim_id, m and
-// cascade, and zeros in the other evidence channels.
+// cascade, and zeros in the other evidence channels. A partial frame reads the occluder's object
+// from the map's stencil (the stencil ids): its occluder_id is the full frame's, its occluder_prim
+// stays 0 (meta "occluder_prim": "unresolved").
 #include <gtest/gtest.h>
 
 #include <cstdint>
@@ -12,6 +14,7 @@
 
 #include "shadowlab/raster/raster.h"
 #include "shadowlab/scenes/loader.h"
+#include "support/quad.h"
 #include "support/raster_device.h"
 
 using namespace shadowlab;
@@ -32,7 +35,9 @@ Scene smallScene(const std::string& name) {
 struct Check {
   size_t listed = 0, fractional = 0, mismatches = 0;
   size_t changedBytes = 0;  // lookup bytes that differ between the acne frame and m's
+  size_t occluded = 0;      // listed pixels whose map texel holds an object (occluder_id != 0)
   bool acnePartial = false;
+  bool primUnresolved = false;  // the stencil ids
   std::string first;
 };
 
@@ -72,16 +77,20 @@ Check renderBoth(Rasterizer& r, const Scene& s, const Method& m, bool* partial) 
   if (full.names != part.names) return c;
   const std::string p = "light." + s.lights.front().name + ".";
   const std::vector<float>& vis = full.get(p + "vis");
+  const std::vector<float>& occluder = full.get(p + "occluder_id");
+  c.primUnresolved = part.meta.value("occluder_prim", "") == "unresolved";
   for (size_t i = 0; i < full.pixelCount(); ++i) {
     const bool fractional = vis[i] > 0.0f && vis[i] < 1.0f;
     const bool listed = i % 7 == 0 || fractional;
     c.listed += listed;
     c.fractional += fractional;
+    c.occluded += listed && occluder[i] != 0.0f;
     for (size_t k = 0; k < full.names.size(); ++k) {
       const std::string& name = full.names[k];
       const bool everywhere = name == "hit" || name == "object_id" || name == "prim_id" || name == p + "vis" ||
                               name == p + "m" || name == p + "cascade";
-      const float want = listed || everywhere ? full.data[k][i] : 0.0f;
+      const bool unresolved = c.primUnresolved && name == p + "occluder_prim";
+      const float want = (listed || everywhere) && !unresolved ? full.data[k][i] : 0.0f;
       if (!sameBits(part.data[k][i], want) && c.mismatches++ == 0)
         c.first = name + " at pixel " + std::to_string(i) + ": " + std::to_string(part.data[k][i]) + ", full " +
                   std::to_string(full.data[k][i]);
@@ -94,20 +103,22 @@ Check renderBoth(Rasterizer& r, const Scene& s, const Method& m, bool* partial) 
 }  // namespace
 
 // Every filter path that reads the map differently (hw2x2's hardware blend with its implicit LOD,
-// gathers, the moments, a blend band between cascades), the receiver plane and the normal offset.
+// gathers, the moments, a blend band between cascades), the receiver plane and the normal offset;
+// the stencil ids in every map format, with light-depth layers (tsm) and with alpha-tested casters.
 TEST_F(RasterEvidence, ListedPixelsGetTheFullResolvesBits) {
   REQUIRE_DEVICE();
-  const Scene sphere = smallScene("sphere_on_plane");
+  const Scene sphere = smallScene("sphere_on_plane"), fence = smallScene("alpha_fence");
   struct Case {
     const char* what;
+    const Scene* scene;
     Method m;
   };
   std::vector<Case> cases;
-  auto add = [&](const char* what, auto edit) {
+  auto add = [&](const char* what, auto edit, const Scene* scene = nullptr) {
     Method m;
     m.mapSize = 512;
     edit(m);
-    cases.push_back({what, m});
+    cases.push_back({what, scene ? scene : &sphere, m});
   };
   add("none", [](Method&) {});
   add("hw2x2", [](Method& m) { m.filter = Filter::Hw2x2; });
@@ -124,12 +135,28 @@ TEST_F(RasterEvidence, ListedPixelsGetTheFullResolvesBits) {
     m.cascadeBlend = 0.3f;
     m.filter = Filter::Hw2x2;
   });
+  add("d16, pcf 3", [](Method& m) {
+    m.mapFormat = DepthFormat::D16;
+    m.filter = Filter::Pcf;
+  });
+  add("d32f, hw2x2", [](Method& m) {
+    m.mapFormat = DepthFormat::D32F;
+    m.filter = Filter::Hw2x2;
+  });
+  add("tsm (light-depth layers)", [](Method& m) { m.fit = Fit::Tsm; });
+  add(
+      "alpha-tested fence, pcf 3", [](Method& m) { m.filter = Filter::Pcf; }, &fence);
   int partials = 0;
   for (const Case& c : cases) {
     bool partial = false;
-    const Check k = renderBoth(*R, sphere, c.m, &partial);
+    const Check k = renderBoth(*R, *c.scene, c.m, &partial);
     partials += partial;
     EXPECT_EQ(k.mismatches, 0u) << c.what << "; first: " << k.first;
+    // The stencil ids were used; lavapipe has no D16_S8, so d16 keeps the id attachment there.
+    if (c.m.mapFormat != DepthFormat::D16) {
+      EXPECT_TRUE(k.primUnresolved) << c.what;
+    }
+    EXPECT_GT(k.occluded, 500u) << c.what;
     EXPECT_GT(k.listed, 1000u) << c.what;
     EXPECT_TRUE(k.acnePartial) << c.what;
     EXPECT_GT(k.changedBytes, 500u) << c.what;
@@ -138,6 +165,25 @@ TEST_F(RasterEvidence, ListedPixelsGetTheFullResolvesBits) {
     }
   }
   EXPECT_EQ(partials, int(cases.size()));
+}
+
+// More objects than the stencil's 8 bits tell apart: the partial frames keep the id attachment
+// (occluder_prim resolved) and still hold the full resolve's bits.
+TEST_F(RasterEvidence, ManyObjectsKeepTheIdAttachment) {
+  REQUIRE_DEVICE();
+  Scene s = smallScene("sphere_on_plane");
+  for (uint32_t k = 0; k < 300; ++k)  // a grid of small tiles floating over the ground
+    shadowlab::testing::addQuad(s, 1000 + k, {-3.0f + 0.3f * float(k % 20), 0.6f, -2.0f + 0.3f * float(k / 20)},
+                                {0.2f, 0.0f, 0.0f}, {0.0f, 0.0f, 0.2f});
+  s.hash.clear();
+  Method m;
+  m.mapSize = 512;
+  bool partial = false;
+  const Check k = renderBoth(*R, s, m, &partial);
+  EXPECT_TRUE(partial);
+  EXPECT_FALSE(k.primUnresolved);
+  EXPECT_EQ(k.mismatches, 0u) << k.first;
+  EXPECT_GT(k.occluded, 500u);
 }
 
 // Without a selector, with a scene that has projectors, or a selector that is empty: the full frame.

@@ -15,7 +15,9 @@
 //                    compiled out; timed on its own (lookup_gpu_ms, what an engine pays for the
 //                    method besides its shadow pass).
 // Evidence on demand (render() with an EvidenceSelector, a light, no projectors, and the group's
-// planes kept): pass 3 is skipped. After passes 1, 2 and 4 the CPU reads the bytes back, lists the
+// planes kept): pass 3 is skipped and pass 1 writes the stencil ids (each draw's object index + 1
+// in the map's stencil aspect, no id attachment: a depth-only pass's cost; up to 255 objects, where
+// the device has the depth+stencil format). After passes 1, 2 and 4 the CPU reads the bytes back, lists the
 // fractional pixels and those the selector asks for (where the decision disagrees with the
 // reference), and
 //   Pass 5 (evidence): resolve.frag specialized to kSpecCompact draws a kCompactWidth-wide target
@@ -166,6 +168,22 @@ VkFormat vkDepthFormat(DepthFormat f) {
   return VK_FORMAT_D32_SFLOAT;
 }
 
+// The map format with a stencil aspect beside the same depth bits: evidence on demand writes the
+// occluder's object (index + 1) there instead of an id attachment (a depth-only pass's cost).
+VkFormat vkDepthStencilFormat(DepthFormat f) {
+  switch (f) {
+    case DepthFormat::D16: return VK_FORMAT_D16_UNORM_S8_UINT;
+    case DepthFormat::D24: return VK_FORMAT_D24_UNORM_S8_UINT;
+    case DepthFormat::D32F: return VK_FORMAT_D32_SFLOAT_S8_UINT;
+  }
+  return VK_FORMAT_D32_SFLOAT_S8_UINT;
+}
+// Objects the stencil ids can tell apart: 8 bits, 0 for no occluder.
+constexpr size_t kMaxStencilObjects = 255;
+bool isDepthStencil(VkFormat f) {
+  return f == VK_FORMAT_D16_UNORM_S8_UINT || f == VK_FORMAT_D24_UNORM_S8_UINT || f == VK_FORMAT_D32_SFLOAT_S8_UINT;
+}
+
 VkCullModeFlags vkCull(CullMode c) {
   switch (c) {
     case CullMode::Back: return VK_CULL_MODE_BACK_BIT;
@@ -260,8 +278,9 @@ struct Rasterizer::Impl {
       resolveFrag, momentsRowsFrag, momentsColsFrag;
   vk::QueryPool queries;
   // Keyed by what needs a new pipeline: (depth format, depth clamp, material tests, depth bias,
-  // light depth).
+  // light depth); a depth+stencil format: the stencil ids, no id attachment.
   std::map<std::tuple<VkFormat, bool, bool, bool, bool>, vk::PipelineHandle> idPipelines;
+  std::map<DepthFormat, bool> stencilFormatOk;  // whether the device renders and samples it
   // Keyed by resolve.frag's specialization constants (resolve_abi.h's kSpec*).
   using ResolveKey = raster::ResolveSpecialization;
   std::map<ResolveKey, vk::PipelineHandle> resolvePipelines;
@@ -343,7 +362,8 @@ struct Rasterizer::Impl {
   const Light* validate(const Scene& scene, const Method& method, const std::string& lightName) const;
   int maxMapSize() const;
   void upload(const Scene& scene);
-  void prepareTargets(const Scene& scene, const Method& method, const raster::FrameLayers& layers);
+  void prepareTargets(const Scene& scene, const Method& method, const raster::FrameLayers& layers, bool stencilIds);
+  bool stencilIdsApply(const Method& method);
   std::vector<raster::ProjectorTexels> projectorTexels() const;
   FramePipelines pipelinesFor(const Method& method, const raster::FrameLayers& layers,
                               const raster::ResolveSpecialization& spec, bool partial);
@@ -484,7 +504,14 @@ VkPipeline Rasterizer::Impl::idPipeline(VkFormat format, bool depthClamp, bool m
   d.bindings = {{0, 5 * sizeof(float), VK_VERTEX_INPUT_RATE_VERTEX}};
   d.attributes = {{0, 0, VK_FORMAT_R32G32B32_SFLOAT, 0}};
   if (materialTests || lightDepth) d.attributes.push_back({1, 0, VK_FORMAT_R32G32_SFLOAT, 3 * sizeof(float)});
-  d.colorFormats = {kIdFormat};
+  if (isDepthStencil(format)) {
+    // The stencil ids: no id attachment; the object comes from the stencil reference, and a draw
+    // without material tests or light depth needs no fragment shader at all (a depth-only pass).
+    d.stencilFormat = format;
+    if (!materialTests && !lightDepth) d.fragment = VK_NULL_HANDLE;
+  } else {
+    d.colorFormats = {kIdFormat};
+  }
   d.depthFormat = format;
   d.depthClamp = depthClamp;
   d.depthBias = depthBias;
@@ -537,12 +564,15 @@ void Rasterizer::Impl::ensureImages(int mapSize, VkFormat mapFormat, int layers,
                                     bool momentChannels) {
   const vk::Context& c = *context;
   if (mapDepth.width() != mapSize || mapDepth.format() != mapFormat || mapDepth.layers() != layers) {
-    mapDepth =
-        vk::Image(c, mapSize, mapSize, layers, mapFormat,
-                  VK_IMAGE_USAGE_DEPTH_STENCIL_ATTACHMENT_BIT | VK_IMAGE_USAGE_SAMPLED_BIT, VK_IMAGE_ASPECT_DEPTH_BIT);
+    mapDepth = vk::Image();  // released first: maps of 4096^2 and more
+    mapDepth = vk::Image(c, mapSize, mapSize, layers, mapFormat,
+                         VK_IMAGE_USAGE_DEPTH_STENCIL_ATTACHMENT_BIT | VK_IMAGE_USAGE_SAMPLED_BIT,
+                         isDepthStencil(mapFormat) ? VK_IMAGE_ASPECT_DEPTH_BIT | VK_IMAGE_ASPECT_STENCIL_BIT
+                                                   : VK_IMAGE_ASPECT_DEPTH_BIT);
+  }
+  if (mapIds.width() != mapSize || mapIds.layers() != layers)
     mapIds = vk::Image(c, mapSize, mapSize, layers, kIdFormat,
                        VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT | VK_IMAGE_USAGE_SAMPLED_BIT, VK_IMAGE_ASPECT_COLOR_BIT);
-  }
   if (cameraIds.width() != width || cameraIds.height() != height) {
     cameraDepth = vk::Image(c, width, height, 1, kCameraDepthFormat, VK_IMAGE_USAGE_DEPTH_STENCIL_ATTACHMENT_BIT,
                             VK_IMAGE_ASPECT_DEPTH_BIT);
@@ -587,8 +617,10 @@ void Rasterizer::Impl::writeDescriptors() {
       image(nearestSampler, mapDepth.arrayView(), VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL);
   resources[abi::kBindingMapShadow].image =
       image(compareSampler, mapDepth.arrayView(), VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL);
+  // With the stencil ids the map's stencil aspect (object + 1) stands in for the id attachment.
   resources[abi::kBindingMapIds].image =
-      image(nearestSampler, mapIds.arrayView(), VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL);
+      image(nearestSampler, mapDepth.hasStencil() ? mapDepth.stencilView() : mapIds.arrayView(),
+            VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL);
   resources[abi::kBindingCameraIds].image = image(nearestSampler, cameraIds.layerView(0), VK_IMAGE_LAYOUT_GENERAL);
   resources[abi::kBindingTrianglePlanes].texelView = s.trianglePlanesView.get();
   resources[abi::kBindingProjectorTexels].buffer = &s.projectorTexels;
@@ -642,6 +674,12 @@ void Rasterizer::Impl::record(VkCommandBuffer cmd, const std::vector<LayerDraw>&
   glm::vec4 shaderBias(method.biasConstant * raster::depthResolution(method.mapFormat), method.biasSlope,
                        method.biasClamp, raster::depthResolution(method.mapFormat) > 0.0f ? 0.0f : 1.0f);
   if (shaderBias.w > 0.5f) shaderBias.x = method.biasConstant;
+  // The stencil ids (evidence on demand): the shadow pass writes each draw's object index + 1
+  // into the map's stencil where its fragment wins the depth test, the same fragment whose id the
+  // id attachment would keep.
+  const bool stencilIds = mapDepth.hasStencil();
+  const VkImageLayout mapLayout =
+      stencilIds ? VK_IMAGE_LAYOUT_DEPTH_STENCIL_ATTACHMENT_OPTIMAL : VK_IMAGE_LAYOUT_DEPTH_ATTACHMENT_OPTIMAL;
   auto drawAll = [&](const glm::mat4& clip, bool shadowPass, const LayerDraw* lightDepth = nullptr) {
     VkPipeline bound = VK_NULL_HANDLE;
     for (int tested = 0; tested < 2; ++tested)
@@ -661,11 +699,13 @@ void Rasterizer::Impl::record(VkCommandBuffer cmd, const std::vector<LayerDraw>&
         vkCmdSetCullMode(cmd, cull);
         DrawPush push{clip, d.objectIndex, d.triangleBase, 0, 0};
         if (lightDepth) push.depthRow = lightDepth->depthRow, push.depthBias = shaderBias;
+        if (shadowPass && stencilIds) vkCmdSetStencilReference(cmd, VK_STENCIL_FACE_FRONT_AND_BACK, d.objectIndex + 1);
         vkCmdPushConstants(cmd, pipelineLayout.get(), VK_SHADER_STAGE_VERTEX_BIT | VK_SHADER_STAGE_FRAGMENT_BIT, 0,
                            sizeof(push), &push);
         vkCmdDrawIndexed(cmd, d.indexCount, 1, d.firstIndex, d.vertexOffset, 0);
       }
   };
+  // idView VK_NULL_HANDLE: no id attachment (the stencil ids: depthView holds both aspects).
   auto beginRendering = [&](VkImageView depthView, VkImageView idView, int w, int h,
                             VkImageLayout idLayout = VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL) {
     VkRenderingAttachmentInfo color{VK_STRUCTURE_TYPE_RENDERING_ATTACHMENT_INFO};
@@ -676,16 +716,18 @@ void Rasterizer::Impl::record(VkCommandBuffer cmd, const std::vector<LayerDraw>&
     color.clearValue.color.uint32[0] = 0;  // id 0: nothing drawn here
     VkRenderingAttachmentInfo depth{VK_STRUCTURE_TYPE_RENDERING_ATTACHMENT_INFO};
     depth.imageView = depthView;
-    depth.imageLayout = VK_IMAGE_LAYOUT_DEPTH_ATTACHMENT_OPTIMAL;
+    depth.imageLayout = idView ? VK_IMAGE_LAYOUT_DEPTH_ATTACHMENT_OPTIMAL : mapLayout;
     depth.loadOp = VK_ATTACHMENT_LOAD_OP_CLEAR;
     depth.storeOp = VK_ATTACHMENT_STORE_OP_STORE;
-    depth.clearValue.depthStencil = {1.0f, 0};  // an empty texel lies at the far plane: lights all
+    depth.clearValue.depthStencil = {1.0f,
+                                     0};  // an empty texel lies at the far plane: lights all; stencil 0: no object
     VkRenderingInfo info{VK_STRUCTURE_TYPE_RENDERING_INFO};
     info.renderArea = {{0, 0}, {uint32_t(w), uint32_t(h)}};
     info.layerCount = 1;
-    info.colorAttachmentCount = 1;
-    info.pColorAttachments = &color;
+    info.colorAttachmentCount = idView ? 1 : 0;
+    info.pColorAttachments = idView ? &color : nullptr;
     info.pDepthAttachment = &depth;
+    info.pStencilAttachment = idView ? nullptr : &depth;
     vkCmdBeginRendering(cmd, &info);
     VkViewport viewport{0, 0, float(w), float(h), 0.0f, 1.0f};
     VkRect2D scissor{{0, 0}, {uint32_t(w), uint32_t(h)}};
@@ -694,26 +736,28 @@ void Rasterizer::Impl::record(VkCommandBuffer cmd, const std::vector<LayerDraw>&
   };
 
   // ---- Pass 1: depth (+ ids) from the light and from each projector ----
-  vk::transition(cmd, mapDepth, VK_IMAGE_LAYOUT_UNDEFINED, VK_IMAGE_LAYOUT_DEPTH_ATTACHMENT_OPTIMAL,
-                 VK_PIPELINE_STAGE_2_FRAGMENT_SHADER_BIT, 0,
+  vk::transition(cmd, mapDepth, VK_IMAGE_LAYOUT_UNDEFINED, mapLayout, VK_PIPELINE_STAGE_2_FRAGMENT_SHADER_BIT, 0,
                  VK_PIPELINE_STAGE_2_EARLY_FRAGMENT_TESTS_BIT | VK_PIPELINE_STAGE_2_LATE_FRAGMENT_TESTS_BIT,
                  VK_ACCESS_2_DEPTH_STENCIL_ATTACHMENT_READ_BIT | VK_ACCESS_2_DEPTH_STENCIL_ATTACHMENT_WRITE_BIT);
-  vk::transition(cmd, mapIds, VK_IMAGE_LAYOUT_UNDEFINED, VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL,
-                 VK_PIPELINE_STAGE_2_FRAGMENT_SHADER_BIT, 0, VK_PIPELINE_STAGE_2_COLOR_ATTACHMENT_OUTPUT_BIT,
-                 VK_ACCESS_2_COLOR_ATTACHMENT_WRITE_BIT);
+  if (!stencilIds)
+    vk::transition(cmd, mapIds, VK_IMAGE_LAYOUT_UNDEFINED, VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL,
+                   VK_PIPELINE_STAGE_2_FRAGMENT_SHADER_BIT, 0, VK_PIPELINE_STAGE_2_COLOR_ATTACHMENT_OUTPUT_BIT,
+                   VK_ACCESS_2_COLOR_ATTACHMENT_WRITE_BIT);
   for (size_t layer = 0; layer < layerDraws.size(); ++layer) {
-    beginRendering(mapDepth.layerView(int(layer)), mapIds.layerView(int(layer)), method.mapSize, method.mapSize);
+    beginRendering(mapDepth.layerView(int(layer)), stencilIds ? VK_NULL_HANDLE : mapIds.layerView(int(layer)),
+                   method.mapSize, method.mapSize);
     vkCmdSetDepthBias(cmd, method.biasConstant, method.biasClamp, method.biasSlope);
     const LayerDraw& ld = layerDraws[layer];
     drawAll(ld.clip, true, ld.lightDepth ? &ld : nullptr);
     vkCmdEndRendering(cmd);
   }
-  vk::transition(cmd, mapDepth, VK_IMAGE_LAYOUT_DEPTH_ATTACHMENT_OPTIMAL, VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL,
+  vk::transition(cmd, mapDepth, mapLayout, VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL,
                  VK_PIPELINE_STAGE_2_LATE_FRAGMENT_TESTS_BIT, VK_ACCESS_2_DEPTH_STENCIL_ATTACHMENT_WRITE_BIT,
                  VK_PIPELINE_STAGE_2_FRAGMENT_SHADER_BIT, VK_ACCESS_2_SHADER_SAMPLED_READ_BIT);
-  vk::transition(cmd, mapIds, VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL, VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL,
-                 VK_PIPELINE_STAGE_2_COLOR_ATTACHMENT_OUTPUT_BIT, VK_ACCESS_2_COLOR_ATTACHMENT_WRITE_BIT,
-                 VK_PIPELINE_STAGE_2_FRAGMENT_SHADER_BIT, VK_ACCESS_2_SHADER_SAMPLED_READ_BIT);
+  if (!stencilIds)
+    vk::transition(cmd, mapIds, VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL, VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL,
+                   VK_PIPELINE_STAGE_2_COLOR_ATTACHMENT_OUTPUT_BIT, VK_ACCESS_2_COLOR_ATTACHMENT_WRITE_BIT,
+                   VK_PIPELINE_STAGE_2_FRAGMENT_SHADER_BIT, VK_ACCESS_2_SHADER_SAMPLED_READ_BIT);
   vkCmdWriteTimestamp2(cmd, VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT, pool, 5);
   // ---- Pass 1b: the moments of filterable maps (placeholders made readable otherwise) ----
   {
@@ -1050,11 +1094,29 @@ void Rasterizer::Impl::upload(const Scene& sc) {
   scene = std::make_unique<raster::SceneGpu>(raster::uploadScene(*context, sc, key));
 }
 
+// Whether a frame of evidence on demand can take its occluder ids from the map's stencil: the
+// device renders and samples the map format's depth+stencil twin, and the scene's objects fit in
+// 8 bits (the uploaded scene's).
+bool Rasterizer::Impl::stencilIdsApply(const Method& method) {
+  if (scene->objectIds.size() > kMaxStencilObjects) return false;
+  auto it = stencilFormatOk.find(method.mapFormat);
+  if (it == stencilFormatOk.end()) {
+    VkFormatProperties fp;
+    vkGetPhysicalDeviceFormatProperties(context->physical(), vkDepthStencilFormat(method.mapFormat), &fp);
+    const VkFormatFeatureFlags need =
+        VK_FORMAT_FEATURE_DEPTH_STENCIL_ATTACHMENT_BIT | VK_FORMAT_FEATURE_SAMPLED_IMAGE_BIT;
+    it = stencilFormatOk.emplace(method.mapFormat, (fp.optimalTilingFeatures & need) == need).first;
+  }
+  return it->second;
+}
+
 // Targets: the map layers, the camera's images, the projector planes, the descriptor set.
-void Rasterizer::Impl::prepareTargets(const Scene& sc, const Method& method, const raster::FrameLayers& layers) {
+// stencilIds: the map in its depth+stencil format (stencilIdsApply), for the stencil ids.
+void Rasterizer::Impl::prepareTargets(const Scene& sc, const Method& method, const raster::FrameLayers& layers,
+                                      bool stencilIds) {
   const Camera& camera = sc.camera;
-  ensureImages(method.mapSize, vkDepthFormat(method.mapFormat), std::max(1, int(layers.layers.size())), camera.width,
-               camera.height, isMomentFilter(method.filter));
+  ensureImages(method.mapSize, stencilIds ? vkDepthStencilFormat(method.mapFormat) : vkDepthFormat(method.mapFormat),
+               std::max(1, int(layers.layers.size())), camera.width, camera.height, isMomentFilter(method.filter));
   const size_t channelCount = size_t(kProjectorChannels) * sc.projectors.size();
   size_t outputBytes = std::max<size_t>(1, channelCount * size_t(camera.width) * size_t(camera.height)) * sizeof(float);
   if (output.size() != outputBytes) output = vk::Buffer(*context, outputBytes, VK_BUFFER_USAGE_STORAGE_BUFFER_BIT);
@@ -1070,11 +1132,12 @@ std::vector<raster::ProjectorTexels> Rasterizer::Impl::projectorTexels() const {
   return out;
 }
 
-// Pipelines: the id writers for the map's format and clamp, the resolve for its specialization.
-Rasterizer::Impl::FramePipelines Rasterizer::Impl::pipelinesFor(const Method& method, const raster::FrameLayers& layers,
+// Pipelines: the id writers for the map's format (the one prepareTargets chose) and clamp, the
+// resolve for its specialization.
+Rasterizer::Impl::FramePipelines Rasterizer::Impl::pipelinesFor(const Method&, const raster::FrameLayers& layers,
                                                                 const raster::ResolveSpecialization& spec,
                                                                 bool partial) {
-  VkFormat mapFormat = vkDepthFormat(method.mapFormat);
+  VkFormat mapFormat = mapDepth.format();
   bool depthClamp = layers.depthClamp;
   FramePipelines p;
   p.ids = {idPipeline(mapFormat, depthClamp, false, true), idPipeline(mapFormat, depthClamp, true, true),
@@ -1384,6 +1447,8 @@ Frame Rasterizer::Impl::partialFrame(const Scene& sc, const Light& light, const 
   const std::vector<uint32_t>& objectIds = scene->objectIds;
   const std::vector<uint32_t>& triangleBase = scene->objectTriangleBase;
   const std::vector<uint32_t>& triangleObject = scene->triangleObject;
+  // The stencil ids hold the object index + 1 (the primitive stays unresolved: occluder_prim 0).
+  const bool stencilIds = mapDepth.hasStencil();
   for (size_t k = 0; k < count; ++k) {
     const size_t i = listed[k];
     const size_t y = k / size_t(compactWidth), x = k % size_t(compactWidth);
@@ -1399,7 +1464,9 @@ Frame Rasterizer::Impl::partialFrame(const Scene& sc, const Light& light, const 
     frame.data[7][i] = b[0];
     frame.data[8][i] = b[1];
     const uint32_t id = uint32_t(b[2]);  // exact up to 2^24
-    if (id != 0) {
+    if (id != 0 && stencilIds) {
+      frame.data[9][i] = float(objectIds[id - 1]);
+    } else if (id != 0) {
       const uint32_t object = triangleObject[id - 1];
       frame.data[9][i] = float(objectIds[object]);
       frame.data[10][i] = float(id - 1 - triangleBase[object]);
@@ -1455,7 +1522,6 @@ Frame Rasterizer::render(const Scene& scene, const Method& method, const std::st
   const Camera& fit = fitCamera ? *fitCamera : scene.camera;  // what the light frustum follows
   im.upload(scene);
   const raster::FrameLayers layers = raster::fitFrameLayers(scene, light, method, fit);
-  im.prepareTargets(scene, method, layers);
   const abi::Params params = raster::packResolveParams(scene, light, method, fit, layers, im.projectorTexels());
   im.params.upload(&params, sizeof(params));
   const raster::ResolveSpecialization spec = raster::resolveSpecialization(scene, light, method, layers);
@@ -1467,6 +1533,9 @@ Frame Rasterizer::render(const Scene& scene, const Method& method, const std::st
   Impl::Footprint* footprint =
       onDemand && im.cameraPlanes.key == camera && !im.cameraPlanes.hit.empty() ? im.findFootprint(group) : nullptr;
   if (footprint && footprint->m.empty()) footprint = nullptr;  // lent to a frame not handed back
+  // A partial frame reads the occluder's object from the map's stencil (no id attachment).
+  const bool stencilIds = footprint && im.stencilIdsApply(method);
+  im.prepareTargets(scene, method, layers, stencilIds);
   const Impl::FramePipelines pipes = im.pipelinesFor(method, layers, spec, footprint != nullptr);
   const bool drewVisibility = im.submit(scene, method, layers, pipes);
   const Impl::PassTimes passes = im.readTimestamps(drewVisibility);
@@ -1490,6 +1559,7 @@ Frame Rasterizer::render(const Scene& scene, const Method& method, const std::st
   if (t.partialEvidence) {
     frame.meta["evidence"] = "partial";
     frame.meta["evidence_pixels"] = t.evidencePixels;
+    if (stencilIds) frame.meta["occluder_prim"] = "unresolved";  // the stencil ids: objects only
   }
   t.shadowGpuMs = passes.shadowGpuMs;
   t.visibilityGpuMs = im.visibilityGpuMs;

@@ -63,18 +63,22 @@ Image::Image(const Context& context, int width, int height, int layers, VkFormat
     coherent_ = context.hostCoherent(memoryType);
   }
 
-  auto makeView = [&](VkImageViewType type, int first, int count) {
+  auto makeView = [&](VkImageViewType type, int first, int count, VkImageAspectFlags viewAspect) {
     VkImageViewCreateInfo v{VK_STRUCTURE_TYPE_IMAGE_VIEW_CREATE_INFO};
     v.image = image;
     v.viewType = type;
     v.format = format;
-    v.subresourceRange = {aspect, 0, 1, uint32_t(first), uint32_t(count)};
+    v.subresourceRange = {viewAspect, 0, 1, uint32_t(first), uint32_t(count)};
     VkImageView view;
     VK_CHECK(vkCreateImageView(device, &v, nullptr, &view));
     return ImageView(device, view);
   };
-  arrayView_ = makeView(VK_IMAGE_VIEW_TYPE_2D_ARRAY, 0, layers);
-  for (int i = 0; i < layers; ++i) layerViews_.push_back(makeView(VK_IMAGE_VIEW_TYPE_2D, i, 1));
+  // A sampled view holds one aspect: a depth+stencil image's depth, and its stencil on its own.
+  const bool depthStencil = hasStencil() && (aspect & VK_IMAGE_ASPECT_DEPTH_BIT);
+  arrayView_ = makeView(VK_IMAGE_VIEW_TYPE_2D_ARRAY, 0, layers,
+                        depthStencil ? VkImageAspectFlags(VK_IMAGE_ASPECT_DEPTH_BIT) : aspect);
+  if (depthStencil) stencilView_ = makeView(VK_IMAGE_VIEW_TYPE_2D_ARRAY, 0, layers, VK_IMAGE_ASPECT_STENCIL_BIT);
+  for (int i = 0; i < layers; ++i) layerViews_.push_back(makeView(VK_IMAGE_VIEW_TYPE_2D, i, 1, aspect));
 }
 
 void Image::invalidate(const Context& context) const {

@@ -1,6 +1,7 @@
 #pragma once
 // A 2D (array) image in device memory with one view over all layers (for sampling) and one
-// 2D view per layer (for rendering into that layer).
+// 2D view per layer (for rendering into that layer). A depth+stencil image's array view is its
+// depth aspect; stencilView() is the stencil aspect's (both sampled); its layer views hold both.
 #include <vector>
 
 #include "vk/context.h"
@@ -21,6 +22,8 @@ class Image {
 
   VkImage get() const { return image_.get(); }
   VkImageView arrayView() const { return arrayView_.get(); }
+  VkImageView stencilView() const { return stencilView_.get(); }  // depth+stencil images only
+  bool hasStencil() const { return (aspect_ & VK_IMAGE_ASPECT_STENCIL_BIT) != 0; }
   VkImageView layerView(int layer) const { return layerViews_[size_t(layer)].get(); }
   int width() const { return width_; }
   int height() const { return height_; }
@@ -36,7 +39,7 @@ class Image {
  private:
   ImageHandle image_;
   Memory memory_;
-  ImageView arrayView_;
+  ImageView arrayView_, stencilView_;
   std::vector<ImageView> layerViews_;
   int width_ = 0, height_ = 0, layers_ = 0;
   VkFormat format_ = VK_FORMAT_UNDEFINED;

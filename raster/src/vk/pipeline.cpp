@@ -31,6 +31,7 @@ PipelineHandle createGraphicsPipeline(const Context& context, const GraphicsPipe
   spec.dataSize = entries.size() * sizeof(uint32_t);
   spec.pData = desc.fragmentSpecialization.data();
   if (!entries.empty()) stages[1].pSpecializationInfo = &spec;
+  const uint32_t stageCount = desc.fragment != VK_NULL_HANDLE ? 2 : 1;  // depth (and stencil) only: no fragment shader
 
   VkPipelineVertexInputStateCreateInfo vertexInput{VK_STRUCTURE_TYPE_PIPELINE_VERTEX_INPUT_STATE_CREATE_INFO};
   vertexInput.vertexBindingDescriptionCount = uint32_t(desc.bindings.size());
@@ -54,6 +55,11 @@ PipelineHandle createGraphicsPipeline(const Context& context, const GraphicsPipe
   depth.depthTestEnable = desc.depthTest;
   depth.depthWriteEnable = desc.depthTest;
   depth.depthCompareOp = VK_COMPARE_OP_LESS;
+  if (desc.stencilFormat != VK_FORMAT_UNDEFINED) {
+    depth.stencilTestEnable = VK_TRUE;
+    depth.front = {VK_STENCIL_OP_KEEP, VK_STENCIL_OP_REPLACE, VK_STENCIL_OP_KEEP, VK_COMPARE_OP_ALWAYS, 0, 0xff, 0};
+    depth.back = depth.front;
+  }
   std::vector<VkPipelineColorBlendAttachmentState> blends(desc.colorFormats.size());
   for (auto& b : blends)
     b.colorWriteMask =
@@ -64,6 +70,7 @@ PipelineHandle createGraphicsPipeline(const Context& context, const GraphicsPipe
   std::vector<VkDynamicState> dynamic = {VK_DYNAMIC_STATE_VIEWPORT, VK_DYNAMIC_STATE_SCISSOR,
                                          VK_DYNAMIC_STATE_CULL_MODE};
   if (desc.depthBias) dynamic.push_back(VK_DYNAMIC_STATE_DEPTH_BIAS);
+  if (desc.stencilFormat != VK_FORMAT_UNDEFINED) dynamic.push_back(VK_DYNAMIC_STATE_STENCIL_REFERENCE);
   VkPipelineDynamicStateCreateInfo dynamicState{VK_STRUCTURE_TYPE_PIPELINE_DYNAMIC_STATE_CREATE_INFO};
   dynamicState.dynamicStateCount = uint32_t(dynamic.size());
   dynamicState.pDynamicStates = dynamic.data();
@@ -71,10 +78,11 @@ PipelineHandle createGraphicsPipeline(const Context& context, const GraphicsPipe
   rendering.colorAttachmentCount = uint32_t(desc.colorFormats.size());
   rendering.pColorAttachmentFormats = desc.colorFormats.data();
   rendering.depthAttachmentFormat = desc.depthFormat;
+  rendering.stencilAttachmentFormat = desc.stencilFormat;
 
   VkGraphicsPipelineCreateInfo info{VK_STRUCTURE_TYPE_GRAPHICS_PIPELINE_CREATE_INFO};
   info.pNext = &rendering;
-  info.stageCount = 2;
+  info.stageCount = stageCount;
   info.pStages = stages;
   info.pVertexInputState = &vertexInput;
   info.pInputAssemblyState = &assembly;

@@ -14,16 +14,19 @@ ShaderModule createShaderModule(const Context& context, const uint32_t* code, si
 
 struct GraphicsPipelineDesc {
   VkShaderModule vertex = VK_NULL_HANDLE;
-  VkShaderModule fragment = VK_NULL_HANDLE;
+  VkShaderModule fragment = VK_NULL_HANDLE;  // none: a depth-only pipeline
   VkPipelineLayout layout = VK_NULL_HANDLE;
   std::vector<VkVertexInputBindingDescription> bindings;
   std::vector<VkVertexInputAttributeDescription> attributes;
   std::vector<VkFormat> colorFormats;
   VkFormat depthFormat = VK_FORMAT_UNDEFINED;
   VkFrontFace frontFace = VK_FRONT_FACE_COUNTER_CLOCKWISE;
-  bool depthClamp = false;                       // keeps casters outside [near, far] in the map (directional lights)
-  bool depthBias = false;                        // depth bias values come from vkCmdSetDepthBias
-  bool depthTest = true;                         // less-than test and write (false: no depth attachment)
+  bool depthClamp = false;  // keeps casters outside [near, far] in the map (directional lights)
+  bool depthBias = false;   // depth bias values come from vkCmdSetDepthBias
+  bool depthTest = true;    // less-than test and write (false: no depth attachment)
+  // stencil: every fragment that passes the depth test writes the dynamic stencil reference
+  // (vkCmdSetStencilReference) into the attachment's stencil aspect.
+  VkFormat stencilFormat = VK_FORMAT_UNDEFINED;
   std::vector<uint32_t> fragmentSpecialization;  // 32-bit constants 0..n-1 of the fragment shader
 };
 

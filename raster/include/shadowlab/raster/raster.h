@@ -89,7 +89,10 @@ class Rasterizer {
   // exact at every byte 0 or 255), those kept planes and one resolve of the listed pixels only: the
   // other evidence channels (receiver_depth, map_depth, bias_depth, bias_world, occluder_id,
   // occluder_prim, in_map, the moment channels) are 0 except at the listed and fractional pixels,
-  // and meta "evidence" is "partial" ("evidence_pixels": how many). compareFrames gives the same
+  // and meta "evidence" is "partial" ("evidence_pixels": how many). Such a frame's shadow pass
+  // writes the occluder's object into the map's stencil rather than its triangle into an id
+  // attachment (up to 255 objects, where the device has the format): occluder_id is exact and
+  // occluder_prim stays 0 (meta "occluder_prim": "unresolved"). compareFrames gives the same
   // metrics as on the full frame when `select` lists every disagreement. Otherwise (no selector,
   // projectors, a group not kept yet) the full frame, as without it.
   Frame render(const Scene& scene, const Method& method, const std::string& light = "",

@@ -26,7 +26,8 @@
 //     light.LIGHT.receiver_depth  the visible point's depth in the light's map space, [0,1]
 //     light.LIGHT.map_depth    depth stored in the map at the center texel of the lookup
 //     light.LIGHT.occluder_id  object id that wrote the center texel (0: nothing, cleared texel)
-//     light.LIGHT.occluder_prim  primitive id that wrote the center texel
+//     light.LIGHT.occluder_prim  primitive id that wrote the center texel (0 in a partial frame
+//                              whose meta says "occluder_prim": "unresolved")
 //     light.LIGHT.in_map       1 where the lookup falls inside the map (and in front of the light)
 //     light.LIGHT.m            texel footprint: largest extent of one map texel on screen, pixels
 //     light.LIGHT.bias_depth   total effective bias at this pixel in map depth units (compare bias
