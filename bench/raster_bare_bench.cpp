@@ -401,8 +401,14 @@ vk::Context& bareContext() {
   return c;
 }
 
+// Every iteration draws its shadow maps: a configuration's whole cost, as in a sweep whose
+// shadow pass changes from row to row.
 Rasterizer& rasterizer() {
-  static Rasterizer r;
+  static Rasterizer r([] {
+    RasterDeviceOptions o;
+    o.keepShadowMaps = false;
+    return o;
+  }());
   return r;
 }
 

@@ -23,7 +23,12 @@ using shadowlab::bench::benchScene;
 namespace {
 
 Rasterizer& rasterizer() {
-  static Rasterizer r;  // lavapipe, no validation: timing the rasterizer, not the layer
+  // lavapipe, no validation: timing the rasterizer, not the layer; every iteration draws its maps.
+  static Rasterizer r([] {
+    RasterDeviceOptions o;
+    o.keepShadowMaps = false;
+    return o;
+  }());
   return r;
 }
 

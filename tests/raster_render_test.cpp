@@ -226,6 +226,85 @@ TEST_F(RasterTest, KeptVisibilityBufferNeverOutlivesItsCamera) {
   expectSame(R->render(other, m), fresh(other, m), "other scene");
 }
 
+// The shadow maps are kept while everything the shadow pass reads stays the same (a sweep's
+// filter axis) and drawn again when anything it reads changes: every frame must equal one from a
+// fresh device, and the maps must be kept exactly where nothing the pass reads changed.
+TEST_F(RasterTest, KeptShadowMapsNeverOutliveWhatDrewThem) {
+  REQUIRE_DEVICE();
+  auto fresh = [](const Scene& scene, const Method& method) {
+    RasterDeviceOptions o;
+    o.validation = true;
+    Rasterizer r(o);
+    Frame f = r.render(scene, method);
+    EXPECT_EQ(r.validationMessages(), 0);
+    return std::make_pair(std::move(f), r.lookupVisibility());
+  };
+  auto expectSame = [](const Frame& a, const Frame& b, const std::string& what) {
+    ASSERT_EQ(a.names, b.names) << what;
+    for (size_t c = 0; c < a.names.size(); ++c)
+      EXPECT_EQ(0, std::memcmp(a.data[c].data(), b.data[c].data(), a.data[c].size() * sizeof(float)))
+          << what << ": " << a.names[c];
+  };
+  const Scene s = roofScene(0.5f);
+  Method m;
+  m.mapSize = 256;
+  struct Step {
+    const char* what;
+    Scene scene;
+    Method method;
+    bool kept;
+  };
+  std::vector<Step> steps;
+  auto step = [&](const char* what, bool kept, auto edit, Scene scene) {
+    edit(m);
+    steps.push_back({what, std::move(scene), m, kept});
+  };
+  auto same = [](Method&) {};
+  step("first", false, same, s);
+  step("the same method", true, same, s);
+  step(
+      "pcf", true, [](Method& x) { x.filter = Filter::Pcf; }, s);
+  step(
+      "vsm (its moments pass from the kept map)", true, [](Method& x) { x.filter = Filter::Vsm; }, s);
+  step(
+      "another compare bias", true, [](Method& x) { x.biasCompare = 0.01f; }, s);
+  step(
+      "another slope bias", false, [](Method& x) { x.biasSlope = 4.0f; }, s);
+  step(
+      "another constant bias", false, [](Method& x) { x.biasConstant = 64.0f; }, s);
+  step(
+      "cull front faces", false, [](Method& x) { x.cull = CullMode::Front; }, s);
+  step(
+      "map 512", false, [](Method& x) { x.mapSize = 512; }, s);
+  step(
+      "d32f", false, [](Method& x) { x.mapFormat = DepthFormat::D32F; }, s);
+  step("a higher roof", false, same, roofScene(0.75f));
+  Scene turned = roofScene(0.75f);
+  turned.lights[0].direction = glm::normalize(glm::vec3(0.3f, -1.0f, 0.0f));
+  step("the light turned", false, same, turned);
+  step(
+      "filter none again", true, [](Method& x) { x.filter = Filter::None; }, turned);
+  // A pipeline's first use draws the maps in both of its runs: warm every step's pipelines first.
+  for (const Step& st : steps) R->render(st.scene, st.method);
+  for (const Step& st : steps) {
+    RasterTimings t;
+    const Frame f = R->render(st.scene, st.method, "", &t);
+    EXPECT_EQ(t.shadowMapsKept, st.kept) << st.what;
+    EXPECT_GT(t.shadowGpuMs, 0.0) << st.what;
+    const std::vector<uint8_t> bytes = R->lookupVisibility();
+    const auto [expected, expectedBytes] = fresh(st.scene, st.method);
+    expectSame(f, expected, st.what);
+    EXPECT_EQ(bytes, expectedBytes) << st.what;
+  }
+  // Off: every render draws its maps.
+  RasterDeviceOptions o;
+  o.keepShadowMaps = false;
+  Rasterizer r(o);
+  RasterTimings t;
+  for (int i = 0; i < 2; ++i) r.render(s, m, "", &t);
+  EXPECT_FALSE(t.shadowMapsKept);
+}
+
 // Recycled planes are overwritten entirely: a frame rendered into another scene's planes (other
 // values, other sizes) equals one rendered into fresh memory.
 TEST_F(RasterTest, RecycledPlanesAreOverwrittenEverywhere) {

@@ -374,9 +374,12 @@ struct Rasterizer::Impl {
   void keepFootprint(const std::string& key, const std::string& camera, const Frame& frame, const Light& light);
   Frame partialFrame(const Scene& scene, const Light& light, const Method& method, const EvidenceSelector& select,
                      Footprint& footprint, const FramePipelines& pipes, RasterTimings& t);
-  bool submit(const Scene& scene, const Method& method, const raster::FrameLayers& layers,
-              const FramePipelines& pipes);  // returns whether it drew the visibility buffer
-  PassTimes readTimestamps(bool drewVisibility);
+  struct Drawn {
+    bool visibility = false, shadow = false;
+  };
+  Drawn submit(const Scene& scene, const Method& method, const raster::FrameLayers& layers,
+               const FramePipelines& pipes);  // what it drew (the rest was kept)
+  PassTimes readTimestamps(Drawn drawn);
 
   void createLayouts();
   VkPipeline idPipeline(VkFormat format, bool depthClamp, bool materialTests, bool depthBias, bool lightDepth = false);
@@ -388,13 +391,21 @@ struct Rasterizer::Impl {
   Frame readback(const Scene& scene, const Light* light, const Method& method, int width, int height);
   void record(VkCommandBuffer cmd, const std::vector<LayerDraw>& layerDraws, int lightLayers, const IdPipelines& pipes,
               VkPipeline resolve, VkPipeline lookup, const Method& method, const glm::mat4& cameraClip, int width,
-              int height, bool drawVisibility);
+              int height, bool drawVisibility, bool drawShadow);
+  std::string shadowPassKey(const std::vector<LayerDraw>& layerDraws, const IdPipelines& pipes,
+                            const Method& method) const;
 
   // The camera's visibility buffer depends on the scene and the camera only, not on the method:
   // while both stay the same (a sweep over methods, a stability run with a fixed evaluation
   // camera) it is kept and not drawn again. Its GPU time, measured when it was drawn, stays part
   // of every frame's camera_gpu_ms.
-  std::string visibilityKey;              // empty: cameraIds holds nothing reusable
+  std::string visibilityKey;  // empty: cameraIds holds nothing reusable
+  // The same for the map layers (pass 1, not the moments): kept while everything pass 1 reads is
+  // the same (shadowPassKey; a sweep's filter axis, or a stability run's fixed light and camera),
+  // its time (the layers' part of shadow_gpu_ms) carried over. RasterDeviceOptions::keepShadowMaps.
+  std::string shadowKey;  // empty: mapDepth (and mapIds) hold nothing reusable
+  double shadowLayersGpuMs = 0;
+  bool keepShadowMaps = true;
   std::vector<std::vector<float>> spare;  // recycled channel planes (Rasterizer::recycle)
   double visibilityGpuMs = 0;
 };
@@ -404,6 +415,7 @@ Rasterizer::Impl::Impl(const RasterDeviceOptions& options) {
   co.device = options.device;
   co.validation = options.validation;
   context = std::make_unique<vk::Context>(co);
+  keepShadowMaps = options.keepShadowMaps;
   commands = std::make_unique<vk::Commands>(*context);
   createLayouts();
   idVert = vk::createShaderModule(*context, kSpv_id_vert, sizeof(kSpv_id_vert));
@@ -564,15 +576,18 @@ void Rasterizer::Impl::ensureImages(int mapSize, VkFormat mapFormat, int layers,
                                     bool momentChannels) {
   const vk::Context& c = *context;
   if (mapDepth.width() != mapSize || mapDepth.format() != mapFormat || mapDepth.layers() != layers) {
+    shadowKey.clear();
     mapDepth = vk::Image();  // released first: maps of 4096^2 and more
     mapDepth = vk::Image(c, mapSize, mapSize, layers, mapFormat,
                          VK_IMAGE_USAGE_DEPTH_STENCIL_ATTACHMENT_BIT | VK_IMAGE_USAGE_SAMPLED_BIT,
                          isDepthStencil(mapFormat) ? VK_IMAGE_ASPECT_DEPTH_BIT | VK_IMAGE_ASPECT_STENCIL_BIT
                                                    : VK_IMAGE_ASPECT_DEPTH_BIT);
   }
-  if (mapIds.width() != mapSize || mapIds.layers() != layers)
+  if (mapIds.width() != mapSize || mapIds.layers() != layers) {
+    shadowKey.clear();
     mapIds = vk::Image(c, mapSize, mapSize, layers, kIdFormat,
                        VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT | VK_IMAGE_USAGE_SAMPLED_BIT, VK_IMAGE_ASPECT_COLOR_BIT);
+  }
   if (cameraIds.width() != width || cameraIds.height() != height) {
     cameraDepth = vk::Image(c, width, height, 1, kCameraDepthFormat, VK_IMAGE_USAGE_DEPTH_STENCIL_ATTACHMENT_BIT,
                             VK_IMAGE_ASPECT_DEPTH_BIT);
@@ -655,7 +670,8 @@ void Rasterizer::Impl::writeDescriptors() {
 
 void Rasterizer::Impl::record(VkCommandBuffer cmd, const std::vector<LayerDraw>& layerDraws, int lightLayers,
                               const IdPipelines& pipes, VkPipeline resolve, VkPipeline lookup, const Method& method,
-                              const glm::mat4& cameraClip, int width, int height, bool drawVisibility) {
+                              const glm::mat4& cameraClip, int width, int height, bool drawVisibility,
+                              bool drawShadow) {
   const raster::SceneGpu& s = *scene;
   VkQueryPool pool = queries.get();
   vkCmdResetQueryPool(cmd, pool, 0, kTimestamps);
@@ -736,28 +752,31 @@ void Rasterizer::Impl::record(VkCommandBuffer cmd, const std::vector<LayerDraw>&
   };
 
   // ---- Pass 1: depth (+ ids) from the light and from each projector ----
-  vk::transition(cmd, mapDepth, VK_IMAGE_LAYOUT_UNDEFINED, mapLayout, VK_PIPELINE_STAGE_2_FRAGMENT_SHADER_BIT, 0,
-                 VK_PIPELINE_STAGE_2_EARLY_FRAGMENT_TESTS_BIT | VK_PIPELINE_STAGE_2_LATE_FRAGMENT_TESTS_BIT,
-                 VK_ACCESS_2_DEPTH_STENCIL_ATTACHMENT_READ_BIT | VK_ACCESS_2_DEPTH_STENCIL_ATTACHMENT_WRITE_BIT);
-  if (!stencilIds)
-    vk::transition(cmd, mapIds, VK_IMAGE_LAYOUT_UNDEFINED, VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL,
-                   VK_PIPELINE_STAGE_2_FRAGMENT_SHADER_BIT, 0, VK_PIPELINE_STAGE_2_COLOR_ATTACHMENT_OUTPUT_BIT,
-                   VK_ACCESS_2_COLOR_ATTACHMENT_WRITE_BIT);
-  for (size_t layer = 0; layer < layerDraws.size(); ++layer) {
-    beginRendering(mapDepth.layerView(int(layer)), stencilIds ? VK_NULL_HANDLE : mapIds.layerView(int(layer)),
-                   method.mapSize, method.mapSize);
-    vkCmdSetDepthBias(cmd, method.biasConstant, method.biasClamp, method.biasSlope);
-    const LayerDraw& ld = layerDraws[layer];
-    drawAll(ld.clip, true, ld.lightDepth ? &ld : nullptr);
-    vkCmdEndRendering(cmd);
-  }
-  vk::transition(cmd, mapDepth, mapLayout, VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL,
-                 VK_PIPELINE_STAGE_2_LATE_FRAGMENT_TESTS_BIT, VK_ACCESS_2_DEPTH_STENCIL_ATTACHMENT_WRITE_BIT,
-                 VK_PIPELINE_STAGE_2_FRAGMENT_SHADER_BIT, VK_ACCESS_2_SHADER_SAMPLED_READ_BIT);
-  if (!stencilIds)
-    vk::transition(cmd, mapIds, VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL, VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL,
-                   VK_PIPELINE_STAGE_2_COLOR_ATTACHMENT_OUTPUT_BIT, VK_ACCESS_2_COLOR_ATTACHMENT_WRITE_BIT,
+  // (skipped while the maps of the last frame still hold: they are left in their read layout)
+  if (drawShadow) {
+    vk::transition(cmd, mapDepth, VK_IMAGE_LAYOUT_UNDEFINED, mapLayout, VK_PIPELINE_STAGE_2_FRAGMENT_SHADER_BIT, 0,
+                   VK_PIPELINE_STAGE_2_EARLY_FRAGMENT_TESTS_BIT | VK_PIPELINE_STAGE_2_LATE_FRAGMENT_TESTS_BIT,
+                   VK_ACCESS_2_DEPTH_STENCIL_ATTACHMENT_READ_BIT | VK_ACCESS_2_DEPTH_STENCIL_ATTACHMENT_WRITE_BIT);
+    if (!stencilIds)
+      vk::transition(cmd, mapIds, VK_IMAGE_LAYOUT_UNDEFINED, VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL,
+                     VK_PIPELINE_STAGE_2_FRAGMENT_SHADER_BIT, 0, VK_PIPELINE_STAGE_2_COLOR_ATTACHMENT_OUTPUT_BIT,
+                     VK_ACCESS_2_COLOR_ATTACHMENT_WRITE_BIT);
+    for (size_t layer = 0; layer < layerDraws.size(); ++layer) {
+      beginRendering(mapDepth.layerView(int(layer)), stencilIds ? VK_NULL_HANDLE : mapIds.layerView(int(layer)),
+                     method.mapSize, method.mapSize);
+      vkCmdSetDepthBias(cmd, method.biasConstant, method.biasClamp, method.biasSlope);
+      const LayerDraw& ld = layerDraws[layer];
+      drawAll(ld.clip, true, ld.lightDepth ? &ld : nullptr);
+      vkCmdEndRendering(cmd);
+    }
+    vk::transition(cmd, mapDepth, mapLayout, VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL,
+                   VK_PIPELINE_STAGE_2_LATE_FRAGMENT_TESTS_BIT, VK_ACCESS_2_DEPTH_STENCIL_ATTACHMENT_WRITE_BIT,
                    VK_PIPELINE_STAGE_2_FRAGMENT_SHADER_BIT, VK_ACCESS_2_SHADER_SAMPLED_READ_BIT);
+    if (!stencilIds)
+      vk::transition(cmd, mapIds, VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL, VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL,
+                     VK_PIPELINE_STAGE_2_COLOR_ATTACHMENT_OUTPUT_BIT, VK_ACCESS_2_COLOR_ATTACHMENT_WRITE_BIT,
+                     VK_PIPELINE_STAGE_2_FRAGMENT_SHADER_BIT, VK_ACCESS_2_SHADER_SAMPLED_READ_BIT);
+  }
   vkCmdWriteTimestamp2(cmd, VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT, pool, 5);
   // ---- Pass 1b: the moments of filterable maps (placeholders made readable otherwise) ----
   {
@@ -1091,6 +1110,7 @@ void Rasterizer::Impl::upload(const Scene& sc) {
   if (scene && scene->hash == key) return;
   scene.reset();
   visibilityKey.clear();
+  shadowKey.clear();
   scene = std::make_unique<raster::SceneGpu>(raster::uploadScene(*context, sc, key));
 }
 
@@ -1174,8 +1194,8 @@ Rasterizer::Impl::FramePipelines Rasterizer::Impl::pipelinesFor(const Method&, c
 
 // Submit: records and runs the frame (twice at a pipeline's first use, the second one timed).
 // Draws the visibility buffer unless the one of the same scene and camera is still there.
-bool Rasterizer::Impl::submit(const Scene& sc, const Method& method, const raster::FrameLayers& layers,
-                              const FramePipelines& pipes) {
+Rasterizer::Impl::Drawn Rasterizer::Impl::submit(const Scene& sc, const Method& method,
+                                                 const raster::FrameLayers& layers, const FramePipelines& pipes) {
   const Camera& camera = sc.camera;
   std::vector<LayerDraw> layerDraws;
   for (const raster::MapLayer& l : layers.layers)
@@ -1184,25 +1204,46 @@ bool Rasterizer::Impl::submit(const Scene& sc, const Method& method, const raste
   const std::string key = cameraKey(sc);
   const bool drawVisibility = visibilityKey != key;
   visibilityKey.clear();  // until this frame is through
+  // At a pipeline's first use both runs draw the maps: the timed one must not inherit the first's.
+  const std::string mapKey = shadowPassKey(layerDraws, pipes.ids, method);
+  const bool drawShadow = !keepShadowMaps || shadowKey != mapKey || pipes.firstUse;
+  shadowKey.clear();
   for (int run = 0; run < (pipes.firstUse ? 2 : 1); ++run) {
     VkCommandBuffer cmd = commands->begin();
     record(cmd, layerDraws, layers.lightLayers, pipes.ids, pipes.resolve, pipes.lookup, method, cameraClip,
-           camera.width, camera.height, drawVisibility);
+           camera.width, camera.height, drawVisibility, drawShadow);
     commands->submitAndWait();
   }
   visibilityKey = key;
-  return drawVisibility;
+  shadowKey = mapKey;
+  return {drawVisibility, drawShadow};
+}
+
+// What pass 1 reads besides the scene's buffers: the map image and its format, the pipelines
+// (depth clamp, material tests, light depth, stencil ids), the depth bias and cull, and per layer
+// its clip matrix and light-depth row. Equal keys draw equal maps.
+std::string Rasterizer::Impl::shadowPassKey(const std::vector<LayerDraw>& layerDraws, const IdPipelines& pipes,
+                                            const Method& method) const {
+  std::string key = scene->hash;
+  auto add = [&](const auto& value) { key.append(reinterpret_cast<const char*>(&value), sizeof(value)); };
+  add(mapDepth.get()), add(mapDepth.format()), add(mapDepth.width()), add(mapDepth.layers());
+  add(pipes.shadowPlain), add(pipes.shadowTested), add(pipes.shadowLightDepthPlain), add(pipes.shadowLightDepthTested);
+  add(method.biasConstant), add(method.biasSlope), add(method.biasClamp), add(method.cull), add(method.mapSize);
+  for (const LayerDraw& l : layerDraws) add(l.clip), add(l.lightDepth), add(l.depthRow);
+  return key;
 }
 
 // Timestamps: the passes' GPU times of the last submit (kTimestamps says which stamp is where).
-Rasterizer::Impl::PassTimes Rasterizer::Impl::readTimestamps(bool drewVisibility) {
+Rasterizer::Impl::PassTimes Rasterizer::Impl::readTimestamps(Drawn drawn) {
   uint64_t stamps[kTimestamps] = {};
   VK_CHECK(vkGetQueryPoolResults(context->device(), queries.get(), 0, kTimestamps, sizeof(stamps), stamps,
                                  sizeof(uint64_t), VK_QUERY_RESULT_64_BIT | VK_QUERY_RESULT_WAIT_BIT));
   const double msPerTick = context->properties().limits.timestampPeriod * 1e-6;
-  if (drewVisibility) visibilityGpuMs = double(stamps[3] - stamps[1]) * msPerTick;
+  if (drawn.visibility) visibilityGpuMs = double(stamps[3] - stamps[1]) * msPerTick;
+  if (drawn.shadow) shadowLayersGpuMs = double(stamps[5] - stamps[0]) * msPerTick;
   PassTimes t;
-  t.shadowGpuMs = double(stamps[1] - stamps[0]) * msPerTick;
+  // Kept maps: the layers' time when they were drawn, and this frame's moments pass.
+  t.shadowGpuMs = shadowLayersGpuMs + double(stamps[1] - stamps[5]) * msPerTick;
   t.resolveGpuMs = double(stamps[4] - stamps[3]) * msPerTick;
   t.lookupGpuMs = double(stamps[2] - stamps[4]) * msPerTick;
   t.momentsGpuMs = double(stamps[1] - stamps[5]) * msPerTick;
@@ -1537,8 +1578,8 @@ Frame Rasterizer::render(const Scene& scene, const Method& method, const std::st
   const bool stencilIds = footprint && im.stencilIdsApply(method);
   im.prepareTargets(scene, method, layers, stencilIds);
   const Impl::FramePipelines pipes = im.pipelinesFor(method, layers, spec, footprint != nullptr);
-  const bool drewVisibility = im.submit(scene, method, layers, pipes);
-  const Impl::PassTimes passes = im.readTimestamps(drewVisibility);
+  const Impl::Drawn drawn = im.submit(scene, method, layers, pipes);
+  const Impl::PassTimes passes = im.readTimestamps(drawn);
 
   RasterTimings local;
   RasterTimings& t = timings ? *timings : local;
@@ -1562,6 +1603,7 @@ Frame Rasterizer::render(const Scene& scene, const Method& method, const std::st
     if (stencilIds) frame.meta["occluder_prim"] = "unresolved";  // the stencil ids: objects only
   }
   t.shadowGpuMs = passes.shadowGpuMs;
+  t.shadowMapsKept = !drawn.shadow;
   t.visibilityGpuMs = im.visibilityGpuMs;
   t.cameraGpuMs = im.visibilityGpuMs + t.evidenceGpuMs;
   t.lookupGpuMs = light ? passes.lookupGpuMs : 0.0;

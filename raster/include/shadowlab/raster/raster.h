@@ -16,10 +16,18 @@ namespace shadowlab {
 struct RasterDeviceOptions {
   std::string device;       // substring of the device name; empty = lavapipe ("llvmpipe"), else first
   bool validation = false;  // enable VK_LAYER_KHRONOS_validation when installed
+  // Keep the shadow maps while everything the shadow pass reads stays the same (a sweep's filter
+  // axis): render() then skips the pass and reports the time it took when drawn. false: every
+  // render draws them (bench/raster_bare_bench: a configuration's whole cost, every iteration).
+  bool keepShadowMaps = true;
 };
 
 struct RasterTimings {
-  double shadowGpuMs = 0;  // shadow_gpu_ms: GPU timestamps of the shadow pass (all maps)
+  // shadow_gpu_ms: GPU timestamps of the shadow pass (all maps). While everything the pass reads
+  // stays the same the rasterizer keeps the maps (RasterDeviceOptions::keepShadowMaps) and reports
+  // the time they took when drawn (plus this frame's moments pass): the method's cost either way.
+  double shadowGpuMs = 0;
+  bool shadowMapsKept = false;  // this frame reused the last frame's maps (shadowGpuMs carried over)
   // GPU timestamps of the camera pass: the visibility buffer + the resolve. The visibility buffer
   // does not depend on the method: while the scene and the camera stay the same, the rasterizer
   // keeps it and adds the time it took when it was drawn (visibilityGpuMs). camera_gpu_ms.
