@@ -106,8 +106,10 @@ void barrierToHost(VkCommandBuffer cmd, VkPipelineStageFlags2 srcStage, VkAccess
 // A full-screen pass (the moments, the resolve, the lookup): one triangle drawn with `pipeline`
 // over width x height into `count` colour attachments; `beforeDraw` (optional) runs after the
 // pipeline is bound, e.g. for push constants.
+// warmup: a scissor of one pixel (the pipeline's first use, compiling its shaders; raster.cpp's submit()).
 void drawFullscreen(VkCommandBuffer cmd, const VkRenderingAttachmentInfo* colors, uint32_t count, uint32_t width,
-                    uint32_t height, VkPipeline pipeline, const std::function<void()>& beforeDraw = {}) {
+                    uint32_t height, VkPipeline pipeline, const std::function<void()>& beforeDraw = {},
+                    bool warmup = false) {
   VkRenderingInfo info{VK_STRUCTURE_TYPE_RENDERING_INFO};
   info.renderArea = {{0, 0}, {width, height}};
   info.layerCount = 1;
@@ -115,7 +117,7 @@ void drawFullscreen(VkCommandBuffer cmd, const VkRenderingAttachmentInfo* colors
   info.pColorAttachments = colors;
   vkCmdBeginRendering(cmd, &info);
   VkViewport viewport{0, 0, float(width), float(height), 0.0f, 1.0f};
-  VkRect2D scissor{{0, 0}, {width, height}};
+  VkRect2D scissor{{0, 0}, {warmup ? 1u : width, warmup ? 1u : height}};
   vkCmdSetViewport(cmd, 0, 1, &viewport);
   vkCmdSetScissor(cmd, 0, 1, &scissor);
   vkCmdSetCullMode(cmd, VK_CULL_MODE_NONE);
@@ -351,7 +353,7 @@ struct Rasterizer::Impl {
     VkPipeline lookup = VK_NULL_HANDLE;    // pass 4; none without a light
     VkPipeline evidence = VK_NULL_HANDLE;  // pass 5 (evidence on demand; then no pass 3)
     bool evidenceFirstUse = false;
-    bool firstUse = false;  // lavapipe compiles at first use: run once untimed
+    bool firstUse = false;  // lavapipe compiles at first use: run once untimed (warmupRun)
   };
   struct PassTimes {
     double shadowGpuMs = 0;   // pass 1
@@ -406,6 +408,9 @@ struct Rasterizer::Impl {
   std::string shadowKey;  // empty: mapDepth (and mapIds) hold nothing reusable
   double shadowLayersGpuMs = 0;
   bool keepShadowMaps = true;
+  // The untimed first run of a pipeline combination (lavapipe compiles its shaders at the first
+  // draw): every pass scissored to one pixel, then the timed run draws the frame.
+  bool warmupRun = false;
   std::vector<std::vector<float>> spare;  // recycled channel planes (Rasterizer::recycle)
   double visibilityGpuMs = 0;
 };
@@ -746,7 +751,7 @@ void Rasterizer::Impl::record(VkCommandBuffer cmd, const std::vector<LayerDraw>&
     info.pStencilAttachment = idView ? nullptr : &depth;
     vkCmdBeginRendering(cmd, &info);
     VkViewport viewport{0, 0, float(w), float(h), 0.0f, 1.0f};
-    VkRect2D scissor{{0, 0}, {uint32_t(w), uint32_t(h)}};
+    VkRect2D scissor{{0, 0}, {warmupRun ? 1u : uint32_t(w), warmupRun ? 1u : uint32_t(h)}};
     vkCmdSetViewport(cmd, 0, 1, &viewport);
     vkCmdSetScissor(cmd, 0, 1, &scissor);
   };
@@ -785,11 +790,14 @@ void Rasterizer::Impl::record(VkCommandBuffer cmd, const std::vector<LayerDraw>&
     auto fullscreen = [&](const vk::Image& target, int layer, VkPipeline pipeline) {
       const VkRenderingAttachmentInfo color =
           overwrittenColor(target.layerView(layer), VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL);
-      drawFullscreen(cmd, &color, 1, uint32_t(size), uint32_t(size), pipeline, [&] {
-        DrawPush push{glm::mat4(1.0f), uint32_t(layer), 0, 0, 0};
-        vkCmdPushConstants(cmd, pipelineLayout.get(), VK_SHADER_STAGE_VERTEX_BIT | VK_SHADER_STAGE_FRAGMENT_BIT, 0,
-                           sizeof(push), &push);
-      });
+      drawFullscreen(
+          cmd, &color, 1, uint32_t(size), uint32_t(size), pipeline,
+          [&] {
+            DrawPush push{glm::mat4(1.0f), uint32_t(layer), 0, 0, 0};
+            vkCmdPushConstants(cmd, pipelineLayout.get(), VK_SHADER_STAGE_VERTEX_BIT | VK_SHADER_STAGE_FRAGMENT_BIT, 0,
+                               sizeof(push), &push);
+          },
+          warmupRun);
     };
     for (const vk::Image* target : {&momentsRows, &moments}) {
       const bool cols = target == &moments;
@@ -842,7 +850,7 @@ void Rasterizer::Impl::record(VkCommandBuffer cmd, const std::vector<LayerDraw>&
                      VK_ACCESS_2_COLOR_ATTACHMENT_WRITE_BIT);
       colors[i] = overwrittenColor(resolveOut[i].layerView(0), VK_IMAGE_LAYOUT_GENERAL);
     }
-    drawFullscreen(cmd, colors, uint32_t(attachments), uint32_t(width), uint32_t(height), resolve);
+    drawFullscreen(cmd, colors, uint32_t(attachments), uint32_t(width), uint32_t(height), resolve, {}, warmupRun);
   }
   barrierToHost(cmd, VK_PIPELINE_STAGE_2_FRAGMENT_SHADER_BIT | VK_PIPELINE_STAGE_2_COLOR_ATTACHMENT_OUTPUT_BIT,
                 VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT | VK_ACCESS_2_COLOR_ATTACHMENT_WRITE_BIT);
@@ -853,7 +861,7 @@ void Rasterizer::Impl::record(VkCommandBuffer cmd, const std::vector<LayerDraw>&
     vk::transition(cmd, lookupOut, VK_IMAGE_LAYOUT_UNDEFINED, VK_IMAGE_LAYOUT_GENERAL, VK_PIPELINE_STAGE_2_HOST_BIT, 0,
                    VK_PIPELINE_STAGE_2_COLOR_ATTACHMENT_OUTPUT_BIT, VK_ACCESS_2_COLOR_ATTACHMENT_WRITE_BIT);
     const VkRenderingAttachmentInfo color = overwrittenColor(lookupOut.layerView(0), VK_IMAGE_LAYOUT_GENERAL);
-    drawFullscreen(cmd, &color, 1, uint32_t(width), uint32_t(height), lookup);
+    drawFullscreen(cmd, &color, 1, uint32_t(width), uint32_t(height), lookup, {}, warmupRun);
     barrierToHost(cmd, VK_PIPELINE_STAGE_2_FRAGMENT_SHADER_BIT | VK_PIPELINE_STAGE_2_COLOR_ATTACHMENT_OUTPUT_BIT,
                   VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT | VK_ACCESS_2_COLOR_ATTACHMENT_WRITE_BIT);
   }
@@ -1210,8 +1218,15 @@ Rasterizer::Impl::Drawn Rasterizer::Impl::submit(const Scene& sc, const Method& 
   shadowKey.clear();
   for (int run = 0; run < (pipes.firstUse ? 2 : 1); ++run) {
     VkCommandBuffer cmd = commands->begin();
-    record(cmd, layerDraws, layers.lightLayers, pipes.ids, pipes.resolve, pipes.lookup, method, cameraClip,
-           camera.width, camera.height, drawVisibility, drawShadow);
+    warmupRun = pipes.firstUse && run == 0;  // one pixel per pass: compiles, draws next to nothing
+    try {
+      record(cmd, layerDraws, layers.lightLayers, pipes.ids, pipes.resolve, pipes.lookup, method, cameraClip,
+             camera.width, camera.height, drawVisibility, drawShadow);
+    } catch (...) {
+      warmupRun = false;
+      throw;
+    }
+    warmupRun = false;
     commands->submitAndWait();
   }
   visibilityKey = key;
@@ -1407,11 +1422,14 @@ Frame Rasterizer::Impl::partialFrame(const Scene& sc, const Light& light, const 
                        VK_ACCESS_2_COLOR_ATTACHMENT_WRITE_BIT);
         colors[i] = overwrittenColor(evidenceOut[i].layerView(0), VK_IMAGE_LAYOUT_GENERAL);
       }
-      drawFullscreen(cmd, colors, uint32_t(attachments), uint32_t(compactWidth), uint32_t(rows), pipes.evidence, [&] {
-        DrawPush push{glm::mat4(1.0f), uint32_t(count), uint32_t(compactWidth), 0, 0};
-        vkCmdPushConstants(cmd, pipelineLayout.get(), VK_SHADER_STAGE_VERTEX_BIT | VK_SHADER_STAGE_FRAGMENT_BIT, 0,
-                           sizeof(push), &push);
-      });
+      drawFullscreen(
+          cmd, colors, uint32_t(attachments), uint32_t(compactWidth), uint32_t(rows), pipes.evidence,
+          [&] {
+            DrawPush push{glm::mat4(1.0f), uint32_t(count), uint32_t(compactWidth), 0, 0};
+            vkCmdPushConstants(cmd, pipelineLayout.get(), VK_SHADER_STAGE_VERTEX_BIT | VK_SHADER_STAGE_FRAGMENT_BIT, 0,
+                               sizeof(push), &push);
+          },
+          pipes.evidenceFirstUse && run == 0);
       barrierToHost(cmd, VK_PIPELINE_STAGE_2_COLOR_ATTACHMENT_OUTPUT_BIT, VK_ACCESS_2_COLOR_ATTACHMENT_WRITE_BIT);
       vkCmdWriteTimestamp2(cmd, VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT, pool, 1);
       commands->submitAndWait();
