@@ -88,10 +88,10 @@ TEST_F(ContextOnFrames, SameMetricsAsCompareFramesForEveryFrameOfAGroup) {
         Frame frame = R->render(s, g.methods[k], "", &t, nullptr, &select);
         const std::string what = name + ", " + g.what + ", method " + std::to_string(k);
         ASSERT_TRUE(frame.meta.contains("evidence_group")) << what;
-        if (k == 0) context = CompareContext(reference, frame, options);  // the group's first (full) frame
+        if (k == 0) context = CompareContext(reference, frame, options);  // the group's first frame
         EXPECT_EQ(context.group(), frame.meta["evidence_group"].get<std::string>()) << what;
         ASSERT_TRUE(context.appliesTo(reference, frame)) << what;
-        EXPECT_EQ(t.partialEvidence, k > 0) << what;
+        EXPECT_TRUE(t.partialEvidence) << what;  // the first frame too (its planes pass)
         const Metrics want = compareFrames(reference, frame, options);
         EXPECT_EQ(compareFrames(context, reference, frame).toJson().dump(), want.toJson().dump()) << what;
         errors += want.errors;

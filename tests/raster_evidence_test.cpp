@@ -42,7 +42,8 @@ struct Check {
 };
 
 // Renders `m` fully, then with a selector listing every 7th pixel, and compares the two frames.
-// The first render with a selector keeps the group's planes (a full frame when the group is new);
+// The first render with a selector keeps the group's planes (drawn by the planes pass when the
+// group is new, then checked everywhere against the full frame's m and cascade);
 // handed back, a partial frame's planes are reused, its evidence planes zeroed again only where it
 // listed pixels (every 5th here, so a value left over would show at the 7th's unlisted pixels).
 // Between the two, a partial frame of the same group with another bias (acne: no bias at all,

@@ -51,6 +51,9 @@ layout(constant_id = kSpecLookupOnly) const bool kLookupOnly = false;
 // the 2x2 quad but hw2x2's implicit LOD, which selects nothing (see hwVis in shadeLight), so the
 // listed pixels get the full resolve's bits (tests/raster_evidence_test.cpp).
 layout(constant_id = kSpecCompact) const bool kCompact = false;
+// The planes pass (the first frame of an evidence group on demand): m and 2 * cascade + in_map
+// alone, as outA.x and outA.y (the full resolve's outA.w and outB.w), the rest dead code.
+layout(constant_id = kSpecPlanesOnly) const bool kPlanesOnly = false;
 
 // Params P (binding kBindingParams) comes from resolve_abi.h.
 layout(set = 0, binding = kBindingMapDepth) uniform sampler2DArray mapDepth;         // NEAREST, raw depth
@@ -558,6 +561,10 @@ void main() {
   LightChannels light = shadeLight(s);  // without a light (kLightNone) the readback ignores it
   if (kLookupOnly) {
     outA = vec4(lookupByte(s.hit ? light.a.x : 0.0));  // the R8 attachment keeps x
+    return;
+  }
+  if (kPlanesOnly) {
+    outA = s.hit ? vec4(light.a.w, light.b.w, 0.0, 0.0) : vec4(0.0);
     return;
   }
   outA = s.hit ? light.a : vec4(0.0);

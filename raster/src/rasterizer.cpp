@@ -24,8 +24,9 @@
 //                    with one fragment per listed pixel (evidencePixels[k] instead of
 //                    gl_FragCoord), the same channels as pass 3 for those pixels only;
 // the frame is then the bytes (0/1 exactly), the kept planes of the group (hit, object_id,
-// prim_id from the last full frame of the camera; m and cascade per footprintKey: the light's
-// layers, the camera, the cascade splits) and the listed pixels' evidence, zeros elsewhere.
+// prim_id from the visibility buffer; m and cascade per footprintKey: the light's layers, the
+// camera, the cascade splits) and the listed pixels' evidence, zeros elsewhere. A group's first
+// frame draws those planes first: pass 3 specialized to kSpecPlanesOnly (m, cascade only).
 // The visibility buffer and the resolve attachments are linear images in host memory: the CPU
 // splits them into the Frame's channel planes in place, without a copy to a buffer first.
 #include "shadowlab/raster/raster.h"
@@ -351,7 +352,8 @@ struct Rasterizer::Impl {
     IdPipelines ids;
     VkPipeline resolve = VK_NULL_HANDLE;
     VkPipeline lookup = VK_NULL_HANDLE;    // pass 4; none without a light
-    VkPipeline evidence = VK_NULL_HANDLE;  // pass 5 (evidence on demand; then no pass 3)
+    VkPipeline evidence = VK_NULL_HANDLE;  // pass 5 (evidence on demand; then no pass 3 but the planes pass)
+    int resolveTargets = 0;                // pass 3's attachments (0: resolveAttachments(filter))
     bool evidenceFirstUse = false;
     bool firstUse = false;  // lavapipe compiles at first use: run once untimed (warmupRun)
   };
@@ -368,12 +370,13 @@ struct Rasterizer::Impl {
   bool stencilIdsApply(const Method& method);
   std::vector<raster::ProjectorTexels> projectorTexels() const;
   FramePipelines pipelinesFor(const Method& method, const raster::FrameLayers& layers,
-                              const raster::ResolveSpecialization& spec, bool partial);
+                              const raster::ResolveSpecialization& spec, bool partial, bool planes);
   std::string cameraKey(const Scene& scene) const;
   std::string footprintKey(const Scene& scene, const abi::Params& params,
                            const raster::ResolveSpecialization& spec) const;
   Footprint* findFootprint(const std::string& key);
-  void keepFootprint(const std::string& key, const std::string& camera, const Frame& frame, const Light& light);
+  Footprint& keepPlanes(const std::string& key, const std::string& camera, int width, int height);
+  void idsOf(uint32_t id, float& objectId, float& prim) const;
   Frame partialFrame(const Scene& scene, const Light& light, const Method& method, const EvidenceSelector& select,
                      Footprint& footprint, const FramePipelines& pipes, RasterTimings& t);
   struct Drawn {
@@ -391,9 +394,9 @@ struct Rasterizer::Impl {
   void ensureMoments(Filter filter, int mapSize, int lightLayers);
   VkPipeline momentsPipeline(Filter filter, bool cols);
   Frame readback(const Scene& scene, const Light* light, const Method& method, int width, int height);
-  void record(VkCommandBuffer cmd, const std::vector<LayerDraw>& layerDraws, int lightLayers, const IdPipelines& pipes,
-              VkPipeline resolve, VkPipeline lookup, const Method& method, const glm::mat4& cameraClip, int width,
-              int height, bool drawVisibility, bool drawShadow);
+  void record(VkCommandBuffer cmd, const std::vector<LayerDraw>& layerDraws, int lightLayers,
+              const FramePipelines& frame, const Method& method, const glm::mat4& cameraClip, int width, int height,
+              bool drawVisibility, bool drawShadow);
   std::string shadowPassKey(const std::vector<LayerDraw>& layerDraws, const IdPipelines& pipes,
                             const Method& method) const;
 
@@ -545,6 +548,7 @@ VkPipeline Rasterizer::Impl::resolvePipeline(const ResolveKey& key) {
   d.layout = pipelineLayout.get();
   d.depthTest = false;
   if (key[abi::kSpecLookupOnly]) d.colorFormats = {kLookupFormat};
+  else if (key[abi::kSpecPlanesOnly]) d.colorFormats = {kResolveFormats[0]};
   else d.colorFormats.assign(kResolveFormats, kResolveFormats + resolveAttachments(Filter(key[abi::kSpecFilter])));
   d.fragmentSpecialization.assign(key.begin(), key.end());  // straight-line code per case
   return resolvePipelines.emplace(key, vk::createGraphicsPipeline(*context, d)).first->second.get();
@@ -674,9 +678,10 @@ void Rasterizer::Impl::writeDescriptors() {
 }
 
 void Rasterizer::Impl::record(VkCommandBuffer cmd, const std::vector<LayerDraw>& layerDraws, int lightLayers,
-                              const IdPipelines& pipes, VkPipeline resolve, VkPipeline lookup, const Method& method,
-                              const glm::mat4& cameraClip, int width, int height, bool drawVisibility,
-                              bool drawShadow) {
+                              const FramePipelines& frame, const Method& method, const glm::mat4& cameraClip, int width,
+                              int height, bool drawVisibility, bool drawShadow) {
+  const IdPipelines& pipes = frame.ids;
+  const VkPipeline resolve = frame.resolve, lookup = frame.lookup;
   const raster::SceneGpu& s = *scene;
   VkQueryPool pool = queries.get();
   vkCmdResetQueryPool(cmd, pool, 0, kTimestamps);
@@ -842,7 +847,7 @@ void Rasterizer::Impl::record(VkCommandBuffer cmd, const std::vector<LayerDraw>&
   // ---- Pass 3: resolve, one fragment per pixel, into the resolve attachments (evidence on
   // demand: none; pass 5 resolves the listed pixels after the readback of pass 4) ----
   if (resolve != VK_NULL_HANDLE) {
-    const int attachments = resolveAttachments(method.filter);
+    const int attachments = frame.resolveTargets > 0 ? frame.resolveTargets : resolveAttachments(method.filter);
     VkRenderingAttachmentInfo colors[kResolveAttachments];
     for (int i = 0; i < attachments; ++i) {
       vk::transition(cmd, resolveOut[i], VK_IMAGE_LAYOUT_UNDEFINED, VK_IMAGE_LAYOUT_GENERAL,
@@ -914,19 +919,6 @@ Frame Rasterizer::Impl::readback(const Scene& sc, const Light* light, const Meth
     allocate(0, 2);
     helper.join();
   }
-  const std::vector<uint32_t>& objectIds = scene->objectIds;
-  const std::vector<uint32_t>& triangleBase = scene->objectTriangleBase;
-  const std::vector<uint32_t>& triangleObject = scene->triangleObject;
-  // id (global triangle + 1, 0: none) -> (object id, the object's primitive index), as floats.
-  auto idsOf = [&](uint32_t id, float& objectId, float& prim) {
-    if (id == 0) {
-      objectId = prim = 0.0f;
-      return;
-    }
-    uint32_t object = triangleObject[id - 1];
-    objectId = float(objectIds[object]);
-    prim = float(id - 1 - triangleBase[object]);
-  };
   const float* planes = static_cast<const float*>(output.mapped());
   auto rowOf = [](const vk::Image& img, int y) {
     return static_cast<const char*>(img.mapped()) + size_t(y) * img.rowPitch();
@@ -1163,8 +1155,8 @@ std::vector<raster::ProjectorTexels> Rasterizer::Impl::projectorTexels() const {
 // Pipelines: the id writers for the map's format (the one prepareTargets chose) and clamp, the
 // resolve for its specialization.
 Rasterizer::Impl::FramePipelines Rasterizer::Impl::pipelinesFor(const Method&, const raster::FrameLayers& layers,
-                                                                const raster::ResolveSpecialization& spec,
-                                                                bool partial) {
+                                                                const raster::ResolveSpecialization& spec, bool partial,
+                                                                bool planes) {
   VkFormat mapFormat = mapDepth.format();
   bool depthClamp = layers.depthClamp;
   FramePipelines p;
@@ -1182,6 +1174,19 @@ Rasterizer::Impl::FramePipelines Rasterizer::Impl::pipelinesFor(const Method&, c
     compactSpec[abi::kSpecProjectorCount] = 0u;
     p.evidence = resolvePipeline(compactSpec);
     p.evidenceFirstUse = evidenceWarmed.insert(compactSpec).second;
+    if (planes) {
+      // The group's first frame: pass 3 draws its planes (m, cascade) alone. They depend on no
+      // bias or filter (footprintKey), so every filter's group shares one pipeline.
+      raster::ResolveSpecialization planesSpec = spec;
+      planesSpec[abi::kSpecPlanesOnly] = 1u;
+      planesSpec[abi::kSpecProjectorCount] = 0u;
+      for (int k :
+           {abi::kSpecFilter, abi::kSpecPcfSize, abi::kSpecAdaptive, abi::kSpecReceiverPlane, abi::kSpecNormalOffset})
+        planesSpec[size_t(k)] = 0u;
+      static_assert(int(Filter::None) == 0, "kSpecFilter 0 is filter none");
+      p.resolve = resolvePipeline(planesSpec);
+      p.resolveTargets = 1;
+    }
   } else {
     p.resolve = resolvePipeline(spec);
   }
@@ -1193,8 +1198,8 @@ Rasterizer::Impl::FramePipelines Rasterizer::Impl::pipelinesFor(const Method&, c
     p.lookup = resolvePipeline(lookupSpec);
   }
   // lavapipe compiles shaders at first use: the first frame of a combination runs twice.
-  std::string warmKey =
-      std::to_string(int(mapFormat)) + "/" + std::to_string(depthClamp) + "/" + std::to_string(partial);
+  std::string warmKey = std::to_string(int(mapFormat)) + "/" + std::to_string(depthClamp) + "/" +
+                        std::to_string(partial) + "/" + std::to_string(planes);
   for (uint32_t k : spec) warmKey += "/" + std::to_string(k);
   p.firstUse = warmed.insert(warmKey).second;
   return p;
@@ -1220,8 +1225,8 @@ Rasterizer::Impl::Drawn Rasterizer::Impl::submit(const Scene& sc, const Method& 
     VkCommandBuffer cmd = commands->begin();
     warmupRun = pipes.firstUse && run == 0;  // one pixel per pass: compiles, draws next to nothing
     try {
-      record(cmd, layerDraws, layers.lightLayers, pipes.ids, pipes.resolve, pipes.lookup, method, cameraClip,
-             camera.width, camera.height, drawVisibility, drawShadow);
+      record(cmd, layerDraws, layers.lightLayers, pipes, method, cameraClip, camera.width, camera.height,
+             drawVisibility, drawShadow);
     } catch (...) {
       warmupRun = false;
       throw;
@@ -1303,22 +1308,62 @@ Rasterizer::Impl::Footprint* Rasterizer::Impl::findFootprint(const std::string& 
   return nullptr;
 }
 
-// After a full frame rendered with a selector: keeps its camera planes and its group's m and
-// cascade for the next frames of the group.
-void Rasterizer::Impl::keepFootprint(const std::string& key, const std::string& camera, const Frame& frame,
-                                     const Light& light) {
-  if (cameraPlanes.key != camera || cameraPlanes.hit.empty()) {
-    if (cameraPlanes.key != camera) footprints.clear();  // of another camera: never found again
-    cameraPlanes.key.clear();
-    cameraPlanes.hit = frame.get("hit");
-    cameraPlanes.objectId = frame.get("object_id");
-    cameraPlanes.primId = frame.get("prim_id");
-    cameraPlanes.key = camera;
+// id (global triangle + 1, 0: none) -> (object id, the object's primitive index), as floats.
+void Rasterizer::Impl::idsOf(uint32_t id, float& objectId, float& prim) const {
+  if (id == 0) {
+    objectId = prim = 0.0f;
+    return;
   }
-  const std::string p = "light." + light.name + ".";
+  const uint32_t object = scene->triangleObject[id - 1];
+  objectId = float(scene->objectIds[object]);
+  prim = float(id - 1 - scene->objectTriangleBase[object]);
+}
+
+// The first frame of a group on demand, after the planes pass (pass 3 specialized to kSpecPlanesOnly):
+// keeps the camera planes (hit, object_id, prim_id from the visibility buffer, as readback() makes
+// them) unless those of this camera are kept, and the group's m and cascade from the planes pass.
+Rasterizer::Impl::Footprint& Rasterizer::Impl::keepPlanes(const std::string& key, const std::string& camera, int width,
+                                                          int height) {
+  const size_t n = size_t(width) * size_t(height);
+  cameraIds.invalidate(*context);
+  resolveOut[0].invalidate(*context);
+  const bool cameraToo = cameraPlanes.key != camera || cameraPlanes.hit.empty();
+  if (cameraPlanes.key != camera) footprints.clear();  // of another camera: never found again
+  if (cameraToo) {
+    cameraPlanes.key.clear();
+    cameraPlanes.hit.resize(n);
+    cameraPlanes.objectId.resize(n);
+    cameraPlanes.primId.resize(n);
+  }
   footprints.remove_if([&](const Footprint& f) { return f.key == key; });  // one whose planes are lent
   while (footprints.size() >= kKeptFootprints) footprints.pop_back();
-  footprints.push_front({key, frame.get(p + "m"), frame.get(p + "cascade")});
+  Footprint f{key, std::vector<float>(n), std::vector<float>(n)};
+  auto rowOf = [](const vk::Image& img, int y) {
+    return static_cast<const char*>(img.mapped()) + size_t(y) * img.rowPitch();
+  };
+  auto split = [&](int y0, int y1) {
+    for (int y = y0; y < y1; ++y) {
+      const size_t o = size_t(y) * size_t(width);
+      if (cameraToo) {
+        const uint32_t* ids = reinterpret_cast<const uint32_t*>(rowOf(cameraIds, y));
+        for (int x = 0; x < width; ++x) {
+          cameraPlanes.hit[o + size_t(x)] = ids[x] ? 1.0f : 0.0f;
+          idsOf(ids[x], cameraPlanes.objectId[o + size_t(x)], cameraPlanes.primId[o + size_t(x)]);
+        }
+      }
+      const float* a = reinterpret_cast<const float*>(rowOf(resolveOut[0], y));  // m, 2 * cascade + in_map
+      for (int x = 0; x < width; ++x) {
+        f.m[o + size_t(x)] = a[4 * x];
+        f.cascade[o + size_t(x)] = float(int(a[4 * x + 1]) >> 1);
+      }
+    }
+  };
+  std::thread helper(split, height / 2, height);
+  split(0, height / 2);
+  helper.join();
+  if (cameraToo) cameraPlanes.key = camera;
+  footprints.push_front(std::move(f));
+  return footprints.front();
 }
 
 // Evidence on demand, after the shadow and lookup passes: reads the lookup's bytes, lists the
@@ -1504,8 +1549,6 @@ Frame Rasterizer::Impl::partialFrame(const Scene& sc, const Light& light, const 
   for (size_t c = 4; c < frame.data.size(); ++c)
     if (c != 6 && c != 12) lent.zeroed.push_back(frame.data[c].data());
   const std::vector<uint32_t>& objectIds = scene->objectIds;
-  const std::vector<uint32_t>& triangleBase = scene->objectTriangleBase;
-  const std::vector<uint32_t>& triangleObject = scene->triangleObject;
   // The stencil ids hold the object index + 1 (the primitive stays unresolved: occluder_prim 0).
   const bool stencilIds = mapDepth.hasStencil();
   for (size_t k = 0; k < count; ++k) {
@@ -1523,13 +1566,8 @@ Frame Rasterizer::Impl::partialFrame(const Scene& sc, const Light& light, const 
     frame.data[7][i] = b[0];
     frame.data[8][i] = b[1];
     const uint32_t id = uint32_t(b[2]);  // exact up to 2^24
-    if (id != 0 && stencilIds) {
-      frame.data[9][i] = float(objectIds[id - 1]);
-    } else if (id != 0) {
-      const uint32_t object = triangleObject[id - 1];
-      frame.data[9][i] = float(objectIds[object]);
-      frame.data[10][i] = float(id - 1 - triangleBase[object]);
-    }
+    if (id != 0 && stencilIds) frame.data[9][i] = float(objectIds[id - 1]);
+    else idsOf(id, frame.data[9][i], frame.data[10][i]);
     frame.data[11][i] = float(int(b[3]) & 1);  // 2 * cascade + in_map; the cascade is kept
     if (momentChannels) {
       const float* c = reinterpret_cast<const float*>(static_cast<const char*>(evidenceOut[2].mapped()) +
@@ -1592,10 +1630,13 @@ Frame Rasterizer::render(const Scene& scene, const Method& method, const std::st
   Impl::Footprint* footprint =
       onDemand && im.cameraPlanes.key == camera && !im.cameraPlanes.hit.empty() ? im.findFootprint(group) : nullptr;
   if (footprint && footprint->m.empty()) footprint = nullptr;  // lent to a frame not handed back
-  // A partial frame reads the occluder's object from the map's stencil (no id attachment).
-  const bool stencilIds = footprint && im.stencilIdsApply(method);
+  // A group's first frame draws its planes (m, cascade) in pass 3 and keeps them, then goes on
+  // like the group's next ones; every frame on demand reads the occluder's object from the map's
+  // stencil (no id attachment).
+  const bool groupStart = onDemand && !footprint;
+  const bool stencilIds = onDemand && im.stencilIdsApply(method);
   im.prepareTargets(scene, method, layers, stencilIds);
-  const Impl::FramePipelines pipes = im.pipelinesFor(method, layers, spec, footprint != nullptr);
+  const Impl::FramePipelines pipes = im.pipelinesFor(method, layers, spec, onDemand, groupStart);
   const Impl::Drawn drawn = im.submit(scene, method, layers, pipes);
   const Impl::PassTimes passes = im.readTimestamps(drawn);
 
@@ -1603,15 +1644,18 @@ Frame Rasterizer::render(const Scene& scene, const Method& method, const std::st
   RasterTimings& t = timings ? *timings : local;
   t = RasterTimings();
   Frame frame;
-  if (footprint) {
+  if (onDemand) {
+    auto tRead = std::chrono::steady_clock::now();
+    if (groupStart) footprint = &im.keepPlanes(group, camera, scene.camera.width, scene.camera.height);
+    const double planesMs = msSince(tRead);
     frame = im.partialFrame(scene, *light, method, *select, *footprint, pipes, t);
+    if (groupStart) t.evidenceGpuMs += passes.resolveGpuMs, t.readbackMs += planesMs;  // the planes pass
   } else {
     auto tRead = std::chrono::steady_clock::now();
     frame = im.readback(scene, light, method, scene.camera.width, scene.camera.height);
     t.readbackMs = msSince(tRead);
     t.evidenceGpuMs = passes.resolveGpuMs;
     t.evidencePixels = frame.pixelCount();
-    if (onDemand) im.keepFootprint(group, camera, frame, *light);
   }
   frame.meta = frameMeta(scene, light, fit, method, deviceName());
   if (onDemand) frame.meta["evidence_group"] = group;  // CompareContext (compare.h): same hit, ids, m, cascade

@@ -90,10 +90,10 @@ class Rasterizer {
   // cascaded crops and the cascade splits (picked by the pixel's view depth along this camera's
   // forward axis). The image is always rendered from scene.camera, so a fixed scene.camera with a
   // moving fit camera shows the same surface point in every pixel of every frame (shimmer).
-  // `select` (optional): evidence on demand. When the scene has a light and no projectors and the
-  // planes that do not depend on bias or filter (hit, object_id, prim_id, m, cascade) are kept
-  // from an earlier render of the same group (the same scene, camera and light layers: map size,
-  // fit, light; a render with `select` keeps them), the frame is made from the lookup pass (vis
+  // `select` (optional): evidence on demand. When the scene has a light and no projectors, the
+  // planes that do not depend on bias or filter (hit, object_id, prim_id, m, cascade) are kept per
+  // group (the same scene, camera and light layers: map size, fit, light; the group's first render
+  // with `select` draws them in a planes pass, the next ones reuse them), the frame is made from the lookup pass (vis
   // exact at every byte 0 or 255), those kept planes and one resolve of the listed pixels only: the
   // other evidence channels (receiver_depth, map_depth, bias_depth, bias_world, occluder_id,
   // occluder_prim, in_map, the moment channels) are 0 except at the listed and fractional pixels,
@@ -102,7 +102,7 @@ class Rasterizer {
   // attachment (up to 255 objects, where the device has the format): occluder_id is exact and
   // occluder_prim stays 0 (meta "occluder_prim": "unresolved"). compareFrames gives the same
   // metrics as on the full frame when `select` lists every disagreement. Otherwise (no selector,
-  // projectors, a group not kept yet) the full frame, as without it.
+  // projectors) the full frame, as without it.
   Frame render(const Scene& scene, const Method& method, const std::string& light = "",
                RasterTimings* timings = nullptr, const Camera* fitCamera = nullptr,
                const EvidenceSelector* select = nullptr);

@@ -69,7 +69,11 @@ SHADOWLAB_CONST(int, kSpecNormalOffset, 12)
 // filter=pcf: filter.size (0 for the other filters, so they share pipelines). A compile-time loop
 // bound lets the compiler unroll pcf's gathers; a sweep over filter.size compiles a pipeline per size.
 SHADOWLAB_CONST(int, kSpecPcfSize, 13)
-SHADOWLAB_CONST(int, kSpecCount, 14)
+// 0/1: the planes pass (rasterizer.cpp, pass 3 at the first frame of an evidence group on demand):
+// per pixel only the planes that depend on no bias or filter, m and 2 * cascade + in_map, into one
+// attachment; the lookup, the evidence and the projectors compiled out.
+SHADOWLAB_CONST(int, kSpecPlanesOnly, 14)
+SHADOWLAB_CONST(int, kSpecCount, 15)
 
 // The descriptor set (set 0), one row per binding: X(Name, binding, kind). The kinds name
 // Vulkan descriptor types (rasterizer.cpp maps them); the set layout, the pool and the writes
