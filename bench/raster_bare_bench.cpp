@@ -116,7 +116,8 @@ class BareProgram {
     shadowIdsFrag_ = vk::createShaderModule(c, kSpv_bare_shadow_ids_frag, sizeof(kSpv_bare_shadow_ids_frag));
     cameraVert_ = vk::createShaderModule(c, kSpv_bare_camera_vert, sizeof(kSpv_bare_camera_vert));
     cameraFrag_ = vk::createShaderModule(c, kSpv_bare_camera_frag, sizeof(kSpv_bare_camera_frag));
-    auto pipeline = [&](VkShaderModule v, VkShaderModule f, std::vector<VkFormat> colors, VkFormat depth, bool bias) {
+    auto pipeline = [&](VkShaderModule v, VkShaderModule f, std::vector<VkFormat> colors, VkFormat depth, bool bias,
+                        bool stencil = false) {
       vk::GraphicsPipelineDesc p;
       p.vertex = v;
       p.fragment = f;
@@ -125,6 +126,7 @@ class BareProgram {
       p.attributes = {{0, 0, VK_FORMAT_R32G32B32_SFLOAT, 0}};
       p.colorFormats = std::move(colors);
       p.depthFormat = depth;
+      p.stencilFormat = stencil ? depth : VK_FORMAT_UNDEFINED;  // writes the draw's stencil reference
       p.depthBias = bias;
       return vk::createGraphicsPipeline(c, p);
     };
@@ -132,19 +134,8 @@ class BareProgram {
     shadowIdsPipe_ =
         pipeline(shadowVert_.get(), shadowIdsFrag_.get(), {VK_FORMAT_R32_UINT}, VK_FORMAT_X8_D24_UNORM_PACK32, true);
     cameraPipe_ = pipeline(cameraVert_.get(), cameraFrag_.get(), {VK_FORMAT_R8_UNORM}, VK_FORMAT_D32_SFLOAT, false);
-    {
-      vk::GraphicsPipelineDesc p;
-      p.vertex = shadowVert_.get();
-      p.fragment = shadowFrag_.get();
-      p.layout = layout;
-      p.bindings = {{0, 3 * sizeof(float), VK_VERTEX_INPUT_RATE_VERTEX}};
-      p.attributes = {{0, 0, VK_FORMAT_R32G32B32_SFLOAT, 0}};
-      p.depthFormat = p.stencilFormat = VK_FORMAT_D24_UNORM_S8_UINT;
-      p.depthBias = true;
-      shadowStencilPipe_ = vk::createGraphicsPipeline(c, p);
-      p.depthFormat = p.stencilFormat = VK_FORMAT_D32_SFLOAT_S8_UINT;
-      shadowStencil32Pipe_ = vk::createGraphicsPipeline(c, p);
-    }
+    shadowStencilPipe_ = pipeline(shadowVert_.get(), shadowFrag_.get(), {}, VK_FORMAT_D24_UNORM_S8_UINT, true, true);
+    shadowStencil32Pipe_ = pipeline(shadowVert_.get(), shadowFrag_.get(), {}, VK_FORMAT_D32_SFLOAT_S8_UINT, true, true);
     for (int linear = 0; linear < 2; ++linear) {
       VkSamplerCreateInfo s{VK_STRUCTURE_TYPE_SAMPLER_CREATE_INFO};
       s.magFilter = s.minFilter = linear ? VK_FILTER_LINEAR : VK_FILTER_NEAREST;
@@ -223,14 +214,8 @@ class BareProgram {
     w.pImageInfo = &image;
     vkUpdateDescriptorSets(c_.device(), 1, &w, 0, nullptr);
 
-    VkCommandBuffer cmd = commands_.begin();
+    VkCommandBuffer cmd = beginFrame();
     VkQueryPool pool = queries_.get();
-    vkCmdResetQueryPool(cmd, pool, 0, 3);
-    vkCmdWriteTimestamp2(cmd, VK_PIPELINE_STAGE_2_TOP_OF_PIPE_BIT, pool, 0);
-    VkDeviceSize offset = 0;
-    VkBuffer vb = vertices_.get();
-    vkCmdBindVertexBuffers(cmd, 0, 1, &vb, &offset);
-    vkCmdBindIndexBuffer(cmd, indices_.get(), 0, VK_INDEX_TYPE_UINT32);
 
     vk::transition(cmd, map_, VK_IMAGE_LAYOUT_UNDEFINED, VK_IMAGE_LAYOUT_DEPTH_ATTACHMENT_OPTIMAL,
                    VK_PIPELINE_STAGE_2_FRAGMENT_SHADER_BIT, 0, VK_PIPELINE_STAGE_2_EARLY_FRAGMENT_TESTS_BIT,
@@ -280,33 +265,12 @@ class BareProgram {
   // its own stencil reference (the object id): its GPU time.
   double stencilShadow(int draws, bool d32) {
     const vk::Image& map = d32 ? mapStencil32_ : mapStencil_;
-    VkCommandBuffer cmd = commands_.begin();
+    VkCommandBuffer cmd = beginFrame();
     VkQueryPool pool = queries_.get();
-    vkCmdResetQueryPool(cmd, pool, 0, 3);
-    vkCmdWriteTimestamp2(cmd, VK_PIPELINE_STAGE_2_TOP_OF_PIPE_BIT, pool, 0);
-    VkDeviceSize offset = 0;
-    VkBuffer vb = vertices_.get();
-    vkCmdBindVertexBuffers(cmd, 0, 1, &vb, &offset);
-    vkCmdBindIndexBuffer(cmd, indices_.get(), 0, VK_INDEX_TYPE_UINT32);
     vk::transition(cmd, map, VK_IMAGE_LAYOUT_UNDEFINED, VK_IMAGE_LAYOUT_DEPTH_STENCIL_ATTACHMENT_OPTIMAL,
                    VK_PIPELINE_STAGE_2_FRAGMENT_SHADER_BIT, 0, VK_PIPELINE_STAGE_2_EARLY_FRAGMENT_TESTS_BIT,
                    VK_ACCESS_2_DEPTH_STENCIL_ATTACHMENT_WRITE_BIT);
-    VkRenderingAttachmentInfo d{VK_STRUCTURE_TYPE_RENDERING_ATTACHMENT_INFO};
-    d.imageView = map.layerView(0);
-    d.imageLayout = VK_IMAGE_LAYOUT_DEPTH_STENCIL_ATTACHMENT_OPTIMAL;
-    d.loadOp = VK_ATTACHMENT_LOAD_OP_CLEAR;
-    d.storeOp = VK_ATTACHMENT_STORE_OP_STORE;
-    d.clearValue.depthStencil = {1.0f, 0};
-    VkRenderingInfo info{VK_STRUCTURE_TYPE_RENDERING_INFO};
-    info.renderArea = {{0, 0}, {uint32_t(kMapSize), uint32_t(kMapSize)}};
-    info.layerCount = 1;
-    info.pDepthAttachment = &d;
-    info.pStencilAttachment = &d;
-    vkCmdBeginRendering(cmd, &info);
-    VkViewport viewport{0, 0, float(kMapSize), float(kMapSize), 0.0f, 1.0f};
-    VkRect2D scissor{{0, 0}, {uint32_t(kMapSize), uint32_t(kMapSize)}};
-    vkCmdSetViewport(cmd, 0, 1, &viewport);
-    vkCmdSetScissor(cmd, 0, 1, &scissor);
+    begin(cmd, nullptr, map.layerView(0), kMapSize, kMapSize, true);
     vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_GRAPHICS, (d32 ? shadowStencil32Pipe_ : shadowStencilPipe_).get());
     vkCmdSetCullMode(cmd, VK_CULL_MODE_NONE);
     vkCmdSetDepthBias(cmd, 1.0f, 0.0f, 1.0f);
@@ -351,7 +315,20 @@ class BareProgram {
   }
 
  private:
-  void begin(VkCommandBuffer cmd, const vk::Image* color, VkImageView depthView, int w, int h) {
+  // A frame's command buffer: its timestamps reset, the first written, the mesh bound.
+  VkCommandBuffer beginFrame() {
+    VkCommandBuffer cmd = commands_.begin();
+    vkCmdResetQueryPool(cmd, queries_.get(), 0, 3);
+    vkCmdWriteTimestamp2(cmd, VK_PIPELINE_STAGE_2_TOP_OF_PIPE_BIT, queries_.get(), 0);
+    VkDeviceSize offset = 0;
+    VkBuffer vb = vertices_.get();
+    vkCmdBindVertexBuffers(cmd, 0, 1, &vb, &offset);
+    vkCmdBindIndexBuffer(cmd, indices_.get(), 0, VK_INDEX_TYPE_UINT32);
+    return cmd;
+  }
+
+  // stencil: depthView is a depth+stencil image's, both aspects attached.
+  void begin(VkCommandBuffer cmd, const vk::Image* color, VkImageView depthView, int w, int h, bool stencil = false) {
     VkRenderingAttachmentInfo c{VK_STRUCTURE_TYPE_RENDERING_ATTACHMENT_INFO};
     if (color) {
       c.imageView = color->layerView(0);
@@ -362,7 +339,8 @@ class BareProgram {
     }
     VkRenderingAttachmentInfo d{VK_STRUCTURE_TYPE_RENDERING_ATTACHMENT_INFO};
     d.imageView = depthView;
-    d.imageLayout = VK_IMAGE_LAYOUT_DEPTH_ATTACHMENT_OPTIMAL;
+    d.imageLayout =
+        stencil ? VK_IMAGE_LAYOUT_DEPTH_STENCIL_ATTACHMENT_OPTIMAL : VK_IMAGE_LAYOUT_DEPTH_ATTACHMENT_OPTIMAL;
     d.loadOp = VK_ATTACHMENT_LOAD_OP_CLEAR;
     d.storeOp = VK_ATTACHMENT_STORE_OP_STORE;
     d.clearValue.depthStencil = {1.0f, 0};
@@ -372,6 +350,7 @@ class BareProgram {
     info.colorAttachmentCount = color ? 1 : 0;
     info.pColorAttachments = color ? &c : nullptr;
     info.pDepthAttachment = &d;
+    info.pStencilAttachment = stencil ? &d : nullptr;
     vkCmdBeginRendering(cmd, &info);
     VkViewport viewport{0, 0, float(w), float(h), 0.0f, 1.0f};
     VkRect2D scissor{{0, 0}, {uint32_t(w), uint32_t(h)}};
