@@ -252,13 +252,8 @@ class BareProgram {
     vkCmdDrawIndexed(cmd, indexCount_, 1, 0, 0, 0);
     vkCmdEndRendering(cmd);
     vkCmdWriteTimestamp2(cmd, VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT, pool, 2);
-    commands_.submitAndWait();
-
-    uint64_t t[3];
-    VK_CHECK(vkGetQueryPoolResults(c_.device(), pool, 0, 3, sizeof(t), t, sizeof(uint64_t),
-                                   VK_QUERY_RESULT_64_BIT | VK_QUERY_RESULT_WAIT_BIT));
-    double ms = c_.properties().limits.timestampPeriod * 1e-6;
-    return {double(t[1] - t[0]) * ms, double(t[2] - t[1]) * ms};
+    const std::vector<double> ms = endFrame(3);
+    return {ms[0], ms[1]};
   }
 
   // The shadow pass alone into a depth+stencil map, the draw split into `draws` parts each writing
@@ -284,11 +279,7 @@ class BareProgram {
     }
     vkCmdEndRendering(cmd);
     vkCmdWriteTimestamp2(cmd, VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT, pool, 1);
-    commands_.submitAndWait();
-    uint64_t t[2];
-    VK_CHECK(vkGetQueryPoolResults(c_.device(), pool, 0, 2, sizeof(t), t, sizeof(uint64_t),
-                                   VK_QUERY_RESULT_64_BIT | VK_QUERY_RESULT_WAIT_BIT));
-    return double(t[1] - t[0]) * c_.properties().limits.timestampPeriod * 1e-6;
+    return endFrame(2)[0];
   }
 
   // Of the image's pixels, the fraction drawn (not the clear value) and, of those, the fraction in
@@ -325,6 +316,19 @@ class BareProgram {
     vkCmdBindVertexBuffers(cmd, 0, 1, &vb, &offset);
     vkCmdBindIndexBuffer(cmd, indices_.get(), 0, VK_INDEX_TYPE_UINT32);
     return cmd;
+  }
+
+  // Submits beginFrame()'s command buffer and waits: the milliseconds between its `stamps`
+  // consecutive timestamps.
+  std::vector<double> endFrame(uint32_t stamps) {
+    commands_.submitAndWait();
+    uint64_t t[3] = {};
+    VK_CHECK(vkGetQueryPoolResults(c_.device(), queries_.get(), 0, stamps, sizeof(t), t, sizeof(uint64_t),
+                                   VK_QUERY_RESULT_64_BIT | VK_QUERY_RESULT_WAIT_BIT));
+    const double ms = c_.properties().limits.timestampPeriod * 1e-6;
+    std::vector<double> out;
+    for (uint32_t i = 1; i < stamps; ++i) out.push_back(double(t[i] - t[i - 1]) * ms);
+    return out;
   }
 
   // stencil: depthView is a depth+stencil image's, both aspects attached.
