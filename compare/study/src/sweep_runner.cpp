@@ -78,6 +78,9 @@ class PipelineRunner final : public SweepRunner {
     Classification classification;
     compareFrames(reference, raster, options, &classification);
     writeTriptychPng(pngPath, reference, raster, classification);
+    // Its planes, and the kept ones it lends (hit, ids, m: raster.h), go back to the rasterizer:
+    // the next triptych's full frame then needs neither fresh memory nor those planes again.
+    rasterizer().recycle(std::move(raster));
     return true;
   }
 
