@@ -294,7 +294,8 @@ std::unique_ptr<PrestartedCharts> prestartCharts(const SweepOptions& options);
 // Where a report's wall time went: results.json's report_charts_wall_seconds and
 // report_triptychs_wall_seconds (compare/TIMINGS.md). The two overlap.
 struct SweepReportTimings {
-  std::optional<double> chartsWallSeconds;     // the chart script, started to reaped; none when it did not start
+  std::optional<double>
+      chartsWallSeconds;  // the chart script, handed its arguments to exited; none when it did not start
   std::optional<double> triptychsWallSeconds;  // rendering and writing the triptychs; none without triptychs
 };
 
