@@ -398,6 +398,7 @@ void writeSweepOutputs(const SweepPlan& plan, const std::vector<const StoredRow*
     if (reportTimings.chartsWallSeconds) results["report_charts_wall_seconds"] = *reportTimings.chartsWallSeconds;
     if (reportTimings.triptychsWallSeconds)
       results["report_triptychs_wall_seconds"] = *reportTimings.triptychsWallSeconds;
+    results["runner"] = runner.info();  // with what the report's triptychs added
     results["command_wall_seconds"] = secondsSince(t0);
     writeJsonAtomic(summary.resultsJson, results);
   }
