@@ -4,6 +4,7 @@
 // aliasing candidates for the distance transform) plus acne stripes in part of the lit area.
 //   ./compare_frames_bench --benchmark_min_time=1
 #include <cmath>
+#include <filesystem>
 
 #include <benchmark/benchmark.h>
 #include <tbb/global_control.h>
@@ -11,6 +12,7 @@
 #include "shadowlab/compare/compare.h"
 #include "shadowlab/raster/raster.h"
 #include "shadowlab/reference/reference.h"
+#include "shadowlab/scenes/frame.h"
 #include "shadowlab/scenes/loader.h"
 
 namespace {
@@ -181,6 +183,35 @@ void BM_ErrorsPicture(benchmark::State& state) {
   }
 }
 BENCHMARK(BM_ErrorsPicture)->Unit(benchmark::kMillisecond)->UseRealTime();
+
+// The errors picture's PNG written with libpng's adaptive row filters (arg 0, every PNG before
+// PngRows existed) and without (arg 1, what errors.png and the triptychs use now): the same
+// pixels, side by side. The file sizes are reported as counters.
+void BM_ErrorsPng(benchmark::State& state) {
+  const Pair p = makeFrames(1920, 1080, 8);
+  shadowlab::Classification c;
+  shadowlab::compareFrames(p.reference, p.raster, {}, &c);
+  int w = 0, h = 0;
+  const std::vector<uint8_t> rgb = shadowlab::errorsPicture(c, &w, &h);
+  const auto rows = state.range(0) ? shadowlab::PngRows::Unfiltered : shadowlab::PngRows::Adaptive;
+  const std::string path = "/tmp/shadowlab_bench_errors_" + std::to_string(state.range(0)) + ".png";
+  for (auto _ : state) shadowlab::writeRgbPng(path, w, h, rgb, rows);
+  state.counters["bytes"] = double(std::filesystem::file_size(path));
+  std::filesystem::remove(path);
+}
+BENCHMARK(BM_ErrorsPng)->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond)->UseRealTime();
+
+// A whole 1080p triptych as the sweep report writes it (three panels, legend, PNG).
+void BM_TriptychPng(benchmark::State& state) {
+  const Pair p = makeFrames(1920, 1080, 8);
+  shadowlab::Classification c;
+  shadowlab::compareFrames(p.reference, p.raster, {}, &c);
+  const std::string path = "/tmp/shadowlab_bench_triptych.png";
+  for (auto _ : state) shadowlab::writeTriptychPng(path, p.reference, p.raster, c);
+  state.counters["bytes"] = double(std::filesystem::file_size(path));
+  std::filesystem::remove(path);
+}
+BENCHMARK(BM_TriptychPng)->Unit(benchmark::kMillisecond)->UseRealTime();
 
 }  // namespace
 

@@ -15,6 +15,7 @@
 #include <thread>
 
 #include "shadowlab/compare/sweep.h"
+#include "shadowlab/scenes/error.h"
 #include "shadowlab/scenes/frame.h"
 #include "shadowlab/scenes/io.h"
 
@@ -130,11 +131,13 @@ class FakeRunner : public SweepRunner {
   }
   // A small picture stands in for reference | raster | errors when asked for one.
   bool writeTriptych(const Scene&, const Method&, const std::string&, const std::string& path) override {
+    if (failTriptychs) throw DriverError("deliberate triptych failure");
     if (!pictures) return false;
     writeRgbPng(path, 12, 4, std::vector<uint8_t>(12 * 4 * 3, 200));
     return true;
   }
   bool pictures = false;
+  bool failTriptychs = false;
 };
 
 TEST(ReportChromium, RealSweepReportLoadsEveryPictureWithoutConsoleErrors) {
@@ -342,5 +345,81 @@ TEST(ReportChromium, UnusedPrestartedPythonWritesNothingAndIsReaped) {
     EXPECT_LT(std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count(), 5.0);
   }
   EXPECT_EQ(::waitpid(-1, nullptr, WNOHANG), -1);
+  fs::remove_all(dir);
+}
+
+// The chart script runs while the triptychs render (writeSweepReport): both still reach the
+// report, a failure of either is a note while the other's output stays, and results.json says how
+// long each took (report_charts_wall_seconds, report_triptychs_wall_seconds; compare/TIMINGS.md).
+// The script below waits for the best triptych to appear before it fails: a report that rendered
+// the triptychs only after the charts would leave it waiting the full 20 s and "never" in its mark.
+TEST(ReportChromium, ChartsRunWhileTriptychsRenderAndEitherFailureIsANote) {
+  const std::string dir = tempDir("overlap");
+  const std::string script = dir + "/waiting_charts.py";
+  std::ofstream(script) << "import os, sys, time\n"
+                           "want = os.path.join(sys.argv[2], 'triptych_sphere_on_plane_best.png')\n"
+                           "t0 = time.time()\n"
+                           "while not os.path.exists(want) and time.time() - t0 < 20:\n"
+                           "    time.sleep(0.01)\n"
+                           "time.sleep(0.3)\n"
+                           "open(os.path.join(sys.argv[2], 'mark.txt'), 'w').write(\n"
+                           "    'seen' if os.path.exists(want) else 'never')\n"
+                           "sys.stderr.write('charts gave up on purpose\\n')\n"
+                           "sys.exit(5)\n";
+  SweepSpec spec;
+  spec.scenes = {"sphere_on_plane"};
+  spec.grid = {parseGridArgument("map.size=256,1024")};
+  const SweepPlan plan = planSweep(spec);
+  FakeRunner runner;
+  runner.pictures = true;
+  SweepOptions o;
+  o.outDir = dir + "/sweep";
+  o.progress = nullptr;
+  o.reportScript = script;
+  SweepSummary s = runSweep(plan, runner, o);
+  EXPECT_EQ(slurp(o.outDir + "/figures/mark.txt"), "seen");
+  for (const char* pick : {"best", "worst"})
+    EXPECT_TRUE(fs::is_regular_file(o.outDir + "/figures/triptych_sphere_on_plane_" + pick + ".png")) << pick;
+  ASSERT_EQ(s.notes.size(), 1u);
+  EXPECT_NE(s.notes[0].find("exited with 5"), std::string::npos) << s.notes[0];
+  EXPECT_NE(s.notes[0].find("charts gave up on purpose"), std::string::npos) << s.notes[0];
+  std::string html = slurp(s.reportHtml);
+  EXPECT_NE(html.find("charts gave up on purpose"), std::string::npos);
+  EXPECT_NE(html.find("src=\"figures/triptych_sphere_on_plane_worst.png\""), std::string::npos);
+  nlohmann::json results = nlohmann::json::parse(slurp(s.resultsJson));
+  ASSERT_TRUE(results["report_charts_wall_seconds"].is_number()) << results.dump(1);
+  ASSERT_TRUE(results["report_triptychs_wall_seconds"].is_number());
+  // The script's own time (its 0.3 s sleep at least), not the triptychs' nor the whole report's.
+  EXPECT_GE(results["report_charts_wall_seconds"].get<double>(), 0.3);
+  EXPECT_LE(results["report_charts_wall_seconds"].get<double>(), results["report_wall_seconds"].get<double>());
+  EXPECT_LE(results["report_triptychs_wall_seconds"].get<double>(), results["report_wall_seconds"].get<double>());
+
+  // Now the triptychs fail and the charts succeed: the chart is shown, the failure is a note.
+  const std::string okScript = dir + "/one_chart.py";
+  std::ofstream(okScript) << "import json, os, sys\n"
+                             "json.dump({'charts': [{'id': 'only', 'title': 'The only chart', 'caption': 'c',\n"
+                             "           'png': 'figures/only.png'}], 'skipped': []},\n"
+                             "          open(os.path.join(sys.argv[2], 'charts.json'), 'w'))\n";
+  runner.failTriptychs = true;
+  o.outDir = dir + "/sweep2";
+  o.reportScript = okScript;
+  s = runSweep(plan, runner, o);
+  ASSERT_EQ(s.notes.size(), 2u) << "one per triptych";
+  for (const auto& n : s.notes) EXPECT_NE(n.find("deliberate triptych failure"), std::string::npos) << n;
+  html = slurp(s.reportHtml);
+  EXPECT_NE(html.find("<figure id=\"only\">"), std::string::npos);
+  EXPECT_NE(html.find("deliberate triptych failure"), std::string::npos);
+  EXPECT_FALSE(fs::exists(o.outDir + "/figures/triptych_sphere_on_plane_best.png"));
+  results = nlohmann::json::parse(slurp(s.resultsJson));
+  EXPECT_TRUE(results["report_charts_wall_seconds"].is_number());
+  EXPECT_TRUE(results["report_triptychs_wall_seconds"].is_number());
+
+  // Without a report, none of the three.
+  o.outDir = dir + "/sweep3";
+  o.writeReport = false;
+  s = runSweep(plan, runner, o);
+  results = nlohmann::json::parse(slurp(s.resultsJson));
+  for (const char* k : {"report_wall_seconds", "report_charts_wall_seconds", "report_triptychs_wall_seconds"})
+    EXPECT_TRUE(results.contains(k) && results[k].is_null()) << k;
   fs::remove_all(dir);
 }

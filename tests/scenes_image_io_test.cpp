@@ -171,3 +171,29 @@ TEST(ImageIo, UnreadableFilesAreNamedErrors) {
   }
   fs::remove_all(dir);
 }
+
+// PngRows::Unfiltered (errors.png, the triptychs) changes how the file is compressed, never the
+// pixels: both files read back as what was written, and the files differ (the option reaches
+// the encoder: on a gradient libpng's adaptive filters pick Sub/Up/Paeth rows, not None).
+TEST(ImageIo, UnfilteredPngHoldsTheSamePixels) {
+  const fs::path dir = freshDir("unfiltered");
+  const int w = 64, h = 16;
+  std::vector<uint8_t> rgb(size_t(w) * h * 3);
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x)
+      for (int c = 0; c < 3; ++c) rgb[(size_t(y) * w + x) * 3 + c] = uint8_t(x * 3 + y * 7 + c * 50);
+  const std::string adaptive = (dir / "adaptive.png").string(), unfiltered = (dir / "unfiltered.png").string();
+  writeRgbPng(adaptive, w, h, rgb);
+  writeRgbPng(unfiltered, w, h, rgb, PngRows::Unfiltered);
+  for (const std::string& path : {adaptive, unfiltered}) {
+    image_io::FloatImage im;
+    ASSERT_EQ(image_io::readTexture(path, im, std::numeric_limits<int>::max()), "") << path;
+    ASSERT_EQ(im.width, w);
+    ASSERT_EQ(im.height, h);
+    ASSERT_EQ(im.pixels.size(), rgb.size()) << path;
+    for (size_t i = 0; i < rgb.size(); ++i)
+      ASSERT_EQ(im.pixels[i], float(rgb[i]) * (1.0f / 255.0f)) << path << " value " << i;  // as expectPngTexture
+  }
+  EXPECT_NE(shadowlab::testing::slurp(adaptive), shadowlab::testing::slurp(unfiltered));
+  fs::remove_all(dir);
+}

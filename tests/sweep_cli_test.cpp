@@ -221,6 +221,41 @@ TEST(SweepCli, SmallSweepRowsMatchShadowlabRunExactly) {
   fs::remove_all(dir);
 }
 
+// The report's triptychs are rendered with evidence on demand, as the rows (sweep_runner.cpp,
+// writeTriptych): the same pictures, byte for byte, as from the full frames of --full-evidence.
+// runner.triptychs_on_demand says how many came from a partial frame: at least one here, or the
+// comparison would prove nothing. The charts are skipped (no script): the triptychs are the point.
+TEST(SweepCli, ReportTriptychsOnDemandEqualFullFrameOnes) {
+  const std::string dir = tempDir("triptychs");
+  const std::string scene = smallScene(dir);
+  ::setenv("SHADOWLAB_REPORT_SCRIPT", (dir + "/no_charts.py").c_str(), 1);
+  for (const char* mode : {"on_demand", "full"}) {
+    std::vector<std::string> args =
+        sweepArgs({scene, "--grid", "map.size=256,512", "--grid", "filter=none,pcf", "--grid", "bias.slope=0,2", "-o",
+                   dir + "/" + mode, "--cache", dir + "/cache"});
+    if (std::string(mode) == "full") args.push_back("--full-evidence");
+    Child sweep = spawn(args, dir + "/" + mode);
+    const int rc = waitFor(sweep);
+    if (rc == 3) {
+      ::unsetenv("SHADOWLAB_REPORT_SCRIPT");
+      GTEST_SKIP() << "no Vulkan device (shadowlab exit 3): " << slurp(sweep.err);
+    }
+    ASSERT_EQ(rc, 0) << slurp(sweep.err);
+  }
+  ::unsetenv("SHADOWLAB_REPORT_SCRIPT");
+  const auto onDemand = nlohmann::json::parse(slurp(dir + "/on_demand/results.json"));
+  const auto full = nlohmann::json::parse(slurp(dir + "/full/results.json"));
+  EXPECT_GE(onDemand["runner"]["triptychs_on_demand"].get<int>(), 1) << onDemand["runner"].dump();
+  EXPECT_EQ(full["runner"]["triptychs_on_demand"].get<int>(), 0);
+  for (const char* pick : {"best", "worst"}) {
+    const std::string file = std::string("/figures/triptych_sphere_on_plane_") + pick + ".png";
+    const std::string a = slurp(dir + "/on_demand" + file), b = slurp(dir + "/full" + file);
+    ASSERT_FALSE(a.empty()) << pick;
+    EXPECT_TRUE(a == b) << pick << ": the triptychs differ";
+  }
+  fs::remove_all(dir);
+}
+
 // Rows rendered on demand are compared through a CompareContext kept per evidence group
 // (compare/METRICS.md "Comparing a group"): the filter fastest, then the map size, so two groups
 // alternate every two rows and each keeps its context. Every row's metrics equal those of the

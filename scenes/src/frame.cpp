@@ -160,12 +160,14 @@ Frame readFrameExr(const std::string& path) {
   return frame;
 }
 
-void writeRgbPng(const std::string& path, int width, int height, const std::vector<uint8_t>& rgb) {
+void writeRgbPng(const std::string& path, int width, int height, const std::vector<uint8_t>& rgb, PngRows rows) {
   if (width <= 0 || height <= 0 || rgb.size() != size_t(width) * size_t(height) * 3)
     throw DriverError(formatError(path, "",
                                   "picture is " + std::to_string(width) + "x" + std::to_string(height) + " with " +
                                       std::to_string(rgb.size()) + " bytes; expected w*h*3"));
-  writeImageAtomic(path, [&](const std::string& tmp) { return image_io::writePng(tmp, width, height, 3, rgb.data()); });
+  writeImageAtomic(path, [&](const std::string& tmp) {
+    return image_io::writePng(tmp, width, height, 3, rgb.data(), rows == PngRows::Unfiltered);
+  });
 }
 
 }  // namespace shadowlab

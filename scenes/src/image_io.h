@@ -41,8 +41,10 @@ struct FloatImage {
 std::string writeExr(const std::string& path, const FloatImage& image);
 // Reads an image file's first part with every channel as float (any EXR pixel type).
 std::string readExr(const std::string& path, FloatImage& image);
-// Writes an 8-bit PNG of `channels` (3 or 4) interleaved values per pixel.
-std::string writePng(const std::string& path, int width, int height, int channels, const uint8_t* pixels);
+// Writes an 8-bit PNG of `channels` (3 or 4) interleaved values per pixel. `unfiltered`: no
+// per-row PNG filter (PNG_FILTER_NONE) instead of libpng's adaptive choice (PngRows, frame.h).
+std::string writePng(const std::string& path, int width, int height, int channels, const uint8_t* pixels,
+                     bool unfiltered = false);
 // Reads a texture (PNG, EXR; OpenImageIO: any format it knows): gray, gray+alpha, RGB or RGBA
 // channels as stored (a palette PNG expands to RGB(A)). When a side is outside 1..maxSide only width and height are set
 // (pixels stay empty) so the caller can refuse the size before anything large is allocated.

@@ -260,7 +260,8 @@ std::string readExr(const std::string& path, FloatImage& image) {
   return readExrFile(path, image, std::numeric_limits<int>::max());
 }
 
-std::string writePng(const std::string& path, int width, int height, int channels, const uint8_t* pixels) {
+std::string writePng(const std::string& path, int width, int height, int channels, const uint8_t* pixels,
+                     bool unfiltered) {
   if (channels != 3 && channels != 4) return "expected 3 or 4 channels, got " + std::to_string(channels);
   File f(std::fopen(path.c_str(), "wb"));
   if (!f) return std::string("cannot create: ") + std::strerror(errno);
@@ -278,6 +279,7 @@ std::string writePng(const std::string& path, int width, int height, int channel
                channels == 4 ? PNG_COLOR_TYPE_RGB_ALPHA : PNG_COLOR_TYPE_RGB, PNG_INTERLACE_NONE,
                PNG_COMPRESSION_TYPE_DEFAULT, PNG_FILTER_TYPE_DEFAULT);
   png_set_compression_level(png, 6);  // OpenImageIO's default
+  if (unfiltered) png_set_filter(png, 0, PNG_FILTER_NONE);
   png_write_info(png, info);
   const size_t stride = size_t(width) * size_t(channels);
   for (int y = 0; y < height; ++y) rows[size_t(y)] = const_cast<png_bytep>(pixels + stride * size_t(y));

@@ -64,10 +64,12 @@ std::string readExr(const std::string& path, FloatImage& image) {
   return "";
 }
 
-std::string writePng(const std::string& path, int width, int height, int channels, const uint8_t* pixels) {
+std::string writePng(const std::string& path, int width, int height, int channels, const uint8_t* pixels,
+                     bool unfiltered) {
   OIIO::ImageSpec spec(width, height, channels, OIIO::TypeDesc::UINT8);
   // The values are un-associated already: without this OIIO would divide colour by alpha.
   if (channels == 4) spec.attribute("oiio:UnassociatedAlpha", 1);
+  if (unfiltered) spec.attribute("png:filter", 0x08);  // libpng's PNG_FILTER_NONE, handed to png_set_filter
   auto out = OIIO::ImageOutput::create(path);
   if (!out) return OIIO::geterror();
   if (!out->open(path, spec)) return out->geterror();

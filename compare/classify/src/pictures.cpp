@@ -144,14 +144,20 @@ void darken(uint8_t* p) {
   for (int k = 0; k < 3; ++k) p[k] = uint8_t(p[k] * 3 / 5);
 }
 
-}  // namespace
-
-std::vector<uint8_t> errorsPicture(const Classification& c, int* outWidth, int* outHeight, const Frame* outlines) {
-  const int w = c.width, h = c.height;
-  if (w <= 0 || h <= 0 || c.classes.size() != size_t(w) * h) {
-    throw InputError("errors picture: error: classification is " + std::to_string(w) + "x" + std::to_string(h) +
-                     " with " + std::to_string(c.classes.size()) + " pixels; expected a non-empty frame");
+void checkClassification(const Classification& c) {
+  if (c.width <= 0 || c.height <= 0 || c.classes.size() != size_t(c.width) * c.height) {
+    throw InputError("errors picture: error: classification is " + std::to_string(c.width) + "x" +
+                     std::to_string(c.height) + " with " + std::to_string(c.classes.size()) +
+                     " pixels; expected a non-empty frame");
   }
+}
+
+// errorsPicture with the outlines' silhouettes given (empty: none), so that the triptych finds
+// the reference's once for two panels.
+std::vector<uint8_t> drawErrors(const Classification& c, int* outWidth, int* outHeight,
+                                const std::vector<uint8_t>& edge) {
+  checkClassification(c);
+  const int w = c.width, h = c.height;
   const PerPixelClass<uint64_t> counts = countClasses(c.classes);
   Metrics shares;  // pixels_compared and the rates the legend prints
   setClassMetrics(shares, counts);
@@ -200,7 +206,6 @@ std::vector<uint8_t> errorsPicture(const Classification& c, int* outWidth, int* 
     }
   }
   // Outlines only over correct and background pixels: an error pixel keeps its class color.
-  const std::vector<uint8_t> edge = silhouettes(outlines, w, h);
   for (size_t i = 0; i < edge.size(); ++i) {
     if (edge[i] && (c.classes[i] == PixelClass::Correct || c.classes[i] == PixelClass::NotCompared)) {
       darken(&canvas.rgb[i * 3]);
@@ -218,19 +223,24 @@ std::vector<uint8_t> errorsPicture(const Classification& c, int* outWidth, int* 
   return std::move(canvas.rgb);
 }
 
+}  // namespace
+
+std::vector<uint8_t> errorsPicture(const Classification& c, int* outWidth, int* outHeight, const Frame* outlines) {
+  return drawErrors(c, outWidth, outHeight, silhouettes(outlines, c.width, c.height));
+}
+
 void writeErrorsPng(const std::string& path, const Classification& c, const Frame* outlines) {
   int w = 0, h = 0;
   std::vector<uint8_t> rgb = errorsPicture(c, &w, &h, outlines);
-  writeRgbPng(path, w, h, rgb);
+  writeRgbPng(path, w, h, rgb, PngRows::Unfiltered);
 }
 
 namespace {
 
 // Grey shading from visibility only (compare sees frames, not the scene): lit surfaces light grey,
 // shadowed ones dark grey, background dark blue; each object slightly tinted and outlined so
-// that a lit object in front of a lit ground stays visible.
-std::vector<uint8_t> visibilityPicture(const Frame& f, const std::string& light) {
-  const std::vector<uint8_t> edge = silhouettes(&f, f.width, f.height);
+// that a lit object in front of a lit ground stays visible. `edge`: silhouettes(&f, ...).
+std::vector<uint8_t> visibilityPicture(const Frame& f, const std::string& light, const std::vector<uint8_t>& edge) {
   const float* id = f.has("object_id") ? f.get("object_id").data() : nullptr;
   std::vector<uint8_t> rgb(f.pixelCount() * 3);
   const std::string visName = "light." + light + ".vis";
@@ -270,16 +280,17 @@ void writeTriptychPng(const std::string& path, const Frame& reference, const Fra
     light.clear();  // no light: both panels show geometry only
   }
   int ew = 0, eh = 0;
-  const std::vector<uint8_t> errors = errorsPicture(c, &ew, &eh, &reference);
+  const std::vector<uint8_t> referenceEdge = silhouettes(&reference, w, h);  // the errors panel's outlines too
+  const std::vector<uint8_t> errors = drawErrors(c, &ew, &eh, referenceEdge);
   const int s = fontScale(w);
   const int gap = 4 * s, header = kGlyphH * s + 4 * s;
   Canvas canvas(3 * w + 2 * gap, header + std::max(h, eh), kLegendBackground);
-  canvas.blit(visibilityPicture(reference, light), w, h, 0, header);
-  canvas.blit(visibilityPicture(raster, light), w, h, w + gap, header);
+  canvas.blit(visibilityPicture(reference, light, referenceEdge), w, h, 0, header);
+  canvas.blit(visibilityPicture(raster, light, silhouettes(&raster, w, h)), w, h, w + gap, header);
   canvas.blit(errors, ew, eh, 2 * (w + gap), header);
   const std::string titles[3] = {"reference", "raster", "errors"};
   for (int k = 0; k < 3; ++k) canvas.text(k * (w + gap) + 2 * s, 2 * s, titles[k], s, kText);
-  writeRgbPng(path, canvas.width, canvas.height, canvas.rgb);
+  writeRgbPng(path, canvas.width, canvas.height, canvas.rgb, PngRows::Unfiltered);
 }
 
 }  // namespace shadowlab

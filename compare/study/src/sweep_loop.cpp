@@ -373,6 +373,8 @@ void writeSweepOutputs(const SweepPlan& plan, const std::vector<const StoredRow*
   results["machine"] = machineInfo();
   results["runner"] = runner.info();
   results["report_wall_seconds"] = nullptr;
+  results["report_charts_wall_seconds"] = nullptr;
+  results["report_triptychs_wall_seconds"] = nullptr;
   results["command_wall_seconds"] = secondsSince(t0);
   for (auto it = extra.begin(); it != extra.end(); ++it) results[it.key()] = it.value();
 
@@ -388,10 +390,15 @@ void writeSweepOutputs(const SweepPlan& plan, const std::vector<const StoredRow*
       std::fflush(options.progress);
     }
     const auto r0 = Clock::now();
-    summary.notes = writeSweepReport(plan, rows, results, runner, options, charts);
+    SweepReportTimings reportTimings;
+    summary.notes = writeSweepReport(plan, rows, results, runner, options, charts, &reportTimings);
     summary.reportHtml = joinPath(options.outDir, "report.html");
     // Written again so command_wall_seconds covers the report too (charts and triptychs included).
     results["report_wall_seconds"] = secondsSince(r0);
+    if (reportTimings.chartsWallSeconds) results["report_charts_wall_seconds"] = *reportTimings.chartsWallSeconds;
+    if (reportTimings.triptychsWallSeconds)
+      results["report_triptychs_wall_seconds"] = *reportTimings.triptychsWallSeconds;
+    results["runner"] = runner.info();  // with what the report's triptychs added
     results["command_wall_seconds"] = secondsSince(t0);
     writeJsonAtomic(summary.resultsJson, results);
   }

@@ -14,14 +14,16 @@
 
 #include <algorithm>
 #include <cctype>
-#include <optional>
+#include <chrono>
 #include <cmath>
 #include <cstring>
 #include <ctime>
 #include <filesystem>
 #include <map>
+#include <optional>
 #include <set>
 #include <sstream>
+#include <thread>
 
 #include "shadowlab/compare/compare.h"
 #include "shadowlab/compare/sweep.h"
@@ -400,7 +402,10 @@ std::vector<size_t> paretoFront(const std::vector<ResultRow>& rows, const std::s
 
 std::vector<std::string> writeSweepReport(const SweepPlan& plan, const std::vector<ResultRow>& rows,
                                           const nlohmann::json& results, SweepRunner& runner,
-                                          const SweepOptions& options, PrestartedCharts* prestarted) {
+                                          const SweepOptions& options, PrestartedCharts* prestarted,
+                                          SweepReportTimings* timings) {
+  using Clock = std::chrono::steady_clock;
+  auto secondsSince = [](Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); };
   std::vector<std::string> notes;
   const std::string figuresDir = joinPath(options.outDir, "figures");
   makeDirs(figuresDir);
@@ -418,6 +423,7 @@ std::vector<std::string> writeSweepReport(const SweepPlan& plan, const std::vect
   fs::remove(manifestPath, ec);
   nlohmann::json manifest;
   pid_t charts = -1;
+  Clock::time_point chartsStart;
   std::string chartsCommand;
   const std::string logPath = joinPath(figuresDir, "charts.log");
   if (options.reportScript.empty()) {
@@ -426,11 +432,27 @@ std::vector<std::string> writeSweepReport(const SweepPlan& plan, const std::vect
     notes.push_back("charts skipped: chart script " + options.reportScript + " not found");
   } else {
     const std::string python = chartPython(options);
+    chartsStart = Clock::now();
     if (prestarted) charts = prestarted->run({options.reportScript, resultsPath, figuresDir}, logPath);
     if (charts < 0) charts = spawnLogged({python, options.reportScript, resultsPath, figuresDir}, logPath);
     chartsCommand = python + " " + options.reportScript;
     if (charts < 0) notes.push_back("charts failed: cannot start " + chartsCommand + ": " + std::strerror(errno));
   }
+  // Reaped on a thread of its own, so that its exit time is known while the triptychs render.
+  int chartsExit = -1;
+  Clock::time_point chartsEnd;
+  std::thread chartsReaper;
+  struct JoinOnExit {  // also on the way out through an exception
+    std::thread& t;
+    ~JoinOnExit() {
+      if (t.joinable()) t.join();
+    }
+  } joinReaper{chartsReaper};
+  if (charts >= 0)
+    chartsReaper = std::thread([&chartsExit, &chartsEnd, charts] {
+      chartsExit = waitExit(charts);
+      chartsEnd = Clock::now();
+    });
 
   // Triptychs of the best and the worst configuration of each scene, rendered again now: the
   // sweep keeps no images.
@@ -442,6 +464,7 @@ std::vector<std::string> writeSweepReport(const SweepPlan& plan, const std::vect
   std::map<std::string, std::vector<Pick>> picks;
   std::map<std::string, size_t> jobOfKey;  // rows need not be in plan order
   for (size_t j = 0; j < plan.jobs.size(); ++j) jobOfKey[plan.jobs[j].key()] = j;
+  const Clock::time_point triptychsStart = Clock::now();
   if (options.triptychs) {
     for (size_t s = 0; s < plan.sceneNames.size(); ++s) {
       const std::string& name = plan.sceneNames[s];
@@ -477,10 +500,13 @@ std::vector<std::string> writeSweepReport(const SweepPlan& plan, const std::vect
       }
       picks[name] = list;
     }
+    if (timings) timings->triptychsWallSeconds = secondsSince(triptychsStart);
   }
 
-  if (charts >= 0) {
-    int rc = waitExit(charts);
+  if (chartsReaper.joinable()) {
+    chartsReaper.join();
+    const int rc = chartsExit;
+    if (timings) timings->chartsWallSeconds = std::chrono::duration<double>(chartsEnd - chartsStart).count();
     if (rc != 0)
       notes.push_back("charts failed: " + chartsCommand + " exited with " + std::to_string(rc) +
                       "; see figures/charts.log: " + tailOf(logPath, 3));

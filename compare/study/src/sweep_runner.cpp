@@ -71,13 +71,25 @@ class PipelineRunner final : public SweepRunner {
 
   bool writeTriptych(const Scene& scene, const Method& method, const std::string& light,
                      const std::string& pngPath) override {
-    const Frame& reference = referenceFor(scene);
-    Frame raster = rasterizer().render(scene, method, light, nullptr);
+    std::string referenceKey;
+    const Frame& reference = referenceFor(scene, &referenceKey);
     CompareOptions options;
     options.light = scene.lightOrDefault(light);
+    // Evidence on demand, as the rows: the triptych draws the raster's visibility, hit and ids
+    // (whole planes in such a frame too) and the classification, which is the full frame's (the
+    // agreeing pixels are correct either way); the same picture, bit for bit
+    // (SweepCli.ReportTriptychsOnDemandEqualFullFrameOnes). It also runs on the pipelines the
+    // loop compiled, where a full frame would compile its own and run twice (raster.h).
+    const EvidenceSelector* select = fullEvidence_ ? nullptr : &selectorFor(referenceKey, reference, options.light);
+    RasterTimings t;  // for partialEvidence: the rasterizer still renders a full frame where it keeps no planes
+    Frame raster = rasterizer().render(scene, method, light, &t, nullptr, select && *select ? select : nullptr);
+    triptychsOnDemand_ += t.partialEvidence ? 1 : 0;
     Classification classification;
     compareFrames(reference, raster, options, &classification);
     writeTriptychPng(pngPath, reference, raster, classification);
+    // Its planes, and the kept ones it lends (hit, ids, m: raster.h), go back to the rasterizer:
+    // the next triptych's full frame then needs neither fresh memory nor those planes again.
+    rasterizer().recycle(std::move(raster));
     return true;
   }
 
@@ -103,6 +115,7 @@ class PipelineRunner final : public SweepRunner {
     // Rows compared through a group's CompareContext, and contexts built (compareRow).
     j["compare_context_rows"] = contextRows_;
     j["compare_contexts_built"] = contextsBuilt_;
+    j["triptychs_on_demand"] = triptychsOnDemand_;  // triptychs rendered from a partial frame (writeTriptych)
     return j;
   }
 
@@ -191,6 +204,7 @@ class PipelineRunner final : public SweepRunner {
   static constexpr size_t kKeptContexts = 4;
   std::list<std::pair<std::string, CompareContext>> contexts_;  // key -> context, most recently used first
   int contextRows_ = 0, contextsBuilt_ = 0;
+  int triptychsOnDemand_ = 0;
   std::string selectorKey_;  // selectorFor: the reference hash and light of selector_
   EvidenceSelector selector_;
   std::list<std::string> seen_;  // keys seen once, without a context yet

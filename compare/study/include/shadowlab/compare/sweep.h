@@ -16,6 +16,7 @@
 #include <cstdio>
 #include <map>
 #include <memory>
+#include <optional>
 #include <string>
 #include <utility>
 #include <vector>
@@ -290,14 +291,24 @@ class PrestartedCharts {
 // script is configured or found, or it cannot be started (the report then starts the script as before).
 std::unique_ptr<PrestartedCharts> prestartCharts(const SweepOptions& options);
 
+// Where a report's wall time went: results.json's report_charts_wall_seconds and
+// report_triptychs_wall_seconds (compare/TIMINGS.md). The two overlap.
+struct SweepReportTimings {
+  std::optional<double>
+      chartsWallSeconds;  // the chart script, handed its arguments to exited; none when it did not start
+  std::optional<double> triptychsWallSeconds;  // rendering and writing the triptychs; none without triptychs
+};
+
 // The report of a finished sweep whose results.json is written: runs the chart script into
 // outDir/figures (PNG, PDF, SVG and figures/charts.json), renders the best and worst configuration
-// of each scene again for triptychs (figures/triptych_*.png) and writes outDir/report.html.
-// Returns notes (charts skipped, script failures) that the report also shows. `charts`: a Python
-// started earlier by prestartCharts to run the chart script in (null: started here).
+// of each scene again for triptychs (figures/triptych_*.png) while the script runs, and writes
+// outDir/report.html. Returns notes (charts skipped, script failures, triptychs that failed) that
+// the report also shows. `charts`: a Python started earlier by prestartCharts to run the chart
+// script in (null: started here). `timings` (optional) receives the two parts' wall times.
 std::vector<std::string> writeSweepReport(const SweepPlan& plan, const std::vector<ResultRow>& rows,
                                           const nlohmann::json& results, SweepRunner& runner,
-                                          const SweepOptions& options, PrestartedCharts* charts = nullptr);
+                                          const SweepOptions& options, PrestartedCharts* charts = nullptr,
+                                          SweepReportTimings* timings = nullptr);
 
 // Pieces of the report, usable on their own.
 void writeResultsCsv(const std::string& path, const std::vector<ResultRow>& rows);
