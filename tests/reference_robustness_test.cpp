@@ -254,6 +254,83 @@ TEST(ReferenceRobustness, CompareSetEqualsAllSetOnEveryBundledScene) {
   }
 }
 
+// The AVX2 compilation of the trace (ReferenceSimd::Avx2, what Auto runs on a CPU with AVX2) gives
+// the baseline compilation's bits: every channel, the picture and the ray counts, on every bundled
+// scene at its own size (All set, spp 1), at spp 3 (Hammersley) and 4 (grid) on the scenes with
+// alpha testing and a projector, and with a spot and a point light added (spp 2) on four scenes.
+// Skipped where the build or the CPU has no AVX2 (there only the baseline runs).
+TEST(ReferenceRobustness, Avx2TraceEqualsBaselineOnEveryBundledScene) {
+  if (!referenceHasAvx2()) GTEST_SKIP() << "no AVX2 trace in this build or on this CPU";
+  struct Case {
+    std::string scene;
+    int spp;
+    bool addLights;
+  };
+  std::vector<Case> cases;
+  for (const std::string& name : bundledSceneNames()) cases.push_back({name, 1, false});
+  for (const char* name : {"alpha_fence", "projector"})
+    for (int spp : {3, 4}) cases.push_back({name, spp, false});
+  for (const char* name : {"sphere_on_plane", "contact", "alpha_fence", "projector"}) cases.push_back({name, 2, true});
+  ASSERT_GE(cases.size(), 14u);
+  size_t spotLit = 0, spotDark = 0, pointLit = 0, pointDark = 0;
+  for (const Case& c : cases) {
+    SCOPED_TRACE(c.scene + " spp " + std::to_string(c.spp) + (c.addLights ? " with a spot and a point light" : ""));
+    Scene scene = c.spp == 1 ? loadScene(resolveScenePath(c.scene))
+                             : loadScene(resolveScenePath(c.scene), {{"/camera/width", 240}, {"/camera/height", 135}});
+    if (c.addLights) {
+      Light spot;
+      spot.name = "spot";
+      spot.type = LightType::Spot;
+      spot.position = {0.5f, 6.0f, 0.3f};
+      spot.direction = glm::normalize(glm::vec3(-0.1f, -1.0f, -0.05f));
+      spot.coneDeg = 50.0f;
+      Light point;
+      point.name = "point";
+      point.type = LightType::Point;
+      point.position = {3.0f, 4.0f, 2.0f};
+      scene.lights.push_back(spot);
+      scene.lights.push_back(point);
+    }
+    ReferenceOptions options;
+    options.spp = c.spp;
+    options.threads = 2;
+    options.channels = ReferenceChannels::All;
+    options.simd = ReferenceSimd::Baseline;
+    ReferenceStats baselineStats, avx2Stats;
+    std::vector<uint8_t> baselinePicture, avx2Picture;
+    const Frame baseline = renderReference(scene, options, &baselineStats, &baselinePicture);
+    options.simd = ReferenceSimd::Avx2;
+    const Frame avx2 = renderReference(scene, options, &avx2Stats, &avx2Picture);
+    ASSERT_EQ(avx2.names, baseline.names);
+    for (size_t k = 0; k < baseline.names.size(); ++k) {
+      ASSERT_EQ(avx2.data[k].size(), baseline.data[k].size());
+      EXPECT_EQ(std::memcmp(avx2.data[k].data(), baseline.data[k].data(), baseline.data[k].size() * sizeof(float)), 0)
+          << "channel " << baseline.names[k];
+    }
+    EXPECT_EQ(avx2Picture, baselinePicture);
+    EXPECT_EQ(avx2Stats.primaryRays, baselineStats.primaryRays);
+    EXPECT_EQ(avx2Stats.shadowRays, baselineStats.shadowRays);
+    EXPECT_GT(baselineStats.shadowRays, 0u);
+    if (c.addLights) {
+      const auto& hit = baseline.get("hit");
+      const auto& spotVis = baseline.get("light.spot.vis");
+      const auto& pointVis = baseline.get("light.point.vis");
+      for (size_t i = 0; i < hit.size(); ++i) {
+        if (hit[i] != 1.0f) continue;
+        spotLit += spotVis[i] == 1.0f;
+        spotDark += spotVis[i] == 0.0f;
+        pointLit += pointVis[i] == 1.0f;
+        pointDark += pointVis[i] == 0.0f;
+      }
+    }
+  }
+  // Not vacuous: the added lights light some surfaces and leave others dark.
+  EXPECT_GT(spotLit, 0u);
+  EXPECT_GT(spotDark, 0u);
+  EXPECT_GT(pointLit, 0u);
+  EXPECT_GT(pointDark, 0u);
+}
+
 // The picture renderReference draws during the trace (what `shadowlab reference` writes, from a
 // Compare trace) is referencePicture's, byte for byte, drawn from the All frame: with a projector,
 // at spp 4 (averaged visibility and colours), on a mesh, and without any light.

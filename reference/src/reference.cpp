@@ -493,6 +493,31 @@ void copyTileRows(const float* tile, float* plane, int width, int x0, int y0, in
 
 }  // namespace
 
+// The trace is compiled twice where CMake finds x86-64 (SHADOWLAB_REFERENCE_HAS_AVX2): here for the
+// baseline, and by reference_avx2.cpp (SHADOWLAB_REFERENCE_AVX2_TU) for AVX2, where it defines only
+// the trace, as renderReferenceAvx2. renderReference runs that one where the CPU has AVX2
+// (ReferenceOptions::simd); both give the same bits.
+#if defined(SHADOWLAB_REFERENCE_HAS_AVX2) || defined(SHADOWLAB_REFERENCE_AVX2_TU)
+namespace reference_detail {
+Frame renderReferenceAvx2(const Scene& scene, const ReferenceOptions& options, ReferenceStats* stats,
+                          std::vector<uint8_t>* picture);
+}
+#endif
+#ifdef SHADOWLAB_REFERENCE_AVX2_TU
+#define SHADOWLAB_RENDER_REFERENCE reference_detail::renderReferenceAvx2
+#else
+#define SHADOWLAB_RENDER_REFERENCE renderReference
+
+bool referenceHasAvx2() {
+#ifdef SHADOWLAB_REFERENCE_HAS_AVX2
+  static const bool has = __builtin_cpu_supports("avx2");
+  return has;
+#else
+  return false;
+#endif
+}
+#endif
+
 // Process CPU seconds so far (user + system, all threads).
 static double processCpuSeconds() {
   rusage usage{};
@@ -501,6 +526,7 @@ static double processCpuSeconds() {
          1e-6 * double(usage.ru_utime.tv_usec + usage.ru_stime.tv_usec);
 }
 
+#ifndef SHADOWLAB_REFERENCE_AVX2_TU
 float shadowOriginOffset(const glm::vec3& position, const glm::vec3& p0, const glm::vec3& p1, const glm::vec3& p2) {
   return originOffset(position, p0, p1, p2);
 }
@@ -537,9 +563,18 @@ double referenceFrameBytes(const Scene& scene, ReferenceChannels channels) {
   const double count = double(referenceChannelNames(scene, channels).size());
   return count * 4.0 * double(scene.camera.width) * double(scene.camera.height);
 }
+#endif
 
-Frame renderReference(const Scene& scene, const ReferenceOptions& options, ReferenceStats* stats,
-                      std::vector<uint8_t>* picture) {
+Frame SHADOWLAB_RENDER_REFERENCE(const Scene& scene, const ReferenceOptions& options, ReferenceStats* stats,
+                                 std::vector<uint8_t>* picture) {
+#ifndef SHADOWLAB_REFERENCE_AVX2_TU
+  if (options.simd == ReferenceSimd::Avx2 && !referenceHasAvx2())
+    throw DriverError("reference: error: the AVX2 trace was asked for; this build or CPU has none");
+#ifdef SHADOWLAB_REFERENCE_HAS_AVX2
+  if (options.simd != ReferenceSimd::Baseline && referenceHasAvx2())
+    return reference_detail::renderReferenceAvx2(scene, options, stats, picture);
+#endif
+#endif
   if (options.spp < 1 || options.spp > 1024) {
     throw InputError("reference: error: spp " + std::to_string(options.spp) + "; expected 1..1024");
   }
