@@ -478,11 +478,22 @@ inline void putBlock(float* tilePlane, const float* values, int rowLanes, int ro
 // which write whole lines without first reading them from memory (half the memory traffic of
 // writing each pixel into the planes directly, which made those writes most of the reference's
 // cost beyond Embree's). The caller fences (_mm_sfence) before the frame is read.
-void copyTileRows(const float* tile, float* plane, int width, int x0, int y0, int x1, int y1) {
+// A row whose every value has the bits `fill`, the value the plane was filled with when the frame
+// was made (renderReference, frame.add), is not written at all: the plane holds those bits already.
+// Most rows of occluder_dist (-1: lit, or no hit) and of a background's hit, object_id and vis (0)
+// are such rows; skipping them saves their memory traffic, the largest part of the planes' cost.
+void copyTileRows(const float* tile, float* plane, int width, int x0, int y0, int x1, int y1, uint32_t fill) {
   const int count = x1 - x0;
   for (int y = y0; y < y1; ++y) {
     const float* src = tile + (y - y0) * kTileSize;
     float* dst = plane + size_t(y) * size_t(width) + size_t(x0);
+    uint32_t differ = 0;
+    for (int x = 0; x < count; ++x) {
+      uint32_t bits;
+      std::memcpy(&bits, src + x, sizeof bits);
+      differ |= bits ^ fill;
+    }
+    if (differ == 0) continue;
     if (count % 4 == 0 && reinterpret_cast<uintptr_t>(dst) % 16 == 0) {
       for (int x = 0; x < count; x += 4) _mm_stream_ps(dst + x, _mm_loadu_ps(src + x));
     } else {
@@ -624,7 +635,11 @@ Frame SHADOWLAB_RENDER_REFERENCE(const Scene& scene, const ReferenceOptions& opt
   // The channels in Planes' order (frame.add may move planes while channels are added: taken now).
   const size_t channelCount = frame.data.size();
   std::vector<float*> frameBase(channelCount);
-  for (size_t c = 0; c < channelCount; ++c) frameBase[c] = frame.data[c].data();
+  std::vector<uint32_t> frameFill(channelCount);  // each plane's fill value's bits (copyTileRows)
+  for (size_t c = 0; c < channelCount; ++c) {
+    frameBase[c] = frame.data[c].data();
+    std::memcpy(&frameFill[c], frameBase[c], sizeof(uint32_t));  // frame.add filled every value with it
+  }
 
   nlohmann::json lightNames = nlohmann::json::array(), projectorNames = nlohmann::json::array();
   for (const Light& light : scene.lights) lightNames.push_back(light.name);
@@ -817,7 +832,8 @@ Frame SHADOWLAB_RENDER_REFERENCE(const Scene& scene, const ReferenceOptions& opt
             }
           }
         }
-        for (size_t c = 0; c < channelCount; ++c) copyTileRows(tileBase[c], frameBase[c], width, x0, y0, x1, y1);
+        for (size_t c = 0; c < channelCount; ++c)
+          copyTileRows(tileBase[c], frameBase[c], width, x0, y0, x1, y1, frameFill[c]);
         embree->check("tracing a tile");
         tileFinished();
       }
