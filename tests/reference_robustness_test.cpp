@@ -331,6 +331,55 @@ TEST(ReferenceRobustness, Avx2TraceEqualsBaselineOnEveryBundledScene) {
   EXPECT_GT(pointDark, 0u);
 }
 
+// The light channels agree with each other and with N on every bundled scene (All set, spp 1, each
+// scene's directional lights): a hit pixel whose N faces away from the light (dot(N, toLight) <= 0,
+// the trace's own facing test) has vis 0 and occluder_dist exactly 0; one facing it is lit with
+// occluder_dist -1 or dark with occluder_dist > 0. The frame's planes are filled with -1
+// (occluder_dist) and 0 before the trace, and a tile row equal to the fill is not written: a row
+// skipped when it should have been written (a wrong fill value) leaves -1 where 0 belongs.
+TEST(ReferenceRobustness, LightChannelsAgreeWithTheNormalOnEveryBundledScene) {
+  size_t facingAway = 0, lit = 0, shadowed = 0;
+  for (const std::string& name : bundledSceneNames()) {
+    SCOPED_TRACE(name);
+    const Scene scene = loadScene(resolveScenePath(name));
+    ReferenceOptions options;
+    options.channels = ReferenceChannels::All;
+    const Frame frame = renderReference(scene, options);
+    const auto& hit = frame.get("hit");
+    const float* n[3] = {frame.get("N.x").data(), frame.get("N.y").data(), frame.get("N.z").data()};
+    for (const Light& light : scene.lights) {
+      if (light.type != LightType::Directional) continue;
+      const glm::vec3 toLight = glm::normalize(-light.direction);
+      const auto& vis = frame.get("light." + light.name + ".vis");
+      const auto& dist = frame.get("light." + light.name + ".occluder_dist");
+      size_t wrong = 0;
+      std::string first;
+      for (size_t i = 0; i < hit.size(); ++i) {
+        if (hit[i] != 1.0f) continue;
+        const bool facing = glm::dot(glm::vec3(n[0][i], n[1][i], n[2][i]), toLight) > 0.0f;
+        bool ok;
+        if (!facing) {
+          ok = vis[i] == 0.0f && dist[i] == 0.0f && !std::signbit(dist[i]);
+          ++facingAway;
+        } else if (vis[i] == 1.0f) {
+          ok = dist[i] == -1.0f;
+          ++lit;
+        } else {
+          ok = vis[i] == 0.0f && dist[i] > 0.0f;
+          ++shadowed;
+        }
+        if (!ok && wrong++ == 0)
+          first = "pixel " + std::to_string(i) + ": facing " + std::to_string(facing) + ", vis " +
+                  std::to_string(vis[i]) + ", occluder_dist " + std::to_string(dist[i]);
+      }
+      EXPECT_EQ(wrong, 0u) << light.name << ": " << first;
+    }
+  }
+  EXPECT_GT(facingAway, 1000u);
+  EXPECT_GT(lit, 100000u);
+  EXPECT_GT(shadowed, 10000u);
+}
+
 // The picture renderReference draws during the trace (what `shadowlab reference` writes, from a
 // Compare trace) is referencePicture's, byte for byte, drawn from the All frame: with a projector,
 // at spp 4 (averaged visibility and colours), on a mesh, and without any light.
