@@ -31,6 +31,10 @@
 //                      bare_shadow_ms minus it, the strictest baseline
 //     primary_ratio_all, shadow_ratio_all  the same with the All channel set (P, N, prim_id too), as
 //                      `shadowlab reference` traces it (its picture needs them)
+//     ref_primary_baseline_ms, ref_shadow_baseline_ms, primary_ratio_baseline, shadow_ratio_baseline
+//                      the same as ref_* and *_ratio with the trace's baseline (SSE2) compilation
+//                      (ReferenceSimd::Baseline); ref_* run ReferenceSimd::Auto, i.e. the AVX2
+//                      compilation where the CPU has it (simd_avx2 = 1)
 //   The bare loops trace a plain Embree scene (no filter functions, default flags). The reference's
 //   scene is built with RTC_SCENE_FLAG_ROBUST (watertight edges, a correctness rule); the
 //   *_ratio_robust counters divide by the same bare loops on a robust scene instead, i.e. they leave
@@ -292,6 +296,8 @@ void BM_Ratios(benchmark::State& state, const std::string& name) {
   ReferenceOptions options;
   options.threads = 1;
   options.channels = ReferenceChannels::Compare;  // what the reference cache traces
+  ReferenceOptions baselineOptions = options;
+  baselineOptions.simd = ReferenceSimd::Baseline;
   ReferenceOptions allOptions = options;
   allOptions.channels = ReferenceChannels::All;  // what `shadowlab reference` traces (the picture needs P, N)
   BareScene bare(scene, false), bareRobust(scene, true);
@@ -302,7 +308,8 @@ void BM_Ratios(benchmark::State& state, const std::string& name) {
     for (int lane = 0; lane < 8; ++lane) bareShadowRays += packet.valid[lane] ? 1 : 0;
 
   double refPrimary = 1e30, refFull = 1e30, allPrimary = 1e30, allFull = 1e30, barePrimary = 1e30, bareShadow = 1e30,
-         barePrimaryRobust = 1e30, bareShadowRobust = 1e30, bareClosestHit = 1e30, bareSetup = 1e30;
+         barePrimaryRobust = 1e30, bareShadowRobust = 1e30, bareClosestHit = 1e30, bareSetup = 1e30,
+         baselinePrimary = 1e30, baselineFull = 1e30;
   for (auto _ : state) {
     double total = 0;
     for (int round = 0; round < kRounds; ++round) {
@@ -316,6 +323,10 @@ void BM_Ratios(benchmark::State& state, const std::string& name) {
       allPrimary = std::min(allPrimary, stats.traceCpuSeconds);
       benchmark::DoNotOptimize(renderReference(scene, allOptions, &stats).data.data());
       allFull = std::min(allFull, stats.traceCpuSeconds);
+      benchmark::DoNotOptimize(renderReference(cameraOnly, baselineOptions, &stats).data.data());
+      baselinePrimary = std::min(baselinePrimary, stats.traceCpuSeconds);
+      benchmark::DoNotOptimize(renderReference(scene, baselineOptions, &stats).data.data());
+      baselineFull = std::min(baselineFull, stats.traceCpuSeconds);
       const double seconds[4] = {bareIntersect(scene.camera, bare.scene), bareOccluded(packets, bare.scene),
                                  bareIntersect(scene.camera, bareRobust.scene),
                                  bareOccluded(packets, bareRobust.scene)};
@@ -338,6 +349,11 @@ void BM_Ratios(benchmark::State& state, const std::string& name) {
   state.counters["bare_shadow_setup_ms"] = bareSetup * 1e3;
   state.counters["primary_ratio_robust"] = refPrimary / barePrimaryRobust;
   state.counters["shadow_ratio_robust"] = refShadow / bareShadowRobust;
+  state.counters["ref_primary_baseline_ms"] = baselinePrimary * 1e3;
+  state.counters["ref_shadow_baseline_ms"] = (baselineFull - baselinePrimary) * 1e3;
+  state.counters["primary_ratio_baseline"] = baselinePrimary / barePrimary;
+  state.counters["shadow_ratio_baseline"] = (baselineFull - baselinePrimary) / bareShadow;
+  state.counters["simd_avx2"] = referenceHasAvx2() ? 1.0 : 0.0;
   state.counters["primary_ratio_all"] = allPrimary / barePrimary;
   state.counters["shadow_ratio_all"] = (allFull - allPrimary) / bareShadow;
   state.counters["ref_primary_ms"] = refPrimary * 1e3;

@@ -254,6 +254,132 @@ TEST(ReferenceRobustness, CompareSetEqualsAllSetOnEveryBundledScene) {
   }
 }
 
+// The AVX2 compilation of the trace (ReferenceSimd::Avx2, what Auto runs on a CPU with AVX2) gives
+// the baseline compilation's bits: every channel, the picture and the ray counts, on every bundled
+// scene at its own size (All set, spp 1), at spp 3 (Hammersley) and 4 (grid) on the scenes with
+// alpha testing and a projector, and with a spot and a point light added (spp 2) on four scenes.
+// Skipped where the build or the CPU has no AVX2 (there only the baseline runs).
+TEST(ReferenceRobustness, Avx2TraceEqualsBaselineOnEveryBundledScene) {
+  if (!referenceHasAvx2()) GTEST_SKIP() << "no AVX2 trace in this build or on this CPU";
+  struct Case {
+    std::string scene;
+    int spp;
+    bool addLights;
+  };
+  std::vector<Case> cases;
+  for (const std::string& name : bundledSceneNames()) cases.push_back({name, 1, false});
+  for (const char* name : {"alpha_fence", "projector"})
+    for (int spp : {3, 4}) cases.push_back({name, spp, false});
+  for (const char* name : {"sphere_on_plane", "contact", "alpha_fence", "projector"}) cases.push_back({name, 2, true});
+  ASSERT_GE(cases.size(), 14u);
+  size_t spotLit = 0, spotDark = 0, pointLit = 0, pointDark = 0;
+  for (const Case& c : cases) {
+    SCOPED_TRACE(c.scene + " spp " + std::to_string(c.spp) + (c.addLights ? " with a spot and a point light" : ""));
+    Scene scene = c.spp == 1 ? loadScene(resolveScenePath(c.scene))
+                             : loadScene(resolveScenePath(c.scene), {{"/camera/width", 240}, {"/camera/height", 135}});
+    if (c.addLights) {
+      Light spot;
+      spot.name = "spot";
+      spot.type = LightType::Spot;
+      spot.position = {0.5f, 6.0f, 0.3f};
+      spot.direction = glm::normalize(glm::vec3(-0.1f, -1.0f, -0.05f));
+      spot.coneDeg = 50.0f;
+      Light point;
+      point.name = "point";
+      point.type = LightType::Point;
+      point.position = {3.0f, 4.0f, 2.0f};
+      scene.lights.push_back(spot);
+      scene.lights.push_back(point);
+    }
+    ReferenceOptions options;
+    options.spp = c.spp;
+    options.threads = 2;
+    options.channels = ReferenceChannels::All;
+    options.simd = ReferenceSimd::Baseline;
+    ReferenceStats baselineStats, avx2Stats;
+    std::vector<uint8_t> baselinePicture, avx2Picture;
+    const Frame baseline = renderReference(scene, options, &baselineStats, &baselinePicture);
+    options.simd = ReferenceSimd::Avx2;
+    const Frame avx2 = renderReference(scene, options, &avx2Stats, &avx2Picture);
+    ASSERT_EQ(avx2.names, baseline.names);
+    for (size_t k = 0; k < baseline.names.size(); ++k) {
+      ASSERT_EQ(avx2.data[k].size(), baseline.data[k].size());
+      EXPECT_EQ(std::memcmp(avx2.data[k].data(), baseline.data[k].data(), baseline.data[k].size() * sizeof(float)), 0)
+          << "channel " << baseline.names[k];
+    }
+    EXPECT_EQ(avx2Picture, baselinePicture);
+    EXPECT_EQ(avx2Stats.primaryRays, baselineStats.primaryRays);
+    EXPECT_EQ(avx2Stats.shadowRays, baselineStats.shadowRays);
+    EXPECT_GT(baselineStats.shadowRays, 0u);
+    if (c.addLights) {
+      const auto& hit = baseline.get("hit");
+      const auto& spotVis = baseline.get("light.spot.vis");
+      const auto& pointVis = baseline.get("light.point.vis");
+      for (size_t i = 0; i < hit.size(); ++i) {
+        if (hit[i] != 1.0f) continue;
+        spotLit += spotVis[i] == 1.0f;
+        spotDark += spotVis[i] == 0.0f;
+        pointLit += pointVis[i] == 1.0f;
+        pointDark += pointVis[i] == 0.0f;
+      }
+    }
+  }
+  // Not vacuous: the added lights light some surfaces and leave others dark.
+  EXPECT_GT(spotLit, 0u);
+  EXPECT_GT(spotDark, 0u);
+  EXPECT_GT(pointLit, 0u);
+  EXPECT_GT(pointDark, 0u);
+}
+
+// The light channels agree with each other and with N on every bundled scene (All set, spp 1, each
+// scene's directional lights): a hit pixel whose N faces away from the light (dot(N, toLight) <= 0,
+// the trace's own facing test) has vis 0 and occluder_dist exactly 0; one facing it is lit with
+// occluder_dist -1 or dark with occluder_dist > 0. The frame's planes are filled with -1
+// (occluder_dist) and 0 before the trace, and a tile row equal to the fill is not written: a row
+// skipped when it should have been written (a wrong fill value) leaves -1 where 0 belongs.
+TEST(ReferenceRobustness, LightChannelsAgreeWithTheNormalOnEveryBundledScene) {
+  size_t facingAway = 0, lit = 0, shadowed = 0;
+  for (const std::string& name : bundledSceneNames()) {
+    SCOPED_TRACE(name);
+    const Scene scene = loadScene(resolveScenePath(name));
+    ReferenceOptions options;
+    options.channels = ReferenceChannels::All;
+    const Frame frame = renderReference(scene, options);
+    const auto& hit = frame.get("hit");
+    const float* n[3] = {frame.get("N.x").data(), frame.get("N.y").data(), frame.get("N.z").data()};
+    for (const Light& light : scene.lights) {
+      if (light.type != LightType::Directional) continue;
+      const glm::vec3 toLight = glm::normalize(-light.direction);
+      const auto& vis = frame.get("light." + light.name + ".vis");
+      const auto& dist = frame.get("light." + light.name + ".occluder_dist");
+      size_t wrong = 0;
+      std::string first;
+      for (size_t i = 0; i < hit.size(); ++i) {
+        if (hit[i] != 1.0f) continue;
+        const bool facing = glm::dot(glm::vec3(n[0][i], n[1][i], n[2][i]), toLight) > 0.0f;
+        bool ok;
+        if (!facing) {
+          ok = vis[i] == 0.0f && dist[i] == 0.0f && !std::signbit(dist[i]);
+          ++facingAway;
+        } else if (vis[i] == 1.0f) {
+          ok = dist[i] == -1.0f;
+          ++lit;
+        } else {
+          ok = vis[i] == 0.0f && dist[i] > 0.0f;
+          ++shadowed;
+        }
+        if (!ok && wrong++ == 0)
+          first = "pixel " + std::to_string(i) + ": facing " + std::to_string(facing) + ", vis " +
+                  std::to_string(vis[i]) + ", occluder_dist " + std::to_string(dist[i]);
+      }
+      EXPECT_EQ(wrong, 0u) << light.name << ": " << first;
+    }
+  }
+  EXPECT_GT(facingAway, 1000u);
+  EXPECT_GT(lit, 100000u);
+  EXPECT_GT(shadowed, 10000u);
+}
+
 // The picture renderReference draws during the trace (what `shadowlab reference` writes, from a
 // Compare trace) is referencePicture's, byte for byte, drawn from the All frame: with a projector,
 // at spp 4 (averaged visibility and colours), on a mesh, and without any light.

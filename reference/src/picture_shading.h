@@ -55,7 +55,9 @@ class PictureShader {
   }
 
  private:
-  static constexpr int kEncodeSteps = 4096;
+  // An enumerator, not a static constexpr variable: reference_avx2.cpp compiles this header with
+  // -fno-weak, which GCC cannot honour for an inline variable.
+  enum : int { kEncodeSteps = 4096 };
   const Scene& scene_;
   const Light* light_ = nullptr;
   glm::vec3 directionalUnit_{0.0f};

@@ -478,11 +478,22 @@ inline void putBlock(float* tilePlane, const float* values, int rowLanes, int ro
 // which write whole lines without first reading them from memory (half the memory traffic of
 // writing each pixel into the planes directly, which made those writes most of the reference's
 // cost beyond Embree's). The caller fences (_mm_sfence) before the frame is read.
-void copyTileRows(const float* tile, float* plane, int width, int x0, int y0, int x1, int y1) {
+// A row whose every value has the bits `fill`, the value the plane was filled with when the frame
+// was made (renderReference, frame.add), is not written at all: the plane holds those bits already.
+// Most rows of occluder_dist (-1: lit, or no hit) and of a background's hit, object_id and vis (0)
+// are such rows; skipping them saves their memory traffic, the largest part of the planes' cost.
+void copyTileRows(const float* tile, float* plane, int width, int x0, int y0, int x1, int y1, uint32_t fill) {
   const int count = x1 - x0;
   for (int y = y0; y < y1; ++y) {
     const float* src = tile + (y - y0) * kTileSize;
     float* dst = plane + size_t(y) * size_t(width) + size_t(x0);
+    uint32_t differ = 0;
+    for (int x = 0; x < count; ++x) {
+      uint32_t bits;
+      std::memcpy(&bits, src + x, sizeof bits);
+      differ |= bits ^ fill;
+    }
+    if (differ == 0) continue;
     if (count % 4 == 0 && reinterpret_cast<uintptr_t>(dst) % 16 == 0) {
       for (int x = 0; x < count; x += 4) _mm_stream_ps(dst + x, _mm_loadu_ps(src + x));
     } else {
@@ -493,6 +504,31 @@ void copyTileRows(const float* tile, float* plane, int width, int x0, int y0, in
 
 }  // namespace
 
+// The trace is compiled twice where CMake finds x86-64 (SHADOWLAB_REFERENCE_HAS_AVX2): here for the
+// baseline, and by reference_avx2.cpp (SHADOWLAB_REFERENCE_AVX2_TU) for AVX2, where it defines only
+// the trace, as renderReferenceAvx2. renderReference runs that one where the CPU has AVX2
+// (ReferenceOptions::simd); both give the same bits.
+#if defined(SHADOWLAB_REFERENCE_HAS_AVX2) || defined(SHADOWLAB_REFERENCE_AVX2_TU)
+namespace reference_detail {
+Frame renderReferenceAvx2(const Scene& scene, const ReferenceOptions& options, ReferenceStats* stats,
+                          std::vector<uint8_t>* picture);
+}
+#endif
+#ifdef SHADOWLAB_REFERENCE_AVX2_TU
+#define SHADOWLAB_RENDER_REFERENCE reference_detail::renderReferenceAvx2
+#else
+#define SHADOWLAB_RENDER_REFERENCE renderReference
+
+bool referenceHasAvx2() {
+#ifdef SHADOWLAB_REFERENCE_HAS_AVX2
+  static const bool has = __builtin_cpu_supports("avx2");
+  return has;
+#else
+  return false;
+#endif
+}
+#endif
+
 // Process CPU seconds so far (user + system, all threads).
 static double processCpuSeconds() {
   rusage usage{};
@@ -501,6 +537,7 @@ static double processCpuSeconds() {
          1e-6 * double(usage.ru_utime.tv_usec + usage.ru_stime.tv_usec);
 }
 
+#ifndef SHADOWLAB_REFERENCE_AVX2_TU
 float shadowOriginOffset(const glm::vec3& position, const glm::vec3& p0, const glm::vec3& p1, const glm::vec3& p2) {
   return originOffset(position, p0, p1, p2);
 }
@@ -537,9 +574,18 @@ double referenceFrameBytes(const Scene& scene, ReferenceChannels channels) {
   const double count = double(referenceChannelNames(scene, channels).size());
   return count * 4.0 * double(scene.camera.width) * double(scene.camera.height);
 }
+#endif
 
-Frame renderReference(const Scene& scene, const ReferenceOptions& options, ReferenceStats* stats,
-                      std::vector<uint8_t>* picture) {
+Frame SHADOWLAB_RENDER_REFERENCE(const Scene& scene, const ReferenceOptions& options, ReferenceStats* stats,
+                                 std::vector<uint8_t>* picture) {
+#ifndef SHADOWLAB_REFERENCE_AVX2_TU
+  if (options.simd == ReferenceSimd::Avx2 && !referenceHasAvx2())
+    throw DriverError("reference: error: the AVX2 trace was asked for; this build or CPU has none");
+#ifdef SHADOWLAB_REFERENCE_HAS_AVX2
+  if (options.simd != ReferenceSimd::Baseline && referenceHasAvx2())
+    return reference_detail::renderReferenceAvx2(scene, options, stats, picture);
+#endif
+#endif
   if (options.spp < 1 || options.spp > 1024) {
     throw InputError("reference: error: spp " + std::to_string(options.spp) + "; expected 1..1024");
   }
@@ -589,7 +635,11 @@ Frame renderReference(const Scene& scene, const ReferenceOptions& options, Refer
   // The channels in Planes' order (frame.add may move planes while channels are added: taken now).
   const size_t channelCount = frame.data.size();
   std::vector<float*> frameBase(channelCount);
-  for (size_t c = 0; c < channelCount; ++c) frameBase[c] = frame.data[c].data();
+  std::vector<uint32_t> frameFill(channelCount);  // each plane's fill value's bits (copyTileRows)
+  for (size_t c = 0; c < channelCount; ++c) {
+    frameBase[c] = frame.data[c].data();
+    std::memcpy(&frameFill[c], frameBase[c], sizeof(uint32_t));  // frame.add filled every value with it
+  }
 
   nlohmann::json lightNames = nlohmann::json::array(), projectorNames = nlohmann::json::array();
   for (const Light& light : scene.lights) lightNames.push_back(light.name);
@@ -782,7 +832,8 @@ Frame renderReference(const Scene& scene, const ReferenceOptions& options, Refer
             }
           }
         }
-        for (size_t c = 0; c < channelCount; ++c) copyTileRows(tileBase[c], frameBase[c], width, x0, y0, x1, y1);
+        for (size_t c = 0; c < channelCount; ++c)
+          copyTileRows(tileBase[c], frameBase[c], width, x0, y0, x1, y1, frameFill[c]);
         embree->check("tracing a tile");
         tileFinished();
       }

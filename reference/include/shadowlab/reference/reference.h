@@ -20,11 +20,25 @@ enum class ReferenceChannels {
   All,
 };
 
+// Which compilation of the trace runs (reference/README.md, "Speed"): the same source compiled for
+// x86-64's baseline (SSE2) and, on x86-64, a second time for AVX2 (no FMA, no contraction), chosen
+// at run time. Both give the same bits (tested on every bundled scene); Auto takes AVX2 where the
+// CPU and the build have it. Not part of the cache key (referenceHash).
+enum class ReferenceSimd {
+  Auto,
+  Baseline,
+  Avx2,  // DriverError where referenceHasAvx2() is false
+};
+
+// True where this build has the AVX2 trace and the CPU runs it.
+bool referenceHasAvx2();
+
 struct ReferenceOptions {
   int spp = 1;      // stratified samples per pixel (1 = the pixel center); visibility becomes fractional
   int threads = 0;  // 0 = all hardware threads; results are bit-identical for any value
   // Not part of the cache key (referenceHash): the values are the same, the cache always holds Compare.
   ReferenceChannels channels = ReferenceChannels::All;
+  ReferenceSimd simd = ReferenceSimd::Auto;  // not part of the result or its hash: the same bits
   // Called with the fraction of tiles traced (0..1], at most once per percent, from one thread
   // at a time (the caller's terminal progress line). Not part of the result or its hash.
   std::function<void(double)> progress;
