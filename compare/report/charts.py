@@ -15,6 +15,7 @@ point shows the configuration with the lowest error among those sharing the char
 (said in the caption), so a chart never averages configurations that were never run together.
 A chart whose swept key is absent from the grid is skipped with a reason (not an error).
 """
+import gc
 import json
 import math
 import multiprocessing
@@ -536,6 +537,7 @@ def main(argv):
     if len(jobs) > 1 and (os.cpu_count() or 1) > 1:
         order = sorted(range(len(jobs)), key=lambda i: DRAW_FIRST.index(jobs[i][0])
                        if jobs[i][0] in DRAW_FIRST else len(DRAW_FIRST))
+        gc.freeze()  # matplotlib's import-time objects: the workers' collections skip them
         with multiprocessing.get_context("fork").Pool(2) as pool:
             out = pool.starmap(draw_task, [jobs[i][1:] for i in order], chunksize=1)
         by_job = dict(zip(order, out))
