@@ -107,7 +107,7 @@ void barrierToHost(VkCommandBuffer cmd, VkPipelineStageFlags2 srcStage, VkAccess
 // A full-screen pass (the moments, the resolve, the lookup): one triangle drawn with `pipeline`
 // over width x height into `count` colour attachments; `beforeDraw` (optional) runs after the
 // pipeline is bound, e.g. for push constants.
-// warmup: a scissor of one pixel (the pipeline's first use, compiling its shaders; raster.cpp's submit()).
+// warmup: a scissor of one pixel (a pipeline's untimed first use, compiling its shaders: submit()).
 void drawFullscreen(VkCommandBuffer cmd, const VkRenderingAttachmentInfo* colors, uint32_t count, uint32_t width,
                     uint32_t height, VkPipeline pipeline, const std::function<void()>& beforeDraw = {},
                     bool warmup = false) {
@@ -745,8 +745,8 @@ void Rasterizer::Impl::record(VkCommandBuffer cmd, const std::vector<LayerDraw>&
     depth.imageLayout = idView ? VK_IMAGE_LAYOUT_DEPTH_ATTACHMENT_OPTIMAL : mapLayout;
     depth.loadOp = VK_ATTACHMENT_LOAD_OP_CLEAR;
     depth.storeOp = VK_ATTACHMENT_STORE_OP_STORE;
-    depth.clearValue.depthStencil = {1.0f,
-                                     0};  // an empty texel lies at the far plane: lights all; stencil 0: no object
+    // An empty texel lies at the far plane (lights all) and holds stencil 0 (no object).
+    depth.clearValue.depthStencil = {1.0f, 0};
     VkRenderingInfo info{VK_STRUCTURE_TYPE_RENDERING_INFO};
     info.renderArea = {{0, 0}, {uint32_t(w), uint32_t(h)}};
     info.layerCount = 1;
