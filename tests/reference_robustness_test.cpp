@@ -482,33 +482,45 @@ TEST(ReferenceRobustness, ChannelsMetadataAndHashes) {
   EXPECT_NE(*std::max_element(picture.begin(), picture.end()), *std::min_element(picture.begin(), picture.end()));
 }
 
-// Degenerate but legal inputs: no objects at all, an object with no triangles, a light and a
-// projector: everything misses, nothing throws, every channel holds its "no hit" value.
-TEST(ReferenceRobustness, EmptySceneRendersAllMisses) {
+// A scene where every camera ray misses: a light and a projector, no geometry (objects added by
+// the caller), and the check that every channel of its frame holds its "no hit" value.
+Scene missScene(const std::string& name, int width, int height) {
   Scene scene;
-  scene.name = "empty";
+  scene.name = name;
   scene.hash = "0000000000000000";
-  scene.camera.width = 40;
-  scene.camera.height = 30;
+  scene.camera.width = width;
+  scene.camera.height = height;
   scene.materials.push_back(Material{});
-  Object nothing;
-  nothing.name = "nothing";
-  nothing.id = 7;
-  scene.objects.push_back(nothing);
   Light sun;
   sun.name = "sun";
   scene.lights.push_back(sun);
   Projector projector;
   projector.name = "slide";
   scene.projectors.push_back(projector);
+  return scene;
+}
+
+void expectAllMisses(const Scene& scene, const ReferenceOptions& options) {
   ReferenceStats stats;
-  const Frame frame = renderReference(scene, {}, &stats);
-  EXPECT_EQ(stats.primaryRays, 40u * 30u);
+  const Frame frame = renderReference(scene, options, &stats);
+  EXPECT_EQ(stats.primaryRays, uint64_t(scene.camera.width) * uint64_t(scene.camera.height));
   EXPECT_EQ(stats.shadowRays, 0u);
+  ASSERT_EQ(frame.names, referenceChannelNames(scene, options.channels));
   for (size_t c = 0; c < frame.names.size(); ++c) {
     const float expected = frame.names[c] == "light.sun.occluder_dist" ? -1.0f : 0.0f;
     for (float value : frame.data[c]) ASSERT_EQ(value, expected) << frame.names[c];
   }
+}
+
+// Degenerate but legal inputs: an object with no triangles, a light and a projector: everything
+// misses, nothing throws, every channel holds its "no hit" value.
+TEST(ReferenceRobustness, EmptySceneRendersAllMisses) {
+  Scene scene = missScene("empty", 40, 30);
+  Object nothing;
+  nothing.name = "nothing";
+  nothing.id = 7;
+  scene.objects.push_back(nothing);
+  expectAllMisses(scene, {});
 }
 
 // No object at all (a library caller's scene; the loader never makes one): the packet code reads
@@ -516,31 +528,12 @@ TEST(ReferenceRobustness, EmptySceneRendersAllMisses) {
 // with the light's and the projector's channels at their no-hit values, with the Compare and the
 // All set.
 TEST(ReferenceRobustness, SceneWithoutObjectsRendersAllMisses) {
-  Scene scene;
-  scene.name = "nothing";
-  scene.hash = "0000000000000000";
-  scene.camera.width = 24;
-  scene.camera.height = 10;
-  scene.materials.push_back(Material{});
-  Light sun;
-  sun.name = "sun";
-  scene.lights.push_back(sun);
-  Projector projector;
-  projector.name = "slide";
-  scene.projectors.push_back(projector);
+  const Scene scene = missScene("nothing", 24, 10);
   for (ReferenceChannels channels : {ReferenceChannels::Compare, ReferenceChannels::All}) {
     ReferenceOptions options;
     options.channels = channels;
     options.spp = 4;
-    ReferenceStats stats;
-    const Frame frame = renderReference(scene, options, &stats);
-    EXPECT_EQ(stats.primaryRays, 24u * 10u);
-    EXPECT_EQ(stats.shadowRays, 0u);
-    ASSERT_EQ(frame.names, referenceChannelNames(scene, channels));
-    for (size_t c = 0; c < frame.names.size(); ++c) {
-      const float expected = frame.names[c] == "light.sun.occluder_dist" ? -1.0f : 0.0f;
-      for (float value : frame.data[c]) ASSERT_EQ(value, expected) << frame.names[c];
-    }
+    expectAllMisses(scene, options);
   }
 }
 
