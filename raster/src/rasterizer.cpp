@@ -104,6 +104,11 @@ void barrierToHost(VkCommandBuffer cmd, VkPipelineStageFlags2 srcStage, VkAccess
   dep.pMemoryBarriers = &toHost;
   vkCmdPipelineBarrier2(cmd, &dep);
 }
+// Row y of a host-readable image, as T.
+template <class T>
+const T* mappedRow(const vk::Image& img, size_t y) {
+  return reinterpret_cast<const T*>(static_cast<const char*>(img.mapped()) + y * img.rowPitch());
+}
 // A full-screen pass (the moments, the resolve, the lookup): one triangle drawn with `pipeline`
 // over width x height into `count` colour attachments; `beforeDraw` (optional) runs after the
 // pipeline is bound, e.g. for push constants.
@@ -377,6 +382,7 @@ struct Rasterizer::Impl {
   Footprint* findFootprint(const std::string& key);
   Footprint& keepPlanes(const std::string& key, const std::string& camera, int width, int height);
   void idsOf(uint32_t id, float& objectId, float& prim) const;
+  void cameraRow(int y, float* hit, float* objectId, float* primId) const;
   Frame partialFrame(const Scene& scene, const Light& light, const Method& method, const EvidenceSelector& select,
                      Footprint& footprint, const FramePipelines& pipes, RasterTimings& t);
   struct Drawn {
@@ -920,25 +926,15 @@ Frame Rasterizer::Impl::readback(const Scene& sc, const Light* light, const Meth
     helper.join();
   }
   const float* planes = static_cast<const float*>(output.mapped());
-  auto rowOf = [](const vk::Image& img, int y) {
-    return static_cast<const char*>(img.mapped()) + size_t(y) * img.rowPitch();
-  };
   auto split = [&](int y0, int y1) {
     for (int y = y0; y < y1; ++y) {
       const size_t o = size_t(y) * size_t(width);
-      float* hit = frame.data[0].data() + o;
-      float* objectId = frame.data[1].data() + o;
-      float* primId = frame.data[2].data() + o;
-      const uint32_t* ids = reinterpret_cast<const uint32_t*>(rowOf(cameraIds, y));
-      for (int x = 0; x < width; ++x) {
-        hit[x] = ids[x] ? 1.0f : 0.0f;
-        idsOf(ids[x], objectId[x], primId[x]);
-      }
+      cameraRow(y, frame.data[0].data() + o, frame.data[1].data() + o, frame.data[2].data() + o);
       if (hasLight) {
         float* out[10];
         for (int c = 0; c < 10; ++c) out[c] = frame.data[size_t(3 + c)].data() + o;
-        const float* a = reinterpret_cast<const float*>(rowOf(resolveOut[0], y));
-        const float* b = reinterpret_cast<const float*>(rowOf(resolveOut[1], y));
+        const float* a = mappedRow<float>(resolveOut[0], size_t(y));
+        const float* b = mappedRow<float>(resolveOut[1], size_t(y));
         for (int x = 0; x < width; ++x) {
           for (int k = 0; k < 4; ++k) out[k][x] = a[4 * x + k];
           out[4][x] = b[4 * x];
@@ -949,7 +945,7 @@ Frame Rasterizer::Impl::readback(const Scene& sc, const Light* light, const Meth
           out[9][x] = float(packed >> 1);
         }
         if (momentChannels) {
-          const float* c = reinterpret_cast<const float*>(rowOf(resolveOut[2], y));
+          const float* c = mappedRow<float>(resolveOut[2], size_t(y));
           float* mean = frame.data[13].data() + o;
           float* variance = frame.data[14].data() + o;
           float* bound = frame.data[15].data() + o;
@@ -991,7 +987,7 @@ std::vector<uint8_t> Rasterizer::lookupVisibility() const {
   img.invalidate(*impl_->context);
   out.resize(size_t(img.width()) * size_t(img.height()));
   for (int y = 0; y < img.height(); ++y) {
-    const uint8_t* row = static_cast<const uint8_t*>(img.mapped()) + size_t(y) * img.rowPitch();
+    const uint8_t* row = mappedRow<uint8_t>(img, size_t(y));
     std::copy(row, row + img.width(), out.data() + size_t(y) * size_t(img.width()));
   }
   return out;
@@ -1319,6 +1315,15 @@ void Rasterizer::Impl::idsOf(uint32_t id, float& objectId, float& prim) const {
   prim = float(id - 1 - scene->objectTriangleBase[object]);
 }
 
+// Row y of the camera planes from the visibility buffer: hit (0/1), object_id, prim_id.
+void Rasterizer::Impl::cameraRow(int y, float* hit, float* objectId, float* primId) const {
+  const uint32_t* ids = mappedRow<uint32_t>(cameraIds, size_t(y));
+  for (int x = 0; x < cameraIds.width(); ++x) {
+    hit[x] = ids[x] ? 1.0f : 0.0f;
+    idsOf(ids[x], objectId[x], primId[x]);
+  }
+}
+
 // The first frame of a group on demand, after the planes pass (pass 3 specialized to kSpecPlanesOnly):
 // keeps the camera planes (hit, object_id, prim_id from the visibility buffer, as readback() makes
 // them) unless those of this camera are kept, and the group's m and cascade from the planes pass.
@@ -1338,20 +1343,12 @@ Rasterizer::Impl::Footprint& Rasterizer::Impl::keepPlanes(const std::string& key
   footprints.remove_if([&](const Footprint& f) { return f.key == key; });  // one whose planes are lent
   while (footprints.size() >= kKeptFootprints) footprints.pop_back();
   Footprint f{key, std::vector<float>(n), std::vector<float>(n)};
-  auto rowOf = [](const vk::Image& img, int y) {
-    return static_cast<const char*>(img.mapped()) + size_t(y) * img.rowPitch();
-  };
   auto split = [&](int y0, int y1) {
     for (int y = y0; y < y1; ++y) {
       const size_t o = size_t(y) * size_t(width);
-      if (cameraToo) {
-        const uint32_t* ids = reinterpret_cast<const uint32_t*>(rowOf(cameraIds, y));
-        for (int x = 0; x < width; ++x) {
-          cameraPlanes.hit[o + size_t(x)] = ids[x] ? 1.0f : 0.0f;
-          idsOf(ids[x], cameraPlanes.objectId[o + size_t(x)], cameraPlanes.primId[o + size_t(x)]);
-        }
-      }
-      const float* a = reinterpret_cast<const float*>(rowOf(resolveOut[0], y));  // m, 2 * cascade + in_map
+      if (cameraToo)
+        cameraRow(y, cameraPlanes.hit.data() + o, cameraPlanes.objectId.data() + o, cameraPlanes.primId.data() + o);
+      const float* a = mappedRow<float>(resolveOut[0], size_t(y));  // m, 2 * cascade + in_map
       for (int x = 0; x < width; ++x) {
         f.m[o + size_t(x)] = a[4 * x];
         f.cascade[o + size_t(x)] = float(int(a[4 * x + 1]) >> 1);
@@ -1554,12 +1551,8 @@ Frame Rasterizer::Impl::partialFrame(const Scene& sc, const Light& light, const 
   for (size_t k = 0; k < count; ++k) {
     const size_t i = listed[k];
     const size_t y = k / size_t(compactWidth), x = k % size_t(compactWidth);
-    const float* a = reinterpret_cast<const float*>(static_cast<const char*>(evidenceOut[0].mapped()) +
-                                                    y * evidenceOut[0].rowPitch()) +
-                     4 * x;
-    const float* b = reinterpret_cast<const float*>(static_cast<const char*>(evidenceOut[1].mapped()) +
-                                                    y * evidenceOut[1].rowPitch()) +
-                     4 * x;
+    const float* a = mappedRow<float>(evidenceOut[0], y) + 4 * x;
+    const float* b = mappedRow<float>(evidenceOut[1], y) + 4 * x;
     frame.data[3][i] = a[0];
     frame.data[4][i] = a[1];
     frame.data[5][i] = a[2];
@@ -1570,9 +1563,7 @@ Frame Rasterizer::Impl::partialFrame(const Scene& sc, const Light& light, const 
     else idsOf(id, frame.data[9][i], frame.data[10][i]);
     frame.data[11][i] = float(int(b[3]) & 1);  // 2 * cascade + in_map; the cascade is kept
     if (momentChannels) {
-      const float* c = reinterpret_cast<const float*>(static_cast<const char*>(evidenceOut[2].mapped()) +
-                                                      y * evidenceOut[2].rowPitch()) +
-                       4 * x;
+      const float* c = mappedRow<float>(evidenceOut[2], y) + 4 * x;
       for (int j = 0; j < 3; ++j) frame.data[size_t(13 + j)][i] = c[j];
     }
   }

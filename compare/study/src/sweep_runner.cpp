@@ -45,9 +45,8 @@ class PipelineRunner final : public SweepRunner {
     const bool keep = !imagesDir.empty();
     // A row that keeps no pictures needs the metrics only: evidence on demand (raster.h), the
     // same metrics (tests/compare_on_demand_test.cpp). Pictures and --full-evidence: every channel.
-    const EvidenceSelector* select =
-        keep || fullEvidence_ ? nullptr : &selectorFor(referenceKey, reference, options.light);
-    Frame raster = rasterizer().render(scene, method, light, &t, nullptr, select && *select ? select : nullptr);
+    const EvidenceSelector* select = keep ? nullptr : onDemand(referenceKey, reference, options.light);
+    Frame raster = rasterizer().render(scene, method, light, &t, nullptr, select);
     Classification classification;
     const auto c0 = Clock::now();
     Metrics m = compareRow(referenceKey, reference, raster, options, keep ? &classification : nullptr);
@@ -79,10 +78,10 @@ class PipelineRunner final : public SweepRunner {
     // (whole planes in such a frame too) and the classification, which is the full frame's (the
     // agreeing pixels are correct either way); the same picture, bit for bit
     // (SweepCli.ReportTriptychsOnDemandEqualFullFrameOnes). It also runs on the pipelines the
-    // loop compiled, where a full frame would compile its own and run twice (raster.h).
-    const EvidenceSelector* select = fullEvidence_ ? nullptr : &selectorFor(referenceKey, reference, options.light);
-    RasterTimings t;  // for partialEvidence: the rasterizer still renders a full frame where it keeps no planes
-    Frame raster = rasterizer().render(scene, method, light, &t, nullptr, select && *select ? select : nullptr);
+    // loop compiled, where a full frame would compile its own full-evidence pipelines.
+    RasterTimings t;  // for partialEvidence (a full frame with --full-evidence or projectors)
+    Frame raster =
+        rasterizer().render(scene, method, light, &t, nullptr, onDemand(referenceKey, reference, options.light));
     triptychsOnDemand_ += t.partialEvidence ? 1 : 0;
     Classification classification;
     compareFrames(reference, raster, options, &classification);
@@ -120,16 +119,17 @@ class PipelineRunner final : public SweepRunner {
   }
 
  private:
-  // The disagreement selector of the reference and light, kept while they stay: it holds the
-  // reference's decisions as bytes, made once rather than per row.
-  const EvidenceSelector& selectorFor(const std::string& referenceKey, const Frame& reference,
-                                      const std::string& light) {
+  // The selector for evidence on demand (null with --full-evidence, or where the reference gives
+  // none): the disagreement selector of the reference and light, kept while they stay, as it holds
+  // the reference's decisions as bytes, made once rather than per row.
+  const EvidenceSelector* onDemand(const std::string& referenceKey, const Frame& reference, const std::string& light) {
+    if (fullEvidence_) return nullptr;
     const std::string key = referenceKey + "\n" + light;
     if (key != selectorKey_) {
       selector_ = disagreementSelector(reference, light);
       selectorKey_ = key;
     }
-    return selector_;
+    return selector_ ? &selector_ : nullptr;
   }
 
   Rasterizer& rasterizer() {
@@ -205,7 +205,7 @@ class PipelineRunner final : public SweepRunner {
   std::list<std::pair<std::string, CompareContext>> contexts_;  // key -> context, most recently used first
   int contextRows_ = 0, contextsBuilt_ = 0;
   int triptychsOnDemand_ = 0;
-  std::string selectorKey_;  // selectorFor: the reference hash and light of selector_
+  std::string selectorKey_;  // onDemand: the reference hash and light of selector_
   EvidenceSelector selector_;
   std::list<std::string> seen_;  // keys seen once, without a context yet
 
