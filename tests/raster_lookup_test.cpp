@@ -149,3 +149,47 @@ TEST_F(RasterLookup, EqualsTheResolveVisibilityOnEveryLookupPath) {
     }
   }
 }
+
+// The lookup of a method without a normal (no normal offset, receiver plane or adaptive bias)
+// reads its visible point from the group's surface image, which the planes pass draws once per
+// group and the rasterizer keeps for up to 4 groups (rasterizer.cpp, surfaceFor). Five groups that
+// differ in what the surface holds (the camera's rays; the light, which decides which sides it
+// reaches; a spot's cone), visited in turns so that kept surfaces are read again and evicted ones
+// drawn again, interleaved with frames that do not read a surface (normal offset): every frame's
+// bytes must equal its resolve's. A surface read under the wrong group puts another camera's
+// points, or another light's facing, into the lookup.
+TEST_F(RasterLookup, TheSurfaceFollowsItsGroup) {
+  REQUIRE_DEVICE();
+  const Scene base = quarterScene("sphere_on_plane");
+  std::vector<Scene> groups(5, base);
+  groups[1].camera.position += glm::vec3(1.5f, 0.5f, 0.0f);
+  groups[2].camera.position += glm::vec3(-1.0f, 1.0f, 1.0f);
+  // The light from below the plane: the camera sees the plane's side facing away from it.
+  groups[3].lights.front().direction = -groups[3].lights.front().direction;
+  Light& spot = groups[4].lights.front();
+  spot.type = LightType::Spot;
+  spot.position = glm::vec3(0.5f, 4.0f, 0.5f);
+  spot.direction = glm::vec3(0, -1, 0);
+  spot.coneDeg = 40.0f;  // the plane's far parts outside the cone
+  int frames = 0;
+  for (int round = 0; round < 3; ++round)
+    for (size_t k = 0; k < groups.size(); ++k)
+      for (bool normalOffset : {false, true}) {
+        if (normalOffset && (k + size_t(round)) % 2) continue;
+        const size_t g = round == 2 ? groups.size() - 1 - k : k;  // the last round backwards
+        Method m;
+        m.mapSize = 512;
+        m.filter = round == 1 ? Filter::Hw2x2 : Filter::None;
+        if (normalOffset) m.biasNormal = 1.0f;
+        const Agreement a = renderAndCompare(*R, groups[g], m);
+        ++frames;
+        const std::string what =
+            "round " + std::to_string(round) + ", group " + std::to_string(g) + (normalOffset ? ", normal offset" : "");
+        EXPECT_EQ(a.mismatches, 0u) << what << "; first: " << a.first;
+        if (g != 3) {
+          EXPECT_GT(a.lit, 100u) << what;
+        }
+        EXPECT_GT(a.shadowed, 100u) << what;
+      }
+  EXPECT_GE(frames, 20);
+}

@@ -54,6 +54,12 @@ layout(constant_id = kSpecCompact) const bool kCompact = false;
 // The planes pass (the first frame of an evidence group on demand): m and 2 * cascade + in_map
 // alone, as outA.x and outA.y (the full resolve's outA.w and outB.w), the rest dead code.
 layout(constant_id = kSpecPlanesOnly) const bool kPlanesOnly = false;
+// The lookup pass of a method that needs no normal: the visible point from the group's surface
+// image (the planes pass writes it: the camera ray's t and whether the light reaches the point)
+// rather than from the visibility buffer and the triangle's plane, one fetch instead of two, like
+// a deferred renderer reconstructing the point from its depth buffer. The same p, bit for bit: the
+// point is origin + dir * t with the t the planes pass computed by the same expression.
+layout(constant_id = kSpecSurface) const bool kSurface = false;
 
 // Params P (binding kBindingParams) comes from resolve_abi.h.
 layout(set = 0, binding = kBindingMapDepth) uniform sampler2DArray mapDepth;         // NEAREST, raw depth
@@ -62,6 +68,9 @@ layout(set = 0, binding = kBindingMapIds) uniform usampler2DArray mapIds;
 // Filterable maps: the blurred moments of each light layer (moments_rows/cols.frag), LINEAR.
 layout(set = 0, binding = kBindingMoments) uniform sampler2DArray momentsMap;
 layout(set = 0, binding = kBindingCameraIds) uniform usampler2D cameraIds;
+// The group's surface (kSurface): x the camera ray's t at the visible point, y 1 where a triangle
+// covers the pixel and the light reaches its visible side (not facing away, inside a spot's cone).
+layout(set = 0, binding = kBindingSurface) uniform sampler2D surfaceMap;
 
 // Per triangle (at its global index + 1, as in the id attachments; texel 0 a placeholder), its
 // plane relative to the camera origin o: (n, dot(n, v0 - o)), n the unit normal
@@ -83,6 +92,7 @@ layout(push_constant) uniform Push {
 // The rasterizer splits these into the frame's channels (rasterizer.cpp, readback).
 layout(location = 0) out vec4 outA;  // vis, receiver_depth, map_depth, m
 layout(location = 1) out vec4 outB;  // bias_depth, bias_world, occluder (id), 2 * cascade + in_map
+                                     // (the planes pass: the surface, ray t and light reaches)
 // Filterable maps only (the pipeline has this third attachment for them alone): the moments'
 // evidence at the lookup: mean depth, variance, the bound before the bleed cut.
 layout(location = 2) out vec4 outC;
@@ -96,6 +106,7 @@ struct Surface {
   bool hit;       // a triangle covers the pixel
   vec4 plane;     // the triangle's plane (n, dot(n, v0 - camera origin))
   vec3 dir;       // the (unnormalized) ray direction through the pixel center
+  float t;        // p = camera origin + dir * t
   vec3 p;         // the visible point, world
   vec3 normal;    // the plane's unit normal, facing the camera
   vec3 e1;        // a unit tangent of the plane
@@ -130,11 +141,9 @@ struct LayerHit {
 Layer layerAt(int index) { return Layer(index, P.texFromWorld[index], float(P.sizes.x)); }
 
 vec3 rayThrough(vec2 pixel) { return P.rayX.xyz * pixel.x + P.rayY.xyz * pixel.y + P.rayC.xyz; }
-// Where the camera ray through an image point meets a plane (n, dot(n, v0 - origin)).
-vec3 planePoint(vec2 pixel, vec4 plane) {
-  vec3 d = rayThrough(pixel);
-  return P.cameraOrigin.xyz + d * (plane.w / dot(d, plane.xyz));
-}
+// Where the camera ray origin + d t meets a plane (n, dot(n, v0 - origin)): its t, and the point.
+float planeT(vec3 d, vec4 plane) { return plane.w / dot(d, plane.xyz); }
+vec3 rayPoint(vec3 d, float t) { return P.cameraOrigin.xyz + d * t; }
 
 // The layer's homogeneous coordinates of a point (u w, v w, depth w, w); the first, second and
 // fourth move by dirMap(v) per unit of v, and so does the third unless kLightDepth:
@@ -393,15 +402,28 @@ int cubeFace(vec3 v) {
   return v.z > 0.0 ? 4 : 5;
 }
 
-// The pixel's visible surface, from the visibility buffer.
+// The pixel's visible surface, from the visibility buffer (kSurface: from the surface image, the
+// point alone; hit then also says that the light reaches it).
 Surface visibleSurface(ivec2 px) {
   Surface s;
+  if (kSurface) {
+    vec2 surface = texelFetch(surfaceMap, px, 0).xy;
+    s.hit = surface.y != 0.0;
+    s.dir = rayThrough(vec2(px) + 0.5);
+    s.t = surface.x;
+    s.p = rayPoint(s.dir, s.t);
+    s.plane = vec4(0.0);  // unread: nothing the lookup computes without a normal reads them
+    s.normal = vec3(0.0, 0.0, 1.0);
+    s.e1 = vec3(1.0, 0.0, 0.0);
+    return s;
+  }
   uint id = texelFetch(cameraIds, px, 0).x;  // global triangle + 1, 0: no hit
   s.hit = id != 0u;
   s.plane = texelFetch(trianglePlanes, int(id));
   vec2 pixelCenter = vec2(px) + 0.5;
   s.dir = rayThrough(pixelCenter);
-  s.p = planePoint(pixelCenter, s.plane);
+  s.t = planeT(s.dir, s.plane);
+  s.p = rayPoint(s.dir, s.t);
   s.normal = s.plane.xyz;
   if (dot(s.normal, s.dir) > 0.0) s.normal = -s.normal;  // face the camera, like the reference's N
   // A unit tangent (Duff et al. 2017's branchless basis), for the receiver plane's slope.
@@ -416,6 +438,7 @@ struct LightChannels {
   vec4 a;  // vis, receiver_depth, map_depth, m
   vec4 b;  // bias_depth, bias_world, occluder (id), 2 * cascade + in_map
   vec4 c;  // filterable maps: moment mean, variance, bound (0 outside the map)
+  bool unreached;  // the light cannot reach the visible side (facing away, outside a spot's cone)
 };
 
 LightChannels shadeLight(Surface s) {
@@ -494,9 +517,11 @@ LightChannels shadeLight(Surface s) {
 
   // The blend band: the same lookup in the next cascade.
   if (kBlend && pick.blendT > 0.0) vis = mix(vis, blendVisibility(lookUp(pick.cascade + 1, s)), pick.blendT);
-  if (outsideCone || facesAway) vis = 0.0;
+  // kSurface: the surface image's hit says it (the planes pass wrote it); the normal is not there.
+  if (!kSurface && (outsideCone || facesAway)) vis = 0.0;
 
   LightChannels o;
+  o.unreached = outsideCone || facesAway;
   o.a = vec4(vis, h.uvz.z, mapDepthCenter, m);
   o.b = vec4(biasDepth, biasDepth * worldPerDepth, occluder, float(2 * pick.cascade + (h.inMap ? 1 : 0)));
   o.c = momentEvidence;
@@ -565,6 +590,7 @@ void main() {
   }
   if (kPlanesOnly) {
     outA = s.hit ? vec4(light.a.w, light.b.w, 0.0, 0.0) : vec4(0.0);
+    outB = vec4(s.t, s.hit && !light.unreached ? 1.0 : 0.0, 0.0, 0.0);  // the surface (kSurface)
     return;
   }
   outA = s.hit ? light.a : vec4(0.0);

@@ -6,6 +6,10 @@
 //                    moments map sampled with linear filtering (moments_rows/cols.frag).
 //   Pass 2 (camera): the camera's visibility buffer: depth + id (global triangle + 1) per pixel,
 //                    kept while the scene and the camera stay the same.
+//   Pass 3a (planes, a group's first frame): resolve.frag specialized to kSpecPlanesOnly: m and
+//                    2 * cascade + in_map (evidence on demand keeps them per group) and the group's
+//                    surface (kSurfaceFormat: the camera ray's t at the visible point, whether the
+//                    light reaches it), kept for up to kKeptFootprints groups (surfaceFor).
 //   Pass 3 (resolve, a full-screen fragment pass): per pixel, the visible point, the map lookup with the method's
 //                    bias and filter, the evidence channels into two color attachments
 //                    (kResolveFormats), the projectors into a storage buffer (one plane per channel).
@@ -13,7 +17,8 @@
 //                    (kSpecLookupOnly): the visibility as 1 byte per pixel (kLookupFormat; 0 and
 //                    255 only for exactly 0 and 1, the 0.5 threshold exact), the evidence
 //                    compiled out; timed on its own (lookup_gpu_ms, what an engine pays for the
-//                    method besides its shadow pass).
+//                    method besides its shadow pass). A method that needs no normal reads the
+//                    visible point from the group's surface (kSpecSurface), one fetch per pixel.
 // Evidence on demand (render() with an EvidenceSelector, a light, no projectors, and the group's
 // planes kept): pass 3 is skipped and pass 1 writes the stencil ids (each draw's object index + 1
 // in the map's stencil aspect, no id attachment: a depth-only pass's cost; up to 255 objects, where
@@ -26,7 +31,7 @@
 // the frame is then the bytes (0/1 exactly), the kept planes of the group (hit, object_id,
 // prim_id from the visibility buffer; m and cascade per footprintKey: the light's layers, the
 // camera, the cascade splits) and the listed pixels' evidence, zeros elsewhere. A group's first
-// frame draws those planes first: pass 3 specialized to kSpecPlanesOnly (m, cascade only).
+// frame draws those planes first (pass 3a).
 // The visibility buffer and the resolve attachments are linear images in host memory: the CPU
 // splits them into the Frame's channel planes in place, without a copy to a buffer first.
 #include "shadowlab/raster/raster.h"
@@ -143,6 +148,17 @@ constexpr int kCompactWidth = 256;
 // How many groups' planes (m, cascade) evidence on demand keeps: a sweep whose fastest axis is a
 // bias or a filter needs one; a grid with map.size fastest, one per size.
 constexpr size_t kKeptFootprints = 4;
+// The planes pass's second attachment, a group's surface (resolve.frag's kSpecSurface): the camera
+// ray's t at the visible point, and 1 where the light reaches it. Kept per group, as many as the
+// footprints (8 bytes per pixel: 17 MB at 1080p each).
+constexpr VkFormat kSurfaceFormat = VK_FORMAT_R32G32_SFLOAT;
+
+// Whether the lookup pass of a specialization reads the group's surface: it needs no normal (no
+// normal offset, no receiver plane, no adaptive bias), the surface image holds the visible point.
+bool lookupReadsSurface(const raster::ResolveSpecialization& spec) {
+  return spec[abi::kSpecLightType] != uint32_t(abi::kLightNone) && !spec[abi::kSpecNormalOffset] &&
+         !spec[abi::kSpecReceiverPlane] && !spec[abi::kSpecAdaptive];
+}
 
 // A filterable map's moments format: RG32F for 2 moments, RGBA32F for 4 (raster/METHODS.md).
 VkFormat momentsFormat(Filter filter) {
@@ -323,6 +339,17 @@ struct Rasterizer::Impl {
     std::vector<float> m, cascade;
   };
   std::list<Footprint> footprints;  // most recently used first, at most kKeptFootprints
+  // The groups' surfaces (kSurfaceFormat), keyed like the footprints (footprintKey), most recently
+  // used first, at most kKeptFootprints; every frame with a light keeps its group's (a full frame
+  // too: its lookup reads it). `surfaceBound` is the frame's (the planes pass draws it, the lookup
+  // reads it; kBindingSurface), else the 1x1 placeholder (never read: every binding needs an image).
+  struct SurfaceImage {
+    std::string key;  // empty until the planes pass has drawn it
+    vk::Image image;
+  };
+  std::list<SurfaceImage> surfaces;
+  vk::Image surfacePlaceholder;
+  vk::Image* surfaceBound = nullptr;
   // The kept planes are lent (moved, not copied) to the last partial frame; recycle() moves them
   // back and re-zeroes that frame's evidence planes at its listed pixels only, for the next one.
   // A frame not handed back leaves its group without planes: its next frame is a full one.
@@ -355,10 +382,10 @@ struct Rasterizer::Impl {
   // render()'s steps (defined beside render(), in its order).
   struct FramePipelines {
     IdPipelines ids;
-    VkPipeline resolve = VK_NULL_HANDLE;
+    VkPipeline planes = VK_NULL_HANDLE;    // pass 3a: the group's planes and surface (none: both kept)
+    VkPipeline resolve = VK_NULL_HANDLE;   // pass 3 (none on demand)
     VkPipeline lookup = VK_NULL_HANDLE;    // pass 4; none without a light
-    VkPipeline evidence = VK_NULL_HANDLE;  // pass 5 (evidence on demand; then no pass 3 but the planes pass)
-    int resolveTargets = 0;                // pass 3's attachments (0: resolveAttachments(filter))
+    VkPipeline evidence = VK_NULL_HANDLE;  // pass 5 (evidence on demand)
     bool evidenceFirstUse = false;
     bool firstUse = false;  // lavapipe compiles at first use: run once untimed (warmupRun)
   };
@@ -381,6 +408,7 @@ struct Rasterizer::Impl {
                            const raster::ResolveSpecialization& spec) const;
   Footprint* findFootprint(const std::string& key);
   Footprint& keepPlanes(const std::string& key, const std::string& camera, int width, int height);
+  SurfaceImage& surfaceFor(const std::string& key, int width, int height, bool& kept);
   void idsOf(uint32_t id, float& objectId, float& prim) const;
   void cameraRow(int y, float* hit, float* objectId, float* primId) const;
   Frame partialFrame(const Scene& scene, const Light& light, const Method& method, const EvidenceSelector& select,
@@ -554,7 +582,7 @@ VkPipeline Rasterizer::Impl::resolvePipeline(const ResolveKey& key) {
   d.layout = pipelineLayout.get();
   d.depthTest = false;
   if (key[abi::kSpecLookupOnly]) d.colorFormats = {kLookupFormat};
-  else if (key[abi::kSpecPlanesOnly]) d.colorFormats = {kResolveFormats[0]};
+  else if (key[abi::kSpecPlanesOnly]) d.colorFormats = {kResolveFormats[0], kSurfaceFormat};
   else d.colorFormats.assign(kResolveFormats, kResolveFormats + resolveAttachments(Filter(key[abi::kSpecFilter])));
   d.fragmentSpecialization.assign(key.begin(), key.end());  // straight-line code per case
   return resolvePipelines.emplace(key, vk::createGraphicsPipeline(*context, d)).first->second.get();
@@ -652,6 +680,7 @@ void Rasterizer::Impl::writeDescriptors() {
       image(nearestSampler, mapDepth.hasStencil() ? mapDepth.stencilView() : mapIds.arrayView(),
             VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL);
   resources[abi::kBindingCameraIds].image = image(nearestSampler, cameraIds.layerView(0), VK_IMAGE_LAYOUT_GENERAL);
+  resources[abi::kBindingSurface].image = image(nearestSampler, surfaceBound->layerView(0), VK_IMAGE_LAYOUT_GENERAL);
   resources[abi::kBindingTrianglePlanes].texelView = s.trianglePlanesView.get();
   resources[abi::kBindingProjectorTexels].buffer = &s.projectorTexels;
   resources[abi::kBindingOutPlanes].buffer = &output;
@@ -850,14 +879,37 @@ void Rasterizer::Impl::record(VkCommandBuffer cmd, const std::vector<LayerDraw>&
                  VK_PIPELINE_STAGE_2_FRAGMENT_SHADER_BIT, VK_ACCESS_2_SHADER_SAMPLED_READ_BIT);
   vkCmdWriteTimestamp2(cmd, VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT, pool, 3);
 
+  // ---- Pass 3a: a group's planes (m, cascade) and surface, where not kept ----
+  vk::Image& surface = *surfaceBound;
+  if (frame.planes != VK_NULL_HANDLE) {
+    VkRenderingAttachmentInfo colors[2];
+    vk::transition(cmd, resolveOut[0], VK_IMAGE_LAYOUT_UNDEFINED, VK_IMAGE_LAYOUT_GENERAL, VK_PIPELINE_STAGE_2_HOST_BIT,
+                   0, VK_PIPELINE_STAGE_2_COLOR_ATTACHMENT_OUTPUT_BIT, VK_ACCESS_2_COLOR_ATTACHMENT_WRITE_BIT);
+    vk::transition(cmd, surface, VK_IMAGE_LAYOUT_UNDEFINED, VK_IMAGE_LAYOUT_GENERAL,
+                   VK_PIPELINE_STAGE_2_FRAGMENT_SHADER_BIT, 0, VK_PIPELINE_STAGE_2_COLOR_ATTACHMENT_OUTPUT_BIT,
+                   VK_ACCESS_2_COLOR_ATTACHMENT_WRITE_BIT);
+    colors[0] = overwrittenColor(resolveOut[0].layerView(0), VK_IMAGE_LAYOUT_GENERAL);
+    colors[1] = overwrittenColor(surface.layerView(0), VK_IMAGE_LAYOUT_GENERAL);
+    drawFullscreen(cmd, colors, 2, uint32_t(width), uint32_t(height), frame.planes, {}, warmupRun);
+    vk::transition(cmd, surface, VK_IMAGE_LAYOUT_GENERAL, VK_IMAGE_LAYOUT_GENERAL,
+                   VK_PIPELINE_STAGE_2_COLOR_ATTACHMENT_OUTPUT_BIT, VK_ACCESS_2_COLOR_ATTACHMENT_WRITE_BIT,
+                   VK_PIPELINE_STAGE_2_FRAGMENT_SHADER_BIT, VK_ACCESS_2_SHADER_SAMPLED_READ_BIT);
+  } else if (&surface == &surfacePlaceholder) {
+    vk::transition(cmd, surface, VK_IMAGE_LAYOUT_UNDEFINED, VK_IMAGE_LAYOUT_GENERAL,
+                   VK_PIPELINE_STAGE_2_FRAGMENT_SHADER_BIT, 0, VK_PIPELINE_STAGE_2_FRAGMENT_SHADER_BIT,
+                   VK_ACCESS_2_SHADER_SAMPLED_READ_BIT);
+  }
+
   // ---- Pass 3: resolve, one fragment per pixel, into the resolve attachments (evidence on
   // demand: none; pass 5 resolves the listed pixels after the readback of pass 4) ----
   if (resolve != VK_NULL_HANDLE) {
-    const int attachments = frame.resolveTargets > 0 ? frame.resolveTargets : resolveAttachments(method.filter);
+    const int attachments = resolveAttachments(method.filter);
     VkRenderingAttachmentInfo colors[kResolveAttachments];
     for (int i = 0; i < attachments; ++i) {
+      // After the planes pass (pass 3a), which wrote resolveOut[0] too.
       vk::transition(cmd, resolveOut[i], VK_IMAGE_LAYOUT_UNDEFINED, VK_IMAGE_LAYOUT_GENERAL,
-                     VK_PIPELINE_STAGE_2_HOST_BIT, 0, VK_PIPELINE_STAGE_2_COLOR_ATTACHMENT_OUTPUT_BIT,
+                     VK_PIPELINE_STAGE_2_HOST_BIT | VK_PIPELINE_STAGE_2_COLOR_ATTACHMENT_OUTPUT_BIT,
+                     VK_ACCESS_2_COLOR_ATTACHMENT_WRITE_BIT, VK_PIPELINE_STAGE_2_COLOR_ATTACHMENT_OUTPUT_BIT,
                      VK_ACCESS_2_COLOR_ATTACHMENT_WRITE_BIT);
       colors[i] = overwrittenColor(resolveOut[i].layerView(0), VK_IMAGE_LAYOUT_GENERAL);
     }
@@ -1170,27 +1222,29 @@ Rasterizer::Impl::FramePipelines Rasterizer::Impl::pipelinesFor(const Method&, c
     compactSpec[abi::kSpecProjectorCount] = 0u;
     p.evidence = resolvePipeline(compactSpec);
     p.evidenceFirstUse = evidenceWarmed.insert(compactSpec).second;
-    if (planes) {
-      // The group's first frame: pass 3 draws its planes (m, cascade) alone. They depend on no
-      // bias or filter (footprintKey), so every filter's group shares one pipeline.
-      raster::ResolveSpecialization planesSpec = spec;
-      planesSpec[abi::kSpecPlanesOnly] = 1u;
-      planesSpec[abi::kSpecProjectorCount] = 0u;
-      for (int k :
-           {abi::kSpecFilter, abi::kSpecPcfSize, abi::kSpecAdaptive, abi::kSpecReceiverPlane, abi::kSpecNormalOffset})
-        planesSpec[size_t(k)] = 0u;
-      static_assert(int(Filter::None) == 0, "kSpecFilter 0 is filter none");
-      p.resolve = resolvePipeline(planesSpec);
-      p.resolveTargets = 1;
-    }
   } else {
     p.resolve = resolvePipeline(spec);
   }
+  if (planes) {
+    // A group's first frame: pass 3a draws its planes (m, cascade; kept on demand) and its surface
+    // (the lookup's). They depend on no bias or filter (footprintKey), so every filter's group
+    // shares one pipeline.
+    raster::ResolveSpecialization planesSpec = spec;
+    planesSpec[abi::kSpecPlanesOnly] = 1u;
+    planesSpec[abi::kSpecProjectorCount] = 0u;
+    for (int k :
+         {abi::kSpecFilter, abi::kSpecPcfSize, abi::kSpecAdaptive, abi::kSpecReceiverPlane, abi::kSpecNormalOffset})
+      planesSpec[size_t(k)] = 0u;
+    static_assert(int(Filter::None) == 0, "kSpecFilter 0 is filter none");
+    p.planes = resolvePipeline(planesSpec);
+  }
   if (spec[abi::kSpecLightType] != uint32_t(abi::kLightNone)) {
-    // The lookup: the same specialization, the evidence and the projectors compiled out.
+    // The lookup: the same specialization, the evidence and the projectors compiled out, the
+    // visible point from the group's surface where the method needs no normal.
     raster::ResolveSpecialization lookupSpec = spec;
     lookupSpec[abi::kSpecLookupOnly] = 1u;
     lookupSpec[abi::kSpecProjectorCount] = 0u;
+    lookupSpec[abi::kSpecSurface] = lookupReadsSurface(spec) ? 1u : 0u;
     p.lookup = resolvePipeline(lookupSpec);
   }
   // lavapipe compiles shaders at first use: the first frame of a combination runs twice.
@@ -1361,6 +1415,25 @@ Rasterizer::Impl::Footprint& Rasterizer::Impl::keepPlanes(const std::string& key
   if (cameraToo) cameraPlanes.key = camera;
   footprints.push_front(std::move(f));
   return footprints.front();
+}
+
+// The group's surface image: the kept one (kept = true: the planes pass need not draw it), else a
+// slot for the planes pass (the least recently used one past kKeptFootprints), its key cleared
+// until render() has drawn it. Most recently used first.
+Rasterizer::Impl::SurfaceImage& Rasterizer::Impl::surfaceFor(const std::string& key, int width, int height,
+                                                             bool& kept) {
+  auto it = std::find_if(surfaces.begin(), surfaces.end(), [&](const SurfaceImage& s) { return s.key == key; });
+  kept = it != surfaces.end();
+  if (!kept) it = surfaces.size() < kKeptFootprints ? surfaces.emplace(surfaces.end()) : std::prev(surfaces.end());
+  surfaces.splice(surfaces.begin(), surfaces, it);
+  SurfaceImage& s = surfaces.front();
+  if (!kept) {
+    s.key.clear();
+    if (s.image.width() != width || s.image.height() != height)
+      s.image = vk::Image(*context, width, height, 1, kSurfaceFormat,
+                          VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT | VK_IMAGE_USAGE_SAMPLED_BIT, VK_IMAGE_ASPECT_COLOR_BIT);
+  }
+  return s;
 }
 
 // Evidence on demand, after the shadow and lookup passes: reads the lookup's bytes, lists the
@@ -1616,19 +1689,32 @@ Frame Rasterizer::render(const Scene& scene, const Method& method, const std::st
   // Evidence on demand: with a selector, a light, no projectors (their planes are every pixel's)
   // and the group's planes kept from an earlier frame.
   const bool onDemand = select && *select && light && scene.projectors.empty();
-  const std::string group = onDemand ? im.footprintKey(scene, params, spec) : std::string();
+  const std::string group = light ? im.footprintKey(scene, params, spec) : std::string();
   const std::string camera = onDemand ? im.cameraKey(scene) : std::string();
   Impl::Footprint* footprint =
       onDemand && im.cameraPlanes.key == camera && !im.cameraPlanes.hit.empty() ? im.findFootprint(group) : nullptr;
   if (footprint && footprint->m.empty()) footprint = nullptr;  // lent to a frame not handed back
-  // A group's first frame draws its planes (m, cascade) in pass 3 and keeps them, then goes on
-  // like the group's next ones; every frame on demand reads the occluder's object from the map's
+  // A group's first frame draws its planes (m, cascade) and its surface in pass 3a and keeps them,
+  // then goes on like the group's next ones; a full frame draws the surface alone where its lookup
+  // reads it and it is not kept. Every frame on demand reads the occluder's object from the map's
   // stencil (no id attachment).
   const bool groupStart = onDemand && !footprint;
+  const bool lookupSurface = light && lookupReadsSurface(spec);
+  bool surfaceKept = false;
+  Impl::SurfaceImage* surface = groupStart || lookupSurface
+                                    ? &im.surfaceFor(group, scene.camera.width, scene.camera.height, surfaceKept)
+                                    : nullptr;
+  const bool drawPlanes = groupStart || (lookupSurface && !surfaceKept);
+  if (drawPlanes) surface->key.clear();  // until drawn
+  if (!im.surfacePlaceholder.get())
+    im.surfacePlaceholder =
+        vk::Image(*im.context, 1, 1, 1, kSurfaceFormat, VK_IMAGE_USAGE_SAMPLED_BIT, VK_IMAGE_ASPECT_COLOR_BIT);
+  im.surfaceBound = surface ? &surface->image : &im.surfacePlaceholder;
   const bool stencilIds = onDemand && im.stencilIdsApply(method);
   im.prepareTargets(scene, method, layers, stencilIds);
-  const Impl::FramePipelines pipes = im.pipelinesFor(method, layers, spec, onDemand, groupStart);
+  const Impl::FramePipelines pipes = im.pipelinesFor(method, layers, spec, onDemand, drawPlanes);
   const Impl::Drawn drawn = im.submit(scene, method, layers, pipes);
+  if (drawPlanes) surface->key = group;
   const Impl::PassTimes passes = im.readTimestamps(drawn);
 
   RasterTimings local;
@@ -1640,7 +1726,8 @@ Frame Rasterizer::render(const Scene& scene, const Method& method, const std::st
     if (groupStart) footprint = &im.keepPlanes(group, camera, scene.camera.width, scene.camera.height);
     const double planesMs = msSince(tRead);
     frame = im.partialFrame(scene, *light, method, *select, *footprint, pipes, t);
-    if (groupStart) t.evidenceGpuMs += passes.resolveGpuMs, t.readbackMs += planesMs;  // the planes pass
+    if (drawPlanes) t.evidenceGpuMs += passes.resolveGpuMs;  // the planes pass (3a)
+    if (groupStart) t.readbackMs += planesMs;
   } else {
     auto tRead = std::chrono::steady_clock::now();
     frame = im.readback(scene, light, method, scene.camera.width, scene.camera.height);

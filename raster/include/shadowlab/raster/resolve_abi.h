@@ -73,27 +73,34 @@ SHADOWLAB_CONST(int, kSpecPcfSize, 13)
 // per pixel only the planes that depend on no bias or filter, m and 2 * cascade + in_map, into one
 // attachment; the lookup, the evidence and the projectors compiled out.
 SHADOWLAB_CONST(int, kSpecPlanesOnly, 14)
-SHADOWLAB_CONST(int, kSpecCount, 15)
+// 0/1: the lookup pass reads the pixel's visible point from the group's surface image (Surface
+// below: the camera ray's parameter t and whether the light can reach the point, written by the
+// planes pass) instead of the visibility buffer and the triangle's plane. Only where the lookup
+// needs no normal: no normal offset, no receiver plane, no adaptive bias (rasterizer.cpp,
+// lookupReadsSurface).
+SHADOWLAB_CONST(int, kSpecSurface, 15)
+SHADOWLAB_CONST(int, kSpecCount, 16)
 
 // The descriptor set (set 0), one row per binding: X(Name, binding, kind). The kinds name
 // Vulkan descriptor types (rasterizer.cpp maps them); the set layout, the pool and the writes
 // are built from these rows. id.frag reads bindings 0..2 for its material tests.
-#define SHADOWLAB_RESOLVE_BINDINGS(X)                                                             \
-  X(TriangleMaterials, 0, StorageBuffer)   /* per triangle: its material index */                 \
-  X(Materials, 1, StorageBuffer)           /* MaterialGpu per material */                         \
-  X(AlphaTexels, 2, StorageBuffer)         /* alpha textures, concatenated */                     \
-  X(Params, 3, UniformBuffer)              /* Params below */                                     \
-  X(MapDepth, 4, CombinedImageSampler)     /* map depths, NEAREST */                              \
-  X(MapShadow, 5, CombinedImageSampler)    /* map depths, LINEAR, compare LESS_OR_EQUAL */        \
-  X(MapIds, 6, CombinedImageSampler)       /* map ids (global triangle + 1) */                    \
-  X(CameraIds, 7, CombinedImageSampler)    /* the camera's visibility buffer */                   \
-  X(TrianglePlanes, 8, UniformTexelBuffer) /* per triangle: its plane */                          \
-  X(ProjectorTexels, 9, StorageBuffer)     /* projector images, RGB floats */                     \
-  X(OutPlanes, 10, StorageBuffer)          /* the projector channels, one plane each */           \
-  X(MomentsRows, 11, CombinedImageSampler) /* moments pass: the rows-blurred moments, NEAREST */  \
-  X(Moments, 12, CombinedImageSampler)     /* the blurred moments per light layer, LINEAR */      \
-  X(EvidencePixels, 13, StorageBuffer)     /* evidence pass: the listed pixels (y * width + x) */ \
-  X(ParamsLoops, 14, StorageBuffer)        /* Params again: its loop counts (ParamsLoops below) */
+#define SHADOWLAB_RESOLVE_BINDINGS(X)                                                              \
+  X(TriangleMaterials, 0, StorageBuffer)   /* per triangle: its material index */                  \
+  X(Materials, 1, StorageBuffer)           /* MaterialGpu per material */                          \
+  X(AlphaTexels, 2, StorageBuffer)         /* alpha textures, concatenated */                      \
+  X(Params, 3, UniformBuffer)              /* Params below */                                      \
+  X(MapDepth, 4, CombinedImageSampler)     /* map depths, NEAREST */                               \
+  X(MapShadow, 5, CombinedImageSampler)    /* map depths, LINEAR, compare LESS_OR_EQUAL */         \
+  X(MapIds, 6, CombinedImageSampler)       /* map ids (global triangle + 1) */                     \
+  X(CameraIds, 7, CombinedImageSampler)    /* the camera's visibility buffer */                    \
+  X(TrianglePlanes, 8, UniformTexelBuffer) /* per triangle: its plane */                           \
+  X(ProjectorTexels, 9, StorageBuffer)     /* projector images, RGB floats */                      \
+  X(OutPlanes, 10, StorageBuffer)          /* the projector channels, one plane each */            \
+  X(MomentsRows, 11, CombinedImageSampler) /* moments pass: the rows-blurred moments, NEAREST */   \
+  X(Moments, 12, CombinedImageSampler)     /* the blurred moments per light layer, LINEAR */       \
+  X(EvidencePixels, 13, StorageBuffer)     /* evidence pass: the listed pixels (y * width + x) */  \
+  X(ParamsLoops, 14, StorageBuffer)        /* Params again: its loop counts (ParamsLoops below) */ \
+  X(Surface, 15, CombinedImageSampler)     /* the group's surface: (ray t, light reaches 0/1) */
 #define SHADOWLAB_ABI_BINDING(name, binding, kind) SHADOWLAB_CONST(int, kBinding##name, binding)
 SHADOWLAB_RESOLVE_BINDINGS(SHADOWLAB_ABI_BINDING)
 #undef SHADOWLAB_ABI_BINDING
