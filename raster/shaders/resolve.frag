@@ -96,6 +96,10 @@ layout(location = 1) out vec4 outB;  // bias_depth, bias_world, occluder (id), 2
 // Filterable maps only (the pipeline has this third attachment for them alone): the moments'
 // evidence at the lookup: mean depth, variance, the bound before the bleed cut.
 layout(location = 2) out vec4 outC;
+// The group's surface (kSurface's image: the camera ray's t, 1 where the light reaches the point),
+// which the full resolve writes for the lookup after it, as the next attachment: outC's without
+// moments, outD's with them (the planes pass: outB's).
+layout(location = 3) out vec4 outD;
 
 const bool kMomentFilter =
     kFilter == kFilterVsm || kFilter == kFilterEvsm2 || kFilter == kFilterEvsm4 || kFilter == kFilterMsm;
@@ -590,12 +594,15 @@ void main() {
   }
   if (kPlanesOnly) {
     outA = s.hit ? vec4(light.a.w, light.b.w, 0.0, 0.0) : vec4(0.0);
-    outB = vec4(s.t, s.hit && !light.unreached ? 1.0 : 0.0, 0.0, 0.0);  // the surface (kSurface)
+    outB = vec4(s.t, s.hit && !light.unreached ? 1.0 : 0.0, 0.0, 0.0);  // the group's surface
     return;
   }
   outA = s.hit ? light.a : vec4(0.0);
   outB = s.hit ? light.b : vec4(0.0);
   if (kMomentFilter) outC = s.hit ? light.c : vec4(0.0);
   if (kCompact) return;  // no projectors (their planes are every pixel's)
+  vec4 surface = vec4(s.t, s.hit && !light.unreached ? 1.0 : 0.0, 0.0, 0.0);
+  if (kMomentFilter) outD = surface;
+  else outC = surface;
   shadeProjectors(s, uint(px.y * P.sizes2.x + px.x), uint(P.sizes2.x * P.sizes2.y));
 }

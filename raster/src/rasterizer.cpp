@@ -12,7 +12,8 @@
 //                    light reaches it), kept for up to kKeptFootprints groups (surfaceFor).
 //   Pass 3 (resolve, a full-screen fragment pass): per pixel, the visible point, the map lookup with the method's
 //                    bias and filter, the evidence channels into two color attachments
-//                    (kResolveFormats), the projectors into a storage buffer (one plane per channel).
+//                    (kResolveFormats), the projectors into a storage buffer (one plane per channel),
+//                    with a light the group's surface into one more attachment (pass 4 reads it).
 //   Pass 4 (lookup, with a light): resolve.frag specialized to the method's lookup alone
 //                    (kSpecLookupOnly): the visibility as 1 byte per pixel (kLookupFormat; 0 and
 //                    255 only for exactly 0 and 1, the 0.5 threshold exact), the evidence
@@ -340,9 +341,9 @@ struct Rasterizer::Impl {
   };
   std::list<Footprint> footprints;  // most recently used first, at most kKeptFootprints
   // The groups' surfaces (kSurfaceFormat), keyed like the footprints (footprintKey), most recently
-  // used first, at most kKeptFootprints; every frame with a light keeps its group's (a full frame
-  // too: its lookup reads it). `surfaceBound` is the frame's (the planes pass draws it, the lookup
-  // reads it; kBindingSurface), else the 1x1 placeholder (never read: every binding needs an image).
+  // used first, at most kKeptFootprints: the planes pass draws one on demand, a full frame's resolve
+  // writes its group's. `surfaceBound` is the frame's (kBindingSurface: the lookup reads it), else
+  // the 1x1 placeholder (never read: every binding needs an image).
   struct SurfaceImage {
     std::string key;  // empty until the planes pass has drawn it
     vk::Image image;
@@ -384,6 +385,7 @@ struct Rasterizer::Impl {
     IdPipelines ids;
     VkPipeline planes = VK_NULL_HANDLE;    // pass 3a: the group's planes and surface (none: both kept)
     VkPipeline resolve = VK_NULL_HANDLE;   // pass 3 (none on demand)
+    bool resolveSurface = false;           // pass 3 writes the group's surface too (a light)
     VkPipeline lookup = VK_NULL_HANDLE;    // pass 4; none without a light
     VkPipeline evidence = VK_NULL_HANDLE;  // pass 5 (evidence on demand)
     bool evidenceFirstUse = false;
@@ -583,7 +585,11 @@ VkPipeline Rasterizer::Impl::resolvePipeline(const ResolveKey& key) {
   d.depthTest = false;
   if (key[abi::kSpecLookupOnly]) d.colorFormats = {kLookupFormat};
   else if (key[abi::kSpecPlanesOnly]) d.colorFormats = {kResolveFormats[0], kSurfaceFormat};
-  else d.colorFormats.assign(kResolveFormats, kResolveFormats + resolveAttachments(Filter(key[abi::kSpecFilter])));
+  else {
+    d.colorFormats.assign(kResolveFormats, kResolveFormats + resolveAttachments(Filter(key[abi::kSpecFilter])));
+    if (key[abi::kSpecLightType] != uint32_t(abi::kLightNone) && !key[abi::kSpecCompact])
+      d.colorFormats.push_back(kSurfaceFormat);  // the group's surface, for the lookup after it
+  }
   d.fragmentSpecialization.assign(key.begin(), key.end());  // straight-line code per case
   return resolvePipelines.emplace(key, vk::createGraphicsPipeline(*context, d)).first->second.get();
 }
@@ -904,7 +910,7 @@ void Rasterizer::Impl::record(VkCommandBuffer cmd, const std::vector<LayerDraw>&
   // demand: none; pass 5 resolves the listed pixels after the readback of pass 4) ----
   if (resolve != VK_NULL_HANDLE) {
     const int attachments = resolveAttachments(method.filter);
-    VkRenderingAttachmentInfo colors[kResolveAttachments];
+    VkRenderingAttachmentInfo colors[kResolveAttachments + 1];
     for (int i = 0; i < attachments; ++i) {
       // After the planes pass (pass 3a), which wrote resolveOut[0] too.
       vk::transition(cmd, resolveOut[i], VK_IMAGE_LAYOUT_UNDEFINED, VK_IMAGE_LAYOUT_GENERAL,
@@ -913,7 +919,17 @@ void Rasterizer::Impl::record(VkCommandBuffer cmd, const std::vector<LayerDraw>&
                      VK_ACCESS_2_COLOR_ATTACHMENT_WRITE_BIT);
       colors[i] = overwrittenColor(resolveOut[i].layerView(0), VK_IMAGE_LAYOUT_GENERAL);
     }
-    drawFullscreen(cmd, colors, uint32_t(attachments), uint32_t(width), uint32_t(height), resolve, {}, warmupRun);
+    if (frame.resolveSurface)  // the group's surface, for the lookup (as the planes pass draws it on demand)
+      vk::transition(cmd, surface, VK_IMAGE_LAYOUT_UNDEFINED, VK_IMAGE_LAYOUT_GENERAL,
+                     VK_PIPELINE_STAGE_2_FRAGMENT_SHADER_BIT, 0, VK_PIPELINE_STAGE_2_COLOR_ATTACHMENT_OUTPUT_BIT,
+                     VK_ACCESS_2_COLOR_ATTACHMENT_WRITE_BIT);
+    const int targets = attachments + (frame.resolveSurface ? 1 : 0);
+    if (frame.resolveSurface) colors[attachments] = overwrittenColor(surface.layerView(0), VK_IMAGE_LAYOUT_GENERAL);
+    drawFullscreen(cmd, colors, uint32_t(targets), uint32_t(width), uint32_t(height), resolve, {}, warmupRun);
+    if (frame.resolveSurface)
+      vk::transition(cmd, surface, VK_IMAGE_LAYOUT_GENERAL, VK_IMAGE_LAYOUT_GENERAL,
+                     VK_PIPELINE_STAGE_2_COLOR_ATTACHMENT_OUTPUT_BIT, VK_ACCESS_2_COLOR_ATTACHMENT_WRITE_BIT,
+                     VK_PIPELINE_STAGE_2_FRAGMENT_SHADER_BIT, VK_ACCESS_2_SHADER_SAMPLED_READ_BIT);
   }
   barrierToHost(cmd, VK_PIPELINE_STAGE_2_FRAGMENT_SHADER_BIT | VK_PIPELINE_STAGE_2_COLOR_ATTACHMENT_OUTPUT_BIT,
                 VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT | VK_ACCESS_2_COLOR_ATTACHMENT_WRITE_BIT);
@@ -1224,6 +1240,7 @@ Rasterizer::Impl::FramePipelines Rasterizer::Impl::pipelinesFor(const Method&, c
     p.evidenceFirstUse = evidenceWarmed.insert(compactSpec).second;
   } else {
     p.resolve = resolvePipeline(spec);
+    p.resolveSurface = spec[abi::kSpecLightType] != uint32_t(abi::kLightNone);
   }
   if (planes) {
     // A group's first frame: pass 3a draws its planes (m, cascade; kept on demand) and its surface
@@ -1694,18 +1711,20 @@ Frame Rasterizer::render(const Scene& scene, const Method& method, const std::st
   Impl::Footprint* footprint =
       onDemand && im.cameraPlanes.key == camera && !im.cameraPlanes.hit.empty() ? im.findFootprint(group) : nullptr;
   if (footprint && footprint->m.empty()) footprint = nullptr;  // lent to a frame not handed back
-  // A group's first frame draws its planes (m, cascade) and its surface in pass 3a and keeps them,
-  // then goes on like the group's next ones; a full frame draws the surface alone where its lookup
-  // reads it and it is not kept. Every frame on demand reads the occluder's object from the map's
-  // stencil (no id attachment).
+  // On demand, a group's first frame draws its planes (m, cascade) and its surface in pass 3a and
+  // keeps them, then goes on like the group's next ones (the surface drawn again where it was not
+  // kept); a full frame's resolve writes the surface beside its channels. Every frame on demand
+  // reads the occluder's object from the map's stencil (no id attachment).
   const bool groupStart = onDemand && !footprint;
   const bool lookupSurface = light && lookupReadsSurface(spec);
+  const bool resolveSurface = light && !onDemand;  // a full frame's resolve writes the group's surface
   bool surfaceKept = false;
-  Impl::SurfaceImage* surface = groupStart || lookupSurface
+  Impl::SurfaceImage* surface = groupStart || lookupSurface || resolveSurface
                                     ? &im.surfaceFor(group, scene.camera.width, scene.camera.height, surfaceKept)
                                     : nullptr;
-  const bool drawPlanes = groupStart || (lookupSurface && !surfaceKept);
-  if (drawPlanes) surface->key.clear();  // until drawn
+  const bool drawPlanes = groupStart || (onDemand && lookupSurface && !surfaceKept);
+  const bool drawsSurface = drawPlanes || resolveSurface;
+  if (drawsSurface) surface->key.clear();  // until drawn
   if (!im.surfacePlaceholder.get())
     im.surfacePlaceholder =
         vk::Image(*im.context, 1, 1, 1, kSurfaceFormat, VK_IMAGE_USAGE_SAMPLED_BIT, VK_IMAGE_ASPECT_COLOR_BIT);
@@ -1714,7 +1733,7 @@ Frame Rasterizer::render(const Scene& scene, const Method& method, const std::st
   im.prepareTargets(scene, method, layers, stencilIds);
   const Impl::FramePipelines pipes = im.pipelinesFor(method, layers, spec, onDemand, drawPlanes);
   const Impl::Drawn drawn = im.submit(scene, method, layers, pipes);
-  if (drawPlanes) surface->key = group;
+  if (drawsSurface) surface->key = group;
   const Impl::PassTimes passes = im.readTimestamps(drawn);
 
   RasterTimings local;
