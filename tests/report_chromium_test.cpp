@@ -183,6 +183,36 @@ TEST(ReportChromium, RealSweepReportLoadsEveryPictureWithoutConsoleErrors) {
     }
   EXPECT_TRUE(fs::is_regular_file(out + "/figures/triptych_sphere_on_plane_best.png"));
   EXPECT_TRUE(fs::is_regular_file(out + "/figures/triptych_sphere_on_plane_worst.png"));
+  // error_by_size draws a panel per error class that some row has; the caption names exactly the
+  // others (bleed among them: no filterable map is swept).
+  {
+    const nlohmann::json results = nlohmann::json::parse(slurp(out + "/results.json"));
+    const nlohmann::json classes = nlohmann::json::parse(slurp(out + "/classes.json"));
+    const nlohmann::json charts = nlohmann::json::parse(slurp(out + "/figures/charts.json"));
+    std::string caption;
+    for (const auto& c : charts["charts"])
+      if (c["id"] == "error_by_size") caption = c["caption"].get<std::string>();
+    const std::string absentPart = caption.substr(std::min(caption.size(), caption.find("No configuration has")));
+    int absent = 0;
+    for (const auto& c : classes) {
+      if (!c["error"].get<bool>() || !c["rate_metric"].is_string()) continue;
+      bool any = false;
+      for (const auto& r : results["rows"])
+        any = any || r["metrics"].value(c["rate_metric"].get<std::string>(), 0.0) > 0.0;
+      const std::string label = c["label"].get<std::string>();
+      if (!any) {
+        ++absent;
+        EXPECT_NE(absentPart.find(" " + label), std::string::npos) << label << " is in no row: " << caption;
+      } else {
+        EXPECT_EQ(absentPart.find(" " + label + ","), std::string::npos) << label << " is in a row: " << caption;
+        EXPECT_EQ(absentPart.find(" " + label + " errors"), std::string::npos) << label << " is in a row: " << caption;
+      }
+      if (label == "bleed") {
+        EXPECT_FALSE(any) << "no filterable map in the grid";
+      }
+    }
+    EXPECT_GT(absent, 0) << caption;
+  }
 
   // Self-contained: nothing fetched from a network.
   const std::string html = slurp(out + "/report.html");

@@ -34,8 +34,8 @@ BIAS_KEYS = [("bias.slope", "bias.slope (x max depth slope)"),
              ("bias.normal", "bias.normal (map texels)")]
 PNG_DPI = 100
 # The charts that take longest to draw, started first (main). CPU seconds measured on the
-# 100-configuration speed sweep of compare/SWEEPS.md: time_breakdown 1.3 (a bar per row),
-# error_by_size 1.2 (a panel per class), the others 0.3 each.
+# 100-configuration speed sweep of compare/SWEEPS.md: time_breakdown 0.8 (a bar per row),
+# error_by_size 0.6 (a panel per class that occurs; 1.1 with all seven), the others 0.3 each.
 DRAW_FIRST = ["time_breakdown", "error_by_size"]
 # Reproducible files: no timestamps in PDF/SVG, fixed SVG ids.
 matplotlib.rcParams["svg.hashsalt"] = "shadowlab"
@@ -136,6 +136,12 @@ def chart_error_by_size(scenes, rows_by_scene, swept, classes, out_dir):
 
     def line_of(r):
         return ", ".join(f"{k}={method_value(r, k)}" for k in line_keys)
+    # A class no row has (its rate 0 everywhere, e.g. bleed without a filterable map) gets no panel,
+    # only a line in the caption: a row of empty panels says less and costs most of the drawing.
+    all_rows = [r for s in scenes for r in rows_by_scene[s]]
+    absent = [label for metric, label, _ in classes[1:]
+              if all((num(r["metrics"], metric) or 0.0) == 0.0 for r in all_rows)]
+    classes = [c for c in classes if c[1] not in absent]
     fig, axes = panel_grid(len(scenes) * len(classes), width_per=3.3, height_per=2.8, max_cols=len(classes))
     drew_zero = False
     for si, scene in enumerate(scenes):
@@ -181,6 +187,8 @@ def chart_error_by_size(scenes, rows_by_scene, swept, classes, out_dir):
                     + ", ".join(others) + " is shown.")
     if drew_zero:
         caption += " Hollow triangles: a rate of exactly 0, drawn at the panel's floor (log axes cannot show 0)."
+    if absent:
+        caption += " No configuration has " + ", ".join(absent) + " errors (rate 0 in every row): no panel."
     return save(fig, out_dir, "error_by_size"), caption
 
 
