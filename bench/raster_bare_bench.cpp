@@ -539,17 +539,22 @@ const Frame& referenceOf(const Scene& s) {
   return cache.emplace(s.name + s.hash, renderReference(s, ReferenceOptions{})).first->second;
 }
 
+// The bare count's reference: the traced visibility as bytes, 255 lit, 0 shadowed, the clear
+// value where no surface is (what the bare camera pass leaves there).
+std::vector<uint8_t> referenceBytes(const Scene& s, const Frame& ref) {
+  const std::vector<float>& refVis = ref.get("light." + s.lights.front().name + ".vis");
+  const std::vector<float>& refHit = ref.get("hit");
+  std::vector<uint8_t> bytes(refVis.size());
+  for (size_t i = 0; i < refVis.size(); ++i) bytes[i] = refHit[i] < 0.5f ? kClearByte : (refVis[i] > 0.5f ? 255 : 0);
+  return bytes;
+}
+
 // One iteration: a bare harness configuration, then a shadowlab one, each end to end (passes,
 // readback, count or compare). Iteration time: shadowlab's.
 void harnessVsBare(benchmark::State& state, const std::string& sceneName, Filter filter, bool full) {
   const Scene& s = goalScene(sceneName);
   const Frame& ref = referenceOf(s);
-  // The bare count's reference: the traced visibility as bytes, 255 lit, 0 shadowed, the clear
-  // value where no surface is (what the bare camera pass leaves there).
-  const std::vector<float>& refVis = ref.get("light." + s.lights.front().name + ".vis");
-  const std::vector<float>& refHit = ref.get("hit");
-  std::vector<uint8_t> refBytes(refVis.size());
-  for (size_t i = 0; i < refVis.size(); ++i) refBytes[i] = refHit[i] < 0.5f ? kClearByte : (refVis[i] > 0.5f ? 255 : 0);
+  const std::vector<uint8_t> refBytes = referenceBytes(s, ref);
   BareProgram bare(bareContext());
   bare.setScene(s);
   const bool linear = filter == Filter::Hw2x2;
@@ -664,6 +669,20 @@ struct BareSweepPass {
   double wallS = 0, shadowGpuS = 0, cameraGpuS = 0, readbackS = 0, countS = 0;
   int shadowPasses = 0;
   std::vector<size_t> wrong;  // per configuration: the pixels whose decision disagrees with the reference
+  // Adds another pass's sums (the shadow passes are per pass: the same in every one).
+  void add(const BareSweepPass& o) {
+    wallS += o.wallS, shadowGpuS += o.shadowGpuS, cameraGpuS += o.cameraGpuS, readbackS += o.readbackS,
+        countS += o.countS, shadowPasses = o.shadowPasses;
+  }
+  // Its counters, each sum divided by `n` (the passes added), named prefix + what.
+  void counters(benchmark::State& state, const std::string& prefix, double n) const {
+    state.counters[prefix + "sweep_s"] = wallS / n;
+    state.counters[prefix + "shadow_gpu_s"] = shadowGpuS / n;
+    state.counters[prefix + "camera_gpu_s"] = cameraGpuS / n;
+    state.counters[prefix + "readback_s"] = readbackS / n;
+    state.counters[prefix + "count_s"] = countS / n;
+    state.counters[prefix + "shadow_passes"] = shadowPasses;
+  }
 };
 
 // The bare harness over every configuration of the plan, in its order, each end to end: the map
@@ -749,10 +768,7 @@ void bareSweep(benchmark::State& state) {
   for (const SweepJob& job : plan.jobs)
     if (job.variantIndex != plan.jobs.front().variantIndex) throw std::logic_error("bare sweep: one scene variant");
   const Frame& ref = referenceOf(s);
-  const std::vector<float>& refVis = ref.get("light." + s.lights.front().name + ".vis");
-  const std::vector<float>& refHit = ref.get("hit");
-  std::vector<uint8_t> refBytes(refVis.size());
-  for (size_t i = 0; i < refVis.size(); ++i) refBytes[i] = refHit[i] < 0.5f ? kClearByte : (refVis[i] > 0.5f ? 255 : 0);
+  const std::vector<uint8_t> refBytes = referenceBytes(s, ref);
   BareProgram bare(bareContext());
   bare.setScene(s);
   bare.useShadowlabFit(s, plan.configs.front().method);
@@ -773,10 +789,8 @@ void bareSweep(benchmark::State& state) {
     const BareSweepPass k = bareSweepPass(bare, plan, refBytes, true);
     const ShadowlabSweepPass o = shadowlabSweepPass(*runner, plan);
     state.SetIterationTime(d.wallS);
-    drawn.wallS += d.wallS, drawn.shadowGpuS += d.shadowGpuS, drawn.cameraGpuS += d.cameraGpuS;
-    drawn.readbackS += d.readbackS, drawn.countS += d.countS;
-    kept.wallS += k.wallS, kept.shadowGpuS += k.shadowGpuS, kept.cameraGpuS += k.cameraGpuS;
-    kept.readbackS += k.readbackS, kept.countS += k.countS, kept.shadowPasses = k.shadowPasses;
+    drawn.add(d);
+    kept.add(k);
     ours.wallS += o.wallS, ours.shadowGpuS += o.shadowGpuS, ours.lookupGpuS += o.lookupGpuS;
     ours.evidenceGpuS += o.evidenceGpuS, ours.readbackS += o.readbackS, ours.compareS += o.compareS;
     ours.renderWallS += o.renderWallS;
@@ -795,15 +809,8 @@ void bareSweep(benchmark::State& state) {
   state.counters["configurations"] = double(plan.jobs.size());
   state.counters["bare_first_pass_s"] = bareFirst.wallS;
   state.counters["shadowlab_first_pass_s"] = oursFirstS;
-  state.counters["bare_sweep_s"] = drawn.wallS / n;
-  state.counters["bare_shadow_gpu_s"] = drawn.shadowGpuS / n;
-  state.counters["bare_camera_gpu_s"] = drawn.cameraGpuS / n;
-  state.counters["bare_readback_s"] = drawn.readbackS / n;
-  state.counters["bare_count_s"] = drawn.countS / n;
-  state.counters["bare_kept_sweep_s"] = kept.wallS / n;
-  state.counters["bare_kept_shadow_gpu_s"] = kept.shadowGpuS / n;
-  state.counters["bare_kept_camera_gpu_s"] = kept.cameraGpuS / n;
-  state.counters["bare_kept_shadow_passes"] = kept.shadowPasses;
+  drawn.counters(state, "bare_", n);
+  kept.counters(state, "bare_kept_", n);
   state.counters["shadowlab_sweep_s"] = ours.wallS / n;
   state.counters["shadowlab_shadow_gpu_s"] = ours.shadowGpuS / n;
   state.counters["shadowlab_lookup_gpu_s"] = ours.lookupGpuS / n;
