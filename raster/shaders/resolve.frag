@@ -55,7 +55,8 @@ layout(constant_id = kSpecCompact) const bool kCompact = false;
 // alone, as outA.x and outA.y (the full resolve's outA.w and outB.w), the rest dead code.
 layout(constant_id = kSpecPlanesOnly) const bool kPlanesOnly = false;
 // The lookup pass of a method that needs no normal: the visible point from the group's surface
-// image (the planes pass writes it: the camera ray's t and whether the light reaches the point)
+// image (the planes pass or the full resolve writes it, surfaceTexel: the camera ray's t and
+// whether the light reaches the point)
 // rather than from the visibility buffer and the triangle's plane, one fetch instead of two, like
 // a deferred renderer reconstructing the point from its depth buffer. The same p, bit for bit: the
 // point is origin + dir * t with the t the planes pass computed by the same expression.
@@ -521,7 +522,7 @@ LightChannels shadeLight(Surface s) {
 
   // The blend band: the same lookup in the next cascade.
   if (kBlend && pick.blendT > 0.0) vis = mix(vis, blendVisibility(lookUp(pick.cascade + 1, s)), pick.blendT);
-  // kSurface: the surface image's hit says it (the planes pass wrote it); the normal is not there.
+  // kSurface: the surface image's hit says it (surfaceTexel); the normal is not there.
   if (!kSurface && (outsideCone || facesAway)) vis = 0.0;
 
   LightChannels o;
@@ -530,6 +531,12 @@ LightChannels shadeLight(Surface s) {
   o.b = vec4(biasDepth, biasDepth * worldPerDepth, occluder, float(2 * pick.cascade + (h.inMap ? 1 : 0)));
   o.c = momentEvidence;
   return o;
+}
+
+// The group's surface at a pixel, as the planes pass and the full resolve write it (kSurface's
+// image): the camera ray's t, and 1 where a triangle covers the pixel and the light reaches it.
+vec4 surfaceTexel(Surface s, LightChannels light) {
+  return vec4(s.t, s.hit && !light.unreached ? 1.0 : 0.0, 0.0, 0.0);
 }
 
 // Each projector's channels of a surface into outPlanes (pixel `pixel` of planes of `planeSize`).
@@ -594,15 +601,14 @@ void main() {
   }
   if (kPlanesOnly) {
     outA = s.hit ? vec4(light.a.w, light.b.w, 0.0, 0.0) : vec4(0.0);
-    outB = vec4(s.t, s.hit && !light.unreached ? 1.0 : 0.0, 0.0, 0.0);  // the group's surface
+    outB = surfaceTexel(s, light);
     return;
   }
   outA = s.hit ? light.a : vec4(0.0);
   outB = s.hit ? light.b : vec4(0.0);
   if (kMomentFilter) outC = s.hit ? light.c : vec4(0.0);
   if (kCompact) return;  // no projectors (their planes are every pixel's)
-  vec4 surface = vec4(s.t, s.hit && !light.unreached ? 1.0 : 0.0, 0.0, 0.0);
-  if (kMomentFilter) outD = surface;
-  else outC = surface;
+  if (kMomentFilter) outD = surfaceTexel(s, light);
+  else outC = surfaceTexel(s, light);
   shadeProjectors(s, uint(px.y * P.sizes2.x + px.x), uint(P.sizes2.x * P.sizes2.y));
 }

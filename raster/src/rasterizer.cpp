@@ -149,10 +149,16 @@ constexpr int kCompactWidth = 256;
 // How many groups' planes (m, cascade) evidence on demand keeps: a sweep whose fastest axis is a
 // bias or a filter needs one; a grid with map.size fastest, one per size.
 constexpr size_t kKeptFootprints = 4;
-// The planes pass's second attachment, a group's surface (resolve.frag's kSpecSurface): the camera
-// ray's t at the visible point, and 1 where the light reaches it. Kept per group, as many as the
-// footprints (8 bytes per pixel: 17 MB at 1080p each).
+// A group's surface (resolve.frag's kSpecSurface), the planes pass's second attachment and the full
+// resolve's last: the camera ray's t at the visible point, and 1 where the light reaches it. Kept
+// per group, as many as the footprints (8 bytes per pixel: 17 MB at 1080p each).
 constexpr VkFormat kSurfaceFormat = VK_FORMAT_R32G32_SFLOAT;
+
+// Whether the full resolve of a specialization writes the group's surface: with a light (the lookup
+// after it reads it), not in the evidence pass (kSpecCompact).
+bool resolveWritesSurface(const raster::ResolveSpecialization& spec) {
+  return spec[abi::kSpecLightType] != uint32_t(abi::kLightNone) && !spec[abi::kSpecCompact];
+}
 
 // Whether the lookup pass of a specialization reads the group's surface: it needs no normal (no
 // normal offset, no receiver plane, no adaptive bias), the surface image holds the visible point.
@@ -587,7 +593,7 @@ VkPipeline Rasterizer::Impl::resolvePipeline(const ResolveKey& key) {
   else if (key[abi::kSpecPlanesOnly]) d.colorFormats = {kResolveFormats[0], kSurfaceFormat};
   else {
     d.colorFormats.assign(kResolveFormats, kResolveFormats + resolveAttachments(Filter(key[abi::kSpecFilter])));
-    if (key[abi::kSpecLightType] != uint32_t(abi::kLightNone) && !key[abi::kSpecCompact])
+    if (resolveWritesSurface(key))
       d.colorFormats.push_back(kSurfaceFormat);  // the group's surface, for the lookup after it
   }
   d.fragmentSpecialization.assign(key.begin(), key.end());  // straight-line code per case
@@ -1240,7 +1246,7 @@ Rasterizer::Impl::FramePipelines Rasterizer::Impl::pipelinesFor(const Method&, c
     p.evidenceFirstUse = evidenceWarmed.insert(compactSpec).second;
   } else {
     p.resolve = resolvePipeline(spec);
-    p.resolveSurface = spec[abi::kSpecLightType] != uint32_t(abi::kLightNone);
+    p.resolveSurface = resolveWritesSurface(spec);
   }
   if (planes) {
     // A group's first frame: pass 3a draws its planes (m, cascade; kept on demand) and its surface

@@ -75,9 +75,9 @@ SHADOWLAB_CONST(int, kSpecPcfSize, 13)
 SHADOWLAB_CONST(int, kSpecPlanesOnly, 14)
 // 0/1: the lookup pass reads the pixel's visible point from the group's surface image (Surface
 // below: the camera ray's parameter t and whether the light can reach the point, written by the
-// planes pass) instead of the visibility buffer and the triangle's plane. Only where the lookup
-// needs no normal: no normal offset, no receiver plane, no adaptive bias (rasterizer.cpp,
-// lookupReadsSurface).
+// planes pass or the full resolve) instead of the visibility buffer and the triangle's plane. Only
+// where the lookup needs no normal: no normal offset, no receiver plane, no adaptive bias
+// (rasterizer.cpp, lookupReadsSurface).
 SHADOWLAB_CONST(int, kSpecSurface, 15)
 SHADOWLAB_CONST(int, kSpecCount, 16)
 
