@@ -201,6 +201,38 @@ TEST(SweepShardCli, DamagedReferenceCacheEntriesAreTracedAgainWithIdenticalMetri
   fs::remove_all(dir);
 }
 
+// A scene's reference is read on a thread of its own while its first row renders
+// (compare/study/src/sweep_runner.cpp). When that read fails (here: the second scene's entry is a
+// folder, so the trace cannot be stored), the sweep still exits 2 naming the entry, after the
+// first scene's rows, and writes no row of the failed scene and no results.
+TEST(SweepShardCli, AReferenceThatCannotBeReadMidSweepExits2NamingTheEntry) {
+  const fs::path dir = tempDir("unreadable");
+  const fs::path cache = dir / "cache";
+  const std::string args =
+      "sweep sphere_on_plane contact --grid map.size=256,512 --set scene:/camera/width=64 "
+      "--set scene:/camera/height=48 --no-report --cache '" +
+      cache.string() + "'";
+  auto first = runShadowlab(args + " -o '" + (dir / "a").string() + "'", dir);
+  ASSERT_EQ(first.code, 0) << first.err;
+  fs::path contactEntry;
+  for (const auto& e : fs::directory_iterator(cache))
+    if (readFrameExr(e.path().string()).meta.value("scene", "") == "contact") contactEntry = e.path();
+  ASSERT_FALSE(contactEntry.empty()) << "no cache entry names the scene contact";
+  fs::remove(contactEntry);
+  fs::create_directories(contactEntry / "in-the-way");
+
+  const fs::path out = dir / "b";
+  auto r = runShadowlab(args + " -o '" + out.string() + "'", dir);
+  EXPECT_EQ(r.code, 2) << r.err;
+  EXPECT_NE(r.err.find(contactEntry.string() + ": error: cannot write image"), std::string::npos) << r.err;
+  EXPECT_FALSE(fs::exists(out / "results.json"));
+  const std::string journal = readFile((out / "rows.jsonl").string());
+  EXPECT_EQ(std::count(journal.begin(), journal.end(), '\n'), 2) << "the two rows of sphere_on_plane only:\n"
+                                                                 << journal;
+  EXPECT_EQ(journal.find("contact"), std::string::npos) << journal;
+  fs::remove_all(dir);
+}
+
 TEST(SweepShardCli, SlurmScriptsRunAsAnArrayThenMergeToTheUnshardedMetrics) {
   const fs::path dir = tempDir("slurm");
   const std::string cache = " --cache '" + (dir / "cache").string() + "'";

@@ -8,6 +8,8 @@
 // against `shadowlab run`).
 #include <algorithm>
 #include <chrono>
+#include <exception>
+#include <future>
 #include <list>
 #include <memory>
 
@@ -37,16 +39,46 @@ class PipelineRunner final : public SweepRunner {
 
   SweepRunOutput run(const Scene& scene, const Method& method, const std::string& light,
                      const std::string& imagesDir) override {
-    std::string referenceKey;
-    const Frame& reference = referenceFor(scene, &referenceKey);
     RasterTimings t;
     CompareOptions options;
     options.light = scene.lightOrDefault(light);
     const bool keep = !imagesDir.empty();
+    // A scene's first row reads (or traces) its reference on a thread of its own while the
+    // rasterizer draws: the reference is first needed once the row's visibility is read back (the
+    // selector below), so the read overlaps the shadow and camera passes and, on the sweep's first
+    // row, the pipelines' compiles. Declared before anything that can throw: leaving run() through
+    // an exception waits for the read, which holds `scene`, to end.
+    const std::string referenceKey = referenceHash(scene, referenceOptions_);
+    std::future<Loaded> loading;
+    const Frame* held = heldReference(referenceKey);
+    if (!held) {
+      freeReferencesFor(1);  // before reading the next one, as referenceFor
+      loading = std::async(std::launch::async, [this, &scene] { return loadReference(scene); });
+    }
     // A row that keeps no pictures needs the metrics only: evidence on demand (raster.h), the
     // same metrics (tests/compare_on_demand_test.cpp). Pictures and --full-evidence: every channel.
-    const EvidenceSelector* select = keep ? nullptr : onDemand(referenceKey, reference, options.light);
+    // While the reference is being read, a selector that waits for it and then asks the same
+    // selector; a failed read lists nothing here and is thrown once the frame is back.
+    const bool evidenceOnDemand = !keep && !fullEvidence_ && !options.light.empty();
+    EvidenceSelector waiting;
+    std::exception_ptr readFailed;
+    if (evidenceOnDemand && !held)
+      waiting = [&](const uint8_t* vis8, int width, int height, std::vector<uint32_t>& pixels) {
+        try {
+          held = &adoptReference(referenceKey, loading);
+        } catch (...) {
+          readFailed = std::current_exception();
+          return;
+        }
+        if (const EvidenceSelector* s = onDemand(referenceKey, *held, options.light)) (*s)(vis8, width, height, pixels);
+      };
+    const EvidenceSelector* select = !evidenceOnDemand ? nullptr
+                                     : held            ? onDemand(referenceKey, *held, options.light)
+                                                       : &waiting;
     Frame raster = rasterizer().render(scene, method, light, &t, nullptr, select);
+    if (readFailed) std::rethrow_exception(readFailed);
+    if (!held) held = &adoptReference(referenceKey, loading);
+    const Frame& reference = *held;
     Classification classification;
     const auto c0 = Clock::now();
     Metrics m = compareRow(referenceKey, reference, raster, options, keep ? &classification : nullptr);
@@ -143,19 +175,49 @@ class PipelineRunner final : public SweepRunner {
   const Frame& referenceFor(const Scene& scene, std::string* key = nullptr) {
     const std::string hash = referenceHash(scene, referenceOptions_);
     if (key) *key = hash;
+    if (const Frame* held = heldReference(hash)) return *held;
+    freeReferencesFor(1);  // free before reading the next one
+    return keepReference(hash, loadReference(scene));
+  }
+
+  // A reference read or traced, with what it cost (on the thread that read it).
+  struct Loaded {
+    Frame frame;
+    bool traced = false;
+    double seconds = 0;
+  };
+  Loaded loadReference(const Scene& scene) {
+    const auto t0 = Clock::now();
+    Loaded l;
+    l.frame = cache_.get(scene, referenceOptions_, &l.traced);
+    l.seconds = msSince(t0) / 1000.0;
+    return l;
+  }
+  // The held reference of `hash`, made the most recently used; nullptr when none is held.
+  const Frame* heldReference(const std::string& hash) {
     for (auto it = held_.begin(); it != held_.end(); ++it)
       if (it->first == hash) {
         held_.splice(held_.begin(), held_, it);  // most recently used first
-        return held_.front().second;
+        return &held_.front().second;
       }
-    while (!held_.empty() && held_.size() >= keep_) held_.pop_back();  // free before reading the next one
-    const auto t0 = Clock::now();
-    bool traced = false;
-    Frame frame = cache_.get(scene, referenceOptions_, &traced);
-    referenceWallSeconds_ += msSince(t0) / 1000.0;
-    (traced ? traced_ : loaded_) += 1;
-    held_.emplace_front(hash, std::move(frame));
+    return nullptr;
+  }
+  // Drops the least recently used references until `more` fit within keep_.
+  void freeReferencesFor(size_t more) {
+    while (!held_.empty() && held_.size() + more > keep_) held_.pop_back();
+  }
+  const Frame& keepReference(const std::string& hash, Loaded&& l) {
+    referenceWallSeconds_ += l.seconds;
+    (l.traced ? traced_ : loaded_) += 1;
+    freeReferencesFor(1);
+    held_.emplace_front(hash, std::move(l.frame));
     return held_.front().second;
+  }
+  // The reference `loading` reads, held from now on (once: later calls find it held); rethrows
+  // what the read threw.
+  const Frame& adoptReference(const std::string& hash, std::future<Loaded>& loading) {
+    if (const Frame* held = heldReference(hash)) return *held;
+    return keepReference(hash, loading.get());
   }
 
   // compareFrames for one row. A frame rendered on demand names its evidence group (the
