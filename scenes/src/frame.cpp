@@ -170,4 +170,6 @@ void writeRgbPng(const std::string& path, int width, int height, const std::vect
   });
 }
 
+void preloadImageLibrary() { image_io::preload(); }
+
 }  // namespace shadowlab

@@ -51,5 +51,9 @@ std::string writePng(const std::string& path, int width, int height, int channel
 std::string readTexture(const std::string& path, FloatImage& image, int maxSide);
 // "oiio" or "exr-png".
 const char* backendName();
+// Where the library is a module loaded on first use (image_io_module.cpp): starts loading it on a
+// thread of its own, so that a command sure to read or write images soon need not wait for it
+// then. Elsewhere nothing to do.
+void preload();
 
 }  // namespace shadowlab::image_io

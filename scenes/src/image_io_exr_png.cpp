@@ -298,4 +298,6 @@ std::string readTexture(const std::string& path, FloatImage& image, int maxSide)
 
 const char* backendName() { return "exr-png"; }
 
+void preload() {}  // linked: loaded with the program
+
 }  // namespace shadowlab::image_io

@@ -1,0 +1,116 @@
+// image_io.h through OpenImageIO loaded on first use (SHADOWLAB_IMAGE_IO=oiio with
+// SHADOWLAB_IMAGE_IO_MODULE=ON, the default; scenes/CMakeLists.txt). OpenImageIO brings ~260 shared
+// libraries (GDAL, ffmpeg, OpenCV, ...); linked into the program, the dynamic loader resolves all of
+// them before main(), ~0.2 s of every command's start on the 2-core machine, even for commands that
+// never touch an image (gate, version, scenes). As a module (libshadowlab_image_io_oiio.so, next to
+// the shadowlab binary), they load when the first image is read or written, and on the thread that
+// does it: a sweep reads its reference on a thread of its own while its first row renders
+// (compare/study/src/sweep_runner.cpp), so the loading overlaps that row.
+// The module is looked for in $SHADOWLAB_IMAGE_IO_MODULE (when set), next to the running program,
+// then where the build put it. When it cannot be loaded every function returns why (the callers add
+// the file's path), so a command that needs no image still runs.
+#include <dlfcn.h>
+#include <unistd.h>
+
+#include <cstdlib>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include "image_io_table.h"
+
+namespace shadowlab::image_io {
+namespace {
+
+constexpr const char* kModuleName = "libshadowlab_image_io_oiio.so";
+
+std::string programDir() {
+  std::vector<char> buf(4096);
+  const ssize_t n = ::readlink("/proc/self/exe", buf.data(), buf.size() - 1);
+  if (n <= 0) return "";
+  std::string exe(buf.data(), size_t(n));
+  const size_t slash = exe.rfind('/');
+  return slash == std::string::npos ? "" : exe.substr(0, slash);
+}
+
+struct Module {
+  const Table* table = nullptr;
+  std::string error;  // why there is no table
+};
+
+Module load() {
+  std::vector<std::string> candidates;
+  if (const char* env = std::getenv("SHADOWLAB_IMAGE_IO_MODULE"); env && *env) {
+    candidates.push_back(env);  // set: the only place looked at
+  } else {
+    if (const std::string dir = programDir(); !dir.empty()) candidates.push_back(dir + "/" + kModuleName);
+    candidates.push_back(SHADOWLAB_IMAGE_IO_MODULE_FILE);
+  }
+  Module m;
+  std::string tried;
+  for (const std::string& path : candidates) {
+    if (::access(path.c_str(), F_OK) != 0) {
+      tried += (tried.empty() ? "" : ", ") + path + " (missing)";
+      continue;
+    }
+    void* handle = ::dlopen(path.c_str(), RTLD_LAZY | RTLD_LOCAL | RTLD_NODELETE);
+    if (!handle) {
+      const char* why = ::dlerror();
+      tried += (tried.empty() ? "" : ", ") + path + " (" + (why ? why : "dlopen failed") + ")";
+      continue;
+    }
+    using Entry = const Table* (*)();
+    auto entry = reinterpret_cast<Entry>(::dlsym(handle, "shadowlab_image_io_table"));
+    const Table* table = entry ? entry() : nullptr;
+    if (!table || table->version != kTableVersion) {
+      tried += (tried.empty() ? "" : ", ") + path + " (not this build's image module)";
+      continue;
+    }
+    m.table = table;
+    return m;
+  }
+  m.error = "cannot load OpenImageIO's module " + std::string(kModuleName) + ": tried " + tried +
+            " (set SHADOWLAB_IMAGE_IO_MODULE to its path)";
+  return m;
+}
+
+const Module& module() {
+  static const Module m = load();  // once, thread-safe
+  return m;
+}
+
+}  // namespace
+
+std::string writeExr(const std::string& path, const FloatImage& image) {
+  const Module& m = module();
+  return m.table ? m.table->writeExr(path, image) : m.error;
+}
+
+std::string readExr(const std::string& path, FloatImage& image) {
+  const Module& m = module();
+  return m.table ? m.table->readExr(path, image) : m.error;
+}
+
+std::string writePng(const std::string& path, int width, int height, int channels, const uint8_t* pixels,
+                     bool unfiltered) {
+  const Module& m = module();
+  return m.table ? m.table->writePng(path, width, height, channels, pixels, unfiltered) : m.error;
+}
+
+std::string readTexture(const std::string& path, FloatImage& image, int maxSide) {
+  const Module& m = module();
+  return m.table ? m.table->readTexture(path, image, maxSide) : m.error;
+}
+
+const char* backendName() { return "oiio"; }
+
+void preload() {
+  // Joined when the program exits (a static's destructor), so exit never races a half-done load.
+  struct Loader {
+    std::thread thread{[] { module(); }};
+    ~Loader() { thread.join(); }
+  };
+  static Loader loader;
+}
+
+}  // namespace shadowlab::image_io
