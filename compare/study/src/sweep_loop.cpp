@@ -428,12 +428,9 @@ SweepSummary runSweep(const SweepPlan& plan, SweepRunner& runner, const SweepOpt
   if (shard.active() && shard.index >= shard.count) throw InputError("--shard: error: I >= N; expected 0 <= I < N");
   for (size_t i = 0; i < plan.jobs.size(); ++i) summary.configurations += shard.owns(i) ? 1 : 0;
   if (options.outDir.empty()) throw InputError("shadowlab sweep: error: no output folder; expected -o DIR");
-  // The report's Python imports matplotlib while the rows run (a core is mostly free then); it
-  // writes nothing unless the report hands it the chart script. Started once the first row is
-  // done, not before: that row's device start, pipeline compiles and reference read (with the
-  // image library's loading, on a thread of its own: sweep_runner.cpp) are the loop's one stretch
-  // that keeps both cores busy. A sweep that runs no row spawns the script at the report instead.
-  std::unique_ptr<PrestartedCharts> charts;
+  // The report's Python starts now and imports matplotlib while the device starts and the rows run
+  // (a core is mostly free then); it writes nothing unless the report hands it the chart script.
+  const std::unique_ptr<PrestartedCharts> charts = prestartCharts(options);
   // Device limits are input errors too: found before the output folder exists.
   for (const auto& c : plan.configs) runner.checkMethod(c.method, "shadowlab sweep: configuration " + c.config);
   // A shard works in its own folder with its own lock and journal: two shards never write one file.
@@ -548,7 +545,6 @@ SweepSummary runSweep(const SweepPlan& plan, SweepRunner& runner, const SweepOpt
     have[i] = &fresh[i];
     ++summary.ran;
     progress.finish(what, errorRate, seconds);
-    if (summary.ran == 1) charts = prestartCharts(options);
   }
   progress.end();
   journal.close();  // every row run is synced before anything is read from or written about them
