@@ -1,7 +1,9 @@
 #pragma once
 // The few image operations shadowlab needs, behind one interface with two implementations; the
 // build compiles exactly one (CMake option SHADOWLAB_IMAGE_IO, scenes/CMakeLists.txt):
-//   image_io_oiio.cpp     OpenImageIO (the default; reads every format OIIO knows)
+//   image_io_oiio.cpp     OpenImageIO (the default; reads every format OIIO knows), built as a
+//                         module the program loads on first use (image_io_module.cpp forwards to
+//                         it; SHADOWLAB_IMAGE_IO_MODULE=OFF and the fuzz build link it instead)
 //   image_io_exr_png.cpp  OpenEXR + libpng only: a few MB of libraries instead of OIIO's ~390 MB of
 //                         dependencies, so the binary and its libraries fit a small bundle
 //                         (scripts/device-bundle.sh). Reads .exr and .png only.
