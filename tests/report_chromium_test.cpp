@@ -183,6 +183,14 @@ TEST(ReportChromium, RealSweepReportLoadsEveryPictureWithoutConsoleErrors) {
     }
   EXPECT_TRUE(fs::is_regular_file(out + "/figures/triptych_sphere_on_plane_best.png"));
   EXPECT_TRUE(fs::is_regular_file(out + "/figures/triptych_sphere_on_plane_worst.png"));
+  // The log axes' labels are plain Unicode text (charts.py, PlainLogFormatter), never mathtext,
+  // whose parser cost ~15 % of the charts' CPU. matplotlib's SVG names each text in a comment.
+  for (const char* chart : {"error_by_size", "bias_tradeoff_bias_slope", "accuracy_vs_time", "m_footprint"}) {
+    const std::string svg = slurp(out + "/figures/" + chart + ".svg");
+    EXPECT_EQ(svg.find("mathdefault"), std::string::npos) << chart << ": a mathtext label";
+  }
+  EXPECT_NE(slurp(out + "/figures/error_by_size.svg").find("<!-- 10\u207b"), std::string::npos)
+      << "error_by_size's log axis labels a decade as 10⁻ⁿ";
   // error_by_size draws a panel per error class that some row has; the caption names exactly the
   // others (bleed among them: no filterable map is swept).
   {

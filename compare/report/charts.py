@@ -20,6 +20,7 @@ import json
 import math
 import multiprocessing
 import os
+import re
 import sys
 
 import matplotlib
@@ -27,6 +28,7 @@ import matplotlib
 matplotlib.use("Agg")  # no display; also keeps the script from touching any GUI toolkit
 import matplotlib.pyplot as plt  # noqa: E402
 from matplotlib.collections import PolyCollection  # noqa: E402
+from matplotlib.ticker import LogFormatterSciNotation  # noqa: E402
 
 BIAS_KEYS = [("bias.slope", "bias.slope (x max depth slope)"),
              ("bias.constant", "bias.constant (units of r)"),
@@ -106,7 +108,40 @@ def panel_grid(n, width_per=4.6, height_per=3.4, max_cols=3):
     return fig, flat[:n]
 
 
+_SUPERSCRIPT = str.maketrans("-0123456789", "\u207b\u2070\u00b9\u00b2\u00b3\u2074\u2075\u2076\u2077\u2078\u2079")
+
+
+class PlainLogFormatter(LogFormatterSciNotation):
+    """The log axes' default labels (10^-3, 2x10^-6) as plain Unicode text (10⁻³, 2×10⁻⁶) instead of
+    mathtext: the same look, without matplotlib's mathtext parser, which took ~15 % of the charts'
+    CPU (pyparsing, once per label, renderer and resolution: 2.3-2.6 -> 2.0-2.1 s on the
+    100-configuration sweep). A label it cannot write so (a non-integer exponent) stays mathtext."""
+
+    def __call__(self, x, pos=None):
+        label = super().__call__(x, pos)
+        m = re.fullmatch(r"\$\\mathdefault\{(-?)([0-9.]+\\times)?([0-9.e]+)\^\{(-?[0-9]+)\}\}\$", label)
+        if not m:
+            m0 = re.fullmatch(r"\$\\mathdefault\{(-?)([0-9.]+)\}\$", label)
+            return ("\u2212" if m0.group(1) else "") + m0.group(2) if m0 else label
+        sign, coefficient, base, exponent = m.groups()
+        coefficient = coefficient.replace("\\times", "\u00d7") if coefficient else ""
+        return ("\u2212" if sign else "") + coefficient + base + exponent.translate(_SUPERSCRIPT)
+
+
+def plain_log_labels(fig):
+    """Every log and symlog axis of `fig` labelled by PlainLogFormatter, with its formatter's settings."""
+    for ax in fig.axes:
+        for axis in (ax.xaxis, ax.yaxis):
+            for get, put in ((axis.get_major_formatter, axis.set_major_formatter),
+                             (axis.get_minor_formatter, axis.set_minor_formatter)):
+                f = get()
+                if type(f) is LogFormatterSciNotation:
+                    put(PlainLogFormatter(base=f._base, labelOnlyBase=f.labelOnlyBase,
+                                          minor_thresholds=f.minor_thresholds, linthresh=f._linthresh))
+
+
 def save(fig, out_dir, chart_id):
+    plain_log_labels(fig)
     fig.tight_layout()
     files = {}
     for ext, kwargs in (("png", {"dpi": PNG_DPI}), ("pdf", {"metadata": {"CreationDate": None}}),

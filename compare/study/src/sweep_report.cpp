@@ -156,8 +156,8 @@ std::string chartPython(const SweepOptions& options) {
 }
 
 // What the prestarted Python runs (`python -c`): with SIGINT ignored and its output discarded, the
-// imports and one throw-away figure in every format (fonts, the mathtext parser, the backends),
-// the same first-use work charts.py would pay; then it reads "LOG\0SCRIPT\0ARG\0...\0run" from
+// imports and one throw-away figure in every format (fonts, the backends; no mathtext, which
+// charts.py no longer uses: PlainLogFormatter), the same first-use work charts.py would pay; then it reads "LOG\0SCRIPT\0ARG\0...\0run" from
 // stdin (the sweep's report) and runs SCRIPT as `python SCRIPT ARG...` would, stdout and stderr
 // into LOG, SIGINT back to its default. End of input without that message (the sweep ended
 // without a report): it exits, having written nothing. A failing warm-up is ignored: the script
@@ -172,9 +172,7 @@ try:
     import matplotlib.pyplot as plt
     fig, ax = plt.subplots(figsize=(3, 2))
     ax.plot([1, 2, 4], [1e-3, 1e-2, 1e-1], marker="o", label="warm-up")
-    ax.set_xscale("log", base=2)
-    ax.set_yscale("log")
-    ax.set_title("warm-up")
+    ax.set_title("warm-up 10\u207b\u00b3")
     ax.set_xlabel("x")
     ax.legend()
     fig.tight_layout()
