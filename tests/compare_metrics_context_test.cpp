@@ -107,6 +107,12 @@ Frame configuration(const Group& g, unsigned seed, bool withMoments) {
     const float r = u(rng);
     if (r < 0.005f) vis[i] = u(rng);  // fractional (a filter)
     if (r > 0.96f) vis[i] = refLit ? 0.0f : 1.0f;
+    // Values outside 0..1 (a filter's overshoot) and NaN: compare clamps them (NaN to 0), which
+    // the context's vectorized runs must leave to its exact path.
+    if (r > 0.955f && r <= 0.96f) {
+      const float odd[] = {1.5f, -0.25f, std::numeric_limits<float>::quiet_NaN(), 1.0f + 1e-6f};
+      vis[i] = odd[size_t(u(rng) * 3.999f)];
+    }
     if (r < 0.005f || r > 0.96f) {
       f.get("light.sun.in_map")[i] = u(rng) < 0.1f ? 0.0f : 1.0f;
       f.get("light.sun.occluder_id")[i] = u(rng) < 0.3f ? f.get("object_id")[i] : kCaster;

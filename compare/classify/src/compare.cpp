@@ -1060,38 +1060,59 @@ Metrics compareFrames(const CompareContext& context, const Frame& reference, con
     const size_t begin = size_t(b) * kBlockRows * width;
     const size_t end = std::min(n, size_t(b + 1) * kBlockRows * width);
     if (klass) std::memcpy(klass + begin, d.scoredClass.data() + begin, end - begin);
-    for (size_t i = begin; i < end; ++i) {
-      // Branch-free counts; the rest only where the clamped visibilities differ, which is rare
-      // (fractional pixels and disagreements). Elsewhere pass 1 adds exactly 0.0 to sums that
-      // are >= +0.0: no bit changes, so skipping those pixels keeps mae and rmse to the bit.
-      const uint8_t code = decision[i], dec = code & 3;
-      const float v = rasVis[i];
-      const bool sLit = litDecision(v);
-      s.rasShadow += (dec != kDecisionNone) & !sLit;
-      s.bothShadow += (dec == kDecisionShadowed) & !sLit;
-      const bool rLit = dec == kDecisionLit;
-      const float sv = clamp01(v);
-      const float rv = code & CompareContext::Data::kFractional ? refV[i] : rLit ? 1.0f : 0.0f;
-      if (dec == kDecisionNone || rv == sv) continue;  // equal clamped values: equal decisions
-      const double diff = double(rv) - double(sv);
-      s.sumAbs += std::fabs(diff);
-      s.sumSq += diff * diff;
-      if (rLit == sLit) continue;
-      // A disagreement: step 2 on its evidence, and pass 2's decision from the kept distances.
-      ++s.disagreements;
-      const DisagreementClass dc = classifyDisagreement(ch.evidence(i), leakFactor);
-      PixelClass c = dc.cls;
-      if (dc.candidate) {
-        const double limit = double(d.options.boundaryTexels) * (ch.m ? double(sanitizeM(ch.m[i])) : 1.0);
-        const bool within = limit >= diagonalPx ? d.anyBoundary : double(d.boundaryDist2[i]) <= limit * limit;
-        c = resolveCandidate(dc.leakEvidence, within, dc.bleedEvidence);
+    // Runs of kRun pixels: first the counts over the run, branch-free (the compiler vectorizes
+    // it: 2x faster on a 1080p frame, bench/compare_frames_bench.cpp BM_CompareFramesContext),
+    // with whether any pixel of it needs more; then, only in such a run, its pixels in order. A
+    // pixel needs more where the clamped visibilities may differ: a fractional reference, or a
+    // raster value other than the reference's 0 or 1 (fractional pixels and disagreements, rare;
+    // also values outside 0..1 and NaN, which the exact path below clamps and may skip).
+    // Elsewhere pass 1 adds exactly 0.0 to sums that are >= +0.0: no bit changes, so skipping
+    // those pixels keeps mae and rmse to the bit.
+    constexpr size_t kRun = 64;
+    for (size_t r = begin; r < end; r += kRun) {
+      const size_t rEnd = std::min(end, r + kRun);
+      int rasShadow = 0, bothShadow = 0, more = 0;
+      for (size_t i = r; i < rEnd; ++i) {
+        const int code = decision[i], dec = code & 3;
+        const float v = rasVis[i];
+        const int sShadow = !litDecision(v);
+        const int compared = dec != kDecisionNone;
+        rasShadow += compared & sShadow;
+        bothShadow += (dec == kDecisionShadowed) & sShadow;
+        const float plain = dec == kDecisionLit ? 1.0f : 0.0f;
+        more |= compared & (((code & CompareContext::Data::kFractional) != 0) | (v != plain));
       }
-      ++s.counts[classIndex(c)];
-      if (klass) klass[i] = uint8_t(c);
-      if (ch.cascade && isErrorClass(c)) {
-        const float v = ch.cascade[i];
-        const int k = v >= 0.0f ? (v < 7.0f ? int(v + 0.5f) : 7) : 0;  // as cascadeMetrics reads it
-        ++s.cascadeErrors[size_t(k)];
+      s.rasShadow += uint64_t(rasShadow);
+      s.bothShadow += uint64_t(bothShadow);
+      if (!more) continue;
+      for (size_t i = r; i < rEnd; ++i) {
+        const uint8_t code = decision[i], dec = code & 3;
+        const float v = rasVis[i];
+        const bool sLit = litDecision(v);
+        const bool rLit = dec == kDecisionLit;
+        const float sv = clamp01(v);
+        const float rv = code & CompareContext::Data::kFractional ? refV[i] : rLit ? 1.0f : 0.0f;
+        if (dec == kDecisionNone || rv == sv) continue;  // equal clamped values: equal decisions
+        const double diff = double(rv) - double(sv);
+        s.sumAbs += std::fabs(diff);
+        s.sumSq += diff * diff;
+        if (rLit == sLit) continue;
+        // A disagreement: step 2 on its evidence, and pass 2's decision from the kept distances.
+        ++s.disagreements;
+        const DisagreementClass dc = classifyDisagreement(ch.evidence(i), leakFactor);
+        PixelClass c = dc.cls;
+        if (dc.candidate) {
+          const double limit = double(d.options.boundaryTexels) * (ch.m ? double(sanitizeM(ch.m[i])) : 1.0);
+          const bool within = limit >= diagonalPx ? d.anyBoundary : double(d.boundaryDist2[i]) <= limit * limit;
+          c = resolveCandidate(dc.leakEvidence, within, dc.bleedEvidence);
+        }
+        ++s.counts[classIndex(c)];
+        if (klass) klass[i] = uint8_t(c);
+        if (ch.cascade && isErrorClass(c)) {
+          const float v = ch.cascade[i];
+          const int k = v >= 0.0f ? (v < 7.0f ? int(v + 0.5f) : 7) : 0;  // as cascadeMetrics reads it
+          ++s.cascadeErrors[size_t(k)];
+        }
       }
     }
     sums[size_t(b)] = s;
