@@ -11,6 +11,7 @@
 #include "support/cli.h"
 
 namespace fs = std::filesystem;
+using shadowlab::testing::freshTempDir;
 using shadowlab::testing::runShadowlab;
 using shadowlab::testing::slurp;
 
@@ -22,13 +23,6 @@ constexpr const char* kModule = SHADOWLAB_TEST_IMAGE_MODULE;
 constexpr const char* kModule = nullptr;
 #endif
 
-fs::path tempDir(const std::string& name) {
-  fs::path d = fs::temp_directory_path() / ("shadowlab_image_module_" + name + "_" + std::to_string(::getpid()));
-  fs::remove_all(d);
-  fs::create_directories(d);
-  return d;
-}
-
 const std::string kSmallReference =
     "reference sphere_on_plane --set scene:/camera/width=32 --set scene:/camera/height=24 -o ";
 
@@ -36,7 +30,7 @@ const std::string kSmallReference =
 
 TEST(ImageModule, TheProgramStartsWithoutOpenImageIO) {
   if (!kModule) GTEST_SKIP() << "this build links its image library";
-  const fs::path dir = tempDir("ldd");
+  const fs::path dir = freshTempDir("shadowlab_image_module_ldd");
   ASSERT_EQ(std::system(("ldd '" + std::string(SHADOWLAB_BINARY) + "' >'" + (dir / "ldd.txt").string() + "'").c_str()),
             0);
   const std::string libraries = slurp(dir / "ldd.txt");
@@ -49,7 +43,7 @@ TEST(ImageModule, TheProgramStartsWithoutOpenImageIO) {
 
 TEST(ImageModule, WithoutItOnlyTheCommandsThatNeedImagesFailNamingIt) {
   if (!kModule) GTEST_SKIP() << "this build links its image library";
-  const fs::path dir = tempDir("missing");
+  const fs::path dir = freshTempDir("shadowlab_image_module_missing");
   const std::string missing = (dir / "no-such-module.so").string();
   const std::string env = "SHADOWLAB_IMAGE_IO_MODULE='" + missing + "' ";
 

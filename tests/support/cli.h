@@ -2,6 +2,7 @@
 // Running the real `shadowlab` binary (SHADOWLAB_BINARY) from a test: its exit code, stdout and
 // stderr. Each caller passes its own folder for the captured streams (ctest -j runs tests side by side).
 #include <sys/wait.h>
+#include <unistd.h>
 
 #include <cstdlib>
 #include <filesystem>
@@ -16,6 +17,15 @@ inline std::string slurp(const std::filesystem::path& p) {
   std::stringstream s;
   s << f.rdbuf();
   return s.str();
+}
+
+// A fresh, empty folder in the system's temporary folder, named for the test and this process
+// (ctest -j runs test processes side by side).
+inline std::filesystem::path freshTempDir(const std::string& name) {
+  const std::filesystem::path d = std::filesystem::temp_directory_path() / (name + "_" + std::to_string(::getpid()));
+  std::filesystem::remove_all(d);
+  std::filesystem::create_directories(d);
+  return d;
 }
 
 struct CliRun {
