@@ -49,13 +49,13 @@ struct Check {
 // Between the two, a partial frame of the same group with another bias (acne: no bias at all,
 // listing every 3rd pixel) is handed back: the checked frame's vis plane is that frame's,
 // rewritten only where the bytes changed.
-Check renderBoth(Rasterizer& r, const Scene& s, const Method& m, bool* partial) {
+Check renderBoth(Rasterizer& r, const Scene& s, const Method& m, bool* partial, uint32_t checkedStep = 7) {
   auto everyNth = [](uint32_t step) {
     return EvidenceSelector([step](const uint8_t*, int width, int height, std::vector<uint32_t>& pixels) {
       for (uint32_t i = 0; i < uint32_t(width * height); i += step) pixels.push_back(i);
     });
   };
-  const EvidenceSelector every3rd = everyNth(3), every5th = everyNth(5), every7th = everyNth(7);
+  const EvidenceSelector every3rd = everyNth(3), every5th = everyNth(5), every7th = everyNth(checkedStep);
   r.recycle(r.render(s, m, "", nullptr, nullptr, &every5th));
   const std::vector<uint8_t> bytes = r.lookupVisibility();
   Method acne = m;
@@ -82,7 +82,7 @@ Check renderBoth(Rasterizer& r, const Scene& s, const Method& m, bool* partial) 
   c.primUnresolved = part.meta.value("occluder_prim", "") == "unresolved";
   for (size_t i = 0; i < full.pixelCount(); ++i) {
     const bool fractional = vis[i] > 0.0f && vis[i] < 1.0f;
-    const bool listed = i % 7 == 0 || fractional;
+    const bool listed = i % checkedStep == 0 || fractional;
     c.listed += listed;
     c.fractional += fractional;
     c.occluded += listed && occluder[i] != 0.0f;
@@ -166,6 +166,23 @@ TEST_F(RasterEvidence, ListedPixelsGetTheFullResolvesBits) {
     }
   }
   EXPECT_EQ(partials, int(cases.size()));
+}
+
+// A list long enough that the evidence is scattered into the planes on two threads
+// (kParallelScatter, 65536 pixels; rasterizer.cpp): every pixel of a 480x270 frame.
+TEST_F(RasterEvidence, ALongListScattersToTheSameBits) {
+  REQUIRE_DEVICE();
+  Scene sphere = smallScene("sphere_on_plane");
+  sphere.camera.width = 480;
+  sphere.camera.height = 270;
+  Method m;
+  m.mapSize = 512;
+  m.filter = Filter::Pcf;
+  bool partial = false;
+  const Check k = renderBoth(*R, sphere, m, &partial, 1);
+  EXPECT_TRUE(partial);
+  EXPECT_EQ(k.listed, size_t(480 * 270));
+  EXPECT_EQ(k.mismatches, 0u) << "first: " << k.first;
 }
 
 // More objects than the stencil's 8 bits tell apart: the partial frames keep the id attachment

@@ -140,6 +140,9 @@ void drawFullscreen(VkCommandBuffer cmd, const VkRenderingAttachmentInfo* colors
 }
 // The lookup pass's one attachment: the visibility, 1 byte per pixel.
 constexpr VkFormat kLookupFormat = VK_FORMAT_R8_UNORM;
+// Listed pixels from which partialFrame scatters the evidence on two threads (a thread's start
+// costs ~50 us; 64k pixels' scatter ~1.5 ms).
+constexpr size_t kParallelScatter = 65536;
 // GPU timestamps per frame: 0 start, 5 after the map layers (before the moments pass), 1 after
 // the shadow pass (moments included), 3 after the visibility buffer, 4 after the resolve, 2 after
 // the lookup (the end).
@@ -1644,24 +1647,35 @@ Frame Rasterizer::Impl::partialFrame(const Scene& sc, const Light& light, const 
   const std::vector<uint32_t>& objectIds = scene->objectIds;
   // The stencil ids hold the object index + 1 (the primitive stays unresolved: occluder_prim 0).
   const bool stencilIds = mapDepth.hasStencil();
-  for (size_t k = 0; k < count; ++k) {
-    const size_t i = listed[k];
-    const size_t y = k / size_t(compactWidth), x = k % size_t(compactWidth);
-    const float* a = mappedRow<float>(evidenceOut[0], y) + 4 * x;
-    const float* b = mappedRow<float>(evidenceOut[1], y) + 4 * x;
-    frame.data[3][i] = a[0];
-    frame.data[4][i] = a[1];
-    frame.data[5][i] = a[2];
-    frame.data[7][i] = b[0];
-    frame.data[8][i] = b[1];
-    const uint32_t id = uint32_t(b[2]);  // exact up to 2^24
-    if (id != 0 && stencilIds) frame.data[9][i] = float(objectIds[id - 1]);
-    else idsOf(id, frame.data[9][i], frame.data[10][i]);
-    frame.data[11][i] = float(int(b[3]) & 1);  // 2 * cascade + in_map; the cascade is kept
-    if (momentChannels) {
-      const float* c = mappedRow<float>(evidenceOut[2], y) + 4 * x;
-      for (int j = 0; j < 3; ++j) frame.data[size_t(13 + j)][i] = c[j];
+  // Each listed pixel's channels into the planes: distinct pixels, so two threads take half the
+  // list each where it is long (a row with acne everywhere lists a third of the frame).
+  auto scatter = [&](size_t k0, size_t k1) {
+    for (size_t k = k0; k < k1; ++k) {
+      const size_t i = listed[k];
+      const size_t y = k / size_t(compactWidth), x = k % size_t(compactWidth);
+      const float* a = mappedRow<float>(evidenceOut[0], y) + 4 * x;
+      const float* b = mappedRow<float>(evidenceOut[1], y) + 4 * x;
+      frame.data[3][i] = a[0];
+      frame.data[4][i] = a[1];
+      frame.data[5][i] = a[2];
+      frame.data[7][i] = b[0];
+      frame.data[8][i] = b[1];
+      const uint32_t id = uint32_t(b[2]);  // exact up to 2^24
+      if (id != 0 && stencilIds) frame.data[9][i] = float(objectIds[id - 1]);
+      else idsOf(id, frame.data[9][i], frame.data[10][i]);
+      frame.data[11][i] = float(int(b[3]) & 1);  // 2 * cascade + in_map; the cascade is kept
+      if (momentChannels) {
+        const float* c = mappedRow<float>(evidenceOut[2], y) + 4 * x;
+        for (int j = 0; j < 3; ++j) frame.data[size_t(13 + j)][i] = c[j];
+      }
     }
+  };
+  if (count >= kParallelScatter) {
+    std::thread helper(scatter, count / 2, count);
+    scatter(0, count / 2);
+    helper.join();
+  } else {
+    scatter(0, count);
   }
   lent.listed = std::move(listed);
   t.evidenceGpuMs = evidenceMs;
