@@ -143,6 +143,15 @@ constexpr VkFormat kLookupFormat = VK_FORMAT_R8_UNORM;
 // Listed pixels from which partialFrame scatters the evidence on two threads (a thread's start
 // costs ~50 us; 64k pixels' scatter ~1.5 ms).
 constexpr size_t kParallelScatter = 65536;
+
+// f(begin, end) over [0, n) in two halves, the second on a helper thread: the frame's CPU copies
+// (the halves write disjoint pixels; this machine has 2 cores).
+template <class F>
+void inTwoHalves(size_t n, const F& f) {
+  std::thread helper(f, n / 2, n);
+  f(size_t(0), n / 2);
+  helper.join();
+}
 // GPU timestamps per frame: 0 start, 5 after the map layers (before the moments pass), 1 after
 // the shadow pass (moments included), 3 after the visibility buffer, 4 after the resolve, 2 after
 // the lookup (the end).
@@ -1003,8 +1012,8 @@ Frame Rasterizer::Impl::readback(const Scene& sc, const Light* light, const Meth
     helper.join();
   }
   const float* planes = static_cast<const float*>(output.mapped());
-  auto split = [&](int y0, int y1) {
-    for (int y = y0; y < y1; ++y) {
+  auto split = [&](size_t y0, size_t y1) {
+    for (int y = int(y0); y < int(y1); ++y) {
       const size_t o = size_t(y) * size_t(width);
       cameraRow(y, frame.data[0].data() + o, frame.data[1].data() + o, frame.data[2].data() + o);
       if (hasLight) {
@@ -1040,9 +1049,7 @@ Frame Rasterizer::Impl::readback(const Scene& sc, const Light* light, const Meth
       }
     }
   };
-  std::thread helper(split, height / 2, height);
-  split(0, height / 2);
-  helper.join();
+  inTwoHalves(size_t(height), split);
   return frame;
 }
 
@@ -1423,8 +1430,8 @@ Rasterizer::Impl::Footprint& Rasterizer::Impl::keepPlanes(const std::string& key
   footprints.remove_if([&](const Footprint& f) { return f.key == key; });  // one whose planes are lent
   while (footprints.size() >= kKeptFootprints) footprints.pop_back();
   Footprint f{key, std::vector<float>(n), std::vector<float>(n)};
-  auto split = [&](int y0, int y1) {
-    for (int y = y0; y < y1; ++y) {
+  auto split = [&](size_t y0, size_t y1) {
+    for (int y = int(y0); y < int(y1); ++y) {
       const size_t o = size_t(y) * size_t(width);
       if (cameraToo)
         cameraRow(y, cameraPlanes.hit.data() + o, cameraPlanes.objectId.data() + o, cameraPlanes.primId.data() + o);
@@ -1435,9 +1442,7 @@ Rasterizer::Impl::Footprint& Rasterizer::Impl::keepPlanes(const std::string& key
       }
     }
   };
-  std::thread helper(split, height / 2, height);
-  split(0, height / 2);
-  helper.join();
+  inTwoHalves(size_t(height), split);
   if (cameraToo) cameraPlanes.key = camera;
   footprints.push_front(std::move(f));
   return footprints.front();
@@ -1670,13 +1675,8 @@ Frame Rasterizer::Impl::partialFrame(const Scene& sc, const Light& light, const 
       }
     }
   };
-  if (count >= kParallelScatter) {
-    std::thread helper(scatter, count / 2, count);
-    scatter(0, count / 2);
-    helper.join();
-  } else {
-    scatter(0, count);
-  }
+  if (count >= kParallelScatter) inTwoHalves(count, scatter);
+  else scatter(0, count);
   lent.listed = std::move(listed);
   t.evidenceGpuMs = evidenceMs;
   t.evidencePixels = count;
