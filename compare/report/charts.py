@@ -114,8 +114,9 @@ _SUPERSCRIPT = str.maketrans("-0123456789", "\u207b\u2070\u00b9\u00b2\u00b3\u207
 class PlainLogFormatter(LogFormatterSciNotation):
     """The log axes' default labels (10^-3, 2x10^-6) as plain Unicode text (10⁻³, 2×10⁻⁶) instead of
     mathtext: the same look, without matplotlib's mathtext parser, which took ~15 % of the charts'
-    CPU (pyparsing, once per label, renderer and resolution: 2.3-2.6 -> 2.0-2.1 s on the
-    100-configuration sweep). A label it cannot write so (a non-integer exponent) stays mathtext."""
+    CPU (pyparsing, once per label, renderer and resolution: charts.py 2.60-2.63 -> 2.27-2.49 s of
+    CPU on the 100-configuration sweep). A label it cannot write so (a non-integer exponent) stays
+    mathtext."""
 
     def __call__(self, x, pos=None):
         label = super().__call__(x, pos)

@@ -3,9 +3,8 @@
 // libraries (GDAL, ffmpeg, OpenCV, ...); linked into the program, the dynamic loader resolves all of
 // them before main(), ~0.2 s of every command's start on the 2-core machine, even for commands that
 // never touch an image (gate, version, scenes). As a module (libshadowlab_image_io_oiio.so, next to
-// the shadowlab binary), they load when the first image is read or written, and on the thread that
-// does it: a sweep reads its reference on a thread of its own while its first row renders
-// (compare/study/src/sweep_runner.cpp), so the loading overlaps that row.
+// the shadowlab binary), they load when the first image is read or written, or earlier on a thread
+// of its own where a command asks for that (preload: the sweep runner, before its device starts).
 // The module is looked for in $SHADOWLAB_IMAGE_IO_MODULE (when set), next to the running program,
 // then where the build put it. When it cannot be loaded every function returns why (the callers add
 // the file's path), so a command that needs no image still runs.
@@ -48,22 +47,25 @@ Module load() {
   }
   Module m;
   std::string tried;
+  auto refused = [&tried](const std::string& path, const std::string& why) {
+    tried += (tried.empty() ? "" : ", ") + path + " (" + why + ")";
+  };
   for (const std::string& path : candidates) {
     if (::access(path.c_str(), F_OK) != 0) {
-      tried += (tried.empty() ? "" : ", ") + path + " (missing)";
+      refused(path, "missing");
       continue;
     }
     void* handle = ::dlopen(path.c_str(), RTLD_LAZY | RTLD_LOCAL | RTLD_NODELETE);
     if (!handle) {
       const char* why = ::dlerror();
-      tried += (tried.empty() ? "" : ", ") + path + " (" + (why ? why : "dlopen failed") + ")";
+      refused(path, why ? why : "dlopen failed");
       continue;
     }
     using Entry = const Table* (*)();
     auto entry = reinterpret_cast<Entry>(::dlsym(handle, "shadowlab_image_io_table"));
     const Table* table = entry ? entry() : nullptr;
     if (!table || table->version != kTableVersion) {
-      tried += (tried.empty() ? "" : ", ") + path + " (not this build's image module)";
+      refused(path, "not this build's image module");
       continue;
     }
     m.table = table;

@@ -212,10 +212,10 @@ class PipelineRunner final : public SweepRunner {
   void freeReferencesFor(size_t more) {
     while (!held_.empty() && held_.size() + more > keep_) held_.pop_back();
   }
+  // Holds a reference read after freeReferencesFor(1) made room for it.
   const Frame& keepReference(const std::string& hash, Loaded&& l) {
     referenceWallSeconds_ += l.seconds;
     (l.traced ? traced_ : loaded_) += 1;
-    freeReferencesFor(1);
     held_.emplace_front(hash, std::move(l.frame));
     return held_.front().second;
   }

@@ -84,7 +84,7 @@ enum class PngRows { Adaptive, Unfiltered };
 void writeRgbPng(const std::string& path, int width, int height, const std::vector<uint8_t>& rgb,
                  PngRows rows = PngRows::Adaptive);
 
-// For a command sure to read or write images soon (a sweep's reference, a run's pictures): starts
+// For a command sure to read or write images soon (the sweep runner, for its references): starts
 // loading the image library on a thread of its own where it is a module loaded on first use
 // (OpenImageIO, scenes/src/image_io_module.cpp); nothing to do where it is linked.
 void preloadImageLibrary();
