@@ -74,7 +74,7 @@ void lookup(benchmark::State& state, Filter filter, int edit) {
   m.biasReceiverPlane = edit == 1;
   m.biasNormal = edit == 2 ? 1.0f : 0.0f;
   if (edit == 3) m.filterSize = 5;
-  const EvidenceSelector none = [](const uint8_t*, int, int, std::vector<uint32_t>&) {};
+  const EvidenceSelector none = [](const uint8_t*, int, int, EvidenceRequest&) {};
   RasterTimings t;
   for (int i = 0; i < 2; ++i)  // warm-up: pipelines, upload, the group's planes
     rasterizer().recycle(rasterizer().render(s, m, "", &t, nullptr, &none));

@@ -149,7 +149,7 @@ TEST_F(OnDemand, ABrokenSelectorIsCaught) {
   const std::string lightName = s.lights.front().name;
   const Frame reference = renderReference(s, ReferenceOptions{});
   const EvidenceSelector honest = disagreementSelector(reference, lightName);
-  const EvidenceSelector broken = [](const uint8_t*, int, int, std::vector<uint32_t>&) {};
+  const EvidenceSelector broken = [](const uint8_t*, int, int, EvidenceRequest&) {};
   Method m;
   m.mapSize = 512;
   m.biasSlope = 0.0f;

@@ -1,9 +1,11 @@
 // Evidence on demand (Rasterizer::render with an EvidenceSelector; raster/METHODS.md): the frame
 // made from the lookup pass, the kept planes of the group and the resolve of the listed pixels
-// only (pass 5, resolve.frag with kSpecCompact) must hold, at every listed or fractional pixel,
+// only (pass 5, resolve.frag with kSpecCompact) must hold, at every pixel listed for every channel,
 // the full resolve's bits in every light channel (hw2x2's implicit LOD and the compact target's
-// quads included), elsewhere the full frame's vis (exactly 0 or 1), hit, object_id, prim_id, m and
-// cascade, and zeros in the other evidence channels. A partial frame reads the occluder's object
+// quads included); at every pixel listed for the occluder's evidence alone, and every fractional
+// one (the lookup made compact), those bits in vis, in_map, occluder_id and occluder_prim and zeros
+// in the other evidence channels; elsewhere the full frame's vis (exactly 0 or 1), hit, object_id,
+// prim_id, m and cascade, and zeros in the other evidence channels. A partial frame reads the occluder's object
 // from the map's stencil (the stencil ids): its occluder_id is the full frame's, its occluder_prim
 // stays 0 (meta "occluder_prim": "unresolved").
 #include <gtest/gtest.h>
@@ -33,7 +35,7 @@ Scene smallScene(const std::string& name) {
 }
 
 struct Check {
-  size_t listed = 0, fractional = 0, mismatches = 0;
+  size_t listed = 0, occluderListed = 0, fractional = 0, mismatches = 0;
   size_t changedBytes = 0;  // lookup bytes that differ between the acne frame and m's
   size_t occluded = 0;      // listed pixels whose map texel holds an object (occluder_id != 0)
   bool acnePartial = false;
@@ -49,13 +51,22 @@ struct Check {
 // Between the two, a partial frame of the same group with another bias (acne: no bias at all,
 // listing every 3rd pixel) is handed back: the checked frame's vis plane is that frame's,
 // rewritten only where the bytes changed.
-Check renderBoth(Rasterizer& r, const Scene& s, const Method& m, bool* partial, uint32_t checkedStep = 7) {
+// occluderOnly: the checked frame lists every pixel for the occluder's evidence alone, none for all.
+Check renderBoth(Rasterizer& r, const Scene& s, const Method& m, bool* partial, uint32_t checkedStep = 7,
+                 bool occluderOnly = false) {
+  // Every step-th pixel for every channel, and the ones half a step later for the occluder's alone.
   auto everyNth = [](uint32_t step) {
-    return EvidenceSelector([step](const uint8_t*, int width, int height, std::vector<uint32_t>& pixels) {
-      for (uint32_t i = 0; i < uint32_t(width * height); i += step) pixels.push_back(i);
+    return EvidenceSelector([step](const uint8_t*, int width, int height, EvidenceRequest& request) {
+      for (uint32_t i = 0; i < uint32_t(width * height); i += step) request.full.push_back(i);
+      for (uint32_t i = step / 2; i < uint32_t(width * height); i += step) request.occluder.push_back(i);
     });
   };
-  const EvidenceSelector every3rd = everyNth(3), every5th = everyNth(5), every7th = everyNth(checkedStep);
+  const EvidenceSelector every3rd = everyNth(3), every5th = everyNth(5),
+                         every7th = occluderOnly ? EvidenceSelector([](const uint8_t*, int width, int height,
+                                                                       EvidenceRequest& request) {
+                           for (uint32_t i = 0; i < uint32_t(width * height); ++i) request.occluder.push_back(i);
+                         })
+                                                 : everyNth(checkedStep);
   r.recycle(r.render(s, m, "", nullptr, nullptr, &every5th));
   const std::vector<uint8_t> bytes = r.lookupVisibility();
   Method acne = m;
@@ -82,16 +93,22 @@ Check renderBoth(Rasterizer& r, const Scene& s, const Method& m, bool* partial, 
   c.primUnresolved = part.meta.value("occluder_prim", "") == "unresolved";
   for (size_t i = 0; i < full.pixelCount(); ++i) {
     const bool fractional = vis[i] > 0.0f && vis[i] < 1.0f;
-    const bool listed = i % checkedStep == 0 || fractional;
-    c.listed += listed;
+    const bool listed = !occluderOnly && i % checkedStep == 0;  // every channel
+    // The occluder's evidence alone (and the exact vis): listed so, or fractional.
+    const bool occluderListed = !listed && (occluderOnly || i % checkedStep == checkedStep / 2 || fractional);
+    c.listed += listed || occluderListed;
+    c.occluderListed += occluderListed;
     c.fractional += fractional;
-    c.occluded += listed && occluder[i] != 0.0f;
+    c.occluded += (listed || occluderListed) && occluder[i] != 0.0f;
     for (size_t k = 0; k < full.names.size(); ++k) {
       const std::string& name = full.names[k];
       const bool everywhere = name == "hit" || name == "object_id" || name == "prim_id" || name == p + "vis" ||
                               name == p + "m" || name == p + "cascade";
+      const bool occluderChannel =
+          name == p + "in_map" || name == p + "occluder_id" || name == p + "occluder_prim";
       const bool unresolved = c.primUnresolved && name == p + "occluder_prim";
-      const float want = (listed || everywhere) && !unresolved ? full.data[k][i] : 0.0f;
+      const float want =
+          (listed || everywhere || (occluderListed && occluderChannel)) && !unresolved ? full.data[k][i] : 0.0f;
       if (!sameBits(part.data[k][i], want) && c.mismatches++ == 0)
         c.first = name + " at pixel " + std::to_string(i) + ": " + std::to_string(part.data[k][i]) + ", full " +
                   std::to_string(full.data[k][i]);
@@ -159,6 +176,7 @@ TEST_F(RasterEvidence, ListedPixelsGetTheFullResolvesBits) {
     }
     EXPECT_GT(k.occluded, 500u) << c.what;
     EXPECT_GT(k.listed, 1000u) << c.what;
+    EXPECT_GT(k.occluderListed, 1000u) << c.what;
     EXPECT_TRUE(k.acnePartial) << c.what;
     EXPECT_GT(k.changedBytes, 500u) << c.what;
     if (c.m.filter != Filter::None) {
@@ -182,7 +200,14 @@ TEST_F(RasterEvidence, ALongListScattersToTheSameBits) {
   const Check k = renderBoth(*R, sphere, m, &partial, 1);
   EXPECT_TRUE(partial);
   EXPECT_EQ(k.listed, size_t(480 * 270));
+  EXPECT_EQ(k.occluderListed, 0u);
   EXPECT_EQ(k.mismatches, 0u) << "first: " << k.first;
+  // The same for the occluder's list (the lookup made compact).
+  const Check o = renderBoth(*R, sphere, m, &partial, 1, true);
+  EXPECT_TRUE(partial);
+  EXPECT_EQ(o.occluderListed, size_t(480 * 270));
+  EXPECT_GT(o.occluded, 10000u);
+  EXPECT_EQ(o.mismatches, 0u) << "first: " << o.first;
 }
 
 // More objects than the stencil's 8 bits tell apart: the partial frames keep the id attachment
@@ -207,7 +232,7 @@ TEST_F(RasterEvidence, ManyObjectsKeepTheIdAttachment) {
 // Without a selector, with a scene that has projectors, or a selector that is empty: the full frame.
 TEST_F(RasterEvidence, FullFrameWhereOnDemandDoesNotApply) {
   REQUIRE_DEVICE();
-  EvidenceSelector none = [](const uint8_t*, int, int, std::vector<uint32_t>&) {};
+  EvidenceSelector none = [](const uint8_t*, int, int, EvidenceRequest&) {};
   Method m;
   m.mapSize = 256;
   const Scene projector = smallScene("projector");

@@ -175,7 +175,7 @@ TEST_F(RasterLookup, TheSurfaceFollowsItsGroup) {
   spot.coneDeg = 40.0f;  // the plane's far parts outside the cone
   groups[5].lights.front().direction = glm::normalize(glm::vec3(0.6f, -1.0f, 0.3f));
   Rasterizer expectedR;
-  const EvidenceSelector askNothing = [](const uint8_t*, int, int, std::vector<uint32_t>&) {};
+  const EvidenceSelector askNothing = [](const uint8_t*, int, int, EvidenceRequest&) {};
   struct Step {
     size_t group;
     bool onDemand;

@@ -47,7 +47,7 @@ layout(constant_id = kSpecPcfSize) const int kPcfSize = 1;
 // the unread evidence is dead code the compiler removes.
 layout(constant_id = kSpecLookupOnly) const bool kLookupOnly = false;
 // The evidence pass (evidence on demand): fragment k of a compact target resolves the k-th listed
-// pixel (evidencePixels[k], y * width + x) instead of the pixel under it. Nothing here depends on
+// pixel (evidencePixels[first + k], x | y << 16) instead of the pixel under it. Nothing here depends on
 // the 2x2 quad but hw2x2's implicit LOD, which selects nothing (see hwVis in shadeLight), so the
 // listed pixels get the full resolve's bits (tests/raster_evidence_test.cpp).
 layout(constant_id = kSpecCompact) const bool kCompact = false;
@@ -70,7 +70,8 @@ layout(set = 0, binding = kBindingMapIds) uniform usampler2DArray mapIds;
 layout(set = 0, binding = kBindingMoments) uniform sampler2DArray momentsMap;
 layout(set = 0, binding = kBindingCameraIds) uniform usampler2D cameraIds;
 // The group's surface (kSurface): x the camera ray's t at the visible point, y 1 where a triangle
-// covers the pixel and the light reaches its visible side (not facing away, inside a spot's cone).
+// covers the pixel and the light reaches its visible side (not facing away, inside a spot's cone),
+// -1 where one covers it and the light does not, 0 where none does.
 layout(set = 0, binding = kBindingSurface) uniform sampler2D surfaceMap;
 
 // Per triangle (at its global index + 1, as in the id attachments; texel 0 a placeholder), its
@@ -83,11 +84,12 @@ layout(set = 0, binding = kBindingTrianglePlanes) uniform samplerBuffer triangle
 layout(std430, set = 0, binding = kBindingProjectorTexels) readonly buffer ProjectorTexels { float projectorTexels[]; };
 layout(std430, set = 0, binding = kBindingOutPlanes) writeonly buffer OutPlanes { float outPlanes[]; };
 layout(std430, set = 0, binding = kBindingEvidencePixels) readonly buffer EvidencePixels { uint evidencePixels[]; };
-// The evidence pass's list: how many pixels, and the compact target's width (the shadow pass's
-// push block: a mat4, then these two).
+// The evidence pass's list: how many pixels, the compact target's width and where the list starts
+// in evidencePixels (the shadow pass's push block: a mat4, then these three).
 layout(push_constant) uniform Push {
   layout(offset = 64) uint count;
   uint compactWidth;
+  uint first;
 } pc;
 
 // The rasterizer splits these into the frame's channels (rasterizer.cpp, readback).
@@ -108,7 +110,8 @@ const bool kMomentFilter =
 // The pixel's visible surface: the camera ray through the pixel center meets the visible
 // triangle's plane at p.
 struct Surface {
-  bool hit;       // a triangle covers the pixel
+  bool hit;       // a triangle covers the pixel (kSurface: and the light reaches its visible side)
+  bool covered;   // a triangle covers the pixel
   vec4 plane;     // the triangle's plane (n, dot(n, v0 - camera origin))
   vec3 dir;       // the (unnormalized) ray direction through the pixel center
   float t;        // p = camera origin + dir * t
@@ -413,7 +416,8 @@ Surface visibleSurface(ivec2 px) {
   Surface s;
   if (kSurface) {
     vec2 surface = texelFetch(surfaceMap, px, 0).xy;
-    s.hit = surface.y != 0.0;
+    s.hit = surface.y > 0.0;
+    s.covered = surface.y != 0.0;
     s.dir = rayThrough(vec2(px) + 0.5);
     s.t = surface.x;
     s.p = rayPoint(s.dir, s.t);
@@ -424,6 +428,7 @@ Surface visibleSurface(ivec2 px) {
   }
   uint id = texelFetch(cameraIds, px, 0).x;  // global triangle + 1, 0: no hit
   s.hit = id != 0u;
+  s.covered = s.hit;
   s.plane = texelFetch(trianglePlanes, int(id));
   vec2 pixelCenter = vec2(px) + 0.5;
   s.dir = rayThrough(pixelCenter);
@@ -534,9 +539,10 @@ LightChannels shadeLight(Surface s) {
 }
 
 // The group's surface at a pixel, as the planes pass and the full resolve write it (kSurface's
-// image): the camera ray's t, and 1 where a triangle covers the pixel and the light reaches it.
+// image): the camera ray's t, and 1 where a triangle covers the pixel and the light reaches it, -1
+// where one covers it and the light does not, 0 where none does.
 vec4 surfaceTexel(Surface s, LightChannels light) {
-  return vec4(s.t, s.hit && !light.unreached ? 1.0 : 0.0, 0.0, 0.0);
+  return vec4(s.t, !s.hit ? 0.0 : light.unreached ? -1.0 : 1.0, 0.0, 0.0);
 }
 
 // Each projector's channels of a surface into outPlanes (pixel `pixel` of planes of `planeSize`).
@@ -590,13 +596,17 @@ void main() {
   ivec2 px = ivec2(gl_FragCoord.xy);  // the viewport is the image: every pixel, once
   if (kCompact) {
     uint k = min(uint(px.y) * pc.compactWidth + uint(px.x), pc.count - 1u);  // the tail repeats the last
-    uint pixel = evidencePixels[k];
-    px = ivec2(int(pixel % uint(P.sizes2.x)), int(pixel / uint(P.sizes2.x)));
+    uint pixel = evidencePixels[pc.first + k];  // x | y << 16
+    px = ivec2(int(pixel & 0xffffu), int(pixel >> 16));
   }
   Surface s = visibleSurface(px);
   LightChannels light = shadeLight(s);  // without a light (kLightNone) the readback ignores it
   if (kLookupOnly) {
-    outA = vec4(lookupByte(s.hit ? light.a.x : 0.0));  // the R8 attachment keeps x
+    // Compact: the occluder's evidence of the listed pixels (EvidenceRequest::occluder), the full
+    // resolve's vis, occluder and 2 * cascade + in_map (outA.x, outB.z, outB.w) into RGBA32F; the
+    // depth, bias and m arithmetic is dead code, as in the lookup.
+    if (kCompact) outA = s.covered ? vec4(s.hit ? light.a.x : 0.0, light.b.z, light.b.w, 0.0) : vec4(0.0);
+    else outA = vec4(lookupByte(s.hit ? light.a.x : 0.0));  // the R8 attachment keeps x
     return;
   }
   if (kPlanesOnly) {

@@ -28,7 +28,10 @@
 // reference), and
 //   Pass 5 (evidence): resolve.frag specialized to kSpecCompact draws a kCompactWidth-wide target
 //                    with one fragment per listed pixel (evidencePixels[k] instead of
-//                    gl_FragCoord), the same channels as pass 3 for those pixels only;
+//                    gl_FragCoord), the same channels as pass 3 for those pixels only; the pixels
+//                    listed for the map texel's evidence alone (EvidenceRequest::occluder, and the
+//                    fractional ones) go through the lookup's specialization made compact instead
+//                    (kSpecLookupOnly + kSpecCompact: vis, occluder, in_map; ~1/8 of the cost);
 // the frame is then the bytes (0/1 exactly), the kept planes of the group (hit, object_id,
 // prim_id from the visibility buffer; m and cascade per footprintKey: the light's layers, the
 // camera, the cascade splits) and the listed pixels' evidence, zeros elsewhere. A group's first
@@ -110,6 +113,17 @@ void barrierToHost(VkCommandBuffer cmd, VkPipelineStageFlags2 srcStage, VkAccess
   dep.pMemoryBarriers = &toHost;
   vkCmdPipelineBarrier2(cmd, &dep);
 }
+// Sorted pixel indices (y * width + x) as x | y << 16 into `out` (images are at most 65535 wide).
+void packPixels(const std::vector<uint32_t>& sorted, uint32_t width, uint32_t* out) {
+  uint32_t y = 0, rowStart = 0;
+  for (uint32_t i : sorted) {
+    while (i - rowStart >= width) {
+      rowStart += width;
+      ++y;
+    }
+    *out++ = (i - rowStart) | (y << 16);
+  }
+}
 // Row y of a host-readable image, as T.
 template <class T>
 const T* mappedRow(const vk::Image& img, size_t y) {
@@ -162,7 +176,8 @@ constexpr int kCompactWidth = 256;
 // bias or a filter needs one; a grid with map.size fastest, one per size.
 constexpr size_t kKeptFootprints = 4;
 // A group's surface (resolve.frag's kSpecSurface), the planes pass's second attachment and the full
-// resolve's last: the camera ray's t at the visible point, and 1 where the light reaches it. Kept
+// resolve's last: the camera ray's t at the visible point, and 1 where the light reaches it (-1
+// where it does not, 0 where no triangle covers the pixel). Kept
 // per group, as many as the footprints (8 bytes per pixel: 17 MB at 1080p each).
 constexpr VkFormat kSurfaceFormat = VK_FORMAT_R32G32_SFLOAT;
 
@@ -344,6 +359,7 @@ struct Rasterizer::Impl {
   // many rows as the list needs; [2] for filterable maps only), their two timestamps.
   vk::Buffer evidencePixels;
   vk::Image evidenceOut[kResolveAttachments];
+  vk::Image occluderOut;  // the pixels listed for the occluder's evidence alone: vis, occluder, in_map
   vk::QueryPool evidenceQueries;
   std::set<raster::ResolveSpecialization> evidenceWarmed;
   // The planes that depend on the scene and the camera only (hit, object_id, prim_id, as the last
@@ -388,7 +404,8 @@ struct Rasterizer::Impl {
     std::vector<uint8_t> bytes;
   } visKept;
   std::vector<uint8_t> lookupRows;  // the lookup's bytes when its rows are padded (a copy without the padding)
-  std::vector<uint32_t> asked, fractional;
+  EvidenceRequest asked;
+  std::vector<uint32_t> fractional;
 
   explicit Impl(const RasterDeviceOptions& options);
   // Work may still be in flight when a render throws (a failed call after a submission): wait for
@@ -406,6 +423,7 @@ struct Rasterizer::Impl {
     bool resolveSurface = false;           // pass 3 writes the group's surface too (a light)
     VkPipeline lookup = VK_NULL_HANDLE;    // pass 4; none without a light
     VkPipeline evidence = VK_NULL_HANDLE;  // pass 5 (evidence on demand)
+    VkPipeline evidenceOccluder = VK_NULL_HANDLE;  // pass 5, the pixels listed for the occluder alone
     bool evidenceFirstUse = false;
     bool firstUse = false;  // lavapipe compiles at first use: run once untimed (warmupRun)
   };
@@ -601,7 +619,7 @@ VkPipeline Rasterizer::Impl::resolvePipeline(const ResolveKey& key) {
   d.fragment = resolveFrag.get();
   d.layout = pipelineLayout.get();
   d.depthTest = false;
-  if (key[abi::kSpecLookupOnly]) d.colorFormats = {kLookupFormat};
+  if (key[abi::kSpecLookupOnly]) d.colorFormats = {key[abi::kSpecCompact] ? kResolveFormats[0] : kLookupFormat};
   else if (key[abi::kSpecPlanesOnly]) d.colorFormats = {kResolveFormats[0], kSurfaceFormat};
   else {
     d.colorFormats.assign(kResolveFormats, kResolveFormats + resolveAttachments(Filter(key[abi::kSpecFilter])));
@@ -1247,13 +1265,27 @@ Rasterizer::Impl::FramePipelines Rasterizer::Impl::pipelinesFor(const Method&, c
       p.ids.shadowLightDepthPlain = idPipeline(mapFormat, depthClamp, false, false, true);
       p.ids.shadowLightDepthTested = idPipeline(mapFormat, depthClamp, true, false, true);
     }
+  // The lookup: the same specialization, the evidence and the projectors compiled out, the
+  // visible point from the group's surface where the method needs no normal.
+  raster::ResolveSpecialization lookupSpec = spec;
+  lookupSpec[abi::kSpecLookupOnly] = 1u;
+  lookupSpec[abi::kSpecProjectorCount] = 0u;
+  lookupSpec[abi::kSpecSurface] = lookupReadsSurface(spec) ? 1u : 0u;
+  const bool light = spec[abi::kSpecLightType] != uint32_t(abi::kLightNone);
   if (partial) {
-    // Evidence on demand: the resolve over the listed pixels only (pass 5), no projectors.
+    // Evidence on demand: the resolve over the listed pixels only (pass 5), no projectors; the
+    // lookup over those listed for the occluder alone.
     raster::ResolveSpecialization compactSpec = spec;
     compactSpec[abi::kSpecCompact] = 1u;
     compactSpec[abi::kSpecProjectorCount] = 0u;
     p.evidence = resolvePipeline(compactSpec);
     p.evidenceFirstUse = evidenceWarmed.insert(compactSpec).second;
+    if (light) {
+      raster::ResolveSpecialization occluderSpec = lookupSpec;
+      occluderSpec[abi::kSpecCompact] = 1u;
+      p.evidenceOccluder = resolvePipeline(occluderSpec);
+      p.evidenceFirstUse = evidenceWarmed.insert(occluderSpec).second || p.evidenceFirstUse;
+    }
   } else {
     p.resolve = resolvePipeline(spec);
     p.resolveSurface = resolveWritesSurface(spec);
@@ -1271,15 +1303,7 @@ Rasterizer::Impl::FramePipelines Rasterizer::Impl::pipelinesFor(const Method&, c
     static_assert(int(Filter::None) == 0, "kSpecFilter 0 is filter none");
     p.planes = resolvePipeline(planesSpec);
   }
-  if (spec[abi::kSpecLightType] != uint32_t(abi::kLightNone)) {
-    // The lookup: the same specialization, the evidence and the projectors compiled out, the
-    // visible point from the group's surface where the method needs no normal.
-    raster::ResolveSpecialization lookupSpec = spec;
-    lookupSpec[abi::kSpecLookupOnly] = 1u;
-    lookupSpec[abi::kSpecProjectorCount] = 0u;
-    lookupSpec[abi::kSpecSurface] = lookupReadsSurface(spec) ? 1u : 0u;
-    p.lookup = resolvePipeline(lookupSpec);
-  }
+  if (light) p.lookup = resolvePipeline(lookupSpec);
   // lavapipe compiles shaders at first use: the first frame of a combination runs twice.
   std::string warmKey = std::to_string(int(mapFormat)) + "/" + std::to_string(depthClamp) + "/" +
                         std::to_string(partial) + "/" + std::to_string(planes);
@@ -1501,7 +1525,8 @@ Frame Rasterizer::Impl::partialFrame(const Scene& sc, const Light& light, const 
   visKept.bytes.resize(n);
   // Two threads: the vis plane and the fractional bytes beside the selector.
   std::thread visHelper(visFromBytes, vis8, n, visFull, visKept.bytes.data(), visPlane.data(), std::ref(fractional));
-  asked.clear();
+  asked.full.clear();
+  asked.occluder.clear();
   try {
     select(vis8, width, height, asked);
   } catch (...) {
@@ -1509,22 +1534,23 @@ Frame Rasterizer::Impl::partialFrame(const Scene& sc, const Light& light, const 
     throw;
   }
   visHelper.join();
-  if (!std::is_sorted(asked.begin(), asked.end())) std::sort(asked.begin(), asked.end());
-  // The listed pixels: the fractional ones and those asked for, sorted, once each.
-  std::vector<uint32_t> listed;
-  listed.reserve(fractional.size() + asked.size());
-  {
-    size_t a = 0, f = 0;
-    const auto endAsked = std::lower_bound(asked.begin(), asked.end(), uint32_t(n)) - asked.begin();
-    while (a < size_t(endAsked) || f < fractional.size()) {
-      const uint32_t i =
-          f == fractional.size() || (a < size_t(endAsked) && asked[a] < fractional[f]) ? asked[a] : fractional[f];
-      listed.push_back(i);
-      while (a < size_t(endAsked) && asked[a] == i) ++a;
-      if (f < fractional.size() && fractional[f] == i) ++f;
-    }
-  }
-  const size_t count = listed.size();
+  // The listed pixels, each sorted, once, below n: those asked for every channel, then those whose
+  // map texel's evidence alone is asked for and the fractional ones (their exact vis), less the
+  // first list's.
+  auto sortedOnce = [n](std::vector<uint32_t>& v) {
+    if (!std::is_sorted(v.begin(), v.end())) std::sort(v.begin(), v.end());
+    v.erase(std::unique(v.begin(), v.end()), v.end());
+    v.erase(std::lower_bound(v.begin(), v.end(), uint32_t(n)), v.end());
+  };
+  sortedOnce(asked.full);
+  sortedOnce(asked.occluder);
+  std::vector<uint32_t> listed = std::move(asked.full), both, occluderListed;
+  both.reserve(fractional.size() + asked.occluder.size());
+  std::set_union(fractional.begin(), fractional.end(), asked.occluder.begin(), asked.occluder.end(),
+                 std::back_inserter(both));
+  occluderListed.reserve(both.size());
+  std::set_difference(both.begin(), both.end(), listed.begin(), listed.end(), std::back_inserter(occluderListed));
+  const size_t fullCount = listed.size(), occluderCount = occluderListed.size(), count = fullCount + occluderCount;
   const int attachments = resolveAttachments(method.filter);
   double readMs = msSince(t0);
 
@@ -1538,22 +1564,27 @@ Frame Rasterizer::Impl::partialFrame(const Scene& sc, const Light& light, const 
           vk::Buffer(*context, std::max<size_t>(bytes, 2 * evidencePixels.size()), VK_BUFFER_USAGE_STORAGE_BUFFER_BIT);
       writeDescriptors();
     }
-    evidencePixels.upload(listed.data(), bytes);
-    // kCompactWidth wide, wider when the list needs more rows than the device's largest image.
+    // One buffer: the full list, then the occluder's (the second draw starts at `first`), each
+    // pixel as x | y << 16 (the shader then needs no integer division, which SIMD lanes lack).
+    uint32_t* packed = static_cast<uint32_t*>(evidencePixels.mapped());
+    packPixels(listed, uint32_t(width), packed);
+    packPixels(occluderListed, uint32_t(width), packed + fullCount);
+    // kCompactWidth wide, wider when a list needs more rows than the device's largest image.
     const int maxSize = maxMapSize();
-    while ((count + size_t(compactWidth) - 1) / size_t(compactWidth) > size_t(maxSize)) compactWidth *= 2;
-    const int rows = int((count + size_t(compactWidth) - 1) / size_t(compactWidth));
-    if (evidenceOut[0].height() < rows || evidenceOut[0].width() != compactWidth) {
-      const int allocRows =
-          std::min(maxSize, std::max(rows, evidenceOut[0].width() == compactWidth ? 2 * evidenceOut[0].height() : 0));
-      for (int i = 0; i < kResolveAttachments; ++i) evidenceOut[i] = vk::Image();
-      for (int i = 0; i < 2; ++i)
-        evidenceOut[i] = vk::Image(*context, compactWidth, allocRows, 1, kResolveFormats[i],
-                                   VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT, VK_IMAGE_ASPECT_COLOR_BIT, true);
-    }
-    if (attachments == 3 && evidenceOut[2].height() != evidenceOut[0].height())
-      evidenceOut[2] = vk::Image(*context, compactWidth, evidenceOut[0].height(), 1, kResolveFormats[2],
-                                 VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT, VK_IMAGE_ASPECT_COLOR_BIT, true);
+    const size_t longest = std::max(fullCount, occluderCount);
+    while ((longest + size_t(compactWidth) - 1) / size_t(compactWidth) > size_t(maxSize)) compactWidth *= 2;
+    auto rowsOf = [&](size_t k) { return int((k + size_t(compactWidth) - 1) / size_t(compactWidth)); };
+    // A compact target of at least `rows` rows (grown to twice its height at a time, in place).
+    auto ensureCompact = [&](vk::Image& image, VkFormat format, int rows) {
+      if (image.height() >= rows && image.width() == compactWidth) return;
+      const int allocRows = std::min(maxSize, std::max(rows, image.width() == compactWidth ? 2 * image.height() : 0));
+      image = vk::Image();  // released first
+      image = vk::Image(*context, compactWidth, allocRows, 1, format, VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT,
+                        VK_IMAGE_ASPECT_COLOR_BIT, true);
+    };
+    if (fullCount > 0)
+      for (int i = 0; i < attachments; ++i) ensureCompact(evidenceOut[i], kResolveFormats[i], rowsOf(fullCount));
+    if (occluderCount > 0) ensureCompact(occluderOut, kResolveFormats[0], rowsOf(occluderCount));
     for (int run = 0; run < (pipes.evidenceFirstUse ? 2 : 1); ++run) {
       VkCommandBuffer cmd = commands->begin();
       VkQueryPool pool = evidenceQueries.get();
@@ -1561,21 +1592,27 @@ Frame Rasterizer::Impl::partialFrame(const Scene& sc, const Light& light, const 
       vkCmdWriteTimestamp2(cmd, VK_PIPELINE_STAGE_2_TOP_OF_PIPE_BIT, pool, 0);
       VkDescriptorSet set = descriptorSet;
       vkCmdBindDescriptorSets(cmd, VK_PIPELINE_BIND_POINT_GRAPHICS, pipelineLayout.get(), 0, 1, &set, 0, nullptr);
-      VkRenderingAttachmentInfo colors[kResolveAttachments];
-      for (int i = 0; i < attachments; ++i) {
-        vk::transition(cmd, evidenceOut[i], VK_IMAGE_LAYOUT_UNDEFINED, VK_IMAGE_LAYOUT_GENERAL,
-                       VK_PIPELINE_STAGE_2_HOST_BIT, 0, VK_PIPELINE_STAGE_2_COLOR_ATTACHMENT_OUTPUT_BIT,
-                       VK_ACCESS_2_COLOR_ATTACHMENT_WRITE_BIT);
-        colors[i] = overwrittenColor(evidenceOut[i].layerView(0), VK_IMAGE_LAYOUT_GENERAL);
-      }
-      drawFullscreen(
-          cmd, colors, uint32_t(attachments), uint32_t(compactWidth), uint32_t(rows), pipes.evidence,
-          [&] {
-            DrawPush push{glm::mat4(1.0f), uint32_t(count), uint32_t(compactWidth), 0, 0};
-            vkCmdPushConstants(cmd, pipelineLayout.get(), VK_SHADER_STAGE_VERTEX_BIT | VK_SHADER_STAGE_FRAGMENT_BIT, 0,
-                               sizeof(push), &push);
-          },
-          pipes.evidenceFirstUse && run == 0);
+      // One draw per list: `targets` images, `k` pixels from `first` on, through `pipeline`.
+      auto drawList = [&](vk::Image* targets, int targetCount, size_t first, size_t k, VkPipeline pipeline) {
+        VkRenderingAttachmentInfo colors[kResolveAttachments];
+        for (int i = 0; i < targetCount; ++i) {
+          vk::transition(cmd, targets[i], VK_IMAGE_LAYOUT_UNDEFINED, VK_IMAGE_LAYOUT_GENERAL,
+                         VK_PIPELINE_STAGE_2_HOST_BIT, 0, VK_PIPELINE_STAGE_2_COLOR_ATTACHMENT_OUTPUT_BIT,
+                         VK_ACCESS_2_COLOR_ATTACHMENT_WRITE_BIT);
+          colors[i] = overwrittenColor(targets[i].layerView(0), VK_IMAGE_LAYOUT_GENERAL);
+        }
+        drawFullscreen(
+            cmd, colors, uint32_t(targetCount), uint32_t(compactWidth), uint32_t(rowsOf(k)), pipeline,
+            [&] {
+              // count, the compact width, the list's start (resolve.frag's push block)
+              DrawPush push{glm::mat4(1.0f), uint32_t(k), uint32_t(compactWidth), uint32_t(first), 0};
+              vkCmdPushConstants(cmd, pipelineLayout.get(), VK_SHADER_STAGE_VERTEX_BIT | VK_SHADER_STAGE_FRAGMENT_BIT,
+                                 0, sizeof(push), &push);
+            },
+            pipes.evidenceFirstUse && run == 0);
+      };
+      if (fullCount > 0) drawList(evidenceOut, attachments, 0, fullCount, pipes.evidence);
+      if (occluderCount > 0) drawList(&occluderOut, 1, fullCount, occluderCount, pipes.evidenceOccluder);
       barrierToHost(cmd, VK_PIPELINE_STAGE_2_COLOR_ATTACHMENT_OUTPUT_BIT, VK_ACCESS_2_COLOR_ATTACHMENT_WRITE_BIT);
       vkCmdWriteTimestamp2(cmd, VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT, pool, 1);
       commands->submitAndWait();
@@ -1584,7 +1621,9 @@ Frame Rasterizer::Impl::partialFrame(const Scene& sc, const Light& light, const 
     VK_CHECK(vkGetQueryPoolResults(context->device(), evidenceQueries.get(), 0, 2, sizeof(stamps), stamps,
                                    sizeof(uint64_t), VK_QUERY_RESULT_64_BIT | VK_QUERY_RESULT_WAIT_BIT));
     evidenceMs = double(stamps[1] - stamps[0]) * context->properties().limits.timestampPeriod * 1e-6;
-    for (int i = 0; i < attachments; ++i) evidenceOut[i].invalidate(*context);
+    if (fullCount > 0)
+      for (int i = 0; i < attachments; ++i) evidenceOut[i].invalidate(*context);
+    if (occluderCount > 0) occluderOut.invalidate(*context);
   }
 
   // ---- The frame: the readback's channels, in its order ----
@@ -1652,7 +1691,15 @@ Frame Rasterizer::Impl::partialFrame(const Scene& sc, const Light& light, const 
   const std::vector<uint32_t>& objectIds = scene->objectIds;
   // The stencil ids hold the object index + 1 (the primitive stays unresolved: occluder_prim 0).
   const bool stencilIds = mapDepth.hasStencil();
-  // Each listed pixel's channels into the planes: distinct pixels, so two threads take half the
+  // The occluder's channels of a listed pixel from its id in the map (exact up to 2^24) and
+  // 2 * cascade + in_map (the cascade is kept).
+  auto putOccluder = [&](size_t i, float id, float cascadeInMap) {
+    const uint32_t occluder = uint32_t(id);
+    if (occluder != 0 && stencilIds) frame.data[9][i] = float(objectIds[occluder - 1]);
+    else idsOf(occluder, frame.data[9][i], frame.data[10][i]);
+    frame.data[11][i] = float(int(cascadeInMap) & 1);
+  };
+  // Each listed pixel's channels into the planes: distinct pixels, so two threads take half a
   // list each where it is long (a row with acne everywhere lists a third of the frame).
   auto scatter = [&](size_t k0, size_t k1) {
     for (size_t k = k0; k < k1; ++k) {
@@ -1665,18 +1712,27 @@ Frame Rasterizer::Impl::partialFrame(const Scene& sc, const Light& light, const 
       frame.data[5][i] = a[2];
       frame.data[7][i] = b[0];
       frame.data[8][i] = b[1];
-      const uint32_t id = uint32_t(b[2]);  // exact up to 2^24
-      if (id != 0 && stencilIds) frame.data[9][i] = float(objectIds[id - 1]);
-      else idsOf(id, frame.data[9][i], frame.data[10][i]);
-      frame.data[11][i] = float(int(b[3]) & 1);  // 2 * cascade + in_map; the cascade is kept
+      putOccluder(i, b[2], b[3]);
       if (momentChannels) {
         const float* c = mappedRow<float>(evidenceOut[2], y) + 4 * x;
         for (int j = 0; j < 3; ++j) frame.data[size_t(13 + j)][i] = c[j];
       }
     }
   };
-  if (count >= kParallelScatter) inTwoHalves(count, scatter);
-  else scatter(0, count);
+  auto scatterOccluder = [&](size_t k0, size_t k1) {
+    for (size_t k = k0; k < k1; ++k) {
+      const size_t i = occluderListed[k];
+      const float* a = mappedRow<float>(occluderOut, k / size_t(compactWidth)) + 4 * (k % size_t(compactWidth));
+      frame.data[3][i] = a[0];
+      putOccluder(i, a[1], a[2]);
+    }
+  };
+  if (fullCount >= kParallelScatter) inTwoHalves(fullCount, scatter);
+  else scatter(0, fullCount);
+  if (occluderCount >= kParallelScatter) inTwoHalves(occluderCount, scatterOccluder);
+  else scatterOccluder(0, occluderCount);
+  // Both lists: recycle() sets these pixels of the planes back.
+  listed.insert(listed.end(), occluderListed.begin(), occluderListed.end());
   lent.listed = std::move(listed);
   t.evidenceGpuMs = evidenceMs;
   t.evidencePixels = count;

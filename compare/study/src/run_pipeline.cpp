@@ -107,7 +107,10 @@ EvidenceSelector disagreementSelector(const Frame& reference, const std::string&
   const std::vector<float>& refVis = reference.get(name);
   auto lit = std::make_shared<std::vector<uint8_t>>(refVis.size());
   for (size_t i = 0; i < refVis.size(); ++i) (*lit)[i] = litDecision(refVis[i]) ? 1 : 0;
-  return [lit](const uint8_t* vis8, int width, int height, std::vector<uint32_t>& pixels) {
+  // Where the reference is lit the raster shadowed the pixel, and only the map texel decides its
+  // class (classifyDisagreement: coverage by in_map, acne by the occluder; the depth and bias
+  // evidence counts only where the reference is shadowed): those get the occluder's evidence alone.
+  return [lit](const uint8_t* vis8, int width, int height, EvidenceRequest& request) {
     const size_t n = lit->size();
     if (size_t(width) * size_t(height) != n) return;  // another frame: the rasterizer's own pixels only
     const uint8_t* ref = lit->data();
@@ -118,7 +121,7 @@ EvidenceSelector disagreementSelector(const Frame& reference, const std::string&
       for (size_t i = b; i < e; ++i) any |= uint8_t((vis8[i] >> 7) ^ ref[i]);
       if (!any) continue;
       for (size_t i = b; i < e; ++i)
-        if ((vis8[i] >> 7) != ref[i]) pixels.push_back(uint32_t(i));
+        if ((vis8[i] >> 7) != ref[i]) (ref[i] ? request.occluder : request.full).push_back(uint32_t(i));
     }
   };
 }

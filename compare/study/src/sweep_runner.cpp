@@ -69,14 +69,14 @@ class PipelineRunner final : public SweepRunner {
     EvidenceSelector waiting;
     std::exception_ptr readFailed;
     if (evidenceOnDemand && !held)
-      waiting = [&](const uint8_t* vis8, int width, int height, std::vector<uint32_t>& pixels) {
+      waiting = [&](const uint8_t* vis8, int width, int height, EvidenceRequest& request) {
         try {
           held = &adoptReference(referenceKey, loading);
         } catch (...) {
           readFailed = std::current_exception();
           return;
         }
-        if (const EvidenceSelector* s = onDemand(referenceKey, *held, options.light)) (*s)(vis8, width, height, pixels);
+        if (const EvidenceSelector* s = onDemand(referenceKey, *held, options.light)) (*s)(vis8, width, height, request);
       };
     const EvidenceSelector* select = !evidenceOnDemand ? nullptr
                                      : held            ? onDemand(referenceKey, *held, options.light)

@@ -51,13 +51,25 @@ struct RasterTimings {
   double renderWallMs = 0;       // render_wall_ms: CPU wall time of render() (names: compare/TIMINGS.md)
 };
 
+// What an EvidenceSelector asks for: pixel indices (y * width + x), in any order, repeats allowed.
+struct EvidenceRequest {
+  // Every evidence channel (the full resolve of these pixels).
+  std::vector<uint32_t> full;
+  // The map texel's evidence only: in_map, occluder_id and occluder_prim (beside the exact vis
+  // that every listed pixel gets); their depth, bias and moment channels stay 0. The lookup pass
+  // over these pixels alone, a fraction of the full resolve's cost. A pixel in both lists gets
+  // everything.
+  std::vector<uint32_t> occluder;
+};
+
 // Evidence on demand (raster/METHODS.md): given the lookup pass's bytes (`vis8`, row-major,
 // width x height; 255 only where the visibility is exactly 1, 0 only where it is exactly 0, 128..255
-// exactly where it is >= 0.5), appends to `pixels` the pixel indices (y * width + x) whose evidence
-// channels the caller will read; the rasterizer adds every fractional pixel (a byte other than 0
-// and 255) itself. The study layer passes one that lists where the lit decision disagrees with the
-// reference's; raster does not know why a pixel is listed.
-using EvidenceSelector = std::function<void(const uint8_t* vis8, int width, int height, std::vector<uint32_t>& pixels)>;
+// exactly where it is >= 0.5), appends to `request` the pixels whose evidence channels the caller
+// will read; the rasterizer lists every fractional pixel (a byte other than 0 and 255) itself, for
+// its exact vis. The study layer passes one that lists where the lit decision disagrees with the
+// reference's (where the reference is lit, the map texel's evidence decides the class); raster
+// does not know why a pixel is listed.
+using EvidenceSelector = std::function<void(const uint8_t* vis8, int width, int height, EvidenceRequest& request)>;
 
 class Rasterizer {
  public:
@@ -96,7 +108,8 @@ class Rasterizer {
   // with `select` draws them in a planes pass, the next ones reuse them), the frame is made from the lookup pass (vis
   // exact at every byte 0 or 255), those kept planes and one resolve of the listed pixels only: the
   // other evidence channels (receiver_depth, map_depth, bias_depth, bias_world, occluder_id,
-  // occluder_prim, in_map, the moment channels) are 0 except at the listed and fractional pixels,
+  // occluder_prim, in_map, the moment channels) are 0 except at the listed pixels (at those listed
+  // for the occluder alone and the fractional ones: vis, in_map, occluder_id and occluder_prim),
   // and meta "evidence" is "partial" ("evidence_pixels": how many). Such a frame's shadow pass
   // writes the occluder's object into the map's stencil rather than its triangle into an id
   // attachment (up to 255 objects, where the device has the format): occluder_id is exact and

@@ -52,6 +52,8 @@ SHADOWLAB_CONST(int, kSpecAffine, 6)          // 0/1: every light layer is ortho
 SHADOWLAB_CONST(int, kSpecAdaptive, 7)        // 0/1: bias.adaptive
 // 0/1: the lookup pass (rasterizer.cpp, pass 4): the light's visibility alone into one R8
 // attachment, the evidence and the projectors compiled out (compare/TIMINGS.md, lookup_gpu_ms).
+// With kSpecCompact: the occluder's evidence pass over the pixels listed for it alone (vis,
+// occluder, 2 * cascade + in_map into one RGBA32F attachment; raster.h, EvidenceRequest).
 SHADOWLAB_CONST(int, kSpecLookupOnly, 8)
 // 0/1: the evidence pass (rasterizer.cpp, pass 5): the resolve over a compacted list of pixels
 // (EvidencePixels below), fragment k of a compact target resolving listed pixel k instead of the
@@ -98,9 +100,9 @@ SHADOWLAB_CONST(int, kSpecCount, 16)
   X(OutPlanes, 10, StorageBuffer)          /* the projector channels, one plane each */            \
   X(MomentsRows, 11, CombinedImageSampler) /* moments pass: the rows-blurred moments, NEAREST */   \
   X(Moments, 12, CombinedImageSampler)     /* the blurred moments per light layer, LINEAR */       \
-  X(EvidencePixels, 13, StorageBuffer)     /* evidence pass: the listed pixels (y * width + x) */  \
+  X(EvidencePixels, 13, StorageBuffer)     /* evidence pass: the listed pixels (x | y << 16) */    \
   X(ParamsLoops, 14, StorageBuffer)        /* Params again: its loop counts (ParamsLoops below) */ \
-  X(Surface, 15, CombinedImageSampler)     /* the group's surface: (ray t, light reaches 0/1) */
+  X(Surface, 15, CombinedImageSampler)     /* the group's surface: (ray t, light reaches 1/-1/0) */
 #define SHADOWLAB_ABI_BINDING(name, binding, kind) SHADOWLAB_CONST(int, kBinding##name, binding)
 SHADOWLAB_RESOLVE_BINDINGS(SHADOWLAB_ABI_BINDING)
 #undef SHADOWLAB_ABI_BINDING

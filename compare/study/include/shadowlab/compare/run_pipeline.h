@@ -44,8 +44,10 @@ struct RunResult {
 // Evidence on demand (raster.h, EvidenceSelector): lists the pixels whose lit decision in the
 // lookup's bytes (>= 128) differs from the reference's (`light.<light>.vis` >= 0.5): the only
 // pixels where compareFrames reads the raster frame's evidence channels (classify.h; it reads hit,
-// object_id, vis, m and cascade everywhere, which the rasterizer fills everywhere). An empty
-// function when the reference has no such channel (then the rasterizer renders the full frame).
+// object_id, vis, m and cascade everywhere, which the rasterizer fills everywhere). Those the
+// reference lights for the occluder's evidence alone (in_map and occluder_id decide them), the
+// others for every channel. An empty function when the reference has no such channel (then the
+// rasterizer renders the full frame).
 EvidenceSelector disagreementSelector(const Frame& reference, const std::string& light);
 
 RunResult runPipeline(const Scene& scene, const Method& method, Rasterizer& rasterizer, ReferenceCache& cache,
