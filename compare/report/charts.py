@@ -42,6 +42,10 @@ DRAW_FIRST = ["time_breakdown", "error_by_size"]
 # Reproducible files: no timestamps in PDF/SVG, fixed SVG ids.
 matplotlib.rcParams["svg.hashsalt"] = "shadowlab"
 matplotlib.rcParams["font.size"] = 9
+# Titles at the top of their axes (where the automatic placement puts them too: no chart has
+# labels or ticks above its axes), so that no draw computes the axes' tick boxes to place them
+# (~8 % of the charts' CPU; the same bytes in every format).
+matplotlib.rcParams["axes.titley"] = 1.0
 
 
 def load_classes(results_path):
