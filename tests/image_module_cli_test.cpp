@@ -6,6 +6,7 @@
 #include <gtest/gtest.h>
 
 #include <filesystem>
+#include <fstream>
 #include <string>
 
 #include "support/cli.h"
@@ -21,6 +22,12 @@ namespace {
 constexpr const char* kModule = SHADOWLAB_TEST_IMAGE_MODULE;
 #else
 constexpr const char* kModule = nullptr;
+#endif
+// The default build: EXR and PNG through OpenEXR and libpng, the module for other formats only.
+#ifdef SHADOWLAB_TEST_IMAGE_HYBRID
+constexpr bool kHybrid = true;
+#else
+constexpr bool kHybrid = false;
 #endif
 
 const std::string kSmallReference =
@@ -41,6 +48,22 @@ TEST(ImageModule, TheProgramStartsWithoutOpenImageIO) {
   fs::remove_all(dir);
 }
 
+namespace {
+
+// A projector scene whose slide is a PPM file: a format only OpenImageIO reads, so reading the scene
+// needs the module in every build that has one.
+fs::path ppmSlideScene(const fs::path& dir) {
+  std::ofstream(dir / "slide.ppm", std::ios::binary) << "P6\n2 2\n255\n" << std::string("\xff\x00\x00\x00\xff\x00\x00\x00\xff\xff\xff\xff", 12);
+  const fs::path scene = dir / "slide.json";
+  std::ofstream(scene) << R"({"camera": {"position": [11, 5, 1], "look_at": [0, 2, 0.5], "vfov_deg": 60, "width": 32, "height": 24},
+    "objects": [{"type": "quad", "name": "screen", "size": [10, 6], "transform": {"translate": [0, 3, -5]}}],
+    "projectors": [{"name": "slide", "position": [0, 2.5, 3], "look_at": [0, 2.5, -5], "fov_deg": 40,
+                    "near": 0.1, "far": 50, "image": "slide.ppm"}]})";
+  return scene;
+}
+
+}  // namespace
+
 TEST(ImageModule, WithoutItOnlyTheCommandsThatNeedImagesFailNamingIt) {
   if (!kModule) GTEST_SKIP() << "this build links its image library";
   const fs::path dir = freshTempDir("shadowlab_image_module_missing");
@@ -52,24 +75,41 @@ TEST(ImageModule, WithoutItOnlyTheCommandsThatNeedImagesFailNamingIt) {
 
   const fs::path out = dir / "ref";
   r = runShadowlab(kSmallReference + "'" + out.string() + "'", dir, env);
+  if (kHybrid) {
+    // EXR and PNG through OpenEXR and libpng, linked in: no module needed (image_io_module.cpp).
+    EXPECT_EQ(r.code, 0) << r.err;
+    EXPECT_TRUE(fs::is_regular_file(out / "reference.exr"));
+  } else {
+    EXPECT_EQ(r.code, 2) << r.err;
+    EXPECT_NE(
+        r.err.find("cannot load OpenImageIO's module libshadowlab_image_io_oiio.so: tried " + missing + " (missing)"),
+        std::string::npos)
+        << r.err;
+    EXPECT_NE(r.err.find("reference.exr"), std::string::npos) << "the file it was writing is named: " << r.err;
+    EXPECT_FALSE(fs::exists(out / "reference.exr")) << "no half-written output";
+  }
+
+  // A texture in a format only OpenImageIO reads: the command names the module and the texture.
+  const fs::path scene = ppmSlideScene(dir), slideOut = dir / "slide_ref";
+  r = runShadowlab("reference '" + scene.string() + "' -o '" + slideOut.string() + "'", dir, env);
   EXPECT_EQ(r.code, 2) << r.err;
   EXPECT_NE(
       r.err.find("cannot load OpenImageIO's module libshadowlab_image_io_oiio.so: tried " + missing + " (missing)"),
       std::string::npos)
       << r.err;
-  EXPECT_NE(r.err.find("reference.exr"), std::string::npos) << "the file it was writing is named: " << r.err;
-  EXPECT_FALSE(fs::exists(out / "reference.exr")) << "no half-written output";
+  EXPECT_NE(r.err.find("slide.ppm"), std::string::npos) << "the texture is named: " << r.err;
+  EXPECT_FALSE(fs::exists(slideOut / "reference.exr")) << "no output";
 
   // A library that is not the module is refused by name, not called.
-  r = runShadowlab(kSmallReference + "'" + out.string() + "'", dir,
+  r = runShadowlab("reference '" + scene.string() + "' -o '" + slideOut.string() + "'", dir,
                    "SHADOWLAB_IMAGE_IO_MODULE=/lib/x86_64-linux-gnu/libm.so.6 ");
   EXPECT_EQ(r.code, 2) << r.err;
   EXPECT_NE(r.err.find("libm.so.6 (not this build's image module)"), std::string::npos) << r.err;
 
   // The module named by the variable is the one used.
-  r = runShadowlab(kSmallReference + "'" + out.string() + "'", dir,
+  r = runShadowlab("reference '" + scene.string() + "' -o '" + slideOut.string() + "'", dir,
                    "SHADOWLAB_IMAGE_IO_MODULE='" + std::string(kModule) + "' ");
   EXPECT_EQ(r.code, 0) << r.err;
-  EXPECT_TRUE(fs::is_regular_file(out / "reference.exr"));
+  EXPECT_TRUE(fs::is_regular_file(slideOut / "reference.exr"));
   fs::remove_all(dir);
 }

@@ -17,6 +17,10 @@
 //     (un-associated, as PNG defines it).
 //   * Textures: read as floats, 8/16-bit values times 1/255 or 1/65535, no colour transform; a PNG
 //     with alpha has its colour multiplied by alpha (associated), as OpenImageIO does by default.
+// The default build (SHADOWLAB_IMAGE_IO=oiio with the module, and OpenEXR and libpng found) uses
+// both: image_io_module.cpp reads and writes EXR and PNG through image_io_exr_png.cpp, linked into
+// the program (a handful of libraries), and loads OpenImageIO's module only for a texture in any
+// other format, so that a sweep or a reference never waits ~0.2 s for OpenImageIO's ~260 libraries.
 // Internal to shadowlab_scenes (frame.cpp, loader.cpp); no public header names either library.
 #include <cstdint>
 #include <map>
@@ -51,11 +55,22 @@ std::string writePng(const std::string& path, int width, int height, int channel
 // channels as stored (a palette PNG expands to RGB(A)). When a side is outside 1..maxSide only width and height are set
 // (pixels stay empty) so the caller can refuse the size before anything large is allocated.
 std::string readTexture(const std::string& path, FloatImage& image, int maxSide);
-// "oiio" or "exr-png".
+// "oiio", "exr-png", or "exr-png+oiio" (the two side by side, above).
 const char* backendName();
 // Where the library is a module loaded on first use (image_io_module.cpp): starts loading it on a
 // thread of its own, so that a command sure to read or write images soon need not wait for it
 // then. Elsewhere nothing to do.
 void preload();
+
+#ifdef SHADOWLAB_IMAGE_IO_HYBRID
+// image_io_exr_png.cpp's functions where the module is the rest (see the top).
+namespace exr_png {
+std::string writeExr(const std::string& path, const FloatImage& image);
+std::string readExr(const std::string& path, FloatImage& image);
+std::string writePng(const std::string& path, int width, int height, int channels, const uint8_t* pixels,
+                     bool unfiltered);
+std::string readTexture(const std::string& path, FloatImage& image, int maxSide);
+}  // namespace exr_png
+#endif
 
 }  // namespace shadowlab::image_io

@@ -24,7 +24,14 @@
 
 #include "image_io.h"
 
+// SHADOWLAB_IMAGE_IO=exr-png: image_io.h's functions. Beside the OpenImageIO module (the default
+// build, SHADOWLAB_IMAGE_IO_HYBRID): image_io::exr_png's, which image_io_module.cpp calls for EXR
+// and PNG files.
+#ifdef SHADOWLAB_IMAGE_IO_HYBRID
+namespace shadowlab::image_io::exr_png {
+#else
 namespace shadowlab::image_io {
+#endif
 namespace {
 
 // OpenImageIO compresses and decompresses EXR lines on all cores; so does this.
@@ -296,8 +303,10 @@ std::string readTexture(const std::string& path, FloatImage& image, int maxSide)
   return "this build (SHADOWLAB_IMAGE_IO=exr-png) reads .png and .exr images only";
 }
 
+#ifndef SHADOWLAB_IMAGE_IO_HYBRID
 const char* backendName() { return "exr-png"; }
 
 void preload() {}  // linked: loaded with the program
+#endif
 
-}  // namespace shadowlab::image_io
+}  // namespace

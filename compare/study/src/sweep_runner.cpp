@@ -37,9 +37,9 @@ class PipelineRunner final : public SweepRunner {
     referenceOptions_.spp = spp;
     deviceOptions_.device = device;
     // The first reference read needs the image library: where that is a module loaded on first
-    // use (~0.2 s), it loads from now on beside the plan's checks and the report's Python start,
-    // so that the first row's read finds it loaded. (The device's own libraries load after it:
-    // two loads of shared libraries never overlap.)
+    // use (~0.2 s; a build without OpenEXR and libpng), it loads from now on beside the plan's
+    // checks and the report's Python start, so that the first row's read finds it loaded. (The
+    // device's own libraries load after it: two loads of shared libraries never overlap.)
     preloadImageLibrary();
   }
 

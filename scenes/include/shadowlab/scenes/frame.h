@@ -86,7 +86,8 @@ void writeRgbPng(const std::string& path, int width, int height, const std::vect
 
 // For a command sure to read or write images soon (the sweep runner, for its references): starts
 // loading the image library on a thread of its own where it is a module loaded on first use
-// (OpenImageIO, scenes/src/image_io_module.cpp); nothing to do where it is linked.
+// (OpenImageIO for EXR too: -DSHADOWLAB_IMAGE_IO_MODULE=ON without OpenEXR and libpng,
+// scenes/src/image_io_module.cpp); nothing to do where EXR and PNG are linked (the default).
 void preloadImageLibrary();
 
 }  // namespace shadowlab
