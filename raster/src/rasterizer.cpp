@@ -31,7 +31,8 @@
 //                    gl_FragCoord), the same channels as pass 3 for those pixels only; the pixels
 //                    listed for the map texel's evidence alone (EvidenceRequest::occluder, and the
 //                    fractional ones) go through the lookup's specialization made compact instead
-//                    (kSpecLookupOnly + kSpecCompact: vis, occluder, in_map; ~1/8 of the cost);
+//                    (kSpecLookupOnly + kSpecCompact: vis, occluder, in_map; about half the cost
+//                    per pixel on lavapipe);
 // the frame is then the bytes (0/1 exactly), the kept planes of the group (hit, object_id,
 // prim_id from the visibility buffer; m and cascade per footprintKey: the light's layers, the
 // camera, the cascade splits) and the listed pixels' evidence, zeros elsewhere. A group's first
@@ -1574,7 +1575,7 @@ Frame Rasterizer::Impl::partialFrame(const Scene& sc, const Light& light, const 
     const size_t longest = std::max(fullCount, occluderCount);
     while ((longest + size_t(compactWidth) - 1) / size_t(compactWidth) > size_t(maxSize)) compactWidth *= 2;
     auto rowsOf = [&](size_t k) { return int((k + size_t(compactWidth) - 1) / size_t(compactWidth)); };
-    // A compact target of at least `rows` rows (grown to twice its height at a time, in place).
+    // A compact target of at least `rows` rows (made anew when short, at least twice as tall).
     auto ensureCompact = [&](vk::Image& image, VkFormat format, int rows) {
       if (image.height() >= rows && image.width() == compactWidth) return;
       const int allocRows = std::min(maxSize, std::max(rows, image.width() == compactWidth ? 2 * image.height() : 0));
