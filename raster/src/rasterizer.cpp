@@ -407,6 +407,9 @@ struct Rasterizer::Impl {
   std::vector<uint8_t> lookupRows;  // the lookup's bytes when its rows are padded (a copy without the padding)
   EvidenceRequest asked;
   std::vector<uint32_t> fractional;
+  // partialFrame's lists beside `asked` (kept, so a frame with acne everywhere needs no fresh memory
+  // for them): the occluder's list with the fractional pixels, and that less the full list.
+  std::vector<uint32_t> occluderOrFractional, occluderListed;
 
   explicit Impl(const RasterDeviceOptions& options);
   // Work may still be in flight when a render throws (a failed call after a submission): wait for
@@ -1545,12 +1548,13 @@ Frame Rasterizer::Impl::partialFrame(const Scene& sc, const Light& light, const 
   };
   sortedOnce(asked.full);
   sortedOnce(asked.occluder);
-  std::vector<uint32_t> listed = std::move(asked.full), both, occluderListed;
-  both.reserve(fractional.size() + asked.occluder.size());
+  std::vector<uint32_t> listed = std::move(asked.full);
+  occluderOrFractional.clear();
   std::set_union(fractional.begin(), fractional.end(), asked.occluder.begin(), asked.occluder.end(),
-                 std::back_inserter(both));
-  occluderListed.reserve(both.size());
-  std::set_difference(both.begin(), both.end(), listed.begin(), listed.end(), std::back_inserter(occluderListed));
+                 std::back_inserter(occluderOrFractional));
+  occluderListed.clear();
+  std::set_difference(occluderOrFractional.begin(), occluderOrFractional.end(), listed.begin(), listed.end(),
+                      std::back_inserter(occluderListed));
   const size_t fullCount = listed.size(), occluderCount = occluderListed.size(), count = fullCount + occluderCount;
   const int attachments = resolveAttachments(method.filter);
   double readMs = msSince(t0);

@@ -70,6 +70,7 @@ std::string readExr(const std::string& path, FloatImage& image);
 std::string writePng(const std::string& path, int width, int height, int channels, const uint8_t* pixels,
                      bool unfiltered);
 std::string readTexture(const std::string& path, FloatImage& image, int maxSide);
+bool readsTexture(const std::string& path);  // a name readTexture reads (.png, .exr, any case)
 }  // namespace exr_png
 #endif
 

@@ -303,6 +303,10 @@ std::string readTexture(const std::string& path, FloatImage& image, int maxSide)
   return "this build (SHADOWLAB_IMAGE_IO=exr-png) reads .png and .exr images only";
 }
 
+#ifdef SHADOWLAB_IMAGE_IO_HYBRID
+bool readsTexture(const std::string& path) { return endsWith(path, ".png") || endsWith(path, ".exr"); }
+#endif
+
 #ifndef SHADOWLAB_IMAGE_IO_HYBRID
 const char* backendName() { return "exr-png"; }
 

@@ -90,13 +90,6 @@ const Module& module() {
 
 #ifdef SHADOWLAB_IMAGE_IO_HYBRID
 
-namespace {
-bool endsWith(const std::string& s, const char* tail) {
-  const size_t n = std::char_traits<char>::length(tail);
-  return s.size() >= n && s.compare(s.size() - n, n, tail) == 0;
-}
-}  // namespace
-
 std::string writeExr(const std::string& path, const FloatImage& image) { return exr_png::writeExr(path, image); }
 
 std::string readExr(const std::string& path, FloatImage& image) { return exr_png::readExr(path, image); }
@@ -108,7 +101,7 @@ std::string writePng(const std::string& path, int width, int height, int channel
 
 // .png and .exr as the exr-png build reads them; any other name through OpenImageIO.
 std::string readTexture(const std::string& path, FloatImage& image, int maxSide) {
-  if (endsWith(path, ".png") || endsWith(path, ".exr")) return exr_png::readTexture(path, image, maxSide);
+  if (exr_png::readsTexture(path)) return exr_png::readTexture(path, image, maxSide);
   const Module& m = module();
   return m.table ? m.table->readTexture(path, image, maxSide) : m.error;
 }
