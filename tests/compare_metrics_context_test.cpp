@@ -170,6 +170,80 @@ TEST(CompareContext, SameMetricsAsCompareFramesAcrossAGroup) {
   }
 }
 
+// Another map size of the same camera: the group's m and cascades differ, its geometry (hit and
+// object planes) and the reference do not, so its context shares the first one's decisions and
+// still gives the full path's metrics; the same frames with one pixel's object changed, a copy of
+// the reference or another light do not share them (and are still right).
+TEST(CompareContext, SharesDecisionsWithAnotherGroupOfTheSameGeometry) {
+  for (bool cascaded : {false, true}) {
+    const Group g = makeGroup(200, 75, cascaded, 31);
+    const CompareContext first(g.reference, configuration(g, 200, false));
+    Group h = g;
+    h.raster.meta["evidence_group"] = std::string("another map size") + (cascaded ? "c" : "");
+    std::mt19937 rng(77);
+    std::uniform_real_distribution<float> u(0.0f, 1.0f);
+    for (float& m : h.raster.get("light.sun.m")) m = 0.1f + 2.0f * u(rng);
+    if (cascaded)
+      for (size_t i = 0; i < h.raster.pixelCount(); ++i)
+        h.raster.get("light.sun.cascade")[i] = float((i / size_t(h.width)) % 3);
+    const Frame firstRow = configuration(h, 300, false);
+    Metrics m;
+    const CompareContext second(g.reference, firstRow, {}, &first, &m);
+    EXPECT_TRUE(second.sharesPixelsWith(first));
+    EXPECT_TRUE(first.sharesPixelsWith(second));
+    EXPECT_EQ(second.group(), h.raster.meta["evidence_group"].get<std::string>());
+    EXPECT_EQ(m.toJson().dump(), compareFrames(g.reference, firstRow).toJson().dump());
+    for (unsigned seed = 300; seed < 304; ++seed) {
+      const Frame raster = configuration(h, seed, seed % 2 == 1);
+      ASSERT_TRUE(second.appliesTo(g.reference, raster));
+      EXPECT_FALSE(first.appliesTo(g.reference, raster));  // another group
+      expectSameAsFull(second, g.reference, raster, "shared, seed " + std::to_string(seed));
+    }
+    // The group's own m statistics, not the first group's.
+    EXPECT_NE(compareFrames(second, g.reference, firstRow).mP95,
+              compareFrames(first, g.reference, configuration(g, 300, false)).mP95);
+
+    // One pixel of the raster's geometry differs (another object where both frames hit): the
+    // decisions are not the first group's, so they are made anew.
+    Group k = h;
+    k.raster.meta["evidence_group"] = "one pixel's object differs";
+    const size_t pixel = size_t(10) * size_t(k.width) + size_t(k.width / 2);
+    ASSERT_EQ(k.raster.get("object_id")[pixel], kPlane);
+    ASSERT_EQ(k.reference.get("object_id")[pixel], kPlane);
+    k.raster.get("object_id")[pixel] = kCaster;
+    const Frame kRow = configuration(k, 310, false);
+    Metrics km;
+    const CompareContext third(g.reference, kRow, {}, &first, &km);
+    EXPECT_FALSE(third.sharesPixelsWith(first));
+    EXPECT_EQ(km.toJson().dump(), compareFrames(g.reference, kRow).toJson().dump());
+    expectSameAsFull(third, g.reference, configuration(k, 311, true), "one pixel's object differs");
+
+    // A copy of the reference (equal contents, another object): not shared.
+    const Frame referenceCopy = g.reference;
+    const CompareContext fromCopy(referenceCopy, firstRow, {}, &first);
+    EXPECT_FALSE(fromCopy.sharesPixelsWith(first));
+    expectSameAsFull(fromCopy, referenceCopy, firstRow, "a copy of the reference");
+  }
+  // Another light of the same frames: its own decisions.
+  const Group g = makeGroup(120, 60, false, 41);
+  Frame twoLights = configuration(g, 5, false), referenceTwo = g.reference;
+  twoLights.add("light.moon.vis", 1.0f);
+  referenceTwo.add("light.moon.vis", 0.0f);
+  const CompareContext sun(referenceTwo, twoLights);
+  CompareOptions moon;
+  moon.light = "moon";
+  const CompareContext moonContext(referenceTwo, twoLights, moon, &sun);
+  EXPECT_FALSE(moonContext.sharesPixelsWith(sun));
+  expectSameAsFull(moonContext, referenceTwo, twoLights, "light moon after sun");
+  // A context that applies to nothing shares nothing, and still hands back the full metrics.
+  Frame noKey = twoLights;
+  noKey.meta.erase("evidence_group");
+  Metrics nm;
+  const CompareContext none(referenceTwo, noKey, {}, &sun, &nm);
+  EXPECT_FALSE(none.sharesPixelsWith(sun));
+  EXPECT_EQ(nm.toJson().dump(), compareFrames(referenceTwo, noKey).toJson().dump());
+}
+
 // Options travel with the context: a wider boundary band moves pixels from other to aliasing.
 TEST(CompareContext, KeepsItsOptions) {
   const Group g = makeGroup(120, 60, false, 7);

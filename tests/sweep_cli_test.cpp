@@ -285,10 +285,12 @@ TEST(SweepCli, RowsComparedThroughGroupContextsMatchFullEvidence) {
     EXPECT_EQ(demand[i].metrics, full[i].metrics)
         << demand[i].config << "\non demand: " << demand[i].metrics.dump() << "\nfull:      " << full[i].metrics.dump();
   }
-  // Two groups (map sizes 256 and 512), each with a context from its second row on: 12 rows, the
-  // first of each group compared in full.
+  // Two groups (map sizes 256 and 512): 12 rows, the first of each group compared in full. The
+  // first group's context is built on its second row; the second group's on its first, sharing the
+  // first one's decisions (the same camera), and used from its second row on.
   const auto runner = nlohmann::json::parse(readFile(dir + "/demand/results.json")).at("runner");
   EXPECT_EQ(runner.at("compare_contexts_built"), 2) << runner.dump();
+  EXPECT_EQ(runner.at("compare_contexts_shared"), 1) << runner.dump();
   EXPECT_EQ(runner.at("compare_context_rows"), 10) << runner.dump();
   const auto runnerFull = nlohmann::json::parse(readFile(dir + "/full/results.json")).at("runner");
   EXPECT_EQ(runnerFull.at("compare_context_rows"), 0) << runnerFull.dump();

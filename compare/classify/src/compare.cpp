@@ -851,22 +851,29 @@ struct CompareContext::Data {
   // with others takes the full path.
   bool hasM = false, hasCascade = false;
   int cascadeCount = 0;
-  // Per pixel: kDecisionNone (not compared), kDecisionLit, kDecisionShadowed, plus kFractional
-  // where the clamped reference vis is neither 0 nor 1 (a frame reads referenceVisClamped only
-  // there: 5 bytes per pixel in all with the raster vis); clamp01 of the reference vis (0 where
-  // not compared); the class before the decisions (not compared, geometry mismatch, Correct for
-  // compared pixels); whether the reference decides lit.
   static constexpr uint8_t kFractional = 4;
-  std::vector<uint8_t> decision;
-  std::vector<float> referenceVisClamped;
-  std::vector<uint8_t> scoredClass;
-  std::vector<uint8_t> referenceLit;
-  // Exact squared distance (pixels^2) from each pixel to the nearest boundary pixel (pass 2's
-  // definition), clamped to UINT32_MAX (only compared with limits under the image diagonal).
-  std::vector<uint32_t> boundaryDist2;
-  bool anyBoundary = false;
-  PerPixelClass<uint64_t> scoredCounts{};  // not compared and geometry mismatch
-  uint64_t compared = 0, referenceShadow = 0;
+  // What depends on the reference, the light and the geometry (the hit and object planes of both
+  // frames) alone, not on the group's m and cascades: shared by the contexts of every group of one
+  // camera (the constructor's `sameGeometry`).
+  struct Pixels {
+    // Per pixel: kDecisionNone (not compared), kDecisionLit, kDecisionShadowed, plus kFractional
+    // where the clamped reference vis is neither 0 nor 1 (a frame reads referenceVisClamped only
+    // there: 5 bytes per pixel in all with the raster vis); clamp01 of the reference vis (0 where
+    // not compared); the class before the decisions (not compared, geometry mismatch, Correct for
+    // compared pixels); whether the reference decides lit.
+    std::vector<uint8_t> decision;
+    std::vector<float> referenceVisClamped;
+    std::vector<uint8_t> scoredClass;
+    std::vector<uint8_t> referenceLit;
+    // Exact squared distance (pixels^2) from each pixel to the nearest boundary pixel (pass 2's
+    // definition), clamped to UINT32_MAX (only compared with limits under the image diagonal).
+    std::vector<uint32_t> boundaryDist2;
+    bool anyBoundary = false;
+    PerPixelClass<uint64_t> scoredCounts{};  // not compared and geometry mismatch
+    uint64_t compared = 0, referenceShadow = 0;
+  };
+  std::shared_ptr<const Pixels> pixels;
+  // The group's own: m's statistics and the cascades.
   double mMedian = 0, mP95 = 0, mMax = 0;
   std::vector<CascadeMetrics> cascades;  // pixels and m_p95; errors 0
 };
@@ -961,7 +968,27 @@ struct ContextBlockSums {
 
 }  // namespace
 
-CompareContext::CompareContext(const Frame& reference, const Frame& raster, const CompareOptions& options)
+namespace {
+
+// Whether `scored` (a context's scoredClass) is the scored class of every pixel of `classes` (a
+// full classification): then the two frames pairs have the same geometry to compare.
+bool sameScoredClasses(const std::vector<uint8_t>& scored, const std::vector<PixelClass>& classes) {
+  if (scored.size() != classes.size()) return false;
+  const uint8_t* c = reinterpret_cast<const uint8_t*>(classes.data());
+  const uint8_t notCompared = uint8_t(PixelClass::NotCompared), mismatch = uint8_t(PixelClass::GeometryMismatch),
+                correct = uint8_t(PixelClass::Correct);
+  uint8_t differ = 0;
+  for (size_t i = 0; i < scored.size(); ++i) {
+    const uint8_t k = c[i];
+    differ |= uint8_t(scored[i] ^ (k == notCompared || k == mismatch ? k : correct));
+  }
+  return differ == 0;
+}
+
+}  // namespace
+
+CompareContext::CompareContext(const Frame& reference, const Frame& raster, const CompareOptions& options,
+                               const CompareContext* sameGeometry, Metrics* metrics)
     : options_(options) {
   const Channels ch = readChannels(reference, raster, options);  // throws as compareFrames does
   const std::string group = metaString(raster, "evidence_group");
@@ -969,7 +996,10 @@ CompareContext::CompareContext(const Frame& reference, const Frame& raster, cons
   const double diagonal2 = double(width) * width + double(height) * height;
   // Without a group, with projectors or without a light the full path runs every time; so does a
   // frame whose squared diagonal does not fit the distances' 32 bits.
-  if (group.empty() || ch.hasProjector || !ch.noLightVis.empty() || !(diagonal2 < 4.0e9)) return;
+  if (group.empty() || ch.hasProjector || !ch.noLightVis.empty() || !(diagonal2 < 4.0e9)) {
+    if (metrics) *metrics = compareFrames(reference, raster, options);
+    return;
+  }
   auto d = std::make_shared<Data>();
   d->width = width;
   d->height = height;
@@ -983,38 +1013,54 @@ CompareContext::CompareContext(const Frame& reference, const Frame& raster, cons
   // The constant parts come from the full path itself: the same classes, m statistics, cascades.
   Classification cls;
   const Metrics full = compareFrames(reference, raster, options, &cls);
-  const size_t n = reference.pixelCount();
-  d->decision.resize(n);
-  d->referenceVisClamped.assign(n, 0.0f);
-  d->scoredClass.resize(n);
-  d->referenceLit = std::move(cls.referenceLit);
-  for (size_t i = 0; i < n; ++i) {
-    const PixelClass c = cls.classes[i];
-    const bool compared = c != PixelClass::NotCompared && c != PixelClass::GeometryMismatch;
-    d->scoredClass[i] = uint8_t(compared ? PixelClass::Correct : c);
-    if (!compared) {
-      ++d->scoredCounts[classIndex(c)];
-      d->decision[i] = kDecisionNone;
-      continue;
+  if (metrics) *metrics = full;
+  const Data* same = sameGeometry ? sameGeometry->data_.get() : nullptr;
+  if (same && same->width == width && same->height == height && same->referenceVis == ch.refVis &&
+      sameScoredClasses(same->pixels->scoredClass, cls.classes)) {
+    // The same reference vis plane (of the same light, then) and this frame scores the same
+    // pixels: the same decisions and boundary distances (they depend on nothing else).
+    d->pixels = same->pixels;
+  } else {
+    const size_t n = reference.pixelCount();
+    auto px = std::make_shared<Data::Pixels>();
+    px->decision.resize(n);
+    px->referenceVisClamped.assign(n, 0.0f);
+    px->scoredClass.resize(n);
+    px->referenceLit = std::move(cls.referenceLit);
+    for (size_t i = 0; i < n; ++i) {
+      const PixelClass c = cls.classes[i];
+      const bool compared = c != PixelClass::NotCompared && c != PixelClass::GeometryMismatch;
+      px->scoredClass[i] = uint8_t(compared ? PixelClass::Correct : c);
+      if (!compared) {
+        ++px->scoredCounts[classIndex(c)];
+        px->decision[i] = kDecisionNone;
+        continue;
+      }
+      ++px->compared;
+      px->decision[i] = px->referenceLit[i] ? kDecisionLit : kDecisionShadowed;
+      px->referenceShadow += !px->referenceLit[i];
+      px->referenceVisClamped[i] = clamp01(ch.refVis[i]);
     }
-    ++d->compared;
-    d->decision[i] = d->referenceLit[i] ? kDecisionLit : kDecisionShadowed;
-    d->referenceShadow += !d->referenceLit[i];
-    d->referenceVisClamped[i] = clamp01(ch.refVis[i]);
+    boundaryDistances(px->decision.data(), width, height, px->boundaryDist2, &px->anyBoundary);
+    for (size_t i = 0; i < n; ++i) {
+      const float rv = px->referenceVisClamped[i];
+      if (px->decision[i] != kDecisionNone && rv != (px->decision[i] == kDecisionLit ? 1.0f : 0.0f))
+        px->decision[i] |= Data::kFractional;
+    }
+    d->pixels = std::move(px);
   }
-  if (d->compared != full.pixelsCompared) throw DriverError("compare: context counts differ from compareFrames");
+  if (d->pixels->compared != full.pixelsCompared)
+    throw DriverError("compare: context counts differ from compareFrames");
   d->mMedian = full.mMedian;
   d->mP95 = full.mP95;
   d->mMax = full.mMax;
   d->cascades = full.cascades;
   for (CascadeMetrics& c : d->cascades) c.errors = 0, c.errorRate = 0;
-  boundaryDistances(d->decision.data(), width, height, d->boundaryDist2, &d->anyBoundary);
-  for (size_t i = 0; i < n; ++i) {
-    const float rv = d->referenceVisClamped[i];
-    if (d->decision[i] != kDecisionNone && rv != (d->decision[i] == kDecisionLit ? 1.0f : 0.0f))
-      d->decision[i] |= Data::kFractional;
-  }
   data_ = std::move(d);
+}
+
+bool CompareContext::sharesPixelsWith(const CompareContext& other) const {
+  return data_ && other.data_ && data_->pixels == other.data_->pixels;
 }
 
 bool CompareContext::appliesTo(const Frame& reference, const Frame& raster) const {
@@ -1036,13 +1082,14 @@ Metrics compareFrames(const CompareContext& context, const Frame& reference, con
   if (!contextChannels(data, reference, raster, &channels))
     return compareFrames(reference, raster, context.options(), classification);
   const CompareContext::Data& d = *data;
+  const CompareContext::Data::Pixels& px = *d.pixels;
   const int width = d.width, height = d.height;
   const size_t n = size_t(width) * size_t(height);
   if (classification) {
     classification->width = width;
     classification->height = height;
     classification->classes.resize(n);
-    classification->referenceLit = d.referenceLit;
+    classification->referenceLit = px.referenceLit;
   }
   uint8_t* klass = classification ? reinterpret_cast<uint8_t*>(classification->classes.data()) : nullptr;
   const float leakFactor = d.options.leakBiasFactor;
@@ -1055,11 +1102,11 @@ Metrics compareFrames(const CompareContext& context, const Frame& reference, con
     ContextBlockSums s;
     const Channels& ch = channels;
     const float* const rasVis = ch.rasVis;
-    const float* const refV = d.referenceVisClamped.data();
-    const uint8_t* const decision = d.decision.data();
+    const float* const refV = px.referenceVisClamped.data();
+    const uint8_t* const decision = px.decision.data();
     const size_t begin = size_t(b) * kBlockRows * width;
     const size_t end = std::min(n, size_t(b + 1) * kBlockRows * width);
-    if (klass) std::memcpy(klass + begin, d.scoredClass.data() + begin, end - begin);
+    if (klass) std::memcpy(klass + begin, px.scoredClass.data() + begin, end - begin);
     // Runs of kRun pixels: first the counts over the run, branch-free (the compiler vectorizes
     // it: 2x faster on a 1080p frame, bench/compare_frames_bench.cpp BM_CompareFramesContext),
     // with whether any pixel of it needs more; then, only in such a run, its pixels in order. A
@@ -1103,7 +1150,7 @@ Metrics compareFrames(const CompareContext& context, const Frame& reference, con
         PixelClass c = dc.cls;
         if (dc.candidate) {
           const double limit = double(d.options.boundaryTexels) * (ch.m ? double(sanitizeM(ch.m[i])) : 1.0);
-          const bool within = limit >= diagonalPx ? d.anyBoundary : double(d.boundaryDist2[i]) <= limit * limit;
+          const bool within = limit >= diagonalPx ? px.anyBoundary : double(px.boundaryDist2[i]) <= limit * limit;
           c = resolveCandidate(dc.leakEvidence, within, dc.bleedEvidence);
         }
         ++s.counts[classIndex(c)];
@@ -1118,7 +1165,7 @@ Metrics compareFrames(const CompareContext& context, const Frame& reference, con
     sums[size_t(b)] = s;
   });
   ContextBlockSums t;
-  PerPixelClass<uint64_t> counts = d.scoredCounts;
+  PerPixelClass<uint64_t> counts = px.scoredCounts;
   for (const auto& s : sums) {
     for (size_t k = 0; k < kPixelClassCount; ++k) counts[k] += s.counts[k];
     t.disagreements += s.disagreements;
@@ -1128,23 +1175,23 @@ Metrics compareFrames(const CompareContext& context, const Frame& reference, con
     t.sumSq += s.sumSq;
     for (size_t k = 0; k < t.cascadeErrors.size(); ++k) t.cascadeErrors[k] += s.cascadeErrors[k];
   }
-  counts[classIndex(PixelClass::Correct)] += d.compared - t.disagreements;
+  counts[classIndex(PixelClass::Correct)] += px.compared - t.disagreements;
   Metrics out;
   setClassMetrics(out, counts);
-  if (out.pixelsCompared != d.compared) {
+  if (out.pixelsCompared != px.compared) {
     throw DriverError("compare: " + std::to_string(out.pixelsCompared) + " pixels classified as compared, " +
-                      std::to_string(d.compared) + " counted; expected the same");
+                      std::to_string(px.compared) + " counted; expected the same");
   }
   out.cascades = d.cascades;
   for (CascadeMetrics& c : out.cascades) {
     c.errors = t.cascadeErrors[size_t(c.index)];
     c.errorRate = c.pixels ? double(c.errors) / double(c.pixels) : 0.0;
   }
-  const double denom = double(d.compared);
-  const uint64_t shadowUnion = d.referenceShadow + t.rasShadow - t.bothShadow;
+  const double denom = double(px.compared);
+  const uint64_t shadowUnion = px.referenceShadow + t.rasShadow - t.bothShadow;
   out.shadowIou = shadowUnion ? double(t.bothShadow) / double(shadowUnion) : 1.0;
-  out.mae = d.compared ? t.sumAbs / denom : 0.0;
-  out.rmse = d.compared ? std::sqrt(t.sumSq / denom) : 0.0;
+  out.mae = px.compared ? t.sumAbs / denom : 0.0;
+  out.rmse = px.compared ? std::sqrt(t.sumSq / denom) : 0.0;
   out.mMedian = d.mMedian;
   out.mP95 = d.mP95;
   out.mMax = d.mMax;

@@ -152,6 +152,7 @@ class PipelineRunner final : public SweepRunner {
     // Rows compared through a group's CompareContext, and contexts built (compareRow).
     j["compare_context_rows"] = contextRows_;
     j["compare_contexts_built"] = contextsBuilt_;
+    j["compare_contexts_shared"] = contextsShared_;  // built sharing another group's decisions
     j["triptychs_on_demand"] = triptychsOnDemand_;  // triptychs rendered from a partial frame (writeTriptych)
     return j;
   }
@@ -231,7 +232,10 @@ class PipelineRunner final : public SweepRunner {
   // row on, a CompareContext (compare.h) of that reference, light and group holds what does not
   // change and the row reads only its vis and the disagreeing pixels' evidence: the same metrics.
   // The context is built on the second row, not the first, so that a plan whose every row is a new
-  // group (map.size the fastest axis, more sizes than are kept) pays nothing for it.
+  // group (map.size the fastest axis, more sizes than are kept) pays nothing for it. Where a context
+  // of the same reference and light is kept (another group of the same camera: another map size),
+  // the group's first row builds its context at once, sharing that one's per-pixel decisions
+  // (compare.h: checked to apply) for about the price of the full compare it returns.
   Metrics compareRow(const std::string& referenceKey, const Frame& reference, const Frame& raster,
                      const CompareOptions& options, Classification* classification) {
     auto group = raster.meta.find("evidence_group");
@@ -250,6 +254,20 @@ class PipelineRunner final : public SweepRunner {
         ++contextRows_;
         return compareFrames(it->second, reference, raster, classification);
       }
+    const std::string camera = referenceKey + "\n" + options.light + "\n";
+    auto sameCamera = std::find_if(contexts_.begin(), contexts_.end(),
+                                   [&](const auto& c) { return c.first.compare(0, camera.size(), camera) == 0; });
+    if (!again && sameCamera != contexts_.end()) {
+      Metrics m;
+      CompareContext context(reference, raster, options, &sameCamera->second, &m);
+      const bool shared = context.sharesPixelsWith(sameCamera->second);  // else built whole: kept all the same
+      while (contexts_.size() >= kKeptContexts) contexts_.pop_back();
+      contexts_.emplace_front(key, std::move(context));
+      ++contextsBuilt_;
+      contextsShared_ += shared;
+      if (classification) return compareFrames(contexts_.front().second, reference, raster, classification);
+      return m;
+    }
     auto seen = std::find(seen_.begin(), seen_.end(), key);
     if (again) {
       if (seen != seen_.end()) seen_.erase(seen);
@@ -271,7 +289,7 @@ class PipelineRunner final : public SweepRunner {
   // alternates up to 4 groups keeps each one's context. ~22 MB each at 1920x1080.
   static constexpr size_t kKeptContexts = 4;
   std::list<std::pair<std::string, CompareContext>> contexts_;  // key -> context, most recently used first
-  int contextRows_ = 0, contextsBuilt_ = 0;
+  int contextRows_ = 0, contextsBuilt_ = 0, contextsShared_ = 0;
   int triptychsOnDemand_ = 0;
   std::string selectorKey_;  // onDemand: the reference hash and light of selector_
   EvidenceSelector selector_;

@@ -128,11 +128,19 @@ class CompareContext {
  public:
   CompareContext() = default;  // applies to nothing
   // Throws what compareFrames(reference, raster, options) throws. Costs about two full
-  // compareFrames (the classification and the distance transform).
-  CompareContext(const Frame& reference, const Frame& raster, const CompareOptions& options = {});
+  // compareFrames (the classification and the distance transform). `metrics` (optional) receives
+  // compareFrames(reference, raster, options), which the constructor computes anyway.
+  // `sameGeometry` (optional): a context of another group, for example another map size, of the
+  // same camera. Where it was made from the same reference plane and light and `raster` scores
+  // the same pixels (the same hit and object planes, checked), the new context shares its
+  // per-pixel decisions and boundary distances and costs about one compareFrames.
+  CompareContext(const Frame& reference, const Frame& raster, const CompareOptions& options = {},
+                 const CompareContext* sameGeometry = nullptr, Metrics* metrics = nullptr);
   // Whether compareFrames(*this, reference, raster) takes the fast path for these frames.
   bool appliesTo(const Frame& reference, const Frame& raster) const;
   const std::string& group() const;  // "" when the context applies to nothing
+  // Whether the two contexts share their per-pixel decisions (`sameGeometry` above).
+  bool sharesPixelsWith(const CompareContext& other) const;
   const CompareOptions& options() const;
 
   struct Data;
