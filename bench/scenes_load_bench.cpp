@@ -1,4 +1,5 @@
 // Scene loading cost: every renderer run pays it once per scene (and sweeps once per variant).
+#include <cstdlib>
 #include <benchmark/benchmark.h>
 
 #include "shadowlab/scenes/frame.h"
@@ -41,6 +42,39 @@ void BM_FrameExrRoundTrip(benchmark::State& state) {
   }
 }
 BENCHMARK(BM_FrameExrRoundTrip)->Unit(benchmark::kMillisecond);
+
+// The read alone of a reference cache entry (what a sweep's first row waits for): the file named by
+// $SHADOWLAB_BENCH_EXR, else a 1080p frame of the Compare set's shape (hit, ids, vis, occluder
+// distance: flat regions and a few edges, as a traced frame has).
+void BM_ReadReferenceExr(benchmark::State& state) {
+  std::string path;
+  if (const char* env = std::getenv("SHADOWLAB_BENCH_EXR"); env && *env) {
+    path = env;
+  } else {
+    shadowlab::Frame f;
+    f.width = 1920;
+    f.height = 1080;
+    const int w = f.width;
+    auto fill = [&](const char* name, auto value) {
+      auto& plane = f.add(name);
+      for (size_t i = 0; i < plane.size(); ++i) plane[i] = value(int(i % size_t(w)), int(i / size_t(w)));
+    };
+    auto inSphere = [](int x, int y) { return (x - 960) * (x - 960) + (y - 500) * (y - 500) < 300 * 300; };
+    fill("hit", [](int, int y) { return y > 200 ? 1.0f : 0.0f; });
+    fill("object_id", [&](int x, int y) { return y <= 200 ? 0.0f : inSphere(x, y) ? 2.0f : 1.0f; });
+    fill("prim_id", [&](int x, int y) { return y <= 200 ? 0.0f : float((x / 37) * 31 + y / 41); });
+    fill("light.sun.vis", [&](int x, int y) { return inSphere(x + 250, y - 150) && !inSphere(x, y) ? 0.0f : 1.0f; });
+    fill("light.sun.occluder_dist",
+         [&](int x, int y) { return inSphere(x + 250, y - 150) && !inSphere(x, y) ? 0.5f + float(x % 300) * 1e-3f : -1.0f; });
+    path = "/tmp/shadowlab_scenes_bench_reference.exr";
+    shadowlab::writeFrameExr(f, path);
+  }
+  for (auto _ : state) {
+    shadowlab::Frame g = shadowlab::readFrameExr(path);
+    benchmark::DoNotOptimize(g.data);
+  }
+}
+BENCHMARK(BM_ReadReferenceExr)->Unit(benchmark::kMillisecond)->UseRealTime();
 
 }  // namespace
 

@@ -49,7 +49,8 @@ nlohmann::json probe(const std::string& verb, const fs::path& file, const fs::pa
 
 nlohmann::json ours(const std::string& verb, const fs::path& file) {
   image_io::FloatImage im;
-  const std::string err = verb == "exr" ? image_io::readExr(file.string(), im)
+  im.readPlanar = verb == "exr-planar";
+  const std::string err = verb == "exr" || verb == "exr-planar" ? image_io::readExr(file.string(), im)
                                         : image_io::readTexture(file.string(), im, std::numeric_limits<int>::max());
   return shadowlab::testing::describe(im, err);
 }
@@ -129,6 +130,12 @@ TEST(ImageIo, BothImplementationsReadWhatEitherWroteIdentically) {
       bSame.erase("backend");
       // Same channel order too (OpenImageIO's), not only the same values by name.
       EXPECT_EQ(a, bSame) << what << from << "\n" << a.at("channels").dump() << "\n" << bSame.at("channels").dump();
+      // The planar read (readFrameExr's) gives the same channels, order and bits, in both.
+      const nlohmann::json pa = ours("exr-planar", dir / file);
+      nlohmann::json pb = probe("exr-planar", dir / file, scratch);
+      pb.erase("backend");
+      EXPECT_EQ(pa, a) << what << from << ": " << image_io::backendName() << "'s planar read";
+      EXPECT_EQ(pb, bSame) << what << from << ": the other's planar read";
     }
     for (int channels : {3, 4}) {
       const fs::path png = dir / (channels == 3 ? "probe_rgb.png" : "probe_rgba.png");

@@ -7,6 +7,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <map>
+#include <set>
 
 #include <fcntl.h>
 #include <unistd.h>
@@ -120,10 +121,12 @@ Frame readFrameExr(const std::string& path) {
   std::error_code ec;
   if (!fs::exists(path, ec)) throw InputError(formatError(path, "", "cannot open file: no such file"));
   image_io::FloatImage image;
+  image.readPlanar = true;  // the frame's planes as read: no interleaved copy
   const std::string err = image_io::readExr(path, image);
   if (!err.empty()) throw InputError(formatError(path, "", "cannot read image: " + err));
   const int channels = int(image.channels.size());
-  const std::vector<float>& interleaved = image.pixels;
+  if (image.planesRead.size() != image.channels.size())
+    throw InputError(formatError(path, "", "cannot read image: the reader returned no planes"));
   auto text = [&](const char* name) {
     auto it = image.text.find(name);
     return it == image.text.end() ? std::string() : it->second;
@@ -144,8 +147,10 @@ Frame readFrameExr(const std::string& path) {
   std::vector<std::string> order;
   nlohmann::json recorded = nlohmann::json::parse(text(kOrderAttribute), nullptr, false);
   if (recorded.is_array() && recorded.size() == fileIndex.size()) {
+    std::set<std::string> seen;  // the recorded order is used only when it names every channel once
     for (const auto& n : recorded)
-      if (n.is_string() && fileIndex.count(n.get<std::string>())) order.push_back(n.get<std::string>());
+      if (n.is_string() && fileIndex.count(n.get<std::string>()) && seen.insert(n.get<std::string>()).second)
+        order.push_back(n.get<std::string>());
   }
   if (order.size() != fileIndex.size()) {
     order.clear();
@@ -153,9 +158,12 @@ Frame readFrameExr(const std::string& path) {
   }
   const size_t pixels = frame.pixelCount();
   for (const auto& name : order) {
-    int c = fileIndex.at(name);
-    std::vector<float>& plane = frame.add(name);
-    for (size_t i = 0; i < pixels; ++i) plane[i] = interleaved[i * channels + c];
+    std::vector<float>& plane = image.planesRead[size_t(fileIndex.at(name))];
+    if (plane.size() != pixels)
+      throw InputError(formatError(path, name, "channel has " + std::to_string(plane.size()) + " values; expected " +
+                                                   std::to_string(pixels)));
+    frame.names.push_back(name);
+    frame.data.push_back(std::move(plane));
   }
   return frame;
 }

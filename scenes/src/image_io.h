@@ -38,6 +38,11 @@ struct FloatImage {
   // channel, e.g. a Frame's) and `pixels` is not used: no full interleaved copy is made.
   std::vector<const float*> planes;
   std::map<std::string, std::string> text;  // string attributes (EXR header); empty for other formats
+  // readExr only: set before the call, the channels come back one plane each in `planesRead`
+  // (planesRead[c][y * width + x], in the order of `channels`) and `pixels` stays empty: no
+  // interleaved copy of the whole image (a reference frame's planes are read straight in).
+  bool readPlanar = false;
+  std::vector<std::vector<float>> planesRead;
 };
 
 // Every function returns "" on success, else what went wrong (without the path: callers add it).
@@ -45,7 +50,8 @@ struct FloatImage {
 // Writes an EXR of float channels (pixels as given, channel names as given), ZIPS level 1, with
 // `image.text` as string attributes.
 std::string writeExr(const std::string& path, const FloatImage& image);
-// Reads an image file's first part with every channel as float (any EXR pixel type).
+// Reads an image file's first part with every channel as float (any EXR pixel type); planar
+// where image.readPlanar is set.
 std::string readExr(const std::string& path, FloatImage& image);
 // Writes an 8-bit PNG of `channels` (3 or 4) interleaved values per pixel. `unfiltered`: no
 // per-row PNG filter (PNG_FILTER_NONE) instead of libpng's adaptive choice (PngRows, frame.h).

@@ -98,14 +98,24 @@ std::string readExrFile(const std::string& path, FloatImage& image, int maxSide)
     if (names.empty()) return "empty image";
     image.channels = oiioChannelOrder(names);
     const size_t nc = image.channels.size();
-    image.pixels.assign(size_t(width) * height * nc, 0.0f);
     Imf::FrameBuffer fb;
-    // The slice base is the address of pixel (0, 0) of the data window's coordinate system.
-    char* base = reinterpret_cast<char*>(image.pixels.data()) -
-                 (ptrdiff_t(window.min.x) + ptrdiff_t(window.min.y) * width) * ptrdiff_t(nc * sizeof(float));
-    for (size_t c = 0; c < nc; ++c)
-      fb.insert(image.channels[c], Imf::Slice(Imf::FLOAT, base + c * sizeof(float), nc * sizeof(float),
-                                              size_t(width) * nc * sizeof(float)));
+    // A slice's base is the address of pixel (0, 0) of the data window's coordinate system.
+    const ptrdiff_t origin = ptrdiff_t(window.min.x) + ptrdiff_t(window.min.y) * width;
+    image.planesRead.clear();
+    if (image.readPlanar) {
+      image.planesRead.resize(nc);
+      for (size_t c = 0; c < nc; ++c) {
+        image.planesRead[c].resize(size_t(width) * height);
+        char* base = reinterpret_cast<char*>(image.planesRead[c].data()) - origin * ptrdiff_t(sizeof(float));
+        fb.insert(image.channels[c], Imf::Slice(Imf::FLOAT, base, sizeof(float), size_t(width) * sizeof(float)));
+      }
+    } else {
+      image.pixels.assign(size_t(width) * height * nc, 0.0f);
+      char* base = reinterpret_cast<char*>(image.pixels.data()) - origin * ptrdiff_t(nc * sizeof(float));
+      for (size_t c = 0; c < nc; ++c)
+        fb.insert(image.channels[c], Imf::Slice(Imf::FLOAT, base + c * sizeof(float), nc * sizeof(float),
+                                                size_t(width) * nc * sizeof(float)));
+    }
     file.setFrameBuffer(fb);
     file.readPixels(window.min.y, window.max.y);
     for (auto it = header.begin(); it != header.end(); ++it)

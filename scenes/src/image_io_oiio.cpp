@@ -58,6 +58,14 @@ std::string readExr(const std::string& path, FloatImage& image) {
     image.channels.push_back(c < int(spec.channelnames.size()) ? spec.channelnames[c] : "channel" + std::to_string(c));
   image.pixels.assign(size_t(spec.width) * spec.height * spec.nchannels, 0.0f);
   if (!in->read_image(0, 0, 0, spec.nchannels, OIIO::TypeDesc::FLOAT, image.pixels.data())) return in->geterror();
+  image.planesRead.clear();
+  if (image.readPlanar) {  // OpenImageIO decodes interleaved: the planes are split from it here
+    const size_t n = size_t(spec.width) * size_t(spec.height), nc = size_t(spec.nchannels);
+    image.planesRead.assign(nc, std::vector<float>(n));
+    for (size_t i = 0; i < n; ++i)
+      for (size_t c = 0; c < nc; ++c) image.planesRead[c][i] = image.pixels[i * nc + c];
+    image.pixels = std::vector<float>();
+  }
   image.text.clear();
   for (const auto& p : spec.extra_attribs)
     if (p.type() == OIIO::TypeDesc::STRING) image.text[p.name().string()] = p.get_string();

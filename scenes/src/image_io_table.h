@@ -14,7 +14,7 @@ struct Table {
                           bool unfiltered);
   std::string (*readTexture)(const std::string& path, FloatImage& image, int maxSide);
 };
-constexpr int kTableVersion = 1;
+constexpr int kTableVersion = 2;  // 2: FloatImage::readPlanar
 
 }  // namespace shadowlab::image_io
 

@@ -4,6 +4,7 @@
 //   image_io_probe write DIR        writes DIR/probe.exr, DIR/probe_planar.exr (the same image from
 //                                   planes), DIR/probe_rgb.png, DIR/probe_rgba.png
 //   image_io_probe exr FILE         prints what readExr gives (JSON, see image_io_probe.h)
+//   image_io_probe exr-planar FILE  the same with FloatImage::readPlanar (described interleaved)
 //   image_io_probe texture FILE     prints what readTexture gives
 #include <cstdio>
 #include <limits>
@@ -37,7 +38,8 @@ int main(int argc, char** argv) {
   }
   image_io::FloatImage im;
   std::string err;
-  if (verb == "exr") err = image_io::readExr(path, im);
+  im.readPlanar = verb == "exr-planar";
+  if (verb == "exr" || verb == "exr-planar") err = image_io::readExr(path, im);
   else if (verb == "texture") err = image_io::readTexture(path, im, std::numeric_limits<int>::max());
   else {
     std::fprintf(stderr, "image_io_probe: unknown verb %s\n", verb.c_str());

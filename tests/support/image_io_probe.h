@@ -62,8 +62,20 @@ inline nlohmann::json describe(const image_io::FloatImage& im, const std::string
   j["width"] = im.width;
   j["height"] = im.height;
   j["channels"] = im.channels;
+  // A planar read (FloatImage::readPlanar) is described as the interleaved one it must equal.
+  std::vector<float> pixels = im.pixels;
+  if (im.readPlanar) {
+    const size_t n = size_t(im.width) * size_t(im.height), nc = im.planesRead.size();
+    if (!im.pixels.empty()) j["error"] = error + " (a planar read filled the interleaved pixels too)";
+    if (nc != im.channels.size()) j["error"] = error + " (a planar read returned " + std::to_string(nc) + " planes)";
+    pixels.assign(n * nc, 0.0f);
+    for (size_t c = 0; c < nc; ++c) {
+      if (im.planesRead[c].size() != n) j["error"] = error + " (a plane of the wrong size)";
+      for (size_t i = 0; i < n && i < im.planesRead[c].size(); ++i) pixels[i * nc + c] = im.planesRead[c][i];
+    }
+  }
   nlohmann::json bits = nlohmann::json::array();
-  for (float v : im.pixels) {
+  for (float v : pixels) {
     uint32_t b;
     std::memcpy(&b, &v, sizeof b);
     bits.push_back(b);
