@@ -971,7 +971,7 @@ struct ContextBlockSums {
 namespace {
 
 // Whether `scored` (a context's scoredClass) is the scored class of every pixel of `classes` (a
-// full classification): then the two frames pairs have the same geometry to compare.
+// full classification): then both pairs of frames compare the same pixels.
 bool sameScoredClasses(const std::vector<uint8_t>& scored, const std::vector<PixelClass>& classes) {
   if (scored.size() != classes.size()) return false;
   const uint8_t* c = reinterpret_cast<const uint8_t*>(classes.data());
