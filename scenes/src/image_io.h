@@ -80,4 +80,19 @@ bool readsTexture(const std::string& path);  // a name readTexture reads (.png, 
 }  // namespace exr_png
 #endif
 
+#if defined(SHADOWLAB_IMAGE_IO_HYBRID) || defined(SHADOWLAB_IMAGE_IO_EXR_READERS)
+// image_io_exr_png.cpp's two EXR readers, which readExr and readTexture use in turn, for
+// tests/scenes_exr_core_test.cpp: readExrCore (OpenEXR's core library; false, `image` untouched,
+// for a file it leaves to the other: tiled, deep, several parts, subsampled, a size outside
+// 1..maxSide, or one it cannot decode) and readExrImf (Imf::InputFile: any EXR, every error named).
+#ifdef SHADOWLAB_IMAGE_IO_HYBRID
+namespace exr_png {
+#endif
+bool readExrCore(const std::string& path, FloatImage& image, int maxSide);
+std::string readExrImf(const std::string& path, FloatImage& image, int maxSide);
+#ifdef SHADOWLAB_IMAGE_IO_HYBRID
+}  // namespace exr_png
+#endif
+#endif
+
 }  // namespace shadowlab::image_io

@@ -12,16 +12,22 @@
 #include <OpenEXR/ImfStandardAttributes.h>
 #include <OpenEXR/ImfStringAttribute.h>
 #include <OpenEXR/ImfThreading.h>
+#include <OpenEXR/openexr.h>
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <csetjmp>
 #include <cstdio>
 #include <cstring>
 #include <exception>
 #include <limits>
+#include <map>
 #include <memory>
+#include <system_error>
 #include <thread>
+#include <vector>
 
+#define SHADOWLAB_IMAGE_IO_EXR_READERS 1  // image_io.h declares readExrCore and readExrImf
 #include "image_io.h"
 
 // SHADOWLAB_IMAGE_IO=exr-png: image_io.h's functions. Beside the OpenImageIO module (the default
@@ -75,8 +81,137 @@ std::vector<std::string> oiioChannelOrder(std::vector<std::string> names) {
   return names;
 }
 
-std::string readExrFile(const std::string& path, FloatImage& image, int maxSide) {
+}  // namespace
+
+// A single-part scanline EXR whose channels all have one value per pixel, read through OpenEXR's
+// core (C) library: its unpackers copy each block's values into the planes (or the interleaved
+// buffer) directly. Imf::InputFile (OpenEXR 3.1) converts every value of a ZIP or uncompressed block
+// through Xdr::read, one at a time: a 1080p reference cache entry took ~105 ms of wall time, this
+// ~30-45 ms (compare/SWEEPS.md, "The reference cache"). The values are the same bits: the same
+// decompressors, and FLOAT to float is a copy (HALF and UINT convert as Imf does; checked against
+// OpenImageIO by tests/scenes_image_io_test.cpp). Returns false, with `image` untouched, for
+// anything else (tiled, deep, several parts, subsampled channels, a size outside 1..maxSide, a
+// file the core library does not open or decode): readExrFile then reads it with readExrImf,
+// which says what is wrong where something is.
+bool readExrCore(const std::string& path, FloatImage& image, int maxSide) {
+  exr_context_initializer_t init = EXR_DEFAULT_CONTEXT_INITIALIZER;
+  init.error_handler_fn = [](exr_const_context_t, exr_result_t, const char*) {};  // Imf reports instead
+  exr_context_t ctxt = nullptr;
+  if (exr_start_read(&ctxt, path.c_str(), &init) != EXR_ERR_SUCCESS) {
+    if (ctxt) exr_finish(&ctxt);
+    return false;
+  }
+  struct Finish {
+    exr_context_t& c;
+    ~Finish() { exr_finish(&c); }
+  } finish{ctxt};
+  int parts = 0;
+  exr_storage_t storage = EXR_STORAGE_LAST_TYPE;
+  exr_attr_box2i_t window{};
+  int32_t linesPerChunk = 0;
+  const exr_attr_chlist_t* list = nullptr;
+  if (exr_get_count(ctxt, &parts) != EXR_ERR_SUCCESS || parts != 1 ||
+      exr_get_storage(ctxt, 0, &storage) != EXR_ERR_SUCCESS || storage != EXR_STORAGE_SCANLINE ||
+      exr_get_data_window(ctxt, 0, &window) != EXR_ERR_SUCCESS ||
+      exr_get_scanlines_per_chunk(ctxt, 0, &linesPerChunk) != EXR_ERR_SUCCESS || linesPerChunk <= 0 ||
+      exr_get_channels(ctxt, 0, &list) != EXR_ERR_SUCCESS || !list || list->num_channels <= 0)
+    return false;
+  const int64_t w64 = int64_t(window.max.x) - window.min.x + 1, h64 = int64_t(window.max.y) - window.min.y + 1;
+  if (w64 <= 0 || h64 <= 0 || w64 > maxSide || h64 > maxSide || w64 > INT32_MAX || h64 > INT32_MAX) return false;
+  const int width = int(w64), height = int(h64);
+  std::vector<std::string> names;
+  for (int c = 0; c < list->num_channels; ++c) {
+    const exr_attr_chlist_entry_t& e = list->entries[c];
+    if (e.x_sampling != 1 || e.y_sampling != 1 || !e.name.str) return false;
+    names.emplace_back(e.name.str, size_t(e.name.length));
+  }
+  std::vector<std::string> order = oiioChannelOrder(names);
+  const size_t nc = names.size(), n = size_t(width) * size_t(height);
+  std::vector<size_t> target(nc);  // file channel -> index in `order`
+  for (size_t c = 0; c < nc; ++c) target[c] = size_t(std::find(order.begin(), order.end(), names[c]) - order.begin());
+  std::vector<std::vector<float>> planes;
+  std::vector<float> pixels;
+  if (image.readPlanar)
+    planes.assign(nc, std::vector<float>(n));
+  else
+    pixels.assign(n * nc, 0.0f);
+
+  // The blocks in turn on every core, each thread with its own decode pipeline; each block fills
+  // its own rows, so the result does not depend on the threads.
+  const int chunks = int((int64_t(height) + linesPerChunk - 1) / linesPerChunk);
+  std::atomic<bool> failed{false};
+  std::atomic<int> next{0};
+  auto decode = [&] {
+    exr_decode_pipeline_t pipeline = EXR_DECODE_PIPELINE_INITIALIZER;
+    bool started = false;
+    for (int k = next++; k < chunks && !failed.load(std::memory_order_relaxed); k = next++) {
+      exr_chunk_info_t chunk;
+      if (exr_read_scanline_chunk_info(ctxt, 0, window.min.y + k * linesPerChunk, &chunk) != EXR_ERR_SUCCESS ||
+          (started ? exr_decoding_update(ctxt, 0, &chunk, &pipeline)
+                   : exr_decoding_initialize(ctxt, 0, &chunk, &pipeline)) != EXR_ERR_SUCCESS ||
+          pipeline.channel_count != int16_t(nc) || chunk.start_y < window.min.y ||
+          int64_t(chunk.start_y) + chunk.height > int64_t(window.max.y) + 1) {
+        failed = true;
+        break;
+      }
+      const size_t row = size_t(chunk.start_y - window.min.y);
+      for (int c = 0; c < pipeline.channel_count; ++c) {
+        exr_coding_channel_info_t& ch = pipeline.channels[c];
+        const size_t t = target[size_t(c)];
+        if (image.readPlanar) {
+          ch.decode_to_ptr = reinterpret_cast<uint8_t*>(planes[t].data() + row * size_t(width));
+          ch.user_pixel_stride = int32_t(sizeof(float));
+        } else {
+          ch.decode_to_ptr = reinterpret_cast<uint8_t*>(pixels.data() + row * size_t(width) * nc + t);
+          ch.user_pixel_stride = int32_t(nc * sizeof(float));
+        }
+        ch.user_line_stride = int32_t(size_t(width) * size_t(ch.user_pixel_stride));
+        ch.user_data_type = EXR_PIXEL_FLOAT;
+        ch.user_bytes_per_element = int8_t(sizeof(float));
+      }
+      if (!started && exr_decoding_choose_default_routines(ctxt, 0, &pipeline) != EXR_ERR_SUCCESS) {
+        failed = true;
+        break;
+      }
+      started = true;
+      if (exr_decoding_run(ctxt, 0, &pipeline) != EXR_ERR_SUCCESS) {
+        failed = true;
+        break;
+      }
+    }
+    exr_decoding_destroy(ctxt, &pipeline);
+  };
+  const int threads = std::clamp(int(std::thread::hardware_concurrency()), 1, std::max(1, chunks));
+  std::vector<std::thread> helpers;
+  try {
+    for (int t = 1; t < threads; ++t) helpers.emplace_back(decode);
+  } catch (const std::system_error&) {  // no thread to be had: fewer helpers, the same blocks
+  }
+  decode();
+  for (std::thread& t : helpers) t.join();
+  if (failed) return false;
+
+  std::map<std::string, std::string> text;
+  int32_t attributes = 0;
+  if (exr_get_attribute_count(ctxt, 0, &attributes) != EXR_ERR_SUCCESS) return false;
+  for (int32_t i = 0; i < attributes; ++i) {
+    const exr_attribute_t* a = nullptr;
+    if (exr_get_attribute_by_index(ctxt, 0, EXR_ATTR_LIST_FILE_ORDER, i, &a) != EXR_ERR_SUCCESS || !a) return false;
+    if (a->type == EXR_ATTR_STRING && a->name && a->string)
+      text[a->name] = a->string->str ? std::string(a->string->str, size_t(std::max(0, a->string->length))) : "";
+  }
+  image.width = width;
+  image.height = height;
+  image.channels = std::move(order);
+  image.pixels = std::move(pixels);
+  image.planesRead = std::move(planes);
+  image.text = std::move(text);
+  return true;
+}
+
+std::string readExrImf(const std::string& path, FloatImage& image, int maxSide) {
   useAllCores();
+  image.planesRead.clear();
   try {
     Imf::InputFile file(path.c_str());
     const Imf::Header& header = file.header();
@@ -125,6 +260,14 @@ std::string readExrFile(const std::string& path, FloatImage& image, int maxSide)
     return e.what();
   }
   return "";
+}
+
+namespace {
+
+// Every EXR read: the core library's reader where it takes the file, Imf::InputFile's otherwise.
+std::string readExrFile(const std::string& path, FloatImage& image, int maxSide) {
+  if (readExrCore(path, image, maxSide)) return "";
+  return readExrImf(path, image, maxSide);
 }
 
 // libpng reports errors by longjmp; the message is kept here.
