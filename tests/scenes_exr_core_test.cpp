@@ -21,6 +21,8 @@
 #include <cmath>
 #include <cstring>
 #include <filesystem>
+#include <fstream>
+#include <iterator>
 #include <limits>
 #include <random>
 #include <string>
@@ -211,6 +213,25 @@ TEST(ExrCore, LeavesTiledTruncatedAndOversizedFilesToImf) {
   image_io::FloatImage damaged;
   EXPECT_FALSE(io::readExrCore(cut, damaged, kMax));
   EXPECT_NE(image_io::readExr(cut, damaged), "");
+
+  // A header claiming a 2^30 x 2^30 data window (its dataWindow box patched): an error, no crash
+  // and no attempt to hold 2^60 values.
+  std::string bytes;
+  {
+    std::ifstream in(zip, std::ios::binary);
+    bytes.assign(std::istreambuf_iterator<char>(in), {});
+  }
+  const std::string key("dataWindow\0box2i\0", 17);
+  const size_t at = bytes.find(key);
+  ASSERT_NE(at, std::string::npos);
+  const int32_t huge = 1 << 30;
+  std::memcpy(&bytes[at + key.size() + 4 + 8], &huge, 4);   // xMax
+  std::memcpy(&bytes[at + key.size() + 4 + 12], &huge, 4);  // yMax
+  const std::string lying = (dir / "huge_window.exr").string();
+  { std::ofstream(lying, std::ios::binary) << bytes; }
+  image_io::FloatImage claimed;
+  EXPECT_FALSE(io::readExrCore(lying, claimed, kMax));
+  EXPECT_NE(image_io::readExr(lying, claimed), "");
   fs::remove_all(dir);
 }
 

@@ -93,7 +93,9 @@ std::vector<std::string> oiioChannelOrder(std::vector<std::string> names) {
 // anything else (tiled, deep, several parts, subsampled channels, a size outside 1..maxSide, a
 // file the core library does not open or decode): readExrFile then reads it with readExrImf,
 // which says what is wrong where something is.
-bool readExrCore(const std::string& path, FloatImage& image, int maxSide) {
+namespace {
+
+bool readExrCoreUnguarded(const std::string& path, FloatImage& image, int maxSide) {
   exr_context_initializer_t init = EXR_DEFAULT_CONTEXT_INITIALIZER;
   init.error_handler_fn = [](exr_const_context_t, exr_result_t, const char*) {};  // Imf reports instead
   exr_context_t ctxt = nullptr;
@@ -207,6 +209,16 @@ bool readExrCore(const std::string& path, FloatImage& image, int maxSide) {
   image.planesRead = std::move(planes);
   image.text = std::move(text);
   return true;
+}
+
+}  // namespace
+
+bool readExrCore(const std::string& path, FloatImage& image, int maxSide) {
+  try {
+    return readExrCoreUnguarded(path, image, maxSide);
+  } catch (const std::exception&) {  // e.g. no memory for a size a damaged header claims
+    return false;                     // readExrImf says so
+  }
 }
 
 std::string readExrImf(const std::string& path, FloatImage& image, int maxSide) {
