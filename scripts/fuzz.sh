@@ -1,10 +1,10 @@
 #!/usr/bin/env bash
-# Fuzzes the parsers a user feeds (scene JSON with its OBJ, MTL and PNG files, method files and
+# Fuzzes the parsers a user feeds (scene JSON with its OBJ, MTL and PNG files, EXR files, method files and
 # --set strings, sweep files and --grid strings, tolerance files, results and metrics files, light
 # path specs) with libFuzzer, AddressSanitizer and UndefinedBehaviorSanitizer (Debian's clang).
 #
-#   scripts/fuzz.sh TARGET SECONDS    fuzz one target (scene obj image method sweep tolerances results
-#                                     light_path) for SECONDS; `all` runs every target in turn
+#   scripts/fuzz.sh TARGET SECONDS    fuzz one target (scene obj image exr method sweep tolerances
+#                                     results light_path) for SECONDS; `all` runs every target in turn
 #   scripts/fuzz.sh --list            the targets
 #
 # Builds build-fuzz/ (SHADOWLAB_FUZZ_BUILD overrides; SHADOWLAB_FUZZ_NO_BUILD=1 skips the build, as
@@ -16,7 +16,7 @@
 # Add each finding to tests/fuzz/regressions/TARGET/ (the smoke test replays them) once it is fixed.
 set -euo pipefail
 cd "$(dirname "$0")/.."
-targets=(scene obj image method sweep tolerances results light_path)
+targets=(scene obj image exr method sweep tolerances results light_path)
 if [ "${1:-}" = "--list" ]; then printf '%s\n' "${targets[@]}"; exit 0; fi
 if [ $# -ne 2 ]; then echo "usage: scripts/fuzz.sh TARGET|all SECONDS (scripts/fuzz.sh --list)" >&2; exit 2; fi
 target=$1 seconds=$2
@@ -43,6 +43,7 @@ case "$target" in
   obj) seed tests/bad_input/assets/*.obj tests/bad_input/assets/*.mtl
        printf 'mtllib m.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0 0\nvt 1 0\nvt 0 1\nvn 0 0 1\nusemtl a\nf 1/1/1 2/2/1 3/3/1\n#--MTL--\nnewmtl a\nKd 0.5 0.5 0.5\nmap_d alpha.png\n' > "$corpus/seed_obj_mtl" ;;
   image) seed scenes/data/*.png ;;
+  exr) seed tests/fuzz/seeds/exr/*.exr ;;
   method) seed tests/bad_input/method_*.json
           printf '{"filter": "pcf", "filter.size": 5, "map.size": 1024}\n#--SET--\nbias.slope=2\nfit=cascades\ncascades.count=3\n' > "$corpus/seed_method_set" ;;
   sweep) seed compare/report/default_sweep.json tests/golden/*.sweep.json tests/bad_input/sweep_*.json

@@ -144,7 +144,7 @@ bool readExrCoreUnguarded(const std::string& path, FloatImage& image, int maxSid
   std::atomic<bool> failed{false};
   std::atomic<int> next{0};
   auto decode = [&] {
-    exr_decode_pipeline_t pipeline = EXR_DECODE_PIPELINE_INITIALIZER;
+    exr_decode_pipeline_t pipeline{};  // EXR_DECODE_PIPELINE_INITIALIZER: all zero
     bool started = false;
     for (int k = next++; k < chunks && !failed.load(std::memory_order_relaxed); k = next++) {
       exr_chunk_info_t chunk;
