@@ -259,7 +259,8 @@ int run(const Options& o) {
   cacheFolder.keep();  // a cache outlives the command
 
   // ---- work ------------------------------------------------------------------------------------
-  auto runner = makePipelineRunner(cacheDir, spec.spp, o.device, 1, o.fullEvidence);
+  // A shard writes no report, and neither does --no-report: nothing would draw the kept rows.
+  auto runner = makePipelineRunner(cacheDir, spec.spp, o.device, 1, o.fullEvidence, !o.noReport && !shard.active());
   SweepOptions options;
   options.outDir = o.outDir;
   options.progress = stderr;

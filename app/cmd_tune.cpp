@@ -74,7 +74,8 @@ int run(const Options& o) {
   cacheFolder.keep();
 
   // ---- work ------------------------------------------------------------------------------------
-  auto runner = makePipelineRunner(cacheDir, spec.spp, o.device, plan.sweep.sceneNames.size());
+  // Its triptychs show the chosen configuration, not a scene's best or worst row: nothing kept.
+  auto runner = makePipelineRunner(cacheDir, spec.spp, o.device, plan.sweep.sceneNames.size(), false, false);
   TuneOptions options;
   options.outDir = o.outDir;
   options.progress = stderr;

@@ -221,18 +221,22 @@ TEST(SweepCli, SmallSweepRowsMatchShadowlabRunExactly) {
   fs::remove_all(dir);
 }
 
-// The report's triptychs are rendered with evidence on demand, as the rows (sweep_runner.cpp,
-// writeTriptych): the same pictures, byte for byte, as from the full frames of --full-evidence.
-// runner.triptychs_on_demand says how many came from a partial frame: at least one here, or the
-// comparison would prove nothing. The charts are skipped (no script): the triptychs are the point.
+// The report's triptychs: each scene's best and worst row as the loop kept them (sweep_runner.cpp,
+// keepForTriptych), or rendered again with evidence on demand where the runner did not run the row
+// (here: the same sweep run again, every row resumed), are the same pictures, byte for byte, as
+// those rendered from the full frames of --full-evidence. The runner's counters say which path drew
+// them (both triptychs each time, or the comparison would prove nothing). The charts are skipped
+// (no script): the triptychs are the point.
 TEST(SweepCli, ReportTriptychsOnDemandEqualFullFrameOnes) {
   const std::string dir = tempDir("triptychs");
   const std::string scene = smallScene(dir);
   ::setenv("SHADOWLAB_REPORT_SCRIPT", (dir + "/no_charts.py").c_str(), 1);
-  for (const char* mode : {"on_demand", "full"}) {
-    std::vector<std::string> args =
-        sweepArgs({scene, "--grid", "map.size=256,512", "--grid", "filter=none,pcf", "--grid", "bias.slope=0,2", "-o",
-                   dir + "/" + mode, "--cache", dir + "/cache"});
+  std::map<std::string, std::map<std::string, std::string>> pictures;  // mode -> pick -> PNG bytes
+  std::map<std::string, nlohmann::json> runners;
+  for (const char* mode : {"kept", "resumed", "full"}) {
+    const std::string out = dir + "/" + (std::string(mode) == "full" ? "full" : "on_demand");
+    std::vector<std::string> args = sweepArgs({scene, "--grid", "map.size=256,512", "--grid", "filter=none,pcf", "--grid",
+                                               "bias.slope=0,2", "-o", out, "--cache", dir + "/cache"});
     if (std::string(mode) == "full") args.push_back("--full-evidence");
     Child sweep = spawn(args, dir + "/" + mode);
     const int rc = waitFor(sweep);
@@ -241,17 +245,23 @@ TEST(SweepCli, ReportTriptychsOnDemandEqualFullFrameOnes) {
       GTEST_SKIP() << "no Vulkan device (shadowlab exit 3): " << slurp(sweep.err);
     }
     ASSERT_EQ(rc, 0) << slurp(sweep.err);
+    const auto results = nlohmann::json::parse(slurp(out + "/results.json"));
+    runners[mode] = results.at("runner");
+    EXPECT_EQ(results.at("rows_run").get<int>(), std::string(mode) == "resumed" ? 0 : 8) << mode;
+    for (const char* pick : {"best", "worst"})
+      pictures[mode][pick] = slurp(out + "/figures/triptych_sphere_on_plane_" + pick + ".png");
   }
   ::unsetenv("SHADOWLAB_REPORT_SCRIPT");
-  const auto onDemand = nlohmann::json::parse(slurp(dir + "/on_demand/results.json"));
-  const auto full = nlohmann::json::parse(slurp(dir + "/full/results.json"));
-  EXPECT_GE(onDemand["runner"]["triptychs_on_demand"].get<int>(), 1) << onDemand["runner"].dump();
-  EXPECT_EQ(full["runner"]["triptychs_on_demand"].get<int>(), 0);
+  EXPECT_EQ(runners["kept"].value("triptychs_kept", -1), 2) << runners["kept"].dump();
+  EXPECT_EQ(runners["kept"].value("triptychs_on_demand", -1), 0) << runners["kept"].dump();
+  EXPECT_EQ(runners["resumed"].value("triptychs_kept", -1), 0) << runners["resumed"].dump();
+  EXPECT_EQ(runners["resumed"].value("triptychs_on_demand", -1), 2) << runners["resumed"].dump();
+  EXPECT_EQ(runners["full"].value("triptychs_kept", -1), 0) << runners["full"].dump();
+  EXPECT_EQ(runners["full"].value("triptychs_on_demand", -1), 0) << runners["full"].dump();
   for (const char* pick : {"best", "worst"}) {
-    const std::string file = std::string("/figures/triptych_sphere_on_plane_") + pick + ".png";
-    const std::string a = slurp(dir + "/on_demand" + file), b = slurp(dir + "/full" + file);
-    ASSERT_FALSE(a.empty()) << pick;
-    EXPECT_TRUE(a == b) << pick << ": the triptychs differ";
+    ASSERT_FALSE(pictures["full"][pick].empty()) << pick;
+    EXPECT_TRUE(pictures["kept"][pick] == pictures["full"][pick]) << pick << ": the kept triptych differs";
+    EXPECT_TRUE(pictures["resumed"][pick] == pictures["full"][pick]) << pick << ": the re-rendered triptych differs";
   }
   fs::remove_all(dir);
 }

@@ -8,6 +8,7 @@
 // against `shadowlab run`).
 #include <algorithm>
 #include <chrono>
+#include <cmath>
 #include <exception>
 #include <future>
 #include <list>
@@ -32,8 +33,11 @@ double msSince(Clock::time_point t0) { return std::chrono::duration<double, std:
 class PipelineRunner final : public SweepRunner {
  public:
   PipelineRunner(const std::string& cacheDir, int spp, const std::string& device, size_t keepReferences,
-                 bool fullEvidence)
-      : cache_(cacheDir), keep_(keepReferences < 1 ? 1 : keepReferences), fullEvidence_(fullEvidence) {
+                 bool fullEvidence, bool keepTriptychs)
+      : cache_(cacheDir),
+        keep_(keepReferences < 1 ? 1 : keepReferences),
+        fullEvidence_(fullEvidence),
+        keepTriptychs_(keepTriptychs) {
     referenceOptions_.spp = spp;
     deviceOptions_.device = device;
     // The first reference read needs the image library: where that is a module loaded on first
@@ -86,16 +90,18 @@ class PipelineRunner final : public SweepRunner {
     if (!held) held = &adoptReference(referenceKey, loading);
     const Frame& reference = *held;
     Classification classification;
+    SweepRunOutput out;
     const auto c0 = Clock::now();
     Metrics m = compareRow(referenceKey, reference, raster, options, keep ? &classification : nullptr);
     const double compareMs = msSince(c0);
+    out.metrics = m.toJson();
+    if (evidenceOnDemand && keepTriptychs_)
+      keepForTriptych(method, light, referenceKey, reference, raster, options, out.metrics);
     if (keep) {
       writeFrameExr(raster, imagesDir + "/raster.exr");
       writeErrorsPng(imagesDir + "/errors.png", classification);
     }
     rasterizer().recycle(std::move(raster));  // the next row's planes, without fresh memory
-    SweepRunOutput out;
-    out.metrics = m.toJson();
     out.timings = {
         {timing::kShadowGpuMs, t.shadowGpuMs},         {timing::kCameraGpuMs, t.cameraGpuMs},
         {timing::kVisibilityGpuMs, t.visibilityGpuMs}, {timing::kLookupGpuMs, t.lookupGpuMs},
@@ -110,6 +116,12 @@ class PipelineRunner final : public SweepRunner {
                      const std::string& pngPath) override {
     std::string referenceKey;
     const Frame& reference = referenceFor(scene, &referenceKey);
+    // A configuration the loop kept as its scene's best or worst: drawn from what it kept.
+    if (const KeptPicture* k = keptPicture(referenceKey, method, light)) {
+      writeTriptychPng(pngPath, reference, k->raster, k->classification);
+      ++triptychsKept_;
+      return true;
+    }
     CompareOptions options;
     options.light = scene.lightOrDefault(light);
     // Evidence on demand, as the rows: the triptych draws the raster's visibility, hit and ids
@@ -154,6 +166,7 @@ class PipelineRunner final : public SweepRunner {
     j["compare_contexts_built"] = contextsBuilt_;
     j["compare_contexts_shared"] = contextsShared_;  // built sharing another group's decisions
     j["triptychs_on_demand"] = triptychsOnDemand_;  // triptychs rendered from a partial frame (writeTriptych)
+    j["triptychs_kept"] = triptychsKept_;  // triptychs drawn from what the loop kept (keepForTriptych)
     return j;
   }
 
@@ -285,6 +298,78 @@ class PipelineRunner final : public SweepRunner {
     return compareFrames(contexts_.front().second, reference, raster, classification);
   }
 
+  // The report draws a triptych of each scene's best and worst row (lowest and highest finite
+  // error_rate, the first of equals, in row order: sweep_report.cpp). The loop runs the rows in that
+  // order, so the runner keeps, per scene variant (reference), the two rows that are best and worst
+  // so far: the raster planes the triptych draws (hit, object_id, the light's vis) and the row's
+  // classification. writeTriptych then draws a kept row instead of rendering it again (about 0.35 s
+  // of a 100-row sweep's report: compare/SWEEPS.md, session 12); a row it does not hold (resumed, or
+  // another variant's) is rendered as before. The same picture, byte for byte
+  // (SweepCli.ReportTriptychsOnDemandEqualFullFrameOnes).
+  struct KeptPicture {
+    std::string key;  // keptKey
+    double errorRate = 0;
+    Frame raster;
+    Classification classification;
+  };
+  struct KeptPair {
+    std::string reference;
+    std::shared_ptr<const KeptPicture> best, worst;
+  };
+  static std::string keptKey(const std::string& referenceKey, const Method& method, const std::string& light) {
+    return referenceKey + "\n" + methodToJson(method).dump() + "\n" + light;
+  }
+  void keepForTriptych(const Method& method, const std::string& light, const std::string& referenceKey,
+                       const Frame& reference, const Frame& raster, const CompareOptions& options,
+                       const nlohmann::json& metrics) {
+    auto it = metrics.find("error_rate");
+    if (it == metrics.end() || !it->is_number()) return;
+    const double e = it->get<double>();
+    if (!std::isfinite(e)) return;
+    auto pair = std::find_if(kept_.begin(), kept_.end(), [&](const KeptPair& p) { return p.reference == referenceKey; });
+    if (pair == kept_.end()) {
+      if (kept_.size() >= kKeptScenes) kept_.pop_front();  // the oldest variant's rows: rendered again if asked
+      kept_.push_back({referenceKey, nullptr, nullptr});
+      pair = std::prev(kept_.end());
+    }
+    const bool best = !pair->best || e < pair->best->errorRate;
+    const bool worst = !pair->worst || e > pair->worst->errorRate;
+    if (!best && !worst) return;
+    auto k = std::make_shared<KeptPicture>();
+    k->key = keptKey(referenceKey, method, light);
+    k->errorRate = e;
+    k->raster.width = raster.width;
+    k->raster.height = raster.height;
+    k->raster.meta = raster.meta;
+    for (const std::string& name : {std::string("hit"), std::string("object_id"), "light." + options.light + ".vis"})
+      if (raster.has(name)) k->raster.add(name) = raster.get(name);
+    // The row's classification, through its group's context where it has one (the same classes as
+    // the full compare's), without counting the row twice.
+    const CompareContext* context = nullptr;
+    auto group = raster.meta.find("evidence_group");
+    if (group != raster.meta.end() && group->is_string()) {
+      const std::string key = referenceKey + "\n" + options.light + "\n" + group->get<std::string>();
+      for (const auto& c : contexts_)
+        if (c.first == key && c.second.appliesTo(reference, raster)) context = &c.second;
+    }
+    if (context)
+      compareFrames(*context, reference, raster, &k->classification);
+    else
+      compareFrames(reference, raster, options, &k->classification);
+    if (best) pair->best = k;
+    if (worst) pair->worst = k;
+  }
+  const KeptPicture* keptPicture(const std::string& referenceKey, const Method& method, const std::string& light) const {
+    const std::string key = keptKey(referenceKey, method, light);
+    for (const KeptPair& p : kept_)
+      for (const auto* k : {p.best.get(), p.worst.get()})
+        if (k && k->key == key) return k;
+    return nullptr;
+  }
+  static constexpr size_t kKeptScenes = 4;  // ~12 MB a row at 1920x1080, two rows a variant
+  std::list<KeptPair> kept_;
+  int triptychsKept_ = 0;
+
   // As many as the rasterizer keeps groups (raster/METHODS.md): a plan whose fastest axis
   // alternates up to 4 groups keeps each one's context. ~22 MB each at 1920x1080.
   static constexpr size_t kKeptContexts = 4;
@@ -301,6 +386,7 @@ class PipelineRunner final : public SweepRunner {
   std::unique_ptr<Rasterizer> rasterizer_;
   size_t keep_ = 1;
   bool fullEvidence_ = false;                      // --full-evidence: every row renders the full frame
+  bool keepTriptychs_ = true;                      // keepForTriptych (off without a report)
   std::list<std::pair<std::string, Frame>> held_;  // reference hash -> frame, most recently used first
   int traced_ = 0, loaded_ = 0;
   double referenceWallSeconds_ = 0;
@@ -309,8 +395,8 @@ class PipelineRunner final : public SweepRunner {
 }  // namespace
 
 std::unique_ptr<SweepRunner> makePipelineRunner(const std::string& cacheDir, int spp, const std::string& device,
-                                                size_t keepReferences, bool fullEvidence) {
-  return std::make_unique<PipelineRunner>(cacheDir, spp, device, keepReferences, fullEvidence);
+                                                size_t keepReferences, bool fullEvidence, bool keepTriptychs) {
+  return std::make_unique<PipelineRunner>(cacheDir, spp, device, keepReferences, fullEvidence, keepTriptychs);
 }
 
 }  // namespace shadowlab

@@ -166,9 +166,12 @@ class SweepRunner {
 // tune evaluates each configuration on every scene in turn and keeps one per scene).
 // Rows that keep no pictures render with evidence on demand (raster.h, `disagreementSelector`):
 // the same metrics, the evidence resolved only where the decisions disagree; `fullEvidence`
-// (--full-evidence) renders every row's full frame instead.
+// (--full-evidence) renders every row's full frame instead. `keepTriptychs`: keep each scene's best
+// and worst row so far (a few planes and the classification) for writeTriptych, which then draws
+// them without rendering again; off where no report will ask (--no-report).
 std::unique_ptr<SweepRunner> makePipelineRunner(const std::string& cacheDir, int spp, const std::string& device = "",
-                                                size_t keepReferences = 1, bool fullEvidence = false);
+                                                size_t keepReferences = 1, bool fullEvidence = false,
+                                                bool keepTriptychs = true);
 
 // The cache folder a sweep into `outDir` uses when none is given: $SHADOWLAB_CACHE, else
 // <parent of outDir>/.shadowlab-cache, so sweeps side by side share their references.
