@@ -339,7 +339,10 @@ class PipelineRunner final : public SweepRunner {
     if (!std::isfinite(e)) return;
     auto pair = std::find_if(kept_.begin(), kept_.end(), [&](const KeptPair& p) { return p.reference == referenceKey; });
     if (pair == kept_.end()) {
-      if (kept_.size() >= kKeptScenes) kept_.pop_front();  // the oldest variant's rows: rendered again if asked
+      // The oldest variants' rows go first (rendered again if asked) once the kept rows would pass
+      // kKeptBytes: ~45 MB a variant at 1920x1080, ~11 MB at 960x540.
+      const size_t pixels = size_t(raster.width) * size_t(raster.height);
+      while (!kept_.empty() && (kept_.size() + 1) * keptBytesPerVariant(pixels) > kKeptBytes) kept_.pop_front();
       kept_.push_back({referenceKey, nullptr, nullptr, nullptr});
       pair = std::prev(kept_.end());
     }
@@ -392,7 +395,10 @@ class PipelineRunner final : public SweepRunner {
         if (k && k->key == key) return k;
     return nullptr;
   }
-  static constexpr size_t kKeptScenes = 4;  // ~12 MB a row at 1920x1080, two rows a variant
+  // A variant's kept memory at most: its hit and object_id planes, and two rows' vis, classes and
+  // reference decisions.
+  static size_t keptBytesPerVariant(size_t pixels) { return pixels * (2 * sizeof(float) + 2 * (sizeof(float) + 2)); }
+  static constexpr size_t kKeptBytes = size_t(256) << 20;
   std::list<KeptPair> kept_;
   int triptychsKept_ = 0;
 
