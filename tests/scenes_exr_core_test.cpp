@@ -236,6 +236,25 @@ TEST(ExrCore, LeavesTiledTruncatedAndOversizedFilesToImf) {
   image_io::FloatImage claimed;
   EXPECT_FALSE(io::readExrCore(lying, claimed, kMax));
   EXPECT_NE(image_io::readExr(lying, claimed), "");
+
+  // A float attribute declaring 2 bytes (fuzz_exr's finding, tests/fuzz/regressions/exr): Imf reads
+  // 4 and goes on, a lenient parse would read 2 and misname the attributes after it. The core reader
+  // parses headers strictly and leaves such a file to Imf, so readExr reads it as Imf does.
+  std::string odd = bytes;
+  std::memcpy(&odd[at + key.size() + 4 + 8], "\x1c\0\0\0", 4);  // the window as it was (29 - 1)
+  std::memcpy(&odd[at + key.size() + 4 + 12], "\x14\0\0\0", 4);  // (21 - 1)
+  const std::string floatKey("screenWindowWidth\0float\0", 24);
+  const size_t f = odd.find(floatKey);
+  ASSERT_NE(f, std::string::npos);
+  odd[f + floatKey.size()] = 2;
+  const std::string twoBytes = (dir / "float_in_2_bytes.exr").string();
+  { std::ofstream(twoBytes, std::ios::binary) << odd; }
+  image_io::FloatImage strict, viaImf, viaReadExr2;
+  EXPECT_FALSE(io::readExrCore(twoBytes, strict, kMax));
+  ASSERT_EQ(io::readExrImf(twoBytes, viaImf, kMax), "");
+  ASSERT_EQ(image_io::readExr(twoBytes, viaReadExr2), "");
+  expectSame(viaReadExr2, viaImf, "a float attribute of 2 bytes");
+  EXPECT_TRUE(viaReadExr2.text.count("shadowlab:note")) << "the attribute after it keeps its name";
   fs::remove_all(dir);
 }
 

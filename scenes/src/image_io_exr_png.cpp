@@ -98,6 +98,9 @@ namespace {
 bool readExrCoreUnguarded(const std::string& path, FloatImage& image, int maxSide) {
   exr_context_initializer_t init = EXR_DEFAULT_CONTEXT_INITIALIZER;
   init.error_handler_fn = [](exr_const_context_t, exr_result_t, const char*) {};  // Imf reports instead
+  // A header Imf would read another way (e.g. a float attribute declaring 2 bytes: Imf reads 4, a
+  // lenient core parse 2, and the names after it differ) is refused here and left to Imf.
+  init.flags |= EXR_CONTEXT_FLAG_STRICT_HEADER;
   exr_context_t ctxt = nullptr;
   if (exr_start_read(&ctxt, path.c_str(), &init) != EXR_ERR_SUCCESS) {
     if (ctxt) exr_finish(&ctxt);
