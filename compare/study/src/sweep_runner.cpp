@@ -342,6 +342,7 @@ class PipelineRunner final : public SweepRunner {
       // The oldest variants' rows go first (rendered again if asked) once the kept rows would pass
       // kKeptBytes: ~45 MB a variant at 1920x1080, ~11 MB at 960x540.
       const size_t pixels = size_t(raster.width) * size_t(raster.height);
+      if (keptBytesPerVariant(pixels) > kKeptBytes) return;  // a frame this large: rendered again if asked
       while (!kept_.empty() && (kept_.size() + 1) * keptBytesPerVariant(pixels) > kKeptBytes) kept_.pop_front();
       kept_.push_back({referenceKey, nullptr, nullptr, nullptr});
       pair = std::prev(kept_.end());
