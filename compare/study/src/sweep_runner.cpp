@@ -252,12 +252,20 @@ class PipelineRunner final : public SweepRunner {
   // of the same reference and light is kept (another group of the same camera: another map size),
   // the group's first row builds its context at once, sharing that one's per-pixel decisions
   // (compare.h: checked to apply) for about the price of the full compare it returns.
+  // A row's context key: its reference, light and evidence group ("" for a frame without a group).
+  // The key up to the group names the camera (contextCamera): the groups that may share decisions.
+  static std::string contextCamera(const std::string& referenceKey, const CompareOptions& options) {
+    return referenceKey + "\n" + options.light + "\n";
+  }
+  static std::string contextKey(const std::string& referenceKey, const CompareOptions& options, const Frame& raster) {
+    auto group = raster.meta.find("evidence_group");
+    if (group == raster.meta.end() || !group->is_string()) return "";
+    return contextCamera(referenceKey, options) + group->get<std::string>();
+  }
   Metrics compareRow(const std::string& referenceKey, const Frame& reference, const Frame& raster,
                      const CompareOptions& options, Classification* classification) {
-    auto group = raster.meta.find("evidence_group");
-    if (group == raster.meta.end() || !group->is_string())
-      return compareFrames(reference, raster, options, classification);
-    const std::string key = referenceKey + "\n" + options.light + "\n" + group->get<std::string>();
+    const std::string key = contextKey(referenceKey, options, raster);
+    if (key.empty()) return compareFrames(reference, raster, options, classification);
     bool again = false;  // a context of this key, made from a reference since read again
     for (auto it = contexts_.begin(); it != contexts_.end(); ++it)
       if (it->first == key) {
@@ -270,7 +278,7 @@ class PipelineRunner final : public SweepRunner {
         ++contextRows_;
         return compareFrames(it->second, reference, raster, classification);
       }
-    const std::string camera = referenceKey + "\n" + options.light + "\n";
+    const std::string camera = contextCamera(referenceKey, options);
     auto sameCamera = std::find_if(contexts_.begin(), contexts_.end(),
                                    [&](const auto& c) { return c.first.compare(0, camera.size(), camera) == 0; });
     if (!again && sameCamera != contexts_.end()) {
@@ -307,7 +315,7 @@ class PipelineRunner final : public SweepRunner {
   // so far: the raster planes the triptych draws (hit, object_id, the light's vis) and the row's
   // classification. writeTriptych then draws a kept row instead of rendering it again (about 0.35 s
   // of a 100-row sweep's report: compare/SWEEPS.md, session 12); a row it does not hold (resumed, or
-  // another variant's) is rendered as before. The same picture, byte for byte
+  // a variant dropped for memory) is rendered as before. The same picture, byte for byte
   // (SweepCli.ReportTriptychsOnDemandEqualFullFrameOnes).
   struct KeptPicture {
     std::string key;  // keptKey
@@ -376,12 +384,9 @@ class PipelineRunner final : public SweepRunner {
     // The row's classification, through its group's context where it has one (the same classes as
     // the full compare's), without counting the row twice.
     const CompareContext* context = nullptr;
-    auto group = raster.meta.find("evidence_group");
-    if (group != raster.meta.end() && group->is_string()) {
-      const std::string key = referenceKey + "\n" + options.light + "\n" + group->get<std::string>();
-      for (const auto& c : contexts_)
-        if (c.first == key && c.second.appliesTo(reference, raster)) context = &c.second;
-    }
+    const std::string key = contextKey(referenceKey, options, raster);
+    for (const auto& c : contexts_)
+      if (!key.empty() && c.first == key && c.second.appliesTo(reference, raster)) context = &c.second;
     if (context)
       compareFrames(*context, reference, raster, &k->classification);
     else
