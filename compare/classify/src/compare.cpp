@@ -970,18 +970,17 @@ struct ContextBlockSums {
 
 namespace {
 
+// A final class's scored class (scoredClass in classify.h): not compared and geometry mismatch
+// stay, every compared pixel's is Correct.
+bool isCompared(PixelClass c) { return c != PixelClass::NotCompared && c != PixelClass::GeometryMismatch; }
+uint8_t scoredOf(PixelClass c) { return uint8_t(isCompared(c) ? PixelClass::Correct : c); }
+
 // Whether `scored` (a context's scoredClass) is the scored class of every pixel of `classes` (a
 // full classification): then both pairs of frames compare the same pixels.
 bool sameScoredClasses(const std::vector<uint8_t>& scored, const std::vector<PixelClass>& classes) {
   if (scored.size() != classes.size()) return false;
-  const uint8_t* c = reinterpret_cast<const uint8_t*>(classes.data());
-  const uint8_t notCompared = uint8_t(PixelClass::NotCompared), mismatch = uint8_t(PixelClass::GeometryMismatch),
-                correct = uint8_t(PixelClass::Correct);
   uint8_t differ = 0;
-  for (size_t i = 0; i < scored.size(); ++i) {
-    const uint8_t k = c[i];
-    differ |= uint8_t(scored[i] ^ (k == notCompared || k == mismatch ? k : correct));
-  }
+  for (size_t i = 0; i < scored.size(); ++i) differ |= uint8_t(scored[i] ^ scoredOf(classes[i]));
   return differ == 0;
 }
 
@@ -1029,9 +1028,8 @@ CompareContext::CompareContext(const Frame& reference, const Frame& raster, cons
     px->referenceLit = std::move(cls.referenceLit);
     for (size_t i = 0; i < n; ++i) {
       const PixelClass c = cls.classes[i];
-      const bool compared = c != PixelClass::NotCompared && c != PixelClass::GeometryMismatch;
-      px->scoredClass[i] = uint8_t(compared ? PixelClass::Correct : c);
-      if (!compared) {
+      px->scoredClass[i] = scoredOf(c);
+      if (!isCompared(c)) {
         ++px->scoredCounts[classIndex(c)];
         px->decision[i] = kDecisionNone;
         continue;
