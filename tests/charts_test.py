@@ -7,6 +7,7 @@ charts exist and load; these check what the script decides:
   from fewer tick objects: it only leaves out the decades around the view that the axis would drop.
 - error_by_size writes "no <class> errors" into a panel whose points would all be zero, and says
   whether no configuration of the scene has the class or only the configurations shown lack it.
+- time_breakdown names every bar (a text beside it, not an axis tick).
 """
 import io
 import math
@@ -106,6 +107,23 @@ class ErrorBySizeTest(unittest.TestCase):
         self.assertIn("some other configuration of the scene has it", caption)
         self.assertNotIn("Hollow triangles", caption, "no zero is drawn as a point")
         self.assertEqual(sorted(files), ["pdf", "png", "svg"])
+
+
+class TimeBreakdownTest(unittest.TestCase):
+    def test_every_bar_is_named(self):
+        configs = [f"bias.slope={s},map.size={n}" for s in (0, 1) for n in (256, 1024)]
+        rows = [{"scene": "a", "config": c, "method": {}, "metrics": {},
+                 "timings": {"method_gpu_ms": 10.0 + k, "shadow_gpu_ms": 4.0, "lookup_gpu_ms": 6.0 + k,
+                             "evidence_gpu_ms": 2.0, "readback_ms": 1.0, "compare_ms": 1.0,
+                             "config_wall_ms": 30.0 + k}}
+                for k, c in enumerate(configs)]
+        with tempfile.TemporaryDirectory() as out:
+            files, _ = charts.chart_time_breakdown(["a"], {"a": rows}, out)
+            with open(os.path.join(out, "time_breakdown.svg"), encoding="utf-8") as f:
+                svg = f.read()
+        for c in configs:
+            self.assertEqual(svg.count(f"<!-- {c} -->"), 1, c)
+        self.assertEqual(files["stages"][0], charts.TIME_STAGES[0][0])
 
 
 if __name__ == "__main__":
