@@ -8,6 +8,7 @@ charts exist and load; these check what the script decides:
 - error_by_size writes "no <class> errors" into a panel whose points would all be zero, and says
   whether no configuration of the scene has the class or only the configurations shown lack it.
 - time_breakdown names every bar (a text beside it, not an axis tick).
+- PDF files hold one XObject per marker shape (share_pdf_markers).
 """
 import io
 import math
@@ -75,6 +76,21 @@ class ViewLogLocatorTest(unittest.TestCase):
         self.assertEqual(len(ticks), 3, ticks)
         for got, want in zip(ticks, (1e-3, 1e-2, 1e-1)):
             self.assertAlmostEqual(got / want, 1.0, places=12)
+
+
+class PdfMarkersTest(unittest.TestCase):
+    def test_one_xobject_per_marker_shape(self):
+        # Three lines of circles and one of squares: two marker XObjects, whatever the colours.
+        fig, ax = plt.subplots(figsize=(3, 2))
+        for k in range(3):
+            ax.plot([1, 2, 3], [k, k + 1, k + 2], marker="o")
+        ax.plot([1, 2, 3], [5, 5, 5], marker="s")
+        buf = io.BytesIO()
+        fig.savefig(buf, format="pdf", metadata={"CreationDate": None})
+        plt.close(fig)
+        pdf = buf.getvalue()
+        self.assertEqual(pdf.count(b"/Subtype /Form"), 2, "one XObject per marker shape")
+        self.assertTrue(pdf.startswith(b"%PDF-") and pdf.rstrip().endswith(b"%%EOF"))
 
 
 def row(scene, slope, size, error, acne, leak):

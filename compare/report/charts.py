@@ -50,6 +50,25 @@ matplotlib.rcParams["font.size"] = 9
 matplotlib.rcParams["axes.titley"] = 1.0
 
 
+def share_pdf_markers():
+    """PDF markers shared as matplotlib means them to be. Its PDF writer keeps one XObject per
+    marker shape and reuses it for every line with that shape (PdfFile.markerObject), keyed by the
+    shape's drawing commands; matplotlib 3.6 (Debian 12) wraps those commands in a Verbatim, which
+    compares by identity, so every draw_markers call wrote a new XObject and measured its Bezier
+    extents again. Verbatim compared by its bytes restores the sharing: the same page, smaller
+    files (the main job's error_by_size.pdf 184 -> 70 KB) and 0.66 s less CPU for the main job's
+    charts. Nothing changes where Verbatim already compares by value."""
+    from matplotlib.backends import backend_pdf
+    verbatim = getattr(backend_pdf, "Verbatim", None)
+    if verbatim is None or verbatim.__eq__ is not object.__eq__ or not hasattr(verbatim(b""), "_x"):
+        return
+    verbatim.__eq__ = lambda self, other: type(other) is verbatim and self._x == other._x
+    verbatim.__hash__ = lambda self: hash(self._x)
+
+
+share_pdf_markers()
+
+
 def load_classes(results_path):
     """[(metric, label, colour)]: all errors first, then each error class of classes.json."""
     path = os.path.join(os.path.dirname(os.path.abspath(results_path)), "classes.json")
