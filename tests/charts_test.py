@@ -3,7 +3,7 @@
 with Debian's python3-matplotlib. The sweep tests (report_chromium_test) check that a real sweep's
 charts exist and load; these check what the script decides:
 
-- ViewLogLocator (view_log_ticks) draws the same ticks as matplotlib's LogLocator, byte for byte,
+- ViewLogLocator (lean_log_axes) draws the same ticks as matplotlib's LogLocator, byte for byte,
   from fewer tick objects: it only leaves out the decades around the view that the axis would drop.
 - error_by_size writes "no <class> errors" into a panel whose points would all be zero, and says
   whether no configuration of the scene has the class or only the configurations shown lack it.
@@ -34,9 +34,7 @@ def draw_log_panel(ylim, view, xlim=None):
     if xlim:
         ax.set_xlim(*xlim)
     ax.grid(True, which="both", alpha=0.3)
-    charts.plain_log_labels(fig)
-    if view:
-        charts.view_log_ticks(fig)
+    charts.lean_log_axes(fig, view_ticks=view)
     fig.tight_layout()
     files = {}
     for ext, kwargs in (("png", {"dpi": 80}), ("svg", {"metadata": {"Date": None}})):

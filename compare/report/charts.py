@@ -154,18 +154,6 @@ class PlainLogFormatter(LogFormatterSciNotation):
         return ("\u2212" if sign else "") + coefficient + base + exponent.translate(_SUPERSCRIPT)
 
 
-def plain_log_labels(fig):
-    """Every log and symlog axis of `fig` labelled by PlainLogFormatter, with its formatter's settings."""
-    for ax in fig.axes:
-        for axis in (ax.xaxis, ax.yaxis):
-            for get, put in ((axis.get_major_formatter, axis.set_major_formatter),
-                             (axis.get_minor_formatter, axis.set_minor_formatter)):
-                f = get()
-                if type(f) is LogFormatterSciNotation:
-                    put(PlainLogFormatter(base=f._base, labelOnlyBase=f.labelOnlyBase,
-                                          minor_thresholds=f.minor_thresholds, linthresh=f._linthresh))
-
-
 class ViewLogLocator(LogLocator):
     """A log axis's ticks as LogLocator places them, only those inside the view. LogLocator also
     returns the decades around the view (one below, two above), and the axis makes a tick for each
@@ -182,20 +170,25 @@ class ViewLogLocator(LogLocator):
         return ticks[(ticks >= lo * (1 - 1e-9)) & (ticks <= hi * (1 + 1e-9))]
 
 
-def view_log_ticks(fig):
-    """Every log axis of `fig` located by ViewLogLocator, with its locators' settings."""
+def lean_log_axes(fig, view_ticks=True):
+    """Every log and symlog axis of `fig` labelled by PlainLogFormatter and (view_ticks) every log
+    axis located by ViewLogLocator, each with the settings of the formatter or locator it replaces."""
     for ax in fig.axes:
         for axis in (ax.xaxis, ax.yaxis):
-            for get, put in ((axis.get_major_locator, axis.set_major_locator),
-                             (axis.get_minor_locator, axis.set_minor_locator)):
-                loc = get()
-                if type(loc) is LogLocator:
-                    put(ViewLogLocator(base=loc._base, subs=loc._subs, numticks=loc.numticks))
+            for which in ("major", "minor"):
+                f = getattr(axis, f"get_{which}_formatter")()
+                if type(f) is LogFormatterSciNotation:
+                    getattr(axis, f"set_{which}_formatter")(
+                        PlainLogFormatter(base=f._base, labelOnlyBase=f.labelOnlyBase,
+                                          minor_thresholds=f.minor_thresholds, linthresh=f._linthresh))
+                loc = getattr(axis, f"get_{which}_locator")()
+                if view_ticks and type(loc) is LogLocator:
+                    getattr(axis, f"set_{which}_locator")(
+                        ViewLogLocator(base=loc._base, subs=loc._subs, numticks=loc.numticks))
 
 
 def save(fig, out_dir, chart_id):
-    plain_log_labels(fig)
-    view_log_ticks(fig)
+    lean_log_axes(fig)
     fig.tight_layout()
     files = {}
     for ext, kwargs in (("png", {"dpi": PNG_DPI}), ("pdf", {"metadata": {"CreationDate": None}}),
