@@ -9,6 +9,8 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <cstring>
+#include <map>
 
 #include "shadowlab/compare/compare.h"
 #include "shadowlab/raster/raster.h"
@@ -166,6 +168,44 @@ TEST_F(FilterableMaps, NoMethodReturnsAnothersImage) {
     const std::string name = "light." + light + "." + ch;
     EXPECT_FALSE(fPcf.has(name)) << name;
     for (const Frame* f : {&fVsm, &fEvsm2, &fEvsm4, &fMsm}) EXPECT_TRUE(f->has(name)) << name;
+  }
+}
+
+// The rasterizer keeps the moment images of earlier frames (another size or format: vsm's RG32F,
+// msm's and evsm4's RGBA32F) and reuses them when a sweep comes back: every frame of a sequence
+// that leaves and revisits them, with a non-filterable frame between, has the bits of a fresh
+// rasterizer's frame, in every channel.
+TEST_F(FilterableMaps, KeptMomentImagesGiveAFreshRasterizersBits) {
+  REQUIRE_DEVICE();
+  Scene s = stacked();
+  s.camera.width = 240;
+  s.camera.height = 135;
+  auto method = [](Filter filter, int size) {
+    Method m = filtered(filter);
+    m.mapSize = size;
+    m.filterBlur = 2;
+    return m;
+  };
+  const std::pair<Filter, int> steps[] = {{Filter::Vsm, 256},   {Filter::Msm, 256}, {Filter::Pcf, 256},
+                                          {Filter::Vsm, 512},   {Filter::Msm, 512}, {Filter::Vsm, 256},
+                                          {Filter::Evsm4, 256}, {Filter::Msm, 256}, {Filter::Vsm, 512}};
+  std::map<std::pair<Filter, int>, Frame> fresh;
+  for (const auto& [filter, size] : steps) {
+    if (fresh.count({filter, size})) continue;
+    RasterDeviceOptions o;
+    o.validation = true;
+    Rasterizer r(o);
+    fresh[{filter, size}] = r.render(s, method(filter, size));
+    EXPECT_EQ(r.validationMessages(), 0);
+  }
+  for (const auto& [filter, size] : steps) {
+    const Frame f = R->render(s, method(filter, size));
+    const Frame& want = fresh[{filter, size}];
+    const std::string what = toString(filter) + " " + std::to_string(size);
+    ASSERT_EQ(f.names, want.names) << what;
+    for (size_t c = 0; c < f.names.size(); ++c)
+      EXPECT_EQ(0, std::memcmp(f.data[c].data(), want.data[c].data(), f.data[c].size() * sizeof(float)))
+          << what << ": " << f.names[c];
   }
 }
 

@@ -176,6 +176,9 @@ constexpr int kCompactWidth = 256;
 // How many groups' planes (m, cascade) evidence on demand keeps: a sweep whose fastest axis is a
 // bias or a filter needs one; a grid with map.size fastest, one per size.
 constexpr size_t kKeptFootprints = 4;
+// The filterable maps' moment images kept across frames (Impl::momentsSpare): every vsm and msm
+// pair of a 2048^2 sweep (3 sizes x 2 formats, 252 MB) fits.
+constexpr size_t kMomentsKeptBytes = size_t(384) << 20;
 // A group's surface (resolve.frag's kSpecSurface), the planes pass's second attachment and the full
 // resolve's last: the camera ray's t at the visible point, and 1 where the light reaches it (-1
 // where it does not, 0 where no triangle covers the pixel). Kept
@@ -350,8 +353,21 @@ struct Rasterizer::Impl {
   std::unique_ptr<raster::SceneGpu> scene;
   vk::Image mapDepth, mapIds, cameraDepth, cameraIds;
   // Filterable maps: the rows-blurred moments and the moments map, one layer per light layer
-  // (1x1 placeholders, never read, for the other filters: every binding needs an image).
+  // (1x1 placeholders, never read, until a filterable map needs them: every binding needs an
+  // image; the other filters leave whatever pair is there).
   vk::Image momentsRows, moments;
+  // Pairs of other sizes, layer counts or formats, kept for when a sweep comes back to them (its
+  // rows alternate vsm and msm, and map sizes): a new pair is fresh memory, whose first touch the
+  // moments pass paid inside its timestamps (page faults clearing 128 MB at 2048^2 with msm, ~40
+  // of its ~100 ms). At most kMomentsKeptBytes in all, with the pair in use; the least recently
+  // used goes first, and a pair over the budget on its own is made alone, as before.
+  struct MomentsPair {
+    vk::Image rows, map;
+    size_t bytes = 0;
+    uint64_t lastUse = 0;
+  };
+  std::vector<MomentsPair> momentsSpare;
+  uint64_t momentsUses = 0;
   // resolveOut[2] (the moment channels) is allocated at the first filterable map only.
   vk::Image resolveOut[kResolveAttachments];
   vk::Image lookupOut;        // pass 4's visibility (R8), host-readable
@@ -649,14 +665,53 @@ VkPipeline Rasterizer::Impl::momentsPipeline(Filter filter, bool cols) {
 }
 
 void Rasterizer::Impl::ensureMoments(Filter filter, int mapSize, int lightLayers) {
-  const bool used = isMomentFilter(filter);
-  const int size = used ? mapSize : 1, layers = used ? std::max(1, lightLayers) : 1;
-  const VkFormat format = momentsFormat(filter);
-  if (moments.width() == size && moments.layers() == layers && moments.format() == format) return;
   const VkImageUsageFlags usage = VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT | VK_IMAGE_USAGE_SAMPLED_BIT;
-  // Release the old pair first: two sets of 4096^2 RGBA32F layers would not fit together.
+  const VkFormat format = momentsFormat(filter);
+  if (!isMomentFilter(filter)) {  // never read: any pair will do, the placeholders until there is one
+    if (moments.width() == 0) {
+      momentsRows = vk::Image(*context, 1, 1, 1, format, usage, VK_IMAGE_ASPECT_COLOR_BIT);
+      moments = vk::Image(*context, 1, 1, 1, format, usage, VK_IMAGE_ASPECT_COLOR_BIT);
+    }
+    return;
+  }
+  const int size = mapSize, layers = std::max(1, lightLayers);
+  auto fits = [&](const vk::Image& image) {
+    return image.width() == size && image.layers() == layers && image.format() == format;
+  };
+  if (fits(moments)) return;
+  ++momentsUses;
+  // Both images of a pair: size^2 texels per layer, RG32F or RGBA32F.
+  auto pairBytes = [](int side, int count, VkFormat f) {
+    return 2 * size_t(side) * size_t(side) * size_t(count) * (f == VK_FORMAT_R32G32B32A32_SFLOAT ? 16u : 8u);
+  };
+  if (moments.width() > 1) {  // the pair in use becomes a spare (a placeholder is dropped)
+    MomentsPair spare;
+    spare.bytes = pairBytes(moments.width(), moments.layers(), moments.format());
+    spare.lastUse = momentsUses;
+    spare.rows = std::move(momentsRows);
+    spare.map = std::move(moments);
+    momentsSpare.push_back(std::move(spare));
+  }
   momentsRows = vk::Image();
   moments = vk::Image();
+  for (auto it = momentsSpare.begin(); it != momentsSpare.end(); ++it)
+    if (fits(it->map)) {
+      momentsRows = std::move(it->rows);
+      moments = std::move(it->map);
+      momentsSpare.erase(it);
+      return;
+    }
+  // A new pair: spares go, least recently used first, until it fits the budget beside them (all
+  // of them before a pair over the budget: two sets of 4096^2 RGBA32F layers would not fit).
+  const size_t need = pairBytes(size, layers, format);
+  auto spareBytes = [&] {
+    size_t n = 0;
+    for (const MomentsPair& p : momentsSpare) n += p.bytes;
+    return n;
+  };
+  while (!momentsSpare.empty() && spareBytes() + need > kMomentsKeptBytes)
+    momentsSpare.erase(std::min_element(momentsSpare.begin(), momentsSpare.end(),
+                                        [](const MomentsPair& a, const MomentsPair& b) { return a.lastUse < b.lastUse; }));
   momentsRows = vk::Image(*context, size, size, layers, format, usage, VK_IMAGE_ASPECT_COLOR_BIT);
   moments = vk::Image(*context, size, size, layers, format, usage, VK_IMAGE_ASPECT_COLOR_BIT);
 }
