@@ -710,8 +710,9 @@ void Rasterizer::Impl::ensureMoments(Filter filter, int mapSize, int lightLayers
     return n;
   };
   while (!momentsSpare.empty() && spareBytes() + need > kMomentsKeptBytes)
-    momentsSpare.erase(std::min_element(momentsSpare.begin(), momentsSpare.end(),
-                                        [](const MomentsPair& a, const MomentsPair& b) { return a.lastUse < b.lastUse; }));
+    momentsSpare.erase(
+        std::min_element(momentsSpare.begin(), momentsSpare.end(),
+                         [](const MomentsPair& a, const MomentsPair& b) { return a.lastUse < b.lastUse; }));
   momentsRows = vk::Image(*context, size, size, layers, format, usage, VK_IMAGE_ASPECT_COLOR_BIT);
   moments = vk::Image(*context, size, size, layers, format, usage, VK_IMAGE_ASPECT_COLOR_BIT);
 }
