@@ -107,15 +107,21 @@ class ErrorBySizeTest(unittest.TestCase):
             # "shown": only the worse slope leaks, and the panel shows each size's best slope (0).
             "shown": [row("shown", 0, n, 0.01, 0.01, 0.0) for n in (256, 1024)]
             + [row("shown", 1, n, 0.03, 0.02, 0.01) for n in (256, 1024)],
+            # "old": rows of a build without leak_rate.
+            "old": [row("old", s, n, 0.01, 0.01, None) for s in (0, 1) for n in (256, 1024)],
         }
+        for r in rows["old"]:
+            del r["metrics"]["leak_rate"]
         with tempfile.TemporaryDirectory() as out:
-            files, caption = charts.chart_error_by_size(["flat", "shown"], rows, ["map.size", "bias.slope"], classes,
-                                                        out)
+            files, caption = charts.chart_error_by_size(["flat", "shown", "old"], rows, ["map.size", "bias.slope"],
+                                                        classes, out)
             with open(os.path.join(out, "error_by_size.svg"), encoding="utf-8") as f:
                 svg = f.read()
-        self.assertEqual(svg.count("<!-- no leak errors -->"), 2, "one panel of each scene")
+        self.assertEqual(svg.count("<!-- no leak errors -->"), 2, "one panel of each measured scene")
         self.assertEqual(svg.count("<!-- in any configuration -->"), 1)
         self.assertEqual(svg.count("<!-- in the configurations shown -->"), 1)
+        self.assertEqual(svg.count("<!-- no leak_rate -->"), 1, "the old scene's rows have no leak_rate")
+        self.assertIn("written by an older build", caption)
         self.assertNotIn("<!-- no acne errors -->", svg)
         self.assertIn("no configuration of the panel's scene has the class", caption)
         self.assertIn("some other configuration of the scene has it", caption)

@@ -251,14 +251,16 @@ def chart_error_by_size(scenes, rows_by_scene, swept, classes, out_dir):
                 # Every point would be a zero: say so in words instead of flat lines at an arbitrary
                 # floor of an empty log axis (whose ticks and grid were also most of the panel's
                 # drawing time). "In any configuration" when no row of the scene has the class.
+                # No point at all: the rows lack the metric (results of a build without the class).
                 anywhere = any((num(r["metrics"], metric) or 0.0) > 0.0 for r in rows)
+                measured = any(pts for _, pts in lines)
                 ax.set_xticks([])
                 ax.set_yticks([])
-                ax.text(0.5, 0.5, f"no {label} errors\n" + ("in the configurations shown" if anywhere
-                                                             else "in any configuration"),
-                        transform=ax.transAxes, ha="center", va="center", color="0.35")
+                text = (f"no {label} errors\n" + ("in the configurations shown" if anywhere else "in any configuration")
+                        if measured else f"no {metric}\nin the results")
+                ax.text(0.5, 0.5, text, transform=ax.transAxes, ha="center", va="center", color="0.35")
                 ax.set_title(f"{scene}: {label}")
-                empty_panels.add("shown" if anywhere else "any")
+                empty_panels.add("shown" if anywhere else "any" if measured else "unmeasured")
                 continue
             floor = positive_floor([y for _, pts in lines for _, y in pts])
             for f, pts in lines:
@@ -292,6 +294,8 @@ def chart_error_by_size(scenes, rows_by_scene, swept, classes, out_dir):
     if "shown" in empty_panels:
         caption += (" \"No ... errors in the configurations shown\": the class's rate is 0 in every configuration"
                     " the panel would draw; some other configuration of the scene has it.")
+    if "unmeasured" in empty_panels:
+        caption += " \"No ... in the results\": the scene's rows have no such metric (written by an older build)."
     if absent:
         caption += " No configuration has " + ", ".join(absent) + " errors (rate 0 in every row): no panel."
     return save(fig, out_dir, "error_by_size"), caption
