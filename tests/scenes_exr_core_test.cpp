@@ -258,6 +258,45 @@ TEST(ExrCore, LeavesTiledTruncatedAndOversizedFilesToImf) {
   fs::remove_all(dir);
 }
 
+// An uncompressed block shorter than its lines (fuzz_exr's finding, tests/fuzz/regressions/exr):
+// OpenEXR 3.1's core library decoded it without an error from beyond its buffer (values that
+// changed from run to run) and Imf reads it too. The core reader names the damage and readExr
+// reports it.
+TEST(ExrCore, NamesAnUncompressedBlockShorterThanItsLines) {
+  const fs::path dir = freshDir();
+  Planes p = makePlanes(29, 21);
+  const std::string whole = (dir / "none.exr").string();
+  writeScanlines(whole, p, Imf::NO_COMPRESSION, 0, 3);
+  std::string bytes;
+  {
+    std::ifstream in(whole, std::ios::binary);
+    bytes.assign(std::istreambuf_iterator<char>(in), {});
+  }
+  // The first block: its line (3) and its size, 29 pixels of A (2 bytes), B, C and layer.z (4 each).
+  const int32_t head[2] = {3, 29 * 14};
+  const size_t block = bytes.find(std::string(reinterpret_cast<const char*>(head), sizeof(head)));
+  ASSERT_NE(block, std::string::npos);
+  const int32_t shorter = head[1] - 2;
+  std::memcpy(&bytes[block + 4], &shorter, 4);
+  const std::string cut = (dir / "short_block.exr").string();
+  { std::ofstream(cut, std::ios::binary) << bytes; }
+
+  image_io::FloatImage intact;
+  std::string damage = "unset";
+  EXPECT_TRUE(io::readExrCore(whole, intact, kMax, &damage)) << "the file as written";
+  for (bool planar : {false, true}) {
+    image_io::FloatImage core, viaReadExr;
+    core.readPlanar = viaReadExr.readPlanar = planar;
+    damage.clear();
+    EXPECT_FALSE(io::readExrCore(cut, core, kMax, &damage));
+    EXPECT_TRUE(core.channels.empty() && core.pixels.empty() && core.planesRead.empty()) << "untouched";
+    EXPECT_NE(damage.find("line 3 holds 404 bytes, its lines 406"), std::string::npos) << damage;
+    const std::string err = image_io::readExr(cut, viaReadExr);
+    EXPECT_NE(err.find("damaged"), std::string::npos) << err;
+  }
+  fs::remove_all(dir);
+}
+
 #else
 
 TEST(ExrCore, NeedsTheOpenExrReaders) {

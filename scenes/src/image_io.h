@@ -84,11 +84,13 @@ bool readsTexture(const std::string& path);  // a name readTexture reads (.png, 
 // image_io_exr_png.cpp's two EXR readers, which readExr and readTexture use in turn, for
 // tests/scenes_exr_core_test.cpp: readExrCore (OpenEXR's core library; false, `image` untouched,
 // for a file it leaves to the other: tiled, deep, several parts, subsampled, a size outside
-// 1..maxSide, or one it cannot decode) and readExrImf (Imf::InputFile: any EXR, every error named).
+// 1..maxSide, or one it cannot decode; false with `damage` named for a damaged block the other
+// would read without a word: an uncompressed block shorter or longer than its lines) and
+// readExrImf (Imf::InputFile: any EXR, every error it finds named).
 #ifdef SHADOWLAB_IMAGE_IO_HYBRID
 namespace exr_png {
 #endif
-bool readExrCore(const std::string& path, FloatImage& image, int maxSide);
+bool readExrCore(const std::string& path, FloatImage& image, int maxSide, std::string* damage = nullptr);
 std::string readExrImf(const std::string& path, FloatImage& image, int maxSide);
 #ifdef SHADOWLAB_IMAGE_IO_HYBRID
 }  // namespace exr_png

@@ -22,6 +22,7 @@
 #include <exception>
 #include <limits>
 #include <map>
+#include <mutex>
 #include <memory>
 #include <system_error>
 #include <thread>
@@ -95,7 +96,7 @@ std::vector<std::string> oiioChannelOrder(std::vector<std::string> names) {
 // which says what is wrong where something is.
 namespace {
 
-bool readExrCoreUnguarded(const std::string& path, FloatImage& image, int maxSide) {
+bool readExrCoreUnguarded(const std::string& path, FloatImage& image, int maxSide, std::string* damage) {
   exr_context_initializer_t init = EXR_DEFAULT_CONTEXT_INITIALIZER;
   init.error_handler_fn = [](exr_const_context_t, exr_result_t, const char*) {};  // Imf reports instead
   // A header Imf would read another way (e.g. a float attribute declaring 2 bytes: Imf reads 4, a
@@ -112,6 +113,7 @@ bool readExrCoreUnguarded(const std::string& path, FloatImage& image, int maxSid
   } finish{ctxt};
   int parts = 0;
   exr_storage_t storage = EXR_STORAGE_LAST_TYPE;
+  exr_compression_t compression = EXR_COMPRESSION_LAST_TYPE;
   exr_attr_box2i_t window{};
   int32_t linesPerChunk = 0;
   const exr_attr_chlist_t* list = nullptr;
@@ -119,6 +121,7 @@ bool readExrCoreUnguarded(const std::string& path, FloatImage& image, int maxSid
       exr_get_storage(ctxt, 0, &storage) != EXR_ERR_SUCCESS || storage != EXR_STORAGE_SCANLINE ||
       exr_get_data_window(ctxt, 0, &window) != EXR_ERR_SUCCESS ||
       exr_get_scanlines_per_chunk(ctxt, 0, &linesPerChunk) != EXR_ERR_SUCCESS || linesPerChunk <= 0 ||
+      exr_get_compression(ctxt, 0, &compression) != EXR_ERR_SUCCESS ||
       exr_get_channels(ctxt, 0, &list) != EXR_ERR_SUCCESS || !list || list->num_channels <= 0)
     return false;
   const int64_t w64 = int64_t(window.max.x) - window.min.x + 1, h64 = int64_t(window.max.y) - window.min.y + 1;
@@ -146,6 +149,8 @@ bool readExrCoreUnguarded(const std::string& path, FloatImage& image, int maxSid
   const int chunks = int((int64_t(height) + linesPerChunk - 1) / linesPerChunk);
   std::atomic<bool> failed{false};
   std::atomic<int> next{0};
+  std::mutex damageMutex;
+  std::string damaged;  // the first damaged block found, named
   auto decode = [&] {
     exr_decode_pipeline_t pipeline{};  // EXR_DECODE_PIPELINE_INITIALIZER: all zero
     bool started = false;
@@ -156,6 +161,17 @@ bool readExrCoreUnguarded(const std::string& path, FloatImage& image, int maxSid
                    : exr_decoding_initialize(ctxt, 0, &chunk, &pipeline)) != EXR_ERR_SUCCESS ||
           pipeline.channel_count != int16_t(nc) || chunk.start_y < window.min.y ||
           int64_t(chunk.start_y) + chunk.height > int64_t(window.max.y) + 1) {
+        failed = true;
+        break;
+      }
+      // An uncompressed block must hold its lines' bytes exactly. OpenEXR 3.1 decodes a shorter
+      // one without an error, from beyond its buffer (values that change from run to run), and
+      // Imf 3.1 reads one too: the file is damaged, and said so.
+      if (compression == EXR_COMPRESSION_NONE && chunk.packed_size != chunk.unpacked_size) {
+        std::lock_guard<std::mutex> lock(damageMutex);
+        if (damaged.empty())
+          damaged = "damaged: the uncompressed block of line " + std::to_string(chunk.start_y) + " holds " +
+                    std::to_string(chunk.packed_size) + " bytes, its lines " + std::to_string(chunk.unpacked_size);
         failed = true;
         break;
       }
@@ -194,7 +210,10 @@ bool readExrCoreUnguarded(const std::string& path, FloatImage& image, int maxSid
   }
   decode();
   for (std::thread& t : helpers) t.join();
-  if (failed) return false;
+  if (failed) {
+    if (damage) *damage = damaged;
+    return false;
+  }
 
   std::map<std::string, std::string> text;
   int32_t attributes = 0;
@@ -216,9 +235,9 @@ bool readExrCoreUnguarded(const std::string& path, FloatImage& image, int maxSid
 
 }  // namespace
 
-bool readExrCore(const std::string& path, FloatImage& image, int maxSide) {
+bool readExrCore(const std::string& path, FloatImage& image, int maxSide, std::string* damage) {
   try {
-    return readExrCoreUnguarded(path, image, maxSide);
+    return readExrCoreUnguarded(path, image, maxSide, damage);
   } catch (const std::exception&) {  // e.g. no memory for a size a damaged header claims
     return false;                     // readExrImf says so
   }
@@ -281,7 +300,9 @@ namespace {
 
 // Every EXR read: the core library's reader where it takes the file, Imf::InputFile's otherwise.
 std::string readExrFile(const std::string& path, FloatImage& image, int maxSide) {
-  if (readExrCore(path, image, maxSide)) return "";
+  std::string damage;
+  if (readExrCore(path, image, maxSide, &damage)) return "";
+  if (!damage.empty()) return damage;  // a damaged block Imf would read anyway
   return readExrImf(path, image, maxSide);
 }
 
