@@ -22,7 +22,6 @@
 #include <exception>
 #include <limits>
 #include <map>
-#include <mutex>
 #include <memory>
 #include <system_error>
 #include <thread>
@@ -144,13 +143,27 @@ bool readExrCoreUnguarded(const std::string& path, FloatImage& image, int maxSid
   else
     pixels.assign(n * nc, 0.0f);
 
+  const int chunks = int((int64_t(height) + linesPerChunk - 1) / linesPerChunk);
+  // An uncompressed block must hold its lines' bytes exactly. OpenEXR 3.1 decodes a shorter one
+  // without an error, from beyond its buffer (values that change from run to run), and Imf 3.1
+  // reads one too: the file is damaged, and the first such block is named. Checked before any
+  // decoding, in file order, so that the message does not depend on the threads.
+  if (compression == EXR_COMPRESSION_NONE)
+    for (int k = 0; k < chunks; ++k) {
+      exr_chunk_info_t chunk;
+      if (exr_read_scanline_chunk_info(ctxt, 0, window.min.y + k * linesPerChunk, &chunk) != EXR_ERR_SUCCESS)
+        return false;
+      if (chunk.packed_size != chunk.unpacked_size) {
+        if (damage)
+          *damage = "damaged: the uncompressed block of line " + std::to_string(chunk.start_y) + " holds " +
+                    std::to_string(chunk.packed_size) + " bytes, its lines " + std::to_string(chunk.unpacked_size);
+        return false;
+      }
+    }
   // The blocks in turn on every core, each thread with its own decode pipeline; each block fills
   // its own rows, so the result does not depend on the threads.
-  const int chunks = int((int64_t(height) + linesPerChunk - 1) / linesPerChunk);
   std::atomic<bool> failed{false};
   std::atomic<int> next{0};
-  std::mutex damageMutex;
-  std::string damaged;  // the first damaged block found, named
   auto decode = [&] {
     exr_decode_pipeline_t pipeline{};  // EXR_DECODE_PIPELINE_INITIALIZER: all zero
     bool started = false;
@@ -161,17 +174,6 @@ bool readExrCoreUnguarded(const std::string& path, FloatImage& image, int maxSid
                    : exr_decoding_initialize(ctxt, 0, &chunk, &pipeline)) != EXR_ERR_SUCCESS ||
           pipeline.channel_count != int16_t(nc) || chunk.start_y < window.min.y ||
           int64_t(chunk.start_y) + chunk.height > int64_t(window.max.y) + 1) {
-        failed = true;
-        break;
-      }
-      // An uncompressed block must hold its lines' bytes exactly. OpenEXR 3.1 decodes a shorter
-      // one without an error, from beyond its buffer (values that change from run to run), and
-      // Imf 3.1 reads one too: the file is damaged, and said so.
-      if (compression == EXR_COMPRESSION_NONE && chunk.packed_size != chunk.unpacked_size) {
-        std::lock_guard<std::mutex> lock(damageMutex);
-        if (damaged.empty())
-          damaged = "damaged: the uncompressed block of line " + std::to_string(chunk.start_y) + " holds " +
-                    std::to_string(chunk.packed_size) + " bytes, its lines " + std::to_string(chunk.unpacked_size);
         failed = true;
         break;
       }
@@ -210,10 +212,7 @@ bool readExrCoreUnguarded(const std::string& path, FloatImage& image, int maxSid
   }
   decode();
   for (std::thread& t : helpers) t.join();
-  if (failed) {
-    if (damage) *damage = damaged;
-    return false;
-  }
+  if (failed) return false;
 
   std::map<std::string, std::string> text;
   int32_t attributes = 0;
