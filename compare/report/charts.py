@@ -22,6 +22,7 @@ import multiprocessing
 import os
 import re
 import sys
+import textwrap
 
 import matplotlib
 
@@ -438,6 +439,9 @@ TIME_STAGES = [
     ("readback (readback_ms)", "tab:red", _stage("readback_ms"), False),
     ("compare (compare_ms)", "tab:purple", _stage("compare_ms"), False),
 ]
+# The stages' legend lines wrap at this many characters: the legend sits beside every panel and
+# takes its width from all of them (unwrapped, "other wall time (...)" left the bars a third of it).
+LEGEND_WRAP = 48
 OTHER_STAGE = ("other wall time (config_wall_ms less the stages: recording, submit, a pipeline's first-use compile "
                "and warm-up frame, reference, pictures)",
                "tab:gray")
@@ -479,7 +483,7 @@ def chart_time_breakdown(scenes, rows_by_scene, out_dir):
             ax.add_collection(PolyCollection(
                 [[(x0, y - 0.4), (x0 + w, y - 0.4), (x0 + w, y + 0.4), (x0, y + 0.4)]
                  for y, (x0, w) in enumerate(zip(left, widths)) if w > 0],
-                facecolors=colours[label], edgecolors="none", label=label))
+                facecolors=colours[label], edgecolors="none", label=textwrap.fill(label, LEGEND_WRAP)))
             left = [a + b for a, b in zip(left, widths)]
             if label not in drawn:
                 drawn.append(label)
