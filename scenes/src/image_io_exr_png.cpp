@@ -132,22 +132,11 @@ bool readExrCoreUnguarded(const std::string& path, FloatImage& image, int maxSid
     if (e.x_sampling != 1 || e.y_sampling != 1 || !e.name.str) return false;
     names.emplace_back(e.name.str, size_t(e.name.length));
   }
-  std::vector<std::string> order = oiioChannelOrder(names);
-  const size_t nc = names.size(), n = size_t(width) * size_t(height);
-  std::vector<size_t> target(nc);  // file channel -> index in `order`
-  for (size_t c = 0; c < nc; ++c) target[c] = size_t(std::find(order.begin(), order.end(), names[c]) - order.begin());
-  std::vector<std::vector<float>> planes;
-  std::vector<float> pixels;
-  if (image.readPlanar)
-    planes.assign(nc, std::vector<float>(n));
-  else
-    pixels.assign(n * nc, 0.0f);
-
   const int chunks = int((int64_t(height) + linesPerChunk - 1) / linesPerChunk);
   // An uncompressed block must hold its lines' bytes exactly. OpenEXR 3.1 decodes a shorter one
   // without an error, from beyond its buffer (values that change from run to run), and Imf 3.1
-  // reads one too: the file is damaged, and the first such block is named. Checked before any
-  // decoding, in file order, so that the message does not depend on the threads.
+  // reads one too: the file is damaged, and the first such block is named. Checked before anything
+  // is allocated or decoded, in file order, so that the message does not depend on the threads.
   if (compression == EXR_COMPRESSION_NONE)
     for (int k = 0; k < chunks; ++k) {
       exr_chunk_info_t chunk;
@@ -160,6 +149,17 @@ bool readExrCoreUnguarded(const std::string& path, FloatImage& image, int maxSid
         return false;
       }
     }
+  std::vector<std::string> order = oiioChannelOrder(names);
+  const size_t nc = names.size(), n = size_t(width) * size_t(height);
+  std::vector<size_t> target(nc);  // file channel -> index in `order`
+  for (size_t c = 0; c < nc; ++c) target[c] = size_t(std::find(order.begin(), order.end(), names[c]) - order.begin());
+  std::vector<std::vector<float>> planes;
+  std::vector<float> pixels;
+  if (image.readPlanar)
+    planes.assign(nc, std::vector<float>(n));
+  else
+    pixels.assign(n * nc, 0.0f);
+
   // The blocks in turn on every core, each thread with its own decode pipeline; each block fills
   // its own rows, so the result does not depend on the threads.
   std::atomic<bool> failed{false};
