@@ -235,14 +235,15 @@ def chart_error_by_size(scenes, rows_by_scene, swept, classes, out_dir):
             f = line_of(r)
             if f not in filters:
                 filters.append(f)
+        # Each line's row at each size: the lowest error_rate, the same rows in every class's panel.
+        best = best_by(rows, lambda r: (line_of(r), method_value(r, "map.size")),
+                       lambda r: num(r["metrics"], "error_rate"))
         for ci, (metric, label, colour) in enumerate(classes):
             ax = axes[si * len(classes) + ci]
             if colour:  # the class's colour in errors.png, as the panel's frame
                 for spine in ax.spines.values():
                     spine.set_edgecolor(colour)
                     spine.set_linewidth(1.5)
-            best = best_by(rows, lambda r: (line_of(r), method_value(r, "map.size")),
-                           lambda r: num(r["metrics"], "error_rate"))
             lines = []
             for f in filters:
                 pts = sorted((int(k[1]), num(r["metrics"], metric)) for k, r in best.items()
