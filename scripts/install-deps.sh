@@ -2,12 +2,13 @@
 # Installs the Debian 12 packages shadowlab builds and tests with, only those missing.
 # Usage: scripts/install-deps.sh [--with-report]   (--with-report adds matplotlib and chromium)
 set -euo pipefail
-pkgs=(build-essential cmake pkg-config libembree-dev libglm-dev libopenimageio-dev libopenexr-dev libpng-dev libtinyobjloader-dev
+pkgs=(build-essential cmake pkg-config libembree-dev libglm-dev libopenimageio-dev libopenexr-dev libpng-dev libtinyobjloader-dev libtinygltf-dev
       mesa-vulkan-drivers libvulkan-dev glslang-dev glslang-tools spirv-tools vulkan-validationlayers
       nlohmann-json3-dev libcli11-dev libtbb-dev libgtest-dev libbenchmark-dev
       python3-matplotlib chromium
       clang libclang-rt-14-dev
-      slurm-wlm munge)  # the loopback Slurm test (tests/slurm_loopback_test.sh, scripts/slurm-local.sh)
+      slurm-wlm munge     # the loopback Slurm test (tests/slurm_loopback_test.sh, scripts/slurm-local.sh)
+      assimp-testmodels)  # test data only: real OBJ and glTF files, good and malformed, that nobody here wrote
 missing=()
 for p in "${pkgs[@]}"; do
   dpkg-query -W -f='${Status}\n' "$p" 2>/dev/null | grep -q '^install ok installed' || missing+=("$p")
