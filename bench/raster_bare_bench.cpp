@@ -1,4 +1,4 @@
-// The issue's yardstick, measured here rather than quoted: a bare single-purpose shadow-mapping
+// The speed goals' yardstick, measured here rather than quoted: a bare single-purpose shadow-mapping
 // program (depth-only shadow pass with a depth bias; a forward camera pass doing one comparison
 // lookup per pixel into an RGBA8 target), on the same device, scene, map and image size as the
 // rasterizer, in the same process, one after the other. Each benchmark reports both programs'
@@ -12,7 +12,7 @@
 // D32FS8 map's stencil (bare_stencil_shadow_gpu_ms, bare_stencil32_shadow_gpu_ms, beside depth-only
 // passes timed in between): what shadowlab's stencil ids cost on evidence-on-demand frames.
 //
-// harnessVsBare: the issue's whole per-configuration yardstick, the bare harness (that shadow pass,
+// harnessVsBare: the whole per-configuration yardstick, the bare harness (that shadow pass,
 // that camera pass writing 1 byte (R8) of visibility per pixel, a 1-byte-per-pixel readback, a CPU
 // count of the pixels that disagree with the reference) against shadowlab's configuration as a sweep
 // runs it: with evidence on demand (the default captures) the shadow pass, the lookup pass, the
@@ -20,8 +20,8 @@
 // readback into the Frame (bytes, the selection, the kept planes) and compareFrames; the camera's
 // visibility buffer is kept from the first frame, as in a sweep (total_with_visibility_ms adds its
 // time all the same). The *_full captures: the full frame (shadow + camera passes, the readback
-// of every channel, compareFrames), as before evidence on demand. The reference is traced once per
-// scene before timing (a sweep reads it from its cache).
+// of every channel, compareFrames), every evidence channel at every pixel. The reference is
+// traced once per scene before timing (a sweep reads it from its cache).
 // The on-demand captures also time compareFrames through a CompareContext made before the loop
 // from a frame of the configuration's group, as the sweep keeps one per group (compare.h):
 // compare_context_ms, total_context_ms, ratio_context (the iteration time stays the full
@@ -519,7 +519,7 @@ void versusBare(benchmark::State& state, Filter filter, int copies) {
   state.SetLabel(rasterizer().deviceName());
 }
 
-// The scenes of the issue's goal at 1920x1080: sphere_on_plane, and the four-bunny bench scene.
+// The scenes of the speed goal at 1920x1080: sphere_on_plane, and the four-bunny bench scene.
 const Scene& goalScene(const std::string& name) {
   if (name == "bunny_x4") return bench::benchScene(4);
   static std::map<std::string, Scene> cache;
@@ -604,7 +604,7 @@ void harnessVsBare(benchmark::State& state, const std::string& sceneName, Filter
       }
     }
     rasterizer().recycle(std::move(f));
-    // Per configuration: the full frame's passes (the lookup not counted, as before), or on demand
+    // Per configuration: the full frame's passes (the lookup not counted), or on demand
     // the shadow, lookup and evidence passes (the visibility buffer is kept between configurations).
     const double camera = full ? t.cameraGpuMs : t.lookupGpuMs + t.evidenceGpuMs;
     state.SetIterationTime((t.shadowGpuMs + camera + t.readbackMs + sx.back()) * 1e-3);
@@ -749,7 +749,7 @@ ShadowlabSweepPass shadowlabSweepPass(SweepRunner& runner, const SweepPlan& plan
   return out;
 }
 
-// bareSweep: the yardstick of the 100-configuration sweep's 5 s goal (issue 14). One iteration: the
+// bareSweep: the yardstick of the 100-configuration sweep's 5 s goal (compare/SWEEPS.md). One iteration: the
 // bare harness over the 100 configurations with the shadow pass drawn every row (bare_sweep_s),
 // again with the maps kept over the filter axis as shadowlab keeps them (bare_kept_sweep_s), then
 // the same 100 configurations through shadowlab's sweep runner (shadowlab_sweep_s: its loop, what

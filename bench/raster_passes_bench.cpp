@@ -1,7 +1,7 @@
 // Shadow and camera pass GPU times (timestamps) per filter at 1920x1080 with a 2048^2 map, on
 // the bunny (~28k triangles) and on four bunnies (~111k triangles). The iteration time is the
 // GPU time of the two passes (manual time); readback and total CPU time are counters.
-// The yardstick: a bare Vulkan program does ~24 ms (shadow) + ~45 ms (camera) for
+// The quoted yardstick: a bare Vulkan program does ~24 ms (shadow) + ~45 ms (camera) for
 // ~100k triangles on lavapipe; the goal is within 1.3x of that for filters none and hw2x2.
 // lookup/*: the lookup pass alone (lookup_gpu_ms), per filter and bias specialization.
 #include <benchmark/benchmark.h>

@@ -1,6 +1,6 @@
 // The reference against bare Embree loops over the same scene and the same rays, at 1920x1080, on
 // sphere_on_plane and the four-bunny scene (bench_scene.h: the bundled bunny and three copies,
-// ~111k triangles). Issue 14's goal: primary and shadow rays each <= 1.25x the bare loop.
+// ~111k triangles). The goal: primary and shadow rays each <= 1.25x the bare loop.
 //
 //   BM_Ratios/<scene>  one thread (renderReference with threads = 1 runs on the calling thread,
 //                      like the bare loops), in rounds that alternate the measurements so a load

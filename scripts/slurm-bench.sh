@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# The speed goal of issue 15: the 100-configuration 1080p sweep of compare/SWEEPS.md ("the speed
+# The sharding speed goal: the 100-configuration 1080p sweep of compare/SWEEPS.md ("the speed
 # case") as 4 shards on a loopback Slurm (scripts/slurm-local.sh) against one `shadowlab sweep`
 # process on the same machine; goal: sharded wall <= 1.3x single. Both runs write the report, both
 # start from the same warm reference cache (traced once first, untimed), and they run back to back,

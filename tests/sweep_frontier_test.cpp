@@ -236,7 +236,7 @@ TEST(FrontierCli, BadFrontierFlagsExitTwoAndWriteNothing) {
   fs::remove_all(dir);
 }
 
-// The test: an elevation sweep on grazing finds an acne frontier for every bias method, and a
+// The frontier's defining case: an elevation sweep on grazing finds an acne frontier for every bias method, and a
 // constant comparison bias alone breaks at a higher sun than the same constant plus slope bias.
 TEST(FrontierCli, GrazingElevationSweepFindsAcneFrontiersSlopeBiasHoldsLower) {
   std::string dir = tempDir("grazing");
@@ -260,7 +260,7 @@ TEST(FrontierCli, GrazingElevationSweepFindsAcneFrontiersSlopeBiasHoldsLower) {
     EXPECT_EQ(f["metric"], "acne_rate");
     EXPECT_EQ(f["direction"], "decreasing");
   }
-  // Measured at 480x270 (2026-11-22): the constant alone breaks at 15 deg (acne 22%), with slope 0.25
+  // Measured at 480x270: the constant alone breaks at 15 deg (acne 22%), with slope 0.25
   // at 8 deg (10%); slope 2 keeps acne under 0.1% down to 1 deg. Both weak biases must have a
   // frontier, the constant's must be the higher sun, and the strong slope bias must fail no earlier.
   const auto& constant = frontierOf(fr, "bias.slope=0");

@@ -1,4 +1,4 @@
-// A clone is the whole project (issue "Runs anywhere"): the main job's sweep (scripts/main.sh runs
+// A clone is the whole project: the main job's sweep (scripts/main.sh runs
 // `shadowlab sweep --sweep compare/report/default_sweep.json`) succeeds over every bundled scene with
 // SHADOWLAB_SHARED_DIR pointing at a folder that does not exist, so no bundled scene reads a shared
 // asset. The negative control shows the check can fail: the bunny scene naming its mesh as

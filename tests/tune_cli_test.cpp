@@ -69,7 +69,7 @@ TEST(TuneCli, BadArgumentsExit2NamingThemAndWriteNothing) {
   fs::remove_all(dir);
 }
 
-// The "done when", at 160x90 with a smaller grid (map.size 256..2048, three filters,
+// tune's acceptance case, at 160x90 with a smaller grid (map.size 256..2048, three filters,
 // bias.slope 0..2 in steps of 0.25: 108 configurations x 3 scenes).
 TEST(TuneCli, MaxErrorOnThreeScenesMeetsTheTargetAndNoCheaperGridPointDoes) {
   const fs::path dir = tempDir("e2e");

@@ -14,7 +14,7 @@ namespace shadowlab {
 std::string referenceHash(const Scene& scene, const ReferenceOptions& options) {
   // Version tag first: bump it whenever the reference's output changes for the same inputs
   // (channels, origin offset, sample pattern), so stale cache entries stop matching. /2: the cache
-  // holds the Compare channel set (issue 14), where /1 entries hold every channel.
+  // holds the Compare channel set, where /1 entries hold every channel.
   std::string key = "shadowlab.reference/2;scene=" + scene.hash + ";camera=" + scene.camera.hash() +
                     ";spp=" + std::to_string(options.spp);
   return hashHex(fnv1a64(key.data(), key.size()));

@@ -314,7 +314,7 @@ class PipelineRunner final : public SweepRunner {
   // order, so the runner keeps, per scene variant (reference), the two rows that are best and worst
   // so far: the raster planes the triptych draws (hit, object_id, the light's vis) and the row's
   // classification. writeTriptych then draws a kept row instead of rendering it again (about 0.35 s
-  // of a 100-row sweep's report: compare/SWEEPS.md, session 12); a row it does not hold (resumed, or
+  // of a 100-row sweep's report: compare/SWEEPS.md, "The report's time"); a row it does not hold (resumed, or
   // a variant dropped for memory) is rendered as before. The same picture, byte for byte
   // (SweepCli.ReportTriptychsOnDemandEqualFullFrameOnes).
   struct KeptPicture {

@@ -10,7 +10,7 @@
 // - count / rate metric: its names in Metrics::toJson, results.csv, the report, the gate; nullptr
 //   where the class has none (the rate's denominator is pixels_compared, compare/METRICS.md).
 // - better: which way the gate (compare/gate) reads a move of those metrics; Lower for every class
-//   today (they count wrong or unscored pixels).
+//   (they count wrong or unscored pixels).
 // - colours (0xRRGGBB) in errors.png and its legend; the shadowed one differs only where the
 //   picture shows the reference's decision (correct lit / correct shadowed), and the legend then
 //   shows both swatches.

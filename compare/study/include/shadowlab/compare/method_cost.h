@@ -4,8 +4,8 @@
 // run (and on a shared machine by tens of percent), so a search that ranked by them would choose
 // differently each time. The measured shadow_gpu_ms / camera_gpu_ms stay in every row beside it.
 //
-// This is the one place the model lives: when the per-method lookup pass of the speed issue
-// (#14, "the time axis must be the method's cost") exists, estimateMethodCost is what it replaces.
+// This is the one place the model lives: a ranking by the measured method time (method_gpu_ms,
+// the shadow pass plus the lookup pass) would replace estimateMethodCost and nothing else.
 #include <cstdint>
 #include <string>
 
