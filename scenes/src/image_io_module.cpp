@@ -10,9 +10,9 @@
 // the file's path), so a command that needs no image still runs.
 // With SHADOWLAB_IMAGE_IO_HYBRID (OpenEXR and libpng found: the default) EXR and PNG files go through
 // image_io_exr_png.cpp, linked in: the reference cache, frames, triptychs, PNG textures never load
-// the module, which then serves textures in other formats only (image_io.h). Loading it took ~0.2 s
-// and held the dynamic loader's lock, so the sweep's device (lavapipe, LLVM) waited for it: a
-// two-row sweep 0.66-0.73 -> 0.39-0.45 s.
+// the module, which then serves textures in other formats only (image_io.h). Loading it takes
+// ~0.2 s and holds the dynamic loader's lock, so the sweep's device (lavapipe, LLVM) would wait for
+// it: a two-row sweep takes ~0.3 s longer with it.
 #include <dlfcn.h>
 #include <unistd.h>
 
