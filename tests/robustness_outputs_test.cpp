@@ -87,7 +87,7 @@ TEST(OutputFolders, CompareChecksItsOutputBeforeReadingFrames) {
   EXPECT_TRUE(fs::is_regular_file(dir / "cmp" / "metrics.json"));
 }
 
-// raster takes the scene: overrides that run and sweep take (it used to refuse them), and the
+// raster takes the scene: overrides that run and sweep take (not refused), and the
 // reference takes the scene: ones while refusing method keys, which do not change the truth.
 TEST(SetSyntax, RasterAndReferenceTakeSceneOverrides) {
   const fs::path dir = tempDir("set");

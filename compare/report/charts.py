@@ -492,7 +492,7 @@ def chart_time_breakdown(scenes, rows_by_scene, out_dir):
         ax.set_ylim(-0.6, len(rows) - 0.4)
         # Each bar's configuration as a text beside it rather than as a tick label: the same words
         # in the same place without the bar's tick mark, and without an axis tick (five artists
-        # moved and formatted at every draw) per row: 100 rows drew in 0.65 -> 0.51 s of CPU.
+        # moved and formatted at every draw) per row: ~20 % less CPU for 100 rows.
         ax.set_yticks([])
         beside = blended_transform_factory(ax.transAxes, ax.transData)
         for y, r in enumerate(rows):

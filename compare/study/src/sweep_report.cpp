@@ -157,7 +157,7 @@ std::string chartPython(const SweepOptions& options) {
 
 // What the prestarted Python runs (`python -c`): with SIGINT ignored and its output discarded, the
 // imports and one throw-away figure in every format (fonts, the backends; no mathtext, which
-// charts.py no longer uses: PlainLogFormatter), the same first-use work charts.py would pay; then
+// charts.py does not use: PlainLogFormatter), the same first-use work charts.py would pay; then
 // it reads "LOG\0SCRIPT\0ARG\0...\0run" from stdin (the sweep's report) and runs SCRIPT as
 // `python SCRIPT ARG...` would, stdout and stderr
 // into LOG, SIGINT back to its default. End of input without that message (the sweep ended
