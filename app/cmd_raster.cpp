@@ -42,6 +42,7 @@ int run(const Options& o) {
   deviceOptions.device = o.device;
   deviceOptions.validation = o.validation;
   Rasterizer rasterizer(deviceOptions);
+  app::checkDeviceMemory("raster", rasterizer, scene, method, o.light);
   RasterTimings t;
   Frame frame = rasterizer.render(scene, method, o.light, &t);
   if (o.validation && rasterizer.validationMessages() > 0)

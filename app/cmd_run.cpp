@@ -68,6 +68,7 @@ int run(const Options& o) {
   RasterDeviceOptions deviceOptions;
   deviceOptions.device = o.device;
   Rasterizer rasterizer(deviceOptions);
+  app::checkDeviceMemory("run", rasterizer, scene, method, light);  // before the reference is traced
   ReferenceOptions referenceOptions;
   referenceOptions.spp = o.spp;
   referenceOptions.progress = app::terminalProgress("run: tracing the reference");

@@ -53,7 +53,6 @@ struct Options {
   CLI::Option* framesOpt = nullptr;
 };
 
-const char* kWhere = "shadowlab stability";
 constexpr const char* kStabilitySchema = "shadowlab.stability/1";
 
 std::string numberText(double v) { return canonicalValueText(nlohmann::json(v)); }
@@ -61,9 +60,8 @@ std::string numberText(double v) { return canonicalValueText(nlohmann::json(v));
 int run(const Options& o) {
   const auto t0 = std::chrono::steady_clock::now();
   // ---- inputs: every error surfaces before anything is traced, rendered or written ------------
-  auto bad = [](const std::string& opt, const std::string& what) {
-    return InputError(std::string(kWhere) + ": " + opt + ": error: " + what);
-  };
+  // The option is the place, as every command's option errors read ("--frames: error: got 1; ...").
+  auto bad = [](const std::string& opt, const std::string& what) { return InputError(opt + ": error: " + what); };
   if (o.outDir.empty()) throw bad("-o", "the output folder is empty; expected a folder");
   const bool lightPath = !o.lightPaths.empty();
   if (lightPath == !o.path.empty())
@@ -180,6 +178,7 @@ int run(const Options& o) {
   RasterDeviceOptions deviceOptions;
   deviceOptions.device = o.device;
   Rasterizer rasterizer(deviceOptions);
+  app::checkDeviceMemory("stability", rasterizer, scene, method, light);  // before any reference
   CompareOptions compareOptions;
   compareOptions.light = light;
   StabilityMetrics s;

@@ -264,7 +264,7 @@ int run(const Options& o) {
   SweepOptions options;
   options.outDir = o.outDir;
   options.progress = stderr;
-  options.progressBar = ::isatty(STDERR_FILENO) == 1;
+  options.progressBar = ::isatty(STDERR_FILENO) == 1 && !app::verbose();  // -v: a line per row
   options.stop = &gStop;
   options.writeReport = !o.noReport;
   options.shard = shard;

@@ -1,13 +1,13 @@
-// `shadowlab version`: prints the version and the dependency versions this build links.
+// `shadowlab version`: prints the version line, as `shadowlab --version` (-V) does.
 #include <cstdio>
 
 #include "command.h"
 
 namespace {
 shadowlab::app::Registrar reg{"version", [](CLI::App& app) {
-                                app.add_subcommand("version", "Print the shadowlab version");
+                                app.add_subcommand("version", "Print the shadowlab version (as --version)");
                                 return std::function<int()>([] {
-                                  std::printf("shadowlab 0.1.0\n");
+                                  std::printf("%s\n", shadowlab::app::versionString().c_str());
                                   return 0;
                                 });
                               }};

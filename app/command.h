@@ -34,6 +34,20 @@ struct Registrar {
   Registrar(const std::string& name, Setup setup) { commandRegistry().push_back({name, std::move(setup)}); }
 };
 
+// The version line: the CMake project version and, where the source was a git checkout at
+// configure time, `git describe` ("shadowlab 0.1.0 (git aeb9bea-dirty)"). `shadowlab --version`,
+// `-V` and `shadowlab version` print it.
+std::string versionString();
+
+// -q/--quiet and -v/--verbose of the long commands (kLongCommands; main adds the flags, so every
+// long command has them the same way). -q: errors only (main points stdout and stderr at /dev/null
+// for the command and writes its error line to the real stderr). -v: more detail, where a command
+// has some to give (verbose()).
+inline constexpr const char* kLongCommands[] = {"run", "stability", "sweep", "tune"};
+enum class Verbosity { Quiet, Normal, Verbose };
+Verbosity verbosity();
+inline bool verbose() { return verbosity() == Verbosity::Verbose; }
+
 // SIGINT/SIGTERM call `handler` once (SA_RESETHAND): the first Ctrl-C asks a long command (sweep,
 // tune) for a clean stop after the configuration in progress; a second one kills the process the
 // default way (rows already appended are safe either way).

@@ -5,6 +5,7 @@
 #include <cmath>
 #include <cstdio>
 
+#include "command.h"
 #include "shadowlab/reference/reference.h"
 #include "shadowlab/scenes/error.h"
 
@@ -107,9 +108,30 @@ void checkMemory(const std::string& command, const MemoryEstimate& estimate, dou
     throw InputError("shadowlab " + command + ": error: this job needs about " + gib(estimate.bytes) + " (" +
                      estimate.breakdown + "); expected at most " + limitText +
                      ": lower the camera's width and height or map.size");
-  if (estimate.bytes >= kGiB)
+  if (estimate.bytes >= kGiB || verbose())
     std::fprintf(stderr, "%s: about %s of memory (%s); the limit is %s\n", command.c_str(), gib(estimate.bytes).c_str(),
                  estimate.breakdown.c_str(), limitText.c_str());
+}
+
+void checkDeviceMemory(const std::string& command, const Rasterizer& rasterizer, const Scene& scene,
+                       const Method& method, const std::string& light) {
+  const std::vector<DeviceImage> images = rasterizer.plannedImages(scene, method, light);
+  const DeviceMemoryLimits limits = rasterizer.memoryLimits();
+  if (verbose()) {
+    double total = 0;
+    std::string terms;
+    for (const DeviceImage& image : images) {
+      total += double(image.bytes);
+      terms += (terms.empty() ? "" : " + ") + image.describe();
+    }
+    std::fprintf(stderr, "%s: device images %s (%s); device %s allows %s per image%s\n", command.c_str(),
+                 formatBytes(total).c_str(), terms.c_str(), limits.deviceName.c_str(),
+                 formatBytes(double(limits.maxAllocationBytes)).c_str(),
+                 limits.cpuDevice
+                     ? " (a CPU device: its memory is this machine's RAM)"
+                     : (", " + formatBytes(double(limits.deviceLocalHeapBytes)) + " device-local").c_str());
+  }
+  shadowlab::checkDeviceMemory(images, limits);
 }
 
 std::function<void(double)> terminalProgress(const std::string& label) {

@@ -7,6 +7,7 @@
 
 #include <CLI/CLI.hpp>
 
+#include "shadowlab/raster/raster.h"
 #include "shadowlab/reference/reference.h"
 #include "shadowlab/scenes/method.h"
 #include "shadowlab/scenes/scene.h"
@@ -38,6 +39,12 @@ void addMaxMemoryOption(CLI::App* sub, double* maxMemoryGiB);
 // Throws InputError (exit 2) naming the estimate, its terms and the limit when the job cannot
 // fit; prints the estimate on stderr when it is 1 GiB or more, so a large job says so first.
 void checkMemory(const std::string& command, const MemoryEstimate& estimate, double maxMemoryGiB);
+
+// Refuses (InputError, exit 2) a request whose device images do not fit the device (its largest
+// allocation, its layers; on a GPU its device-local heap: raster/device_memory.h), before any work;
+// with -v prints the images and the limits.
+void checkDeviceMemory(const std::string& command, const Rasterizer& rasterizer, const Scene& scene,
+                       const Method& method, const std::string& light);
 
 // "\r<label> 42%" on stderr, updated as the fraction grows, when stderr is a terminal; an empty
 // function otherwise (logs and pipes stay quiet, as sweeps already do).

@@ -1,6 +1,13 @@
-// shadowlab: builds the CLI from the registered subcommands, parses, dispatches.
+// shadowlab: builds the CLI from the registered subcommands, parses, dispatches. Every error line
+// it prints has one of two forms (STYLE.md "Errors a user can act on"):
+//   shadowlab <subcommand>: error: what was found; expected what
+//   file: place: error: ...      (a file, or an option such as --spp, and the place in it)
+#include <fcntl.h>
+#include <unistd.h>
+
 #include <algorithm>
 #include <cstdio>
+#include <cstring>
 #include <exception>
 #include <map>
 
@@ -8,12 +15,55 @@
 
 #include "command.h"
 #include "shadowlab/scenes/error.h"
+#include "shadowlab_version.h"
 
 namespace shadowlab::app {
+
 std::vector<CommandEntry>& commandRegistry() {
   static std::vector<CommandEntry> registry;
   return registry;
 }
+
+namespace {
+Verbosity gVerbosity = Verbosity::Normal;
+}  // namespace
+
+Verbosity verbosity() { return gVerbosity; }
+
+std::string versionString() {
+  const std::string describe = kGitDescribe;
+  return std::string("shadowlab ") + kProjectVersion + (describe.empty() ? "" : " (git " + describe + ")");
+}
+
+namespace {
+
+// An error message as the user sees it: a message in one of the two forms passes as it is (an
+// option is the place where the user wrote it: "--spp: error: got 0; ...", "--set: map.size:
+// error: ..."); a bare one, or one that names no command ("shadowlab: error: ..."), gets the
+// command's prefix.
+std::string errorLine(const std::string& command, const std::string& what) {
+  const std::string prefix = "shadowlab" + (command.empty() ? std::string() : " " + command) + ": error: ";
+  const std::string unnamed = "shadowlab: error: ";
+  if (what.rfind(unnamed, 0) == 0) return prefix + what.substr(unnamed.size());
+  if (what.rfind("error: ", 0) == 0) return prefix + what.substr(7);
+  if (what.find(": error: ") != std::string::npos) return what;
+  return prefix + what;
+}
+
+std::string commandList(const std::vector<CommandEntry>& registry) {
+  std::string names;
+  for (const CommandEntry& e : registry) names += (names.empty() ? "" : ", ") + e.name;
+  return names;
+}
+
+// The first argument that is not an option: the subcommand (the top level has only flags).
+std::string subcommandArgument(int argc, char** argv) {
+  for (int i = 1; i < argc; ++i)
+    if (argv[i][0] != '-') return argv[i];
+  return "";
+}
+
+}  // namespace
 }  // namespace shadowlab::app
 
 int main(int argc, char** argv) {
@@ -24,6 +74,7 @@ int main(int argc, char** argv) {
   // not the rasterizer library.
   mallopt(M_MMAP_THRESHOLD, 32 << 20), mallopt(M_TRIM_THRESHOLD, 1 << 30);
   CLI::App cli{"shadowlab: how wrong are your shadow maps, and why"};
+  cli.set_version_flag("-V,--version", app::versionString(), "Print the version and exit");
   cli.require_subcommand(1);
   auto& registry = app::commandRegistry();
   // Registration order follows static initialisation order: sort for stable help text.
@@ -31,23 +82,59 @@ int main(int argc, char** argv) {
             [](const app::CommandEntry& a, const app::CommandEntry& b) { return a.name < b.name; });
   std::map<std::string, std::function<int()>> runners;
   for (auto& entry : registry) runners[entry.name] = entry.setup(cli);
+  for (const char* name : app::kLongCommands) {
+    CLI::App* sub = cli.get_subcommand(name);
+    CLI::Option* quiet = sub->add_flag("-q,--quiet", "Print errors only (no progress, notes or summary)");
+    sub->add_flag("-v,--verbose", "Print more detail (memory estimate, device images)")->excludes(quiet);
+  }
+
+  const std::string command = app::subcommandArgument(argc, argv);
+  if (!command.empty() && runners.count(command) == 0) {
+    std::fprintf(stderr, "shadowlab: error: unknown subcommand \"%s\"; expected one of %s\n", command.c_str(),
+                 app::commandList(registry).c_str());
+    return 2;
+  }
   try {
     cli.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
-    int code = cli.exit(e);
-    return code == 0 ? 0 : 2;
+    if (e.get_exit_code() == 0) return cli.exit(e);  // --help, --version
+    if (command.empty()) {
+      std::fprintf(stderr, "shadowlab: error: no subcommand given; expected one of %s (shadowlab --help)\n",
+                   app::commandList(registry).c_str());
+      return 2;
+    }
+    std::fprintf(stderr, "shadowlab %s: error: %s (shadowlab %s --help)\n", command.c_str(), e.what(), command.c_str());
+    return 2;
   }
+  CLI::App* chosen = cli.get_subcommands().empty() ? nullptr : cli.get_subcommands().front();
+  if (!chosen) return 2;
+  const std::string name = chosen->get_name();
+  // -q: the command's stdout and stderr go to /dev/null; its error line still reaches the user.
+  int errorFd = STDERR_FILENO;
+  if (chosen->get_option_no_throw("--quiet") && chosen->count("--quiet") > 0) {
+    app::gVerbosity = app::Verbosity::Quiet;
+    std::fflush(stdout), std::fflush(stderr);
+    errorFd = ::dup(STDERR_FILENO);
+    const int null = ::open("/dev/null", O_WRONLY);
+    if (errorFd >= 0 && null >= 0) ::dup2(null, STDOUT_FILENO), ::dup2(null, STDERR_FILENO);
+    if (null >= 0) ::close(null);
+    if (errorFd < 0) errorFd = STDERR_FILENO;
+  } else if (chosen->get_option_no_throw("--verbose") && chosen->count("--verbose") > 0) {
+    app::gVerbosity = app::Verbosity::Verbose;
+  }
+  auto fail = [&](int code, const std::string& line) {
+    std::fflush(stdout), std::fflush(stderr);
+    const std::string text = line + "\n";
+    if (::write(errorFd, text.data(), text.size()) < 0) return code;
+    return code;
+  };
   try {
-    for (auto* sub : cli.get_subcommands()) return runners.at(sub->get_name())();
-    return 2;
+    return runners.at(name)();
   } catch (const InputError& e) {
-    std::fprintf(stderr, "%s\n", e.what());
-    return 2;
+    return fail(2, app::errorLine(name, e.what()));
   } catch (const DriverError& e) {
-    std::fprintf(stderr, "shadowlab: internal error: %s\n", e.what());
-    return 3;
+    return fail(3, app::errorLine(name, e.what()));
   } catch (const std::exception& e) {
-    std::fprintf(stderr, "shadowlab: internal error: %s\n", e.what());
-    return 3;
+    return fail(3, app::errorLine(name, std::string("internal error: ") + e.what()));
   }
 }

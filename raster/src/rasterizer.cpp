@@ -58,6 +58,7 @@
 #include <glm/gtc/matrix_inverse.hpp>
 
 #include "light_space.h"
+#include "shadowlab/raster/device_memory.h"
 #include "shadowlab/raster/resolve_abi.h"
 #include "shadowlab/raster/resolve_params.h"
 #include "scene_gpu.h"
@@ -454,6 +455,13 @@ struct Rasterizer::Impl {
   };
   const Light* validate(const Scene& scene, const Method& method, const std::string& lightName) const;
   int maxMapSize() const;
+  DeviceMemoryLimits memoryLimits() const;
+  // The images a frame of this request allocates, with the device's sizes; checkDeviceMemory
+  // refuses it before any is allocated.
+  std::vector<DeviceImage> plannedImages(const Scene& scene, const Method& method,
+                                         const raster::FrameLayers& layers) const;
+  mutable std::string plannedKey;  // plannedImages' last request and answer
+  mutable std::vector<DeviceImage> planned;
   void upload(const Scene& scene);
   void prepareTargets(const Scene& scene, const Method& method, const raster::FrameLayers& layers, bool stencilIds);
   bool stencilIdsApply(const Method& method);
@@ -711,8 +719,9 @@ void Rasterizer::Impl::ensureMoments(Filter filter, int mapSize, int lightLayers
     momentsSpare.erase(
         std::min_element(momentsSpare.begin(), momentsSpare.end(),
                          [](const MomentsPair& a, const MomentsPair& b) { return a.lastUse < b.lastUse; }));
-  momentsRows = vk::Image(*context, size, size, layers, format, usage, VK_IMAGE_ASPECT_COLOR_BIT);
-  moments = vk::Image(*context, size, size, layers, format, usage, VK_IMAGE_ASPECT_COLOR_BIT);
+  momentsRows =
+      vk::Image(*context, size, size, layers, format, usage, VK_IMAGE_ASPECT_COLOR_BIT, false, "moments rows");
+  moments = vk::Image(*context, size, size, layers, format, usage, VK_IMAGE_ASPECT_COLOR_BIT, false, "moments map");
 }
 
 void Rasterizer::Impl::ensureImages(int mapSize, VkFormat mapFormat, int layers, int width, int height,
@@ -721,36 +730,38 @@ void Rasterizer::Impl::ensureImages(int mapSize, VkFormat mapFormat, int layers,
   if (mapDepth.width() != mapSize || mapDepth.format() != mapFormat || mapDepth.layers() != layers) {
     shadowKey.clear();
     mapDepth = vk::Image();  // released first: maps of 4096^2 and more
-    mapDepth = vk::Image(c, mapSize, mapSize, layers, mapFormat,
-                         VK_IMAGE_USAGE_DEPTH_STENCIL_ATTACHMENT_BIT | VK_IMAGE_USAGE_SAMPLED_BIT,
-                         isDepthStencil(mapFormat) ? VK_IMAGE_ASPECT_DEPTH_BIT | VK_IMAGE_ASPECT_STENCIL_BIT
-                                                   : VK_IMAGE_ASPECT_DEPTH_BIT);
+    mapDepth = vk::Image(
+        c, mapSize, mapSize, layers, mapFormat,
+        VK_IMAGE_USAGE_DEPTH_STENCIL_ATTACHMENT_BIT | VK_IMAGE_USAGE_SAMPLED_BIT,
+        isDepthStencil(mapFormat) ? VK_IMAGE_ASPECT_DEPTH_BIT | VK_IMAGE_ASPECT_STENCIL_BIT : VK_IMAGE_ASPECT_DEPTH_BIT,
+        false, "shadow map depth");
   }
   if (mapIds.width() != mapSize || mapIds.layers() != layers) {
     shadowKey.clear();
     mapIds = vk::Image(c, mapSize, mapSize, layers, kIdFormat,
-                       VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT | VK_IMAGE_USAGE_SAMPLED_BIT, VK_IMAGE_ASPECT_COLOR_BIT);
+                       VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT | VK_IMAGE_USAGE_SAMPLED_BIT, VK_IMAGE_ASPECT_COLOR_BIT,
+                       false, "shadow map ids");
   }
   if (cameraIds.width() != width || cameraIds.height() != height) {
     cameraDepth = vk::Image(c, width, height, 1, kCameraDepthFormat, VK_IMAGE_USAGE_DEPTH_STENCIL_ATTACHMENT_BIT,
-                            VK_IMAGE_ASPECT_DEPTH_BIT);
+                            VK_IMAGE_ASPECT_DEPTH_BIT, false, "camera depth");
     visibilityKey.clear();
     cameraIds =
         vk::Image(c, width, height, 1, kIdFormat, VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT | VK_IMAGE_USAGE_SAMPLED_BIT,
-                  VK_IMAGE_ASPECT_COLOR_BIT, true);
+                  VK_IMAGE_ASPECT_COLOR_BIT, true, "camera ids");
     for (int i = 0; i < kResolveAttachments; ++i) {
       resolveOut[i] = vk::Image();
       if (i < 2)
         resolveOut[i] = vk::Image(c, width, height, 1, kResolveFormats[i], VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT,
-                                  VK_IMAGE_ASPECT_COLOR_BIT, true);
+                                  VK_IMAGE_ASPECT_COLOR_BIT, true, "camera resolve target");
     }
     lookupOut = vk::Image(c, width, height, 1, kLookupFormat, VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT,
-                          VK_IMAGE_ASPECT_COLOR_BIT, true);
+                          VK_IMAGE_ASPECT_COLOR_BIT, true, "camera lookup target");
   }
   // The moment channels' target (33 MB at 1080p) only once a filterable map needs it; kept after.
   if (momentChannels && resolveOut[2].width() != width)
     resolveOut[2] = vk::Image(c, width, height, 1, kResolveFormats[2], VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT,
-                              VK_IMAGE_ASPECT_COLOR_BIT, true);
+                              VK_IMAGE_ASPECT_COLOR_BIT, true, "camera resolve target");
 }
 
 void Rasterizer::Impl::writeDescriptors() {
@@ -1138,6 +1149,18 @@ std::string Rasterizer::deviceName() const { return impl_->context->deviceName()
 
 int Rasterizer::maxMapSize() const { return impl_->maxMapSize(); }
 
+DeviceMemoryLimits Rasterizer::memoryLimits() const { return impl_->memoryLimits(); }
+
+std::vector<DeviceImage> Rasterizer::plannedImages(const Scene& scene, const Method& method,
+                                                   const std::string& light) const {
+  const Light* l = impl_->validate(scene, method, light);
+  return impl_->plannedImages(scene, method, raster::fitFrameLayers(scene, l, method, scene.camera));
+}
+
+void Rasterizer::check(const Scene& scene, const Method& method, const std::string& light) const {
+  checkDeviceMemory(plannedImages(scene, method, light), memoryLimits());
+}
+
 int Rasterizer::validationMessages() const { return impl_->context->validationMessages(); }
 
 std::vector<uint8_t> Rasterizer::lookupVisibility() const {
@@ -1258,6 +1281,95 @@ const Light* Rasterizer::Impl::validate(const Scene& scene, const Method& method
 int Rasterizer::Impl::maxMapSize() const {
   const VkPhysicalDeviceLimits& l = context->properties().limits;
   return int(std::min({l.maxImageDimension2D, l.maxFramebufferWidth, l.maxFramebufferHeight}));
+}
+
+DeviceMemoryLimits Rasterizer::Impl::memoryLimits() const {
+  DeviceMemoryLimits out;
+  out.deviceName = context->deviceName();
+  out.cpuDevice = context->properties().deviceType == VK_PHYSICAL_DEVICE_TYPE_CPU;
+  const VkPhysicalDeviceMemoryProperties& memory = context->memoryProperties();
+  for (uint32_t i = 0; i < memory.memoryHeapCount; ++i)
+    if (memory.memoryHeaps[i].flags & VK_MEMORY_HEAP_DEVICE_LOCAL_BIT)
+      out.deviceLocalHeapBytes = std::max<uint64_t>(out.deviceLocalHeapBytes, memory.memoryHeaps[i].size);
+  out.maxAllocationBytes = context->maxAllocationBytes();
+  out.maxImageDimension2D = context->properties().limits.maxImageDimension2D;
+  out.maxImageArrayLayers = context->properties().limits.maxImageArrayLayers;
+  return out;
+}
+
+// What ensureImages and ensureMoments allocate for this frame (the map in the larger of its two
+// formats: the depth+stencil twin serves evidence on demand), sized by the device itself
+// (vkGetDeviceImageMemoryRequirements, Vulkan 1.3: no image is created).
+std::vector<DeviceImage> Rasterizer::Impl::plannedImages(const Scene& scene, const Method& method,
+                                                         const raster::FrameLayers& layers) const {
+  auto bytesOf = [&](int width, int height, int count, VkFormat format, VkImageUsageFlags usage, bool linear) {
+    VkImageCreateInfo info{VK_STRUCTURE_TYPE_IMAGE_CREATE_INFO};
+    info.imageType = VK_IMAGE_TYPE_2D;
+    info.format = format;
+    info.extent = {uint32_t(width), uint32_t(height), 1};
+    info.mipLevels = 1;
+    info.arrayLayers = uint32_t(count);
+    info.samples = VK_SAMPLE_COUNT_1_BIT;
+    info.tiling = linear ? VK_IMAGE_TILING_LINEAR : VK_IMAGE_TILING_OPTIMAL;
+    info.usage = usage;
+    info.sharingMode = VK_SHARING_MODE_EXCLUSIVE;
+    VkDeviceImageMemoryRequirements query{VK_STRUCTURE_TYPE_DEVICE_IMAGE_MEMORY_REQUIREMENTS};
+    query.pCreateInfo = &info;
+    VkMemoryRequirements2 req{VK_STRUCTURE_TYPE_MEMORY_REQUIREMENTS_2};
+    vkGetDeviceImageMemoryRequirements(context->device(), &query, &req);
+    return uint64_t(req.memoryRequirements.size);
+  };
+  const std::string scenePlace = scene.path.empty() ? scene.name : scene.path;
+  // A sweep asks for the same images frame after frame: the device is asked once per shape.
+  const std::string key = scenePlace + "|" + std::to_string(method.mapSize) + "|" + toString(method.mapFormat) + "|" +
+                          toString(method.filter) + "|" + std::to_string(layers.layers.size()) + "|" +
+                          std::to_string(layers.lightLayers) + "|" + std::to_string(scene.camera.width) + "x" +
+                          std::to_string(scene.camera.height);
+  if (key == plannedKey) return planned;
+  std::vector<DeviceImage> out;
+  auto add = [&](const char* what, bool map, int width, int height, int count, VkFormat format, VkImageUsageFlags usage,
+                 bool linear = false) {
+    out.push_back({what, map ? "method" : scenePlace, map ? "map.size" : "/camera", width, height, count,
+                   bytesOf(width, height, count, format, usage, linear)});
+  };
+  // Sizes the device cannot make at all are validate()'s and checkDeviceMemory's to refuse, by
+  // their limits, before the device is asked about them.
+  const uint32_t maxLayers = context->properties().limits.maxImageArrayLayers;
+  const int size = method.mapSize, mapLayers = std::max(1, int(layers.layers.size()));
+  auto sized = [&](const char* what, bool map, int width, int height, int count, VkFormat format,
+                   VkImageUsageFlags usage, bool linear = false) {
+    if (uint32_t(count) > maxLayers)
+      out.push_back({what, map ? "method" : scenePlace, map ? "map.size" : "/camera", width, height, count, 0});
+    else add(what, map, width, height, count, format, usage, linear);
+  };
+  const VkImageUsageFlags depthUsage = VK_IMAGE_USAGE_DEPTH_STENCIL_ATTACHMENT_BIT | VK_IMAGE_USAGE_SAMPLED_BIT;
+  sized("shadow map depth", true, size, size, mapLayers, vkDepthFormat(method.mapFormat), depthUsage);
+  VkFormatProperties fp;
+  const VkFormat twin = vkDepthStencilFormat(method.mapFormat);
+  vkGetPhysicalDeviceFormatProperties(context->physical(), twin, &fp);
+  const VkFormatFeatureFlags need =
+      VK_FORMAT_FEATURE_DEPTH_STENCIL_ATTACHMENT_BIT | VK_FORMAT_FEATURE_SAMPLED_IMAGE_BIT;
+  if ((fp.optimalTilingFeatures & need) == need && uint32_t(mapLayers) <= maxLayers) {
+    const uint64_t twinBytes = bytesOf(size, size, mapLayers, twin, depthUsage, false);
+    out.back().bytes = std::max(out.back().bytes, twinBytes);
+  }
+  const VkImageUsageFlags colorUsage = VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT | VK_IMAGE_USAGE_SAMPLED_BIT;
+  sized("shadow map ids", true, size, size, mapLayers, kIdFormat, colorUsage);
+  if (isMomentFilter(method.filter)) {
+    const int lightLayers = std::max(1, layers.lightLayers);
+    sized("moments map", true, size, size, lightLayers, momentsFormat(method.filter), colorUsage);
+    sized("moments rows", true, size, size, lightLayers, momentsFormat(method.filter), colorUsage);
+  }
+  const int width = scene.camera.width, height = scene.camera.height;
+  add("camera depth", false, width, height, 1, kCameraDepthFormat, VK_IMAGE_USAGE_DEPTH_STENCIL_ATTACHMENT_BIT);
+  add("camera ids", false, width, height, 1, kIdFormat, colorUsage, true);
+  for (int i = 0; i < resolveAttachments(method.filter); ++i)
+    add("camera resolve target", false, width, height, 1, kResolveFormats[i], VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT,
+        true);
+  add("camera lookup target", false, width, height, 1, kLookupFormat, VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT, true);
+  plannedKey = key;
+  planned = out;
+  return out;
 }
 
 // Upload: the scene's geometry, materials and projector images (cached by content hash).
@@ -1835,6 +1947,7 @@ Frame Rasterizer::render(const Scene& scene, const Method& method, const std::st
   const Camera& fit = fitCamera ? *fitCamera : scene.camera;  // what the light frustum follows
   im.upload(scene);
   const raster::FrameLayers layers = raster::fitFrameLayers(scene, light, method, fit);
+  checkDeviceMemory(im.plannedImages(scene, method, layers), im.memoryLimits());
   const abi::Params params = raster::packResolveParams(scene, light, method, fit, layers, im.projectorTexels());
   im.params.upload(&params, sizeof(params));
   const raster::ResolveSpecialization spec = raster::resolveSpecialization(scene, light, method, layers);

@@ -1,6 +1,7 @@
 // Method parameters: one table of keys drives files, --set and --grid, so the three can never
 // disagree on names, types or ranges.
 #include "shadowlab/scenes/method.h"
+#include "shadowlab/scenes/method_keys.h"
 
 #include <cerrno>
 #include <cmath>
@@ -198,95 +199,114 @@ const char* const kExponentExpected = "a number > 0 and <= 100 (clamped to 42, w
 
 using Setter = std::function<void(Method&, const Value&, const Where&)>;
 
-const std::vector<std::pair<std::string, Setter>>& setters() {
-  static const std::vector<std::pair<std::string, Setter>> table = {
-      {"map.size", [](Method& m, const Value& v, const Where& w) { m.mapSize = intIn(v, w, 16, 16384, kMapSizeWhy); }},
-      {"map.format", [](Method& m, const Value& v, const Where& w) { m.mapFormat = enumOf(v, w, kFormats); }},
-      {"cull", [](Method& m, const Value& v, const Where& w) { m.cull = enumOf(v, w, kCulls); }},
-      {"fit", [](Method& m, const Value& v, const Where& w) { m.fit = enumOf(v, w, kFits); }},
-      {"cascades.count",
+// One method key: its name, one line of help (`shadowlab methods`) and its parser. The default is
+// Method{}'s and the range the parser's own "expected ..." (methodKeyTable()).
+struct SetterRow {
+  std::string key;
+  const char* help;
+  Setter set;
+};
+
+const std::vector<SetterRow>& setters() {
+  static const std::vector<SetterRow> table = {
+      {"map.size", "texels per side of each map layer",
+       [](Method& m, const Value& v, const Where& w) { m.mapSize = intIn(v, w, 16, 16384, kMapSizeWhy); }},
+      {"map.format", "the map's depth format",
+       [](Method& m, const Value& v, const Where& w) { m.mapFormat = enumOf(v, w, kFormats); }},
+      {"cull", "which faces the shadow pass culls (none: open quads cast from both sides)",
+       [](Method& m, const Value& v, const Where& w) { m.cull = enumOf(v, w, kCulls); }},
+      {"fit", "how a directional light's map is fitted (kinds.h's fits)",
+       [](Method& m, const Value& v, const Where& w) { m.fit = enumOf(v, w, kFits); }},
+      {"cascades.count", "fit=cascades: slices of the view depth, one map layer each",
        [](Method& m, const Value& v, const Where& w) { m.cascadeCount = intIn(v, w, 1, 8, kCascadeWhy); }},
-      {"cascades.lambda",
+      {"cascades.lambda", "fit=cascades: split scheme, 0 uniform .. 1 logarithmic",
        [](Method& m, const Value& v, const Where& w) {
          m.cascadeLambda = floatIn(v, w, 0.0, 1.0, false, "a number 0..1 (0 uniform, 1 logarithmic splits)");
        }},
-      {"cascades.blend",
+      {"cascades.blend", "fit=cascades: blend band between cascades, fraction of a cascade's depth range",
        [](Method& m, const Value& v, const Where& w) {
          m.cascadeBlend = floatIn(v, w, 0.0, 0.5, false, "a number 0..0.5 (fraction of a cascade's depth range)");
        }},
-      {"cascades.stabilize", [](Method& m, const Value& v, const Where& w) { m.cascadeStabilize = boolOf(v, w); }},
-      {"lispsm.n_scale",
+      {"cascades.stabilize", "fit=cascades: constant-size crops snapped to whole texels",
+       [](Method& m, const Value& v, const Where& w) { m.cascadeStabilize = boolOf(v, w); }},
+      {"lispsm.n_scale", "fit=lispsm: the warp's projection center, times the optimal n (larger: closer to uniform)",
        [](Method& m, const Value& v, const Where& w) {
          m.lispsmNScale = floatIn(v, w, 0.0, kNScaleLimit, true, kNScaleExpected);
        }},
-      {"psm.slide_back",
+      {"psm.slide_back", "fit=psm: how far the virtual camera slides back, times the visible depth range",
        [](Method& m, const Value& v, const Where& w) {
          m.psmSlideBack = floatIn(v, w, 0.0, kSlideBackLimit, false, kSlideBackExpected);
        }},
-      {"tsm.focus",
+      {"tsm.focus", "fit=tsm: the map line the focus region ends on (the 80 % rule)",
        [](Method& m, const Value& v, const Where& w) {
          m.tsmFocus = floatIn(v, w, 0.0, 1.0, true, kTsmFocusExpected);
          if (!(m.tsmFocus < 1.0f)) fail(w.file, w.place, v.got(), kTsmFocusExpected);  // open at 1 too
        }},
-      {"tsm.focus_distance",
+      {"tsm.focus_distance", "fit=tsm: where the focus region ends, share of the view depth range",
        [](Method& m, const Value& v, const Where& w) {
          m.tsmFocusDistance = floatIn(v, w, 0.0, 1.0, true, kTsmFocusDistanceExpected);
        }},
-      {"bias.constant",
+      {"bias.constant", "Vulkan depthBiasConstantFactor (units of the format's resolution r)",
        [](Method& m, const Value& v, const Where& w) {
          m.biasConstant = floatIn(v, w, -kBiasLimit, kBiasLimit, false, "a finite number -1e6..1e6 (units of r)");
        }},
-      {"bias.slope",
+      {"bias.slope", "Vulkan depthBiasSlopeFactor",
        [](Method& m, const Value& v, const Where& w) {
          m.biasSlope = floatIn(v, w, -kBiasLimit, kBiasLimit, false, "a finite number -1e6..1e6");
        }},
-      {"bias.clamp",
+      {"bias.clamp", "Vulkan depthBiasClamp (0: no clamp)",
        [](Method& m, const Value& v, const Where& w) {
          m.biasClamp = floatIn(v, w, -1.0, 1.0, false, "a number -1..1 (normalized depth; 0 = no clamp)");
        }},
-      {"bias.compare",
+      {"bias.compare", "added to the receiver's depth in the comparison (normalized depth)",
        [](Method& m, const Value& v, const Where& w) {
          m.biasCompare = floatIn(v, w, -1.0, 1.0, false, "a number -1..1 (normalized depth)");
        }},
-      {"bias.normal",
+      {"bias.normal", "normal offset of the lookup position, in map texels",
        [](Method& m, const Value& v, const Where& w) {
          m.biasNormal = floatIn(v, w, 0.0, 64.0, false, "a number 0..64 (map texels)");
        }},
-      {"bias.receiver_plane", [](Method& m, const Value& v, const Where& w) { m.biasReceiverPlane = boolOf(v, w); }},
-      {"bias.adaptive", [](Method& m, const Value& v, const Where& w) { m.biasAdaptive = boolOf(v, w); }},
-      {"bias.adaptive_epsilon",
+      {"bias.receiver_plane", "receiver-plane depth bias per filter tap",
+       [](Method& m, const Value& v, const Where& w) { m.biasReceiverPlane = boolOf(v, w); }},
+      {"bias.adaptive", "adaptive depth bias (Dou et al. 2014): compare against the receiver's tangent plane",
+       [](Method& m, const Value& v, const Where& w) { m.biasAdaptive = boolOf(v, w); }},
+      {"bias.adaptive_epsilon", "bias.adaptive: the margin, world units along the light ray",
        [](Method& m, const Value& v, const Where& w) {
          m.biasAdaptiveEpsilon = floatIn(v, w, 0.0, 1e3, false, "a number 0..1000 (world units along the light ray)");
        }},
-      {"filter", [](Method& m, const Value& v, const Where& w) { m.filter = enumOf(v, w, kFilters); }},
-      {"filter.size", [](Method& m, const Value& v, const Where& w) { m.filterSize = intIn(v, w, 3, 15); }},
-      {"filter.taps", [](Method& m, const Value& v, const Where& w) { m.filterTaps = intIn(v, w, 1, 64); }},
-      {"filter.radius",
+      {"filter", "how the map comparisons are combined into visibility (kinds.h's filters)",
+       [](Method& m, const Value& v, const Where& w) { m.filter = enumOf(v, w, kFilters); }},
+      {"filter.size", "filter=pcf: the odd grid size N (N x N comparisons)",
+       [](Method& m, const Value& v, const Where& w) { m.filterSize = intIn(v, w, 3, 15); }},
+      {"filter.taps", "filter=poisson: taps on the disc",
+       [](Method& m, const Value& v, const Where& w) { m.filterTaps = intIn(v, w, 1, 64); }},
+      {"filter.radius", "filter=poisson: the disc's radius in map texels",
        [](Method& m, const Value& v, const Where& w) {
          m.filterRadius = floatIn(v, w, 0.0, 32.0, true, "a number > 0 and <= 32 (map texels)");
        }},
-      {"filter.blur", [](Method& m, const Value& v, const Where& w) { m.filterBlur = intIn(v, w, 0, 16); }},
-      {"vsm.min_variance",
+      {"filter.blur", "filterable maps: the moments' Gaussian radius in texels (0: none)",
+       [](Method& m, const Value& v, const Where& w) { m.filterBlur = intIn(v, w, 0, 16); }},
+      {"vsm.min_variance", "vsm, evsm: variance floor (normalized depth squared)",
        [](Method& m, const Value& v, const Where& w) {
          m.vsmMinVariance = floatIn(v, w, 0.0, 1.0, false, "a number 0..1 (normalized depth squared)");
        }},
-      {"vsm.bleed_reduction",
+      {"vsm.bleed_reduction", "vsm, evsm: light-bleeding cut of Chebyshev's bound (0: none)",
        [](Method& m, const Value& v, const Where& w) {
          m.vsmBleedReduction = floatIn(v, w, 0.0, 0.99, false, "a number 0..0.99 (0: no cut)");
        }},
-      {"evsm.exponent_pos",
+      {"evsm.exponent_pos", "evsm2, evsm4: positive warp exponent (clamped to 42)",
        [](Method& m, const Value& v, const Where& w) {
          m.evsmExponentPos = floatIn(v, w, 0.0, 100.0, true, kExponentExpected);
        }},
-      {"evsm.exponent_neg",
+      {"evsm.exponent_neg", "evsm4: negative warp exponent (clamped to 42)",
        [](Method& m, const Value& v, const Where& w) {
          m.evsmExponentNeg = floatIn(v, w, 0.0, 100.0, true, kExponentExpected);
        }},
-      {"msm.moment_bias",
+      {"msm.moment_bias", "msm: moments pulled towards the centre by this much",
        [](Method& m, const Value& v, const Where& w) {
          m.msmMomentBias = floatIn(v, w, 0.0, 1.0, false, "a number 0..1 (3e-5: 32-bit moments)");
        }},
-      {"projector.reverse_guard",
+      {"projector.reverse_guard", "projectors project only where w >= 0 (not behind the projector)",
        [](Method& m, const Value& v, const Where& w) { m.projectorReverseGuard = boolOf(v, w); }},
   };
   return table;
@@ -305,9 +325,9 @@ void apply(Method& m, const std::string& key, const Value& v, const Where& w) {
     m.name = s;
     return;
   }
-  for (const auto& [k, set] : setters())
-    if (k == key) {
-      set(m, v, w);
+  for (const SetterRow& row : setters())
+    if (row.key == key) {
+      row.set(m, v, w);
       return;
     }
   std::vector<std::string> all = methodKeys();
@@ -370,10 +390,46 @@ void crossCheck(const Method& m, const std::string& file, const std::string& pre
 const std::vector<std::string>& methodKeys() {
   static const std::vector<std::string> keys = [] {
     std::vector<std::string> k;
-    for (const auto& s : setters()) k.push_back(s.first);
+    for (const SetterRow& row : setters()) k.push_back(row.key);
     return k;
   }();
   return keys;
+}
+
+const std::vector<MethodKeyInfo>& methodKeyTable() {
+  static const std::vector<MethodKeyInfo> table = [] {
+    const nlohmann::json defaults = methodToJson(Method{});
+    // The parser's own words for what it expects: every key refuses null, and its error message
+    // ends in "got null; expected <range>".
+    const nlohmann::json null;
+    auto rangeOf = [&](const std::string& key) {
+      Method m;
+      const std::string marker = "; expected ";
+      try {
+        apply(m, key, Value{&null, nullptr}, Where{"", ""});
+      } catch (const InputError& e) {
+        const std::string message = e.what();
+        const size_t at = message.find(marker);
+        if (at != std::string::npos) return message.substr(at + marker.size());
+      }
+      return std::string();  // a key that takes null: tests/app_cli_test.cpp fails on it
+    };
+    auto typeOf = [](const nlohmann::json& value, const std::string& range) -> std::string {
+      if (value.is_boolean()) return "boolean";
+      if (value.is_number_integer()) return "integer";
+      if (value.is_number()) return "number";
+      return range.rfind("one of ", 0) == 0 ? "choice" : "string";
+    };
+    std::vector<MethodKeyInfo> rows;
+    rows.push_back({"name", "string", defaults["name"], rangeOf("name"),
+                    "the method's name in results (default: a method file's name)"});
+    for (const SetterRow& row : setters()) {
+      const std::string range = rangeOf(row.key);
+      rows.push_back({row.key, typeOf(defaults[row.key], range), defaults[row.key], range, row.help});
+    }
+    return rows;
+  }();
+  return table;
 }
 
 Method loadMethodFile(const std::string& path) {

@@ -2,6 +2,7 @@
 
 #include <cstring>
 
+#include "shadowlab/raster/device_memory.h"
 #include "vk/check.h"
 
 namespace shadowlab::vk {
@@ -20,9 +21,11 @@ Buffer::Buffer(const Context& context, VkDeviceSize size, VkBufferUsageFlags usa
   vkGetBufferMemoryRequirements(device, buffer, &req);
   // Cached memory makes the CPU readback of the output planes a plain memcpy speed read.
   uint32_t memoryType = 0;
-  memory_ = context.allocate(req, VK_MEMORY_PROPERTY_HOST_VISIBLE_BIT,
-                             VK_MEMORY_PROPERTY_HOST_COHERENT_BIT | VK_MEMORY_PROPERTY_HOST_CACHED_BIT, &memoryType);
-  VK_CHECK(vkBindBufferMemory(device, buffer, memory_.get(), 0));
+  const std::string what = "a buffer of " + formatBytes(double(req.size));
+  memory_ =
+      context.allocate(req, VK_MEMORY_PROPERTY_HOST_VISIBLE_BIT,
+                       VK_MEMORY_PROPERTY_HOST_COHERENT_BIT | VK_MEMORY_PROPERTY_HOST_CACHED_BIT, &memoryType, what);
+  VK_CHECK_ALLOC(vkBindBufferMemory(device, buffer, memory_.get(), 0), what, context.deviceName());
   VK_CHECK(vkMapMemory(device, memory_.get(), 0, VK_WHOLE_SIZE, 0, &mapped_));
   context.adviseHugePages(mapped_, req.size);
   coherent_ = context.hostCoherent(memoryType);

@@ -60,17 +60,41 @@ const char* resultName(VkResult r) {
   }
 }
 
-bool injectedFailure(const char* expression) {
-  static const char* const fail = [] {
+VkResult injectedResult(const char* expression) {
+  struct Injection {
+    std::string text;
+    VkResult result = VK_ERROR_DEVICE_LOST;
+  };
+  static const Injection injection = [] {
+    Injection in;
     const char* v = std::getenv("SHADOWLAB_VK_FAIL");
-    return v && *v ? v : nullptr;
+    if (!v || !*v) return in;
+    in.text = v;
+    const size_t eq = in.text.find('=');
+    if (eq != std::string::npos) {
+      const std::string result = in.text.substr(eq + 1);
+      in.text.resize(eq);
+      for (VkResult r : {VK_ERROR_OUT_OF_HOST_MEMORY, VK_ERROR_OUT_OF_DEVICE_MEMORY, VK_ERROR_DEVICE_LOST})
+        if (result == resultName(r)) in.result = r;
+    }
+    return in;
   }();
-  return fail && std::strstr(expression, fail);
+  return !injection.text.empty() && std::strstr(expression, injection.text.c_str()) ? injection.result : VK_SUCCESS;
 }
 
 void throwVkError(const char* expression, VkResult result, const char* file, int line) {
   throw DriverError(std::string(file) + ":" + std::to_string(line) + ": error: " + expression + " returned " +
                     resultName(result) + " (" + std::to_string(int(result)) + ")");
+}
+
+void throwAllocationError(const char* expression, VkResult result, const std::string& what, const std::string& device,
+                          const char* file, int line) {
+  if (result != VK_ERROR_OUT_OF_DEVICE_MEMORY && result != VK_ERROR_OUT_OF_HOST_MEMORY)
+    throwVkError(expression, result, file, line);
+  std::string call = expression;
+  call.resize(call.find('('));
+  throw DriverError("device " + device + " could not allocate " + what + " (" + resultName(result) + " at " + call +
+                    "); lower map.size, cascades.count or the camera's size");
 }
 
 namespace {
@@ -162,10 +186,13 @@ Context::Context(const ContextOptions& options) {
       throw DriverError(std::string("device ") + properties_.deviceName + " does not support Vulkan 1.3");
 
     VkPhysicalDeviceDriverProperties driver{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_DRIVER_PROPERTIES};
+    VkPhysicalDeviceVulkan11Properties properties11{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_VULKAN_1_1_PROPERTIES};
+    driver.pNext = &properties11;
     VkPhysicalDeviceProperties2 props2{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_PROPERTIES_2};
     props2.pNext = &driver;
     vkGetPhysicalDeviceProperties2(physical_, &props2);
     driverName_ = driver.driverName;
+    maxAllocationBytes_ = properties11.maxMemoryAllocationSize;
 
     uint32_t familyCount = 0;
     vkGetPhysicalDeviceQueueFamilyProperties(physical_, &familyCount, nullptr);
@@ -275,12 +302,12 @@ uint32_t Context::memoryType(uint32_t typeBits, VkMemoryPropertyFlags required, 
 }
 
 Memory Context::allocate(const VkMemoryRequirements& requirements, VkMemoryPropertyFlags required,
-                         VkMemoryPropertyFlags preferred, uint32_t* typeIndex) const {
+                         VkMemoryPropertyFlags preferred, uint32_t* typeIndex, const std::string& what) const {
   VkMemoryAllocateInfo alloc{VK_STRUCTURE_TYPE_MEMORY_ALLOCATE_INFO};
   alloc.allocationSize = requirements.size;
   alloc.memoryTypeIndex = memoryType(requirements.memoryTypeBits, required, preferred);
   VkDeviceMemory memory;
-  VK_CHECK(vkAllocateMemory(device_, &alloc, nullptr, &memory));
+  VK_CHECK_ALLOC(vkAllocateMemory(device_, &alloc, nullptr, &memory), what, deviceName());
   if (typeIndex) *typeIndex = alloc.memoryTypeIndex;
   return Memory(device_, memory);
 }

@@ -39,9 +39,14 @@ class Context {
   // First memory type allowed by `typeBits` having all of `required` (and preferring `preferred`).
   uint32_t memoryType(uint32_t typeBits, VkMemoryPropertyFlags required, VkMemoryPropertyFlags preferred = 0) const;
   // The one place memory is allocated: `requirements.size` bytes of memoryType(...)'s type;
-  // `typeIndex` (optional) receives the type chosen.
+  // `typeIndex` (optional) receives the type chosen. `what` names it in an out-of-memory error
+  // (check.h's VK_CHECK_ALLOC).
   Memory allocate(const VkMemoryRequirements& requirements, VkMemoryPropertyFlags required,
-                  VkMemoryPropertyFlags preferred = 0, uint32_t* typeIndex = nullptr) const;
+                  VkMemoryPropertyFlags preferred = 0, uint32_t* typeIndex = nullptr,
+                  const std::string& what = "memory") const;
+  const VkPhysicalDeviceMemoryProperties& memoryProperties() const { return memory_; }
+  // maxMemoryAllocationSize (VkPhysicalDeviceVulkan11Properties): the largest single allocation.
+  VkDeviceSize maxAllocationBytes() const { return maxAllocationBytes_; }
   bool hostVisible(uint32_t memoryType) const {
     return memory_.memoryTypes[memoryType].propertyFlags & VK_MEMORY_PROPERTY_HOST_VISIBLE_BIT;
   }
@@ -71,6 +76,7 @@ class Context {
   CommandPool commandPool_;
   VkPhysicalDeviceProperties properties_{};
   VkPhysicalDeviceMemoryProperties memory_{};
+  VkDeviceSize maxAllocationBytes_ = 0;
   std::string driverName_;
   std::unique_ptr<std::atomic<int>> validationMessages_ = std::make_unique<std::atomic<int>>(0);
 };

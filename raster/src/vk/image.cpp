@@ -1,12 +1,13 @@
 #include "vk/image.h"
 
+#include "shadowlab/raster/device_memory.h"
 #include "shadowlab/scenes/error.h"
 #include "vk/check.h"
 
 namespace shadowlab::vk {
 
 Image::Image(const Context& context, int width, int height, int layers, VkFormat format, VkImageUsageFlags usage,
-             VkImageAspectFlags aspect, bool hostReadable)
+             VkImageAspectFlags aspect, bool hostReadable, const char* label)
     : width_(width), height_(height), layers_(layers), format_(format), aspect_(aspect) {
   VkDevice device = context.device();
   if (hostReadable) {
@@ -30,19 +31,23 @@ Image::Image(const Context& context, int width, int height, int layers, VkFormat
   info.usage = usage;
   info.sharingMode = VK_SHARING_MODE_EXCLUSIVE;
   info.initialLayout = VK_IMAGE_LAYOUT_UNDEFINED;
+  // What an out-of-memory error names: "shadow map depth 16384x16384 x 3 layers = 3.00 GiB".
+  const std::string shape = std::string(label) + " " + std::to_string(width) + "x" + std::to_string(height) + " x " +
+                            std::to_string(layers) + (layers == 1 ? " layer" : " layers");
   VkImage image;
-  VK_CHECK(vkCreateImage(device, &info, nullptr, &image));
+  VK_CHECK_ALLOC(vkCreateImage(device, &info, nullptr, &image), shape, context.deviceName());
   image_ = ImageHandle(device, image);
 
   VkMemoryRequirements req;
   vkGetImageMemoryRequirements(device, image, &req);
+  const std::string what = shape + " = " + formatBytes(double(req.size));
   uint32_t memoryType = 0;
   memory_ = hostReadable ? context.allocate(req, VK_MEMORY_PROPERTY_HOST_VISIBLE_BIT,
                                             VK_MEMORY_PROPERTY_HOST_CACHED_BIT | VK_MEMORY_PROPERTY_HOST_COHERENT_BIT,
-                                            &memoryType)
-                         : context.allocate(req, 0, VK_MEMORY_PROPERTY_DEVICE_LOCAL_BIT, &memoryType);
+                                            &memoryType, what)
+                         : context.allocate(req, 0, VK_MEMORY_PROPERTY_DEVICE_LOCAL_BIT, &memoryType, what);
   VkDeviceMemory memory = memory_.get();
-  VK_CHECK(vkBindImageMemory(device, image, memory, 0));
+  VK_CHECK_ALLOC(vkBindImageMemory(device, image, memory, 0), what, context.deviceName());
   if (!hostReadable && context.properties().deviceType == VK_PHYSICAL_DEVICE_TYPE_CPU &&
       context.hostVisible(memoryType)) {
     // Mapped only to reach the pages (Context::adviseHugePages); a GPU's memory is left alone.

@@ -14,9 +14,10 @@ class Image {
   Image() = default;
   // hostReadable: linear tiling in host-visible memory, mapped (one layer): the CPU reads the
   // texels in place at mapped() + y * rowPitch(), no copy to a buffer first. Throws DriverError
-  // when the device cannot render to such an image.
+  // when the device cannot render to such an image. `label` names it in an out-of-memory error
+  // ("shadow map depth"; check.h's VK_CHECK_ALLOC).
   Image(const Context& context, int width, int height, int layers, VkFormat format, VkImageUsageFlags usage,
-        VkImageAspectFlags aspect, bool hostReadable = false);
+        VkImageAspectFlags aspect, bool hostReadable = false, const char* label = "an image");
   Image(Image&&) noexcept = default;
   Image& operator=(Image&&) noexcept = default;
 

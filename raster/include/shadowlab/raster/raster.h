@@ -7,6 +7,7 @@
 #include <string>
 #include <vector>
 
+#include "shadowlab/raster/device_memory.h"
 #include "shadowlab/scenes/frame.h"
 #include "shadowlab/scenes/method.h"
 #include "shadowlab/scenes/scene.h"
@@ -80,6 +81,14 @@ class Rasterizer {
 
   std::string deviceName() const;
   int maxMapSize() const;  // the device's largest 2D image size
+  // What the device can hold (raster/device_memory.h), and the images a render of this request
+  // allocates there, with the device's sizes (validates the request first, as render() does).
+  DeviceMemoryLimits memoryLimits() const;
+  std::vector<DeviceImage> plannedImages(const Scene& scene, const Method& method, const std::string& light = "") const;
+  // Throws what render() would throw for this request before any GPU work (InputError: a method
+  // the device cannot render, an unknown light, images that do not fit; device_memory.h), so a
+  // command refuses it before it traces a reference or writes anything.
+  void check(const Scene& scene, const Method& method, const std::string& light = "") const;
   // Number of validation-layer messages (warnings and errors) seen so far (validation only).
   int validationMessages() const;
   // Hands a finished frame's channel planes back for the next render() to fill: a frame of the
