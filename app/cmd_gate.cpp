@@ -4,6 +4,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <memory>
+#include <optional>
 
 #include "command.h"
 #include "shadowlab/compare/gate.h"
@@ -35,7 +36,13 @@ int updateBaseline(const Options& o, const shadowlab::ResultFile& current) {
   // The rows are about to become the reference: refuse duplicates and NaN as the gate would.
   (void)runGate(current, current, defaultTolerances());
   std::vector<std::string> changes = describeBaselineUpdate(current, baseline);
+  // A first baseline may live in a folder that does not exist yet (out/base/metrics.json): made
+  // now, after every check, and removed again if the write fails.
+  const std::string folder = std::filesystem::path(o.baseline).parent_path().string();
+  std::optional<OutputFolder> created;
+  if (!folder.empty()) created.emplace(folder, "--baseline");
   writeJsonAtomic(o.baseline, baselineDocument(current));
+  if (created) created->keep();
   std::printf("shadowlab gate: %s baseline %s from %s (%zu rows)\n", existed ? "updated" : "created",
               o.baseline.c_str(), current.path.c_str(), current.rows.size());
   for (const std::string& line : changes) std::printf("  %s\n", line.c_str());

@@ -117,12 +117,23 @@ int run(const Options& o) {
   writeMetricsJson((dir / "metrics.json").string(), row);
   out.keep();
   const Metrics& m = r.metrics;
+  const char* written = o.keepImages ? ", reference.exr, raster.exr" : "";
+  if (m.nothingCompared()) {
+    // The outputs are written (errors.png shows what each renderer saw), but a comparison of no
+    // pixel is no result: exit 2, so that a script stops here rather than at the gate.
+    std::printf("compare: %.1f ms, 0 pixels compared (%llu geometry mismatch)\n", r.compareMs,
+                (unsigned long long)m.count(PixelClass::GeometryMismatch));
+    std::printf("wrote %s/metrics.json, errors.png, triptych.png%s\n", o.outDir.c_str(), written);
+    std::fflush(stdout);
+    std::fprintf(stderr, "%s: /camera: error: %s\n", scene.path.c_str(), nothingComparedMessage(m).c_str());
+    return 2;
+  }
   std::printf("compare: %.1f ms, %llu pixels: error_rate %.4f (%s), shadow_iou %.4f, m_median %.2f\n", r.compareMs,
               (unsigned long long)m.pixelsCompared, m.errorRate, errorClassSummary(m, true).c_str(), m.shadowIou,
               m.mMedian);
   if (m.hasProjector) std::printf("%s\n", projectorSummary(m).c_str());
-  std::printf("wrote %s/metrics.json, errors.png, triptych.png%s\n", o.outDir.c_str(),
-              o.keepImages ? ", reference.exr, raster.exr" : "");
+  if (m.mCapped > 0) std::printf("%s\n", footprintCapNote(m).c_str());
+  std::printf("wrote %s/metrics.json, errors.png, triptych.png%s\n", o.outDir.c_str(), written);
   return 0;
 }
 

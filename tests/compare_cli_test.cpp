@@ -1,5 +1,7 @@
 // `shadowlab compare` and `shadowlab run` through the real binary: exit codes, messages, and
 // that a refused input writes nothing.
+#include <algorithm>
+#include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
@@ -201,6 +203,173 @@ TEST_F(CompareCli, RunCachesTheReferenceAndKeepsImages) {
   ASSERT_EQ(c.code, 0) << c.err;
   const nlohmann::json jc = nlohmann::json::parse(slurp(path("c/metrics.json")));
   EXPECT_EQ(jc.at("metrics"), ja.at("metrics"));
+}
+
+TEST_F(CompareCli, CompareOfNothingExits2AndWritesTheMarkedOutputs) {
+  // Both frames all background (a camera that sees only sky): no pixel to score. The outputs are
+  // written (they show it), the metrics say so and hold no rate, and the command exits 2.
+  fs::create_directories(path("ref"));
+  fs::create_directories(path("ras"));
+  Frame reference = syntheticFrame(48, 32, false, 0), raster = syntheticFrame(48, 32, true, 0);
+  for (Frame* f : {&reference, &raster}) std::fill(f->get("hit").begin(), f->get("hit").end(), 0.0f);
+  writeFrameExr(reference, path("ref/reference.exr"));
+  writeFrameExr(raster, path("ras/raster.exr"));
+  const Result r = shadowlab("compare ref ras -o out");
+  EXPECT_EQ(r.code, 2) << r.out << r.err;
+  EXPECT_EQ(r.err,
+            "ref/reference.exr and ras/raster.exr: error: nothing to compare: the camera sees no surface (all "
+            "1536 pixels are background in both frames: sky, or only zero-area triangles); metrics.json says "
+            "\"nothing_compared\": true and its rates are null; expected a camera that sees a surface both "
+            "renderers agree on\n");
+  const nlohmann::json m = nlohmann::json::parse(slurp(path("out/metrics.json"))).at("metrics");
+  EXPECT_EQ(m.at("pixels_compared"), 0);
+  EXPECT_EQ(m.at("nothing_compared"), true);
+  EXPECT_TRUE(m.at("error_rate").is_null());
+  EXPECT_TRUE(m.at("shadow_iou").is_null());
+  EXPECT_TRUE(fs::exists(path("out/errors.png")));
+  EXPECT_TRUE(fs::exists(path("out/triptych.png")));
+}
+
+bool haveRasterizer() {
+  try {
+    Rasterizer probe;
+    return true;
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "\n*** SKIPPING: no Vulkan device for the rasterizer: %s ***\n\n", e.what());
+    return false;
+  }
+}
+
+TEST_F(CompareCli, RunOfACameraThatSeesOnlySkyExits2AndTheGateFailsIt) {
+  if (!haveRasterizer()) GTEST_SKIP() << "no Vulkan device";
+  // The camera looks up, 35 to 75 degrees above the horizon: every ray misses the ground.
+  writeFileAtomic(path("sky.json"), R"({
+    "camera": {"position": [0, 2, 5], "look_at": [0, 8, 2], "vfov_deg": 40, "width": 64, "height": 36},
+    "objects": [{"type": "plane", "name": "ground", "size": [20, 20]}],
+    "lights": [{"type": "directional", "name": "sun", "elevation_deg": 40, "azimuth_deg": 30}]
+  })");
+  const Result r = shadowlab("run sky.json -o out");
+  EXPECT_EQ(r.code, 2) << r.out << r.err;
+  EXPECT_NE(r.err.find("sky.json: /camera: error: nothing to compare: the camera sees no surface (all 2304 pixels are "
+                       "background in both frames"),
+            std::string::npos)
+      << r.err;
+  ASSERT_TRUE(fs::exists(path("out/metrics.json"))) << r.out;
+  const nlohmann::json doc = nlohmann::json::parse(slurp(path("out/metrics.json")));
+  const nlohmann::json& m = doc.at("metrics");
+  EXPECT_EQ(m.at("pixels_compared"), 0);
+  EXPECT_EQ(m.at("nothing_compared"), true);
+  for (const char* k : {"error_rate", "acne_rate", "shadow_iou", "mae", "rmse", "m_median", "m_p95", "m_max"})
+    EXPECT_TRUE(m.at(k).is_null()) << k << " = " << m.at(k).dump();
+
+  // A baseline of the same row that did compare pixels: the gate fails the run (exit 1) naming the
+  // file; the other way round the baseline compares nothing (exit 2); and it never becomes one.
+  nlohmann::json base = doc;
+  base["metrics"] = {{"pixels_compared", 2000}, {"errors", 0}, {"error_rate", 0.0}, {"shadow_iou", 1.0}};
+  writeFileAtomic(path("base.json"), base.dump());
+  const Result g = shadowlab("gate out/metrics.json --baseline base.json");
+  EXPECT_EQ(g.code, 1) << g.out << g.err;
+  EXPECT_NE(g.err.find("nothing was compared in out/metrics.json"), std::string::npos) << g.err;
+  const Result b = shadowlab("gate base.json --baseline out/metrics.json");
+  EXPECT_EQ(b.code, 2) << b.out << b.err;
+  EXPECT_NE(
+      b.err.find("out/metrics.json: /metrics/pixels_compared: error: row \"sky | default | sun\" compares nothing"),
+      std::string::npos)
+      << b.err;
+  EXPECT_EQ(shadowlab("gate out/metrics.json --baseline new/metrics.json --update-baseline").code, 2);
+  EXPECT_FALSE(fs::exists(path("new")));
+}
+
+TEST_F(CompareCli, RunCountsFootprintsAtTheCap) {
+  if (!haveRasterizer()) GTEST_SKIP() << "no Vulkan device";
+  // A point light lying in the ground plane: the ground is edge-on to it, so its map-space
+  // Jacobian is singular and the rasterizer caps m at 1e6 on ground pixels (on most of them: where
+  // rounding leaves the Jacobian barely regular, m is large but below the cap). The block stands
+  // up from the ground and keeps a finite footprint.
+  writeFileAtomic(path("grazing_point.json"), R"({
+    "camera": {"position": [0, 4, 6], "look_at": [0, 0, 0], "vfov_deg": 50, "width": 96, "height": 54},
+    "objects": [{"type": "plane", "name": "ground", "size": [20, 20]},
+                {"type": "box", "name": "block", "size": [1, 1, 1], "transform": {"translate": [0, 0.5, 0]}}],
+    "lights": [{"type": "point", "name": "bulb", "position": [2.5, 0, 1.5]}]
+  })");
+  const Result r = shadowlab("run grazing_point.json -o out --keep-images");
+  ASSERT_EQ(r.code, 0) << r.out << r.err;
+  const nlohmann::json m = nlohmann::json::parse(slurp(path("out/metrics.json"))).at("metrics");
+  // Recount from the frames: compared pixels (hit in both, same object) whose m is at the cap, and
+  // the nearest-rank statistics of the others.
+  const Frame reference = readFrameExr(path("out/reference.exr"));
+  const Frame raster = readFrameExr(path("out/raster.exr"));
+  const std::vector<float>& mPlane = raster.get("light.bulb.m");
+  const float ground = raster.get("object_id")[raster.pixelCount() - size_t(raster.width) / 2];  // bottom centre
+  uint64_t compared = 0, capped = 0, cappedOffGround = 0;
+  std::vector<float> rest;
+  for (size_t i = 0; i < raster.pixelCount(); ++i) {
+    if (!(reference.get("hit")[i] >= 0.5f && raster.get("hit")[i] >= 0.5f &&
+          reference.get("object_id")[i] == raster.get("object_id")[i]))
+      continue;
+    ++compared;
+    if (mPlane[i] >= 1e6f) {
+      ++capped;
+      cappedOffGround += raster.get("object_id")[i] != ground;
+    } else {
+      rest.push_back(mPlane[i]);
+    }
+  }
+  ASSERT_FALSE(rest.empty());
+  std::sort(rest.begin(), rest.end());
+  auto rank = [&](double p) { return double(rest[size_t(std::ceil(p * double(rest.size()))) - 1]); };
+  EXPECT_EQ(m.at("pixels_compared").get<uint64_t>(), compared);
+  EXPECT_EQ(m.at("m_capped").get<uint64_t>(), capped);
+  EXPECT_GT(capped, compared / 2);  // most of the frame is ground
+  EXPECT_EQ(cappedOffGround, 0u);   // the block's faces are not edge-on
+  EXPECT_EQ(m.at("m_median").get<double>(), rank(0.5));
+  EXPECT_EQ(m.at("m_p95").get<double>(), rank(0.95));
+  EXPECT_EQ(m.at("m_max").get<double>(), double(rest.back()));
+  EXPECT_LT(m.at("m_max").get<double>(), 1e6);
+  EXPECT_NE(r.out.find("note: " + std::to_string(capped) + " of " + std::to_string(compared) +
+                       " compared pixels have the texel footprint m at its cap 1000000"),
+            std::string::npos)
+      << r.out;
+  // `compare` on the kept frames says the same.
+  const Result c = shadowlab("compare out out -o cmp");
+  ASSERT_EQ(c.code, 0) << c.err;
+  EXPECT_NE(c.out.find("note: " + std::to_string(capped) + " of"), std::string::npos) << c.out;
+}
+
+TEST_F(CompareCli, ReadmeGateLinesWorkVerbatimInOrder) {
+  if (!haveRasterizer()) GTEST_SKIP() << "no Vulkan device";
+  // README.md's "Commands": the `run` line, then its gate lines in the README's order, verbatim
+  // (the part after `$B `, without the comment), in a fresh folder.
+  std::istringstream readme(slurp(fs::path(SHADOWLAB_SOURCE_DIR) / "README.md"));
+  std::string line, runLine;
+  std::vector<std::string> gateLines;
+  bool inCommands = false;
+  while (std::getline(readme, line)) {
+    if (line.rfind("## ", 0) == 0) inCommands = line == "## Commands";
+    if (!inCommands) continue;
+    const size_t comment = line.find("   #");
+    std::string command = line.substr(0, comment);
+    while (!command.empty() && command.back() == ' ') command.pop_back();
+    if (command.rfind("$B run ", 0) == 0) runLine = command.substr(3);
+    if (command.rfind("$B gate out/run/", 0) == 0) gateLines.push_back(command.substr(3));
+  }
+  ASSERT_FALSE(runLine.empty()) << "README.md's Commands section has no `$B run` line";
+  ASSERT_GE(gateLines.size(), 2u) << "README.md's Commands section has no gate lines for out/run";
+  const Result run = shadowlab(runLine);
+  ASSERT_EQ(run.code, 0) << runLine << "\n" << run.err;
+  // Gating before any baseline exists says how to make one.
+  std::string plain;
+  for (const std::string& g : gateLines)
+    if (g.find("--update-baseline") == std::string::npos) plain = g;
+  ASSERT_FALSE(plain.empty());
+  const Result first = shadowlab(plain);
+  EXPECT_EQ(first.code, 2) << first.err;
+  EXPECT_NE(first.err.find("--update-baseline"), std::string::npos) << first.err;
+  for (const std::string& g : gateLines) {
+    const Result r = shadowlab(g);
+    EXPECT_EQ(r.code, 0) << g << "\n" << r.out << r.err;
+  }
+  EXPECT_TRUE(fs::exists(path("out/base/metrics.json")));
 }
 
 }  // namespace

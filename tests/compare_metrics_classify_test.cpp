@@ -103,7 +103,11 @@ TEST(CompareClassTable, CodesKeysAndMetricNamesAreTheStableOnes) {
   EXPECT_EQ(metrics, (std::set<std::string>{"geometry_mismatch", "acne", "leak", "bleed", "aliasing", "coverage",
                                             "other", "acne_rate", "leak_rate", "bleed_rate", "aliasing_rate",
                                             "coverage_rate", "other_rate"}));
-  const nlohmann::json j = Metrics{}.toJson();
+  Metrics one;  // a comparison of one pixel: an empty one also says "nothing_compared"
+  one.pixelsCompared = 1;
+  const nlohmann::json j = one.toJson();
+  EXPECT_EQ(Metrics{}.toJson().size(), j.size() + 1);
+  EXPECT_EQ(Metrics{}.toJson().at("nothing_compared"), true);
   std::set<std::string> keys;
   for (auto it = j.begin(); it != j.end(); ++it) keys.insert(it.key());
   EXPECT_EQ(keys, (std::set<std::string>{"pixels_compared",
@@ -127,7 +131,8 @@ TEST(CompareClassTable, CodesKeysAndMetricNamesAreTheStableOnes) {
                                          "rmse",
                                          "m_median",
                                          "m_p95",
-                                         "m_max"}));
+                                         "m_max",
+                                         "m_capped"}));
 }
 
 TEST(CompareClassTable, ColoursAreTheOnesErrorsPngHasAlwaysUsed) {

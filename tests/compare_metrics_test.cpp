@@ -271,17 +271,28 @@ TEST(CompareMetrics, FrameComparedWithItselfHasZeroError) {
 }
 
 TEST(CompareMetrics, EmptyFramesAreNanFree) {
-  // No pixel at all, and pixels that are all background: every rate 0, IoU 1, nothing NaN.
+  // No pixel at all, and pixels that are all background: nothing NaN in memory, and in JSON every
+  // ratio is null (undefined, not "perfect"), flagged by "nothing_compared".
   for (int size : {0, 8}) {
     Pair p = makeAgreeingPair(size, size);
     for (Frame* f : {&p.reference, &p.raster}) std::fill(f->get("hit").begin(), f->get("hit").end(), 0.0f);
     Classification c;
     const Metrics m = compareFrames(p.reference, p.raster, {}, &c);
     EXPECT_EQ(m.pixelsCompared, 0u);
-    EXPECT_EQ(m.errorRate, 0.0);
-    EXPECT_EQ(m.shadowIou, 1.0);
-    EXPECT_EQ(m.mMedian, 0.0);
-    expectFiniteJson(m.toJson());
+    EXPECT_TRUE(m.nothingCompared());
+    const nlohmann::json j = m.toJson();
+    EXPECT_EQ(j.at("pixels_compared"), 0);
+    EXPECT_EQ(j.at("nothing_compared"), true);
+    EXPECT_EQ(j.at("errors"), 0);
+    EXPECT_EQ(j.at("acne"), 0);
+    for (const char* k : {"error_rate", "acne_rate", "leak_rate", "bleed_rate", "aliasing_rate", "coverage_rate",
+                          "other_rate", "shadow_iou", "mae", "rmse", "m_median", "m_p95", "m_max"})
+      EXPECT_TRUE(j.at(k).is_null()) << k << " = " << j.at(k).dump();
+    EXPECT_EQ(nothingComparedMessage(m).rfind("nothing to compare: the camera sees no surface (all " +
+                                                  std::to_string(size * size) + " pixels are background",
+                                              0),
+              0u)
+        << nothingComparedMessage(m);
   }
   // NaN and infinity in the inputs do not leak into the metrics.
   Pair p = makeAgreeingPair();
@@ -291,6 +302,76 @@ TEST(CompareMetrics, EmptyFramesAreNanFree) {
   p.ref("light.sun.vis", 6, 6) = std::nanf("");
   const Metrics m = compareFrames(p.reference, p.raster);
   expectFiniteJson(m.toJson());
+  EXPECT_FALSE(m.toJson().contains("nothing_compared"));
+  EXPECT_EQ(nothingComparedMessage(m), "");
+}
+
+TEST(CompareMetrics, OnlyGeometryMismatchComparesNothing) {
+  // Both frames hit, but different objects everywhere: 0 compared, every pixel a mismatch.
+  Pair p = makeAgreeingPair(16, 12);
+  std::fill(p.raster.get("object_id").begin(), p.raster.get("object_id").end(), kCaster);
+  const Metrics m = compareFrames(p.reference, p.raster);
+  EXPECT_TRUE(m.nothingCompared());
+  EXPECT_EQ(m.count(PixelClass::GeometryMismatch), uint64_t(16 * (12 - kBackgroundRows)));
+  EXPECT_TRUE(m.toJson().at("error_rate").is_null());
+  EXPECT_NE(nothingComparedMessage(m).find("no pixel shows the same surface in both frames (" +
+                                           std::to_string(16 * (12 - kBackgroundRows)) + " geometry mismatch"),
+            std::string::npos)
+      << nothingComparedMessage(m);
+}
+
+TEST(CompareMetrics, CappedFootprintsAreCountedAndLeftOutOfTheStatistics) {
+  // 1000 compared pixels: 300 at the cap (1e6, or +inf), 700 holding m = 1..700 shuffled. The
+  // statistics are over the 700: median rank ceil(0.5 * 700) = 350, p95 rank ceil(0.95 * 700) = 665.
+  Pair p = makeAgreeingPair(40, 25 + kBackgroundRows);
+  std::vector<float> values;
+  for (int i = 1; i <= 700; ++i) values.push_back(float(i));
+  for (int i = 0; i < 300; ++i) values.push_back(i % 3 ? kFootprintCapPx : INFINITY);
+  std::mt19937 rng(11);
+  std::shuffle(values.begin(), values.end(), rng);
+  for (int i = 0; i < 1000; ++i) p.raster.get("light.sun.m")[size_t(i)] = values[size_t(i)];
+  Classification classification;
+  const Metrics m = compareFrames(p.reference, p.raster, {}, &classification);
+  EXPECT_EQ(m.pixelsCompared, 1000u);
+  EXPECT_EQ(m.mCapped, 300u);
+  EXPECT_EQ(m.mMedian, 350.0);
+  EXPECT_EQ(m.mP95, 665.0);
+  EXPECT_EQ(m.mMax, 700.0);
+  const nlohmann::json j = m.toJson();
+  EXPECT_EQ(j.at("m_capped"), 300);
+  EXPECT_EQ(j.at("m_max"), 700.0);
+  EXPECT_NE(footprintCapNote(m).find("300 of 1000 compared pixels have the texel footprint m at its cap 1000000"),
+            std::string::npos)
+      << footprintCapNote(m);
+
+  // Through a group's context: the same numbers.
+  p.raster.meta["evidence_group"] = "g";
+  const CompareContext context(p.reference, p.raster);
+  ASSERT_TRUE(context.appliesTo(p.reference, p.raster));
+  const Metrics viaContext = compareFrames(context, p.reference, p.raster);
+  EXPECT_EQ(viaContext.mCapped, 300u);
+  EXPECT_EQ(viaContext.mMedian, 350.0);
+  EXPECT_EQ(viaContext.toJson(), j);
+
+  // Every compared pixel capped: nothing left to describe, the statistics are null.
+  std::fill(p.raster.get("light.sun.m").begin(), p.raster.get("light.sun.m").end(), kFootprintCapPx);
+  const Metrics all = compareFrames(p.reference, p.raster);
+  EXPECT_EQ(all.mCapped, 1000u);
+  const nlohmann::json ja = all.toJson();
+  for (const char* k : {"m_median", "m_p95", "m_max"}) EXPECT_TRUE(ja.at(k).is_null()) << k;
+  EXPECT_EQ(ja.at("error_rate"), 0.0);  // the rest is defined
+
+  // Without an m channel nothing is capped and the statistics are 0, as before.
+  Pair none = makeAgreeingPair(16, 12);
+  Frame withoutM;
+  withoutM.width = none.raster.width;
+  withoutM.height = none.raster.height;
+  withoutM.meta = none.raster.meta;
+  for (size_t k = 0; k < none.raster.names.size(); ++k)
+    if (none.raster.names[k] != "light.sun.m") withoutM.add(none.raster.names[k]) = none.raster.data[k];
+  const Metrics noM = compareFrames(none.reference, withoutM);
+  EXPECT_EQ(noM.mCapped, 0u);
+  EXPECT_EQ(noM.toJson().at("m_median"), 0.0);
 }
 
 TEST(CompareMetrics, MismatchedInputsThrow) {

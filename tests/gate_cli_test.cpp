@@ -169,7 +169,8 @@ TEST_F(GateCli, ImprovementPasses) {
 TEST_F(GateCli, EqualPassesWithAndWithoutTolerances) {
   CliRun r = gate(path("base.json") + " --baseline " + path("base.json"));
   EXPECT_EQ(r.code, 0) << r.out << r.err;
-  EXPECT_NE(r.out.find("PASS: 0 regressions, 0 improved, 12 within tolerance, 6 reported only; 2 rows compared"),
+  EXPECT_NE(r.out.find("PASS: 0 regressions, 0 improved, 12 within tolerance, 6 reported only, 0 new metrics; 2 rows "
+                       "compared"),
             std::string::npos)
       << r.out;
   CliRun t = gate(path("base.json") + " --baseline " + path("base.json") + " --tolerances " + path("tol.json"));
@@ -363,6 +364,133 @@ TEST_F(GateCli, UpdateBaselineCreatesThenRewritesOnPurpose) {
   std::string nan = current("nan.json", [](nlohmann::json& d) { d["rows"][0]["metrics"]["acne_rate"] = nullptr; });
   EXPECT_EQ(gate(nan + " --baseline " + path("golden.json") + " --update-baseline").code, 2);
   EXPECT_EQ(slurp(dir_ / "golden.json"), before);
+}
+
+TEST_F(GateCli, CorruptBaselineMetricIsBadInputNotARegression) {
+  // A string, a negative count, a rate above 1: each is exit 2 naming the file and the pointer,
+  // whichever side holds it; before, the string and the negative rate read as "REGRESSED" (exit 1).
+  struct Case {
+    const char* metric;
+    nlohmann::json value;
+    std::string expected;
+  };
+  const Case cases[] = {
+      {"acne_rate", "0.1", "is the string \"0.1\"; expected a number in [0, 1] (a fraction of compared pixels)"},
+      {"acne_rate", -0.5, "is -0.5; expected a number in [0, 1] (a fraction of compared pixels)"},
+      {"shadow_iou", 1.5, "is 1.5; expected a number in [0, 1] (a fraction of compared pixels)"},
+      {"errors", -3, "is -3; expected a number >= 0"},
+  };
+  for (const Case& c : cases) {
+    const std::string doctored =
+        current("doctored.json", [&](nlohmann::json& d) { d["rows"][1]["metrics"][c.metric] = c.value; });
+    const std::string message =
+        doctored + ": /rows/1/metrics/" + c.metric + ": error: metric \"" + c.metric + "\" " + c.expected + "\n";
+    CliRun asBaseline = gate(path("base.json") + " --baseline " + doctored);
+    EXPECT_EQ(asBaseline.code, 2) << c.metric << asBaseline.out << asBaseline.err;
+    EXPECT_EQ(asBaseline.err, message);
+    EXPECT_EQ(asBaseline.out, "");
+    CliRun asCurrent = gate(doctored + " --baseline " + path("base.json"));
+    EXPECT_EQ(asCurrent.code, 2) << c.metric << asCurrent.out << asCurrent.err;
+    EXPECT_EQ(asCurrent.err, message);
+  }
+}
+
+TEST_F(GateCli, NewMetricIsCountedInTheSummary) {
+  const std::string cur = current("cur.json", [](nlohmann::json& d) { d["rows"][0]["metrics"]["m_capped"] = 12; });
+  CliRun r = gate(cur + " --baseline " + path("base.json") + " --json " + path("gate.json"));
+  EXPECT_EQ(r.code, 0) << r.out << r.err;
+  EXPECT_NE(r.out.find("new      grazing | bias.slope=0 | sun  m_capped"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("reported only, 1 new metric; 2 rows compared, 0 new"), std::string::npos) << r.out;
+  EXPECT_EQ(nlohmann::json::parse(slurp(dir_ / "gate.json"))["counts"]["new_metrics"], 1);
+}
+
+// The metrics of a row that compared nothing, as Metrics::toJson writes them.
+void compareNothing(nlohmann::json& row) {
+  nlohmann::json& m = row["metrics"];
+  m = {{"pixels_compared", 0}, {"nothing_compared", true}, {"errors", 0},          {"acne", 0},
+       {"acne_rate", nullptr}, {"leak_rate", nullptr},     {"shadow_iou", nullptr}};
+}
+
+TEST_F(GateCli, CurrentRowThatComparedNothingFails) {
+  const std::string cur = current("cur.json", [](nlohmann::json& d) { compareNothing(d["rows"][1]); });
+  CliRun r = gate(cur + " --baseline " + path("base.json") + " --junit " + path("gate.xml"));
+  EXPECT_EQ(r.code, 1) << r.out << r.err;
+  EXPECT_EQ(r.err, "shadowlab gate: error: grazing | default | sun: nothing was compared in " + cur +
+                       " /rows/1 (pixels_compared 0: the camera sees no surface both renderers agree on); expected "
+                       "compared pixels, 40000 in the baseline\n");
+  EXPECT_NE(r.out.find("REGRESSED  grazing | default | sun"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("FAIL: 1 regression"), std::string::npos) << r.out;
+  EXPECT_TRUE(fs::exists(dir_ / "gate.xml"));
+
+  // A file of today's older writers says only pixels_compared 0 (rates 0, IoU 1): the same failure.
+  const std::string old = current("old.json", [](nlohmann::json& d) {
+    d["rows"][1]["metrics"] = {{"pixels_compared", 0}, {"errors", 0},      {"acne", 0},
+                               {"acne_rate", 0.0},     {"leak_rate", 0.0}, {"shadow_iou", 1.0}};
+  });
+  CliRun o = gate(old + " --baseline " + path("base.json"));
+  EXPECT_EQ(o.code, 1) << o.out << o.err;
+  EXPECT_NE(o.err.find("nothing was compared in " + old), std::string::npos) << o.err;
+
+  // A new row that compared nothing fails too: a new row is no pass by default when it scored nothing.
+  const std::string added = current("added.json", [](nlohmann::json& d) {
+    nlohmann::json row = d["rows"][1];
+    row["config"] = "map.size=64";
+    compareNothing(row);
+    d["rows"].push_back(row);
+  });
+  CliRun n = gate(added + " --baseline " + path("base.json"));
+  EXPECT_EQ(n.code, 1) << n.out << n.err;
+  EXPECT_EQ(n.err, "shadowlab gate: error: grazing | map.size=64 | sun: nothing was compared in " + added +
+                       " /rows/2 (pixels_compared 0: the camera sees no surface both renderers agree on); expected "
+                       "compared pixels\n");
+}
+
+TEST_F(GateCli, BaselineThatComparesNothingExits2) {
+  const std::string empty = current("empty.json", [](nlohmann::json& d) { compareNothing(d["rows"][0]); });
+  CliRun r = gate(path("base.json") + " --baseline " + empty);
+  EXPECT_EQ(r.code, 2) << r.out << r.err;
+  EXPECT_EQ(r.err, empty +
+                       ": /rows/0/metrics/pixels_compared: error: row \"grazing | bias.slope=0 | sun\" compares "
+                       "nothing (pixels_compared 0); expected a baseline whose camera sees a surface both renderers "
+                       "agree on\n");
+  // Nor does such a file become a baseline.
+  CliRun update = gate(empty + " --baseline " + path("new_base.json") + " --update-baseline");
+  EXPECT_EQ(update.code, 2) << update.out << update.err;
+  EXPECT_FALSE(fs::exists(dir_ / "new_base.json"));
+}
+
+TEST_F(GateCli, AllFootprintsCappedLeavesTheStatisticsUndefinedNotNan) {
+  // Every compared pixel's m at the cap: m_median/m_p95/m_max are null by definition, which is
+  // no NaN; null in both passes, m_capped gates the change.
+  auto capped = [](nlohmann::json& row) {
+    nlohmann::json& m = row["metrics"];
+    m["m_capped"] = m["pixels_compared"];
+    for (const char* k : {"m_median", "m_p95", "m_max"}) m[k] = nullptr;
+  };
+  const std::string both = current("both.json", [&](nlohmann::json& d) { capped(d["rows"][0]); });
+  CliRun r = gate(both + " --baseline " + both);
+  EXPECT_EQ(r.code, 0) << r.out << r.err;
+  // A null m_p95 without every pixel capped is a NaN as before.
+  const std::string nan = current("nan.json", [&](nlohmann::json& d) {
+    capped(d["rows"][0]);
+    d["rows"][0]["metrics"]["m_capped"] = 7;
+  });
+  CliRun n = gate(nan + " --baseline " + nan);
+  EXPECT_EQ(n.code, 2) << n.out << n.err;
+  EXPECT_NE(n.err.find("/rows/0/metrics/m_max: error: metric \"m_max\" is null (NaN)"), std::string::npos) << n.err;
+}
+
+TEST_F(GateCli, UpdateBaselineCreatesItsFolder) {
+  // The first baseline of a fresh checkout: --baseline out/base/metrics.json, out/base missing.
+  CliRun r = gate(path("base.json") + " --baseline " + path("out/base/metrics.json") + " --update-baseline");
+  EXPECT_EQ(r.code, 0) << r.out << r.err;
+  EXPECT_EQ(nlohmann::json::parse(slurp(dir_ / "out/base/metrics.json"))["rows"].size(), 2u);
+  EXPECT_EQ(gate(path("base.json") + " --baseline " + path("out/base/metrics.json")).code, 0);
+  // A refused update leaves no folder behind.
+  const std::string nan =
+      current("nan.json", [](nlohmann::json& d) { d["rows"][0]["metrics"]["acne_rate"] = nullptr; });
+  EXPECT_EQ(gate(nan + " --baseline " + path("other/base/metrics.json") + " --update-baseline").code, 2);
+  EXPECT_FALSE(fs::exists(dir_ / "other"));
 }
 
 }  // namespace

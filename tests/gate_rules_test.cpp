@@ -253,6 +253,9 @@ TEST(GateRules, NewRowsAndMetricsAreReportedNotFailed) {
   EXPECT_EQ(r.rowsNew, 1);
   EXPECT_EQ(r.rowsCompared, 1);
   EXPECT_EQ(find(r, "leak_rate").verdict, Verdict::New);
+  // The new metric is in the summary's counts, not in none of them.
+  EXPECT_EQ(r.newMetrics, 1);
+  EXPECT_NE(r.summary().find("1 new metric;"), std::string::npos) << r.summary();
 }
 
 TEST(GateRules, MalformedTolerancesNameFileAndPlace) {

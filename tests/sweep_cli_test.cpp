@@ -221,6 +221,64 @@ TEST(SweepCli, SmallSweepRowsMatchShadowlabRunExactly) {
   fs::remove_all(dir);
 }
 
+// A row whose camera sees only sky compares nothing: the sweep goes on, marks the row
+// ("nothing_compared": true, a column of results.csv; rates null) and ranks it nowhere: the
+// scene's best and worst triptych are both the row that compared pixels.
+TEST(SweepCli, RowThatComparedNothingIsMarkedAndNeverRanked) {
+  const std::string dir = tempDir("nothing");
+  const std::string scene = smallScene(dir);
+  // look_at y = 60: the camera looks steeply up, past the sphere and the ground.
+  Child sweep = spawn(sweepArgs({scene, "--grid", "scene:/camera/look_at/1=0.5,60", "--set", "map.size=256", "-o",
+                                 dir + "/sweep", "--cache", dir + "/cache"}),
+                      dir + "/sweep");
+  int rc = waitFor(sweep, 300);
+  if (rc == 3) GTEST_SKIP() << "no Vulkan device (shadowlab exit 3): " << slurp(sweep.err);
+  ASSERT_EQ(rc, 0) << slurp(sweep.err);
+  const std::string err = slurp(sweep.err);
+  EXPECT_NE(err.find("NOTHING COMPARED (pixels_compared 0)"), std::string::npos) << err;
+  EXPECT_NE(err.find("1 row compared nothing (pixels_compared 0: the camera sees no surface both renderers agree on), "
+                     "marked \"nothing_compared\": true in results.json and results.csv, rates null, never ranked: "
+                     "sphere_on_plane | "),
+            std::string::npos)
+      << err;
+  auto rows = loadResultRows(dir + "/sweep/results.json");
+  ASSERT_EQ(rows.size(), 2u);
+  EXPECT_GT(rows[0].metrics.at("pixels_compared").get<uint64_t>(), 1000u);
+  EXPECT_FALSE(rows[0].metrics.contains("nothing_compared"));
+  EXPECT_EQ(rows[1].metrics.at("pixels_compared"), 0);
+  EXPECT_EQ(rows[1].metrics.at("nothing_compared"), true);
+  EXPECT_TRUE(rows[1].metrics.at("error_rate").is_null());
+  // results.csv: the marker column, "true" in the row, empty in the other; the rate cell empty.
+  std::istringstream csv(slurp(dir + "/sweep/results.csv"));
+  std::string header, first, second;
+  std::getline(csv, header);
+  std::getline(csv, first);
+  std::getline(csv, second);
+  auto cell = [](const std::string& line, size_t column) {
+    std::vector<std::string> cells;
+    std::string c;
+    std::istringstream in(line);
+    while (std::getline(in, c, ',')) cells.push_back(c);
+    if (!line.empty() && line.back() == ',') cells.push_back("");
+    return column < cells.size() ? cells[column] : std::string("(none)");
+  };
+  auto column = [&](const std::string& name) {
+    std::istringstream in(header);
+    std::string c;
+    for (size_t k = 0; std::getline(in, c, ','); ++k)
+      if (c == name) return k;
+    return size_t(-1);
+  };
+  ASSERT_NE(column("nothing_compared"), size_t(-1)) << header;
+  EXPECT_EQ(cell(first, column("nothing_compared")), "");
+  EXPECT_EQ(cell(second, column("nothing_compared")), "true");
+  EXPECT_EQ(cell(second, column("error_rate")), "");
+  // Ranked nowhere: the best and the worst of the scene are the one row that compared pixels.
+  EXPECT_TRUE(fs::exists(dir + "/sweep/figures/triptych_sphere_on_plane_best.png")) << slurp(sweep.err);
+  EXPECT_FALSE(fs::exists(dir + "/sweep/figures/triptych_sphere_on_plane_worst.png"));
+  fs::remove_all(dir);
+}
+
 // The report's triptychs: each scene's best and worst row as the loop kept them (sweep_runner.cpp,
 // keepForTriptych), or rendered again with evidence on demand where the runner did not run the row
 // (here: the same sweep run again, every row resumed), are the same pictures, byte for byte, as

@@ -27,25 +27,32 @@ namespace shadowlab {
 const char* toString(PixelClass c) { return size_t(c) < kPixelClassCount ? classInfo(c).key : "unknown"; }
 
 nlohmann::json Metrics::toJson() const {
+  // A ratio with no pixel under it is undefined: null, never the 0 or 1 an empty tally holds
+  // (compare/METRICS.md "Nothing compared"); a gate must not read "nothing seen" as "perfect".
+  const bool none = nothingCompared();
+  auto ratio = [none](double v) { return none ? nlohmann::json(nullptr) : nlohmann::json(v); };
   nlohmann::json j;
   j["pixels_compared"] = pixelsCompared;
+  if (none) j["nothing_compared"] = true;
   j["errors"] = errors;
-  j["error_rate"] = errorRate;
+  j["error_rate"] = ratio(errorRate);
   for (const PixelClassInfo& c : kPixelClasses) {
     if (c.countMetric) j[c.countMetric] = count(c.cls);
-    if (c.rateMetric) j[c.rateMetric] = rate(c.cls);
+    if (c.rateMetric) j[c.rateMetric] = ratio(rate(c.cls));
   }
-  j["shadow_iou"] = shadowIou;
-  j["mae"] = mae;
-  j["rmse"] = rmse;
-  j["m_median"] = mMedian;
-  j["m_p95"] = mP95;
-  j["m_max"] = mMax;
+  j["shadow_iou"] = ratio(shadowIou);
+  j["mae"] = ratio(mae);
+  j["rmse"] = ratio(rmse);
+  const bool noFootprint = footprintUndefined();
+  j["m_median"] = noFootprint ? nlohmann::json(nullptr) : nlohmann::json(mMedian);
+  j["m_p95"] = noFootprint ? nlohmann::json(nullptr) : nlohmann::json(mP95);
+  j["m_max"] = noFootprint ? nlohmann::json(nullptr) : nlohmann::json(mMax);
+  j["m_capped"] = mCapped;
   if (!lightCompared) j["light_compared"] = false;
   if (hasProjector) {
-    j["projector_coverage_iou"] = projectorCoverageIou;
+    j["projector_coverage_iou"] = ratio(projectorCoverageIou);
     j["reverse_projection_pixels"] = reverseProjectionPixels;
-    j["projector_color_mae"] = projectorColorMae;
+    j["projector_color_mae"] = ratio(projectorColorMae);
   }
   if (!cascades.empty()) {
     nlohmann::json list = nlohmann::json::array();
@@ -54,6 +61,34 @@ nlohmann::json Metrics::toJson() const {
     j["cascades"] = list;
   }
   return j;
+}
+
+std::string nothingComparedMessage(const Metrics& m) {
+  if (!m.nothingCompared()) return "";
+  const uint64_t mismatch = m.count(PixelClass::GeometryMismatch);
+  const uint64_t background = m.count(PixelClass::NotCompared);
+  std::string why;
+  if (mismatch == 0)
+    why = "the camera sees no surface (all " + std::to_string(background) +
+          " pixels are background in both frames: sky, or only zero-area triangles)";
+  else
+    why = "no pixel shows the same surface in both frames (" + std::to_string(mismatch) + " geometry mismatch, " +
+          std::to_string(background) + " background)";
+  return "nothing to compare: " + why +
+         "; metrics.json says \"nothing_compared\": true and its rates are null; expected a camera that sees a "
+         "surface both renderers agree on";
+}
+
+std::string footprintCapNote(const Metrics& m) {
+  if (m.mCapped == 0 || m.nothingCompared()) return "";
+  char buf[320];
+  std::snprintf(buf, sizeof buf,
+                "note: %llu of %llu compared pixels have the texel footprint m at its cap %.0f (a surface edge-on to "
+                "the light, e.g. a point light lying in it): counted in m_capped, left out of m_median, m_p95, "
+                "m_max%s",
+                (unsigned long long)m.mCapped, (unsigned long long)m.pixelsCompared, double(kFootprintCapPx),
+                m.footprintUndefined() ? " (which are null: no pixel left)" : "");
+  return buf;
 }
 
 std::string projectorSummary(const Metrics& m) {
@@ -208,7 +243,8 @@ struct BlockSums {
   PerPixelClass<uint64_t> counts{};  // final classes only: candidates are counted by pass 2
   uint64_t refShadow = 0, rasShadow = 0, bothShadow = 0;
   double sumAbs = 0, sumSq = 0;
-  float mMax = 0, mMin = std::numeric_limits<float>::max();
+  float mMax = 0, mMin = std::numeric_limits<float>::max();  // over m below the cap
+  uint64_t mCapped = 0;
   uint64_t candidates = 0;
   float candidateLimitPx = 0;  // largest m (pixels per texel) over the candidates
   uint64_t projRef = 0, projRas = 0, projBoth = 0, reverse = 0;
@@ -577,7 +613,7 @@ std::vector<CascadeMetrics> cascadeMetrics(const uint8_t* klass, const uint8_t* 
     const int k = v >= 0.0f ? (v < float(kMaxCascades - 1) ? int(v + 0.5f) : kMaxCascades - 1) : 0;
     ++pixels[size_t(k)];
     errors[size_t(k)] += isErrorClass(PixelClass(klass[i]));
-    if (ch.m) mValues[size_t(k)].push_back(sanitizeM(ch.m[i]));
+    if (ch.m && sanitizeM(ch.m[i]) < kFootprintCapPx) mValues[size_t(k)].push_back(sanitizeM(ch.m[i]));
     cascadeCount = std::max(cascadeCount, k + 1);
   }
   std::vector<CascadeMetrics> out;
@@ -601,7 +637,8 @@ std::vector<CascadeMetrics> cascadeMetrics(const uint8_t* klass, const uint8_t* 
 // m quantiles, exact, in linear time: a histogram of the 16 high bits of the float (non-negative
 // floats order like their bit patterns), made in pass 1, finds the bins that hold the ranks, then
 // a selection among the values of those bins. Nearest rank: the value at sorted index
-// ceil(p * N) - 1. Sets out.mMedian and out.mP95.
+// ceil(p * N) - 1, N = `compared`: the compared pixels below the footprint cap. Sets out.mMedian and
+// out.mP95.
 void setFootprintQuantiles(Metrics& out, const std::vector<uint64_t>& high, uint64_t compared,
                            const std::vector<BlockSums>& sums, const uint8_t* decision, const float* mPlane, int width,
                            size_t n) {
@@ -632,6 +669,7 @@ void setFootprintQuantiles(Metrics& out, const std::vector<uint64_t>& high, uint
     for (size_t i = begin; i < end; ++i) {
       if (decision[i] == kDecisionNone) continue;
       const float m = sanitizeM(mPlane[i]);
+      if (m >= kFootprintCapPx) continue;  // capped: not in the statistics
       const uint32_t key = floatBits(m) >> 16;
       if (key == bin[0]) values[0].push_back(m);
       if (key == bin[1]) values[1].push_back(m);
@@ -744,15 +782,19 @@ Metrics compareFrames(const Frame& reference, const Frame& raster, const Compare
       float m = 0.0f;
       if (mPlane_) {
         m = sanitizeM(mPlane_[i]);
-        s.mMax = std::max(s.mMax, m);
-        s.mMin = std::min(s.mMin, m);
-        const uint32_t bin = floatBits(m) >> 16;
-        if (bin != runBin) {
-          hist[runBin] += runLength;
-          runBin = bin;
-          runLength = 0;
+        if (m >= kFootprintCapPx) {
+          ++s.mCapped;  // no footprint to describe: out of the statistics (still the aliasing limit)
+        } else {
+          s.mMax = std::max(s.mMax, m);
+          s.mMin = std::min(s.mMin, m);
+          const uint32_t bin = floatBits(m) >> 16;
+          if (bin != runBin) {
+            hist[runBin] += runLength;
+            runBin = bin;
+            runLength = 0;
+          }
+          ++runLength;
         }
-        ++runLength;
       }
       if (ch.hasProjector) {
         const float rc = clamp01(ch.refCov[i]), sc = clamp01(ch.rasCov[i]);
@@ -796,6 +838,7 @@ Metrics compareFrames(const Frame& reference, const Frame& raster, const Compare
     t.sumAbs += s.sumAbs;
     t.sumSq += s.sumSq;
     t.mMax = std::max(t.mMax, s.mMax);
+    t.mCapped += s.mCapped;
     t.candidates += s.candidates;
     t.candidateLimitPx = std::max(t.candidateLimitPx, s.candidateLimitPx);
     t.projRef += s.projRef;
@@ -821,11 +864,12 @@ Metrics compareFrames(const Frame& reference, const Frame& raster, const Compare
   out.shadowIou = shadowUnion ? double(t.bothShadow) / double(shadowUnion) : 1.0;
   out.mae = t.compared ? t.sumAbs / denom : 0.0;
   out.rmse = t.compared ? std::sqrt(t.sumSq / denom) : 0.0;
-  if (channels.m && t.compared > 0) {
+  out.mCapped = t.mCapped;
+  if (channels.m && t.compared > t.mCapped) {
     std::vector<uint64_t> high(65536, 0);
     for (const auto& h : mHistLocal)
       for (size_t k = 0; k < h.size(); ++k) high[k] += h[k];
-    setFootprintQuantiles(out, high, t.compared, sums, decision, channels.m, width, n);
+    setFootprintQuantiles(out, high, t.compared - t.mCapped, sums, decision, channels.m, width, n);
     out.mMax = t.mMax;
   }
   out.hasProjector = channels.hasProjector;
@@ -875,6 +919,7 @@ struct CompareContext::Data {
   std::shared_ptr<const Pixels> pixels;
   // The group's own: m's statistics and the cascades.
   double mMedian = 0, mP95 = 0, mMax = 0;
+  uint64_t mCapped = 0;
   std::vector<CascadeMetrics> cascades;  // pixels and m_p95; errors 0
 };
 
@@ -1052,6 +1097,7 @@ CompareContext::CompareContext(const Frame& reference, const Frame& raster, cons
   d->mMedian = full.mMedian;
   d->mP95 = full.mP95;
   d->mMax = full.mMax;
+  d->mCapped = full.mCapped;
   d->cascades = full.cascades;
   for (CascadeMetrics& c : d->cascades) c.errors = 0, c.errorRate = 0;
   data_ = std::move(d);
@@ -1193,6 +1239,7 @@ Metrics compareFrames(const CompareContext& context, const Frame& reference, con
   out.mMedian = d.mMedian;
   out.mP95 = d.mP95;
   out.mMax = d.mMax;
+  out.mCapped = d.mCapped;
   return out;
 }
 

@@ -184,6 +184,54 @@ GateCheck baseCheck(const ResultRow& row, const std::string& kind, const std::st
   return c;
 }
 
+// A row whose comparison scored no pixel (compare/METRICS.md "Nothing compared"): its metrics
+// say "nothing_compared": true, or (files written before that key) pixels_compared is 0.
+bool comparesNothing(const ResultRow& row) {
+  auto flag = row.metrics.find("nothing_compared");
+  if (flag != row.metrics.end() && flag->is_boolean() && flag->get<bool>()) return true;
+  auto count = row.metrics.find("pixels_compared");
+  return count != row.metrics.end() && count->is_number() && count->get<double>() == 0.0;
+}
+
+// A null the row itself explains: the m statistics when every compared pixel's footprint hit the
+// cap (m_capped == pixels_compared > 0). Any other null is a NaN, bad input.
+bool undefinedByRow(const nlohmann::json& metrics, const std::string& name) {
+  if (name != "m_median" && name != "m_p95" && name != "m_max") return false;
+  auto capped = metrics.find("m_capped"), compared = metrics.find("pixels_compared");
+  return capped != metrics.end() && compared != metrics.end() && capped->is_number() && compared->is_number() &&
+         compared->get<double>() > 0 && capped->get<double>() == compared->get<double>();
+}
+
+// Metric values the gate refuses as bad input: a built-in metric (one Metrics::toJson or
+// stability.json writes) that is not a number, or a negative one, or a rate / IoU above 1. Each
+// problem names the file and the JSON pointer; a corrupt baseline is not a regression.
+void checkMetricValues(const ResultFile& f, std::vector<std::string>& problems) {
+  static const std::set<std::string> kFlags = {"has_projector", "light_compared", "nothing_compared"};
+  for (size_t r = 0; r < f.rows.size(); ++r) {
+    std::map<std::string, nlohmann::json> flat;
+    flatten(f.rows[r].metrics, "", flat);
+    for (const auto& [name, v] : flat) {
+      bool known = false;
+      builtinDirection(name, &known);
+      if (!known || v.is_null()) continue;  // null: NaN or undefined, judged with the row
+      const std::string where = metricPointer(f.pointers[r], "metrics", name);
+      const std::string shown = v.is_string() ? "the string " + describeJson(v) : describeJson(v);
+      if (kFlags.count(name)) {
+        if (!v.is_boolean())
+          problems.push_back(
+              formatError(f.pathOf(r), where, "metric \"" + name + "\" is " + shown + "; expected true or false"));
+        continue;
+      }
+      const bool ratio = name.size() > 4 && (name.compare(name.size() - 4, 4, "_iou") == 0 ||
+                                             (name.size() > 5 && name.compare(name.size() - 5, 5, "_rate") == 0));
+      const char* expected = ratio ? "a number in [0, 1] (a fraction of compared pixels)" : "a number >= 0";
+      if (!v.is_number() || !(v.get<double>() >= 0.0) || (ratio && v.get<double>() > 1.0))
+        problems.push_back(
+            formatError(f.pathOf(r), where, "metric \"" + name + "\" is " + shown + "; expected " + expected));
+    }
+  }
+}
+
 }  // namespace
 
 std::string toString(Direction d) {
@@ -226,6 +274,9 @@ Direction builtinDirection(const std::string& metric, bool* known) {
         {"m_median", Direction::LowerIsBetter},
         {"m_p95", Direction::LowerIsBetter},
         {"m_max", Direction::LowerIsBetter},
+        {"m_capped", Direction::LowerIsBetter},
+        {"nothing_compared", Direction::Equal},
+        {"light_compared", Direction::Equal},
         {"has_projector", Direction::Equal},
         {"projector_coverage_iou", Direction::HigherIsBetter},
         {"reverse_projection_pixels", Direction::LowerIsBetter},
@@ -335,8 +386,9 @@ Tolerances loadTolerances(const std::string& path) { return parseTolerances(read
 std::string GateResult::summary() const {
   std::ostringstream s;
   s << (passed() ? "PASS" : "FAIL") << ": " << regressions << (regressions == 1 ? " regression" : " regressions")
-    << ", " << improvements << " improved, " << passes << " within tolerance, " << reported << " reported only; "
-    << rowsCompared << (rowsCompared == 1 ? " row" : " rows") << " compared, " << rowsNew << " new";
+    << ", " << improvements << " improved, " << passes << " within tolerance, " << reported << " reported only, "
+    << newMetrics << (newMetrics == 1 ? " new metric; " : " new metrics; ") << rowsCompared
+    << (rowsCompared == 1 ? " row" : " rows") << " compared, " << rowsNew << " new";
   return s.str();
 }
 
@@ -374,6 +426,31 @@ GateResult runGate(const ResultFile& current, const ResultFile& baseline, const 
 
   GateResult result;
   std::vector<std::string> problems;
+  checkMetricValues(baseline, problems);
+  if (&baseline != &current) checkMetricValues(current, problems);
+  throwProblems(problems);
+  // A baseline that compared nothing accepts anything (every rate null): bad input, never a pass.
+  for (size_t b = 0; b < baseline.rows.size(); ++b)
+    if (comparesNothing(baseline.rows[b]))
+      problems.push_back(formatError(baseline.path, metricPointer(baseline.pointers[b], "metrics", "pixels_compared"),
+                                     "row \"" + baseline.rows[b].key() +
+                                         "\" compares nothing (pixels_compared 0); expected a baseline whose camera "
+                                         "sees a surface both renderers agree on"));
+  throwProblems(problems);
+  // A current row that compared nothing fails, whatever the baseline says: no pixel is no pass.
+  auto nothingCompared = [&](size_t i, const nlohmann::json& baselineCount) {
+    const ResultRow& row = current.rows[i];
+    GateCheck c = baseCheck(row, "row", "pixels_compared");
+    c.baseline = baselineCount;
+    c.current = 0;
+    c.tolerance = "> 0";
+    c.verdict = Verdict::Regressed;
+    const std::string& pointer = current.pointers[i];
+    c.message = row.key() + ": nothing was compared in " + current.pathOf(i) + (pointer.empty() ? "" : " " + pointer) +
+                " (pixels_compared 0: the camera sees no surface both renderers agree on); expected compared pixels" +
+                (baselineCount.is_number() ? ", " + formatValue(baselineCount) + " in the baseline" : "");
+    result.checks.push_back(std::move(c));
+  };
   std::set<std::string> matched;
   for (size_t b = 0; b < baseline.rows.size(); ++b) {
     const ResultRow& base = baseline.rows[b];
@@ -389,6 +466,10 @@ GateResult runGate(const ResultFile& current, const ResultFile& baseline, const 
     const std::string& curPointer = current.pointers[found->second];
     const std::string& curPath = current.pathOf(found->second);
     ++result.rowsCompared;
+    if (comparesNothing(cur)) {  // its rates are null: one failing check instead of one per metric
+      nothingCompared(found->second, base.metrics.value("pixels_compared", nlohmann::json()));
+      continue;
+    }
 
     std::map<std::string, nlohmann::json> baseMetrics, curMetrics;
     flatten(base.metrics, "", baseMetrics);
@@ -402,6 +483,20 @@ GateResult runGate(const ResultFile& current, const ResultFile& baseline, const 
         continue;
       }
       const nlohmann::json& cv = ci->second;
+      const bool baseUndefined = bv.is_null() && undefinedByRow(base.metrics, name);
+      const bool curUndefined = cv.is_null() && undefinedByRow(cur.metrics, name);
+      const bool nan = (bv.is_null() && !baseUndefined) || (cv.is_null() && !curUndefined);
+      if (!nan && (baseUndefined || curUndefined)) {
+        // m statistics of a row whose every pixel hit the footprint cap: m_capped carries the
+        // change; both undefined is the same result.
+        GateCheck c = baseCheck(base, "metric", name);
+        c.baseline = bv;
+        c.current = cv;
+        c.tolerance = "undefined";
+        c.verdict = baseUndefined && curUndefined ? Verdict::Pass : Verdict::Reported;
+        result.checks.push_back(std::move(c));
+        continue;
+      }
       // JSON has no NaN: nlohmann writes a NaN as null. A NaN can never pass a gate silently.
       if (bv.is_null())
         problems.push_back(formatError(baseline.path, metricPointer(baseline.pointers[b], "metrics", name),
@@ -518,6 +613,7 @@ GateResult runGate(const ResultFile& current, const ResultFile& baseline, const 
   for (size_t i = 0; i < current.rows.size(); ++i) {
     if (matched.count(current.rows[i].key())) continue;
     ++result.rowsNew;
+    if (comparesNothing(current.rows[i])) nothingCompared(i, nlohmann::json());
     GateCheck c = baseCheck(current.rows[i], "row", "(row)");
     c.verdict = Verdict::New;
     c.tolerance = "-";
@@ -535,7 +631,7 @@ GateResult runGate(const ResultFile& current, const ResultFile& baseline, const 
       case Verdict::Improved: ++result.improvements; break;
       case Verdict::Pass: ++result.passes; break;
       case Verdict::Reported: ++result.reported; break;
-      default: break;
+      case Verdict::New: result.newMetrics += c.kind == "metric"; break;
     }
   }
   return result;
@@ -592,7 +688,8 @@ nlohmann::json gateToJson(const GateResult& result, const ResultFile& current, c
   j["tolerances"] = tolerances.origin;
   j["counts"] = {
       {"regressions", result.regressions}, {"improvements", result.improvements},  {"passes", result.passes},
-      {"reported", result.reported},       {"rows_compared", result.rowsCompared}, {"rows_new", result.rowsNew}};
+      {"reported", result.reported},       {"rows_compared", result.rowsCompared}, {"rows_new", result.rowsNew},
+      {"new_metrics", result.newMetrics}};
   nlohmann::json checks = nlohmann::json::array();
   for (const GateCheck& c : result.checks) {
     nlohmann::json k = {{"row", c.rowKey},          {"scene", c.scene},

@@ -247,6 +247,7 @@ class Progress {
     if (!out_ || !bar_) return;
     draw(what);
   }
+  // errorRate NaN: the row compared nothing (its error_rate is null).
   void finish(const std::string& what, double errorRate, double seconds) {
     ++done_;
     ++ran_;
@@ -258,8 +259,11 @@ class Progress {
     double elapsed = secondsSince(t0_);
     double rate = elapsed > 0 ? ran_ / elapsed : 0;
     double eta = rate > 0 ? (total_ - done_) / rate : NAN;
-    std::fprintf(out_, "sweep: %zu/%zu %s: error_rate %.6g in %.0f ms (%.2f cfg/s, ETA %s)\n", done_, total_,
-                 what.c_str(), errorRate, seconds * 1000.0, rate, fmtDuration(eta).c_str());
+    char result[64];
+    if (std::isnan(errorRate)) std::snprintf(result, sizeof result, "NOTHING COMPARED (pixels_compared 0)");
+    else std::snprintf(result, sizeof result, "error_rate %.6g", errorRate);
+    std::fprintf(out_, "sweep: %zu/%zu %s: %s in %.0f ms (%.2f cfg/s, ETA %s)\n", done_, total_, what.c_str(), result,
+                 seconds * 1000.0, rate, fmtDuration(eta).c_str());
     std::fflush(out_);
   }
   void end() {
@@ -402,6 +406,23 @@ void writeSweepOutputs(const SweepPlan& plan, const std::vector<const StoredRow*
     results["command_wall_seconds"] = secondsSince(t0);
     writeJsonAtomic(summary.resultsJson, results);
   }
+  // Rows that compared nothing carry "nothing_compared": true (a column of results.csv) and null
+  // rates, so no best, worst, frontier or chart point is drawn from them; say which they are.
+  std::vector<std::string> empty;
+  for (const ResultRow& r : rows) {
+    auto flag = r.metrics.find("nothing_compared");
+    if (flag != r.metrics.end() && flag->is_boolean() && flag->get<bool>()) empty.push_back(r.key());
+  }
+  if (!empty.empty()) {
+    std::string list;
+    for (size_t i = 0; i < empty.size() && i < 5; ++i) list += (i ? "; " : "") + empty[i];
+    if (empty.size() > 5) list += "; and " + std::to_string(empty.size() - 5) + " more";
+    summary.notes.push_back(std::to_string(empty.size()) + (empty.size() == 1 ? " row" : " rows") +
+                            " compared nothing (pixels_compared 0: the camera sees no surface both renderers agree "
+                            "on), marked \"nothing_compared\": true in results.json and results.csv, rates null, "
+                            "never ranked: " +
+                            list);
+  }
 }
 
 }  // namespace
@@ -540,7 +561,9 @@ SweepSummary runSweep(const SweepPlan& plan, SweepRunner& runner, const SweepOpt
     if (shard.active()) line["shard"] = std::to_string(shard.index) + "/" + std::to_string(shard.count);
     journal.append(line.dump());
     if (log) log << "pid " << pid << " done " << job.key() << " " << seconds << " s\n" << std::flush;
-    double errorRate = out.metrics.value("error_rate", 0.0);
+    // null when the row compared nothing (compare/METRICS.md "Nothing compared")
+    const auto rateIt = out.metrics.find("error_rate");
+    const double errorRate = rateIt != out.metrics.end() && rateIt->is_number() ? rateIt->get<double>() : std::nan("");
     fresh[i] = std::move(s);
     have[i] = &fresh[i];
     ++summary.ran;

@@ -279,8 +279,11 @@ SweepPlan planSweep(const SweepSpec& spec) {
                                  std::string("got ") + b + "; expected a number >= 0 (a rate, e.g. 0.01)"));
   }
   {
-    // The metric names a compared frame always has (Metrics::toJson of an empty comparison).
-    const nlohmann::json known = Metrics().toJson();
+    // The metric names a compared frame always has (Metrics::toJson of a comparison of one pixel:
+    // an empty one writes its rates as null).
+    Metrics one;
+    one.pixelsCompared = 1;
+    const nlohmann::json known = one.toJson();
     std::string names;
     for (auto it = known.begin(); it != known.end(); ++it)
       if (it.value().is_number()) names += (names.empty() ? "" : ", ") + it.key();

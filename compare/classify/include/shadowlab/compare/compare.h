@@ -15,6 +15,12 @@ namespace shadowlab {
 
 const char* toString(PixelClass c);  // the class's key (classes.h)
 
+// The texel footprint the rasterizer writes where the visible plane is edge-on to the light (its
+// Jacobian is singular: a point light lying in the plane, a directional light along it):
+// raster/shaders/resolve.frag caps `light.L.m` at this value. Such pixels are counted in
+// `m_capped` and left out of the m statistics (compare/METRICS.md).
+constexpr float kFootprintCapPx = 1e6f;
+
 struct CompareOptions {
   std::string light;            // empty: the light the raster frame rendered (meta "light")
   float boundaryTexels = 2.0f;  // aliasing: within this many map texels of a reference boundary
@@ -53,7 +59,16 @@ struct Metrics {
   double rate(PixelClass c) const { return classRates[classIndex(c)]; }
   double shadowIou = 1;
   double mae = 0, rmse = 0;
+  // Over the compared pixels whose m is below kFootprintCapPx; 0 without an m channel.
   double mMedian = 0, mP95 = 0, mMax = 0;
+  // Compared pixels whose m reached kFootprintCapPx (or is +inf): not in mMedian, mP95, mMax.
+  uint64_t mCapped = 0;
+  // No compared pixel (the camera sees no surface, or the two frames see different surfaces at
+  // every pixel): the rates, IoUs, mae, rmse and m statistics are 0 / 0, written as null
+  // (compare/METRICS.md "Nothing compared"); in memory they keep the values of an empty tally.
+  bool nothingCompared() const { return pixelsCompared == 0; }
+  // Every compared pixel's m hit the cap: the m statistics have no value to describe (null in JSON).
+  bool footprintUndefined() const { return nothingCompared() || mCapped == pixelsCompared; }
   // projectors (first projector, when the scene has one; otherwise 0 / absent in JSON)
   bool hasProjector = false;
   // false for frames of a scene with projectors and no light (projective texturing studies): no
@@ -69,6 +84,12 @@ struct Metrics {
 
   nlohmann::json toJson() const;  // stable keys: pixels_compared, geometry_mismatch, error_rate, ...
 };
+
+// One line for stderr when `m` has nothing compared ("nothing to compare: ..." with the reason read
+// from the counts), "" otherwise.
+std::string nothingComparedMessage(const Metrics& m);
+// One line for stdout when some compared pixels hit the footprint cap, "" otherwise.
+std::string footprintCapNote(const Metrics& m);
 
 struct Classification {
   int width = 0, height = 0;

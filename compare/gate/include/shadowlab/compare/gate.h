@@ -104,6 +104,7 @@ struct GateResult {
   std::vector<GateCheck> checks;  // regressions first, then the rest in row/metric order
   int rowsCompared = 0, rowsNew = 0;
   int regressions = 0, improvements = 0, passes = 0, reported = 0;
+  int newMetrics = 0;  // metrics of matched rows that the baseline lacks (verdict New)
   bool passed() const { return regressions == 0; }
   std::string summary() const;  // one line
 };
