@@ -15,6 +15,7 @@
 #include <filesystem>
 #include <regex>
 
+#include "shadowlab/scenes/error.h"
 #include "shadowlab/scenes/io.h"
 #include "shadowlab/scenes/loader.h"
 
@@ -76,6 +77,9 @@ TEST(ScenesBadInput, EveryCaseExitsTwoWithFileAndPlace) {
     EXPECT_NE(r.err.find(expected), std::string::npos)
         << f.filename() << "\n  got:      " << r.err << "  expected: " << expected;
     EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << "one line per error:\n" << r.err;
+    EXPECT_EQ(shadowlab::printableText(r.err.substr(0, r.err.size() - 1)), r.err.substr(0, r.err.size() - 1))
+        << "raw bytes that are not UTF-8, or control characters, in:\n"
+        << r.err;
     EXPECT_EQ(r.out, "") << "nothing on stdout for a rejected file";
   }
 }

@@ -343,6 +343,8 @@ TEST(ObjLines, EveryMalformedLineIsAnErrorAtItsLine) {
       {"line_one", tri + "f 1 2 3\nl 1\n", "x.obj:6: error: \"l\" line has 1 corner; expected at least 2 corners"},
       {"not_a_number", "v 0 0 0\nv 1 0 0\nv 0 1 0x10\nf 1 2 3\n",
        "x.obj:3: error: \"v\" line has \"0x10\"; expected finite numbers"},
+      {"float_overflow", tri + "vt 0 1e39\nf 1/1 2/1 3/1\n",
+       "x.obj:5: error: \"vt\" line has \"1e39\"; expected finite numbers (magnitude below 3.4e38, the float range)"},
       {"unknown", tri + "vx 1 2 3\nf 1 2 3\n",
        "x.obj:5: error: unknown statement \"vx\"; expected one of v, vt, vn, vp, f"},
       {"freeform", tri + "cstype bezier\nf 1 2 3\n",

@@ -239,9 +239,14 @@ ObjText scanObj(const std::string& path) {
       case Args::Numbers: {
         for (size_t k = 1; k < t.size(); ++k) {
           const double value = std::strtod(t[k].c_str(), nullptr);
-          // Overflow gives infinity (refused); underflow a tiny or zero value, harmless here.
+          // Values become floats: 1e39 is a finite double but an infinite float. Underflow gives a
+          // tiny or zero value, harmless here.
           if (!decimalNumber(t[k]) || !std::isfinite(value))
             objError(path, lineNo, quoted + " has \"" + t[k] + "\"; expected finite numbers");
+          if (std::fabs(value) > double(std::numeric_limits<float>::max()))
+            objError(
+                path, lineNo,
+                quoted + " has \"" + t[k] + "\"; expected finite numbers (magnitude below 3.4e38, the float range)");
         }
         if (args >= 32 || !(s->counts & (1u << args)))
           objError(path, lineNo,
