@@ -1,9 +1,9 @@
 #pragma once
 // Polygon faces (an OBJ "f" line with more than three corners) -> triangles.
 //
-// A face that is convex seen along its normal keeps the split tinyobjloader always gave it, so
-// meshes of triangles and convex quads load bit for bit as before: a quad is cut along its
-// shorter diagonal, a convex polygon of five or more corners is fanned from its first corner.
+// A face that is convex seen along its normal is cut the simple way: a quad along its shorter
+// diagonal (tinyobjloader's own rule, in its float arithmetic, so meshes of triangles and convex
+// quads load bit for bit as they did through it), five or more corners fanned from the first.
 // Any other face is ear-clipped (the rules of mapbox/earcut) in the plane it lies in: a simple
 // polygon of n corners gives n - 2 triangles covering exactly its area, including the "keyhole"
 // polygons exporters write for a face with a hole (the outer loop, a bridge edge, the inner loop
