@@ -1,7 +1,9 @@
 // Every file in tests/bad_input/scene_*.json goes through the real binary
 // (`shadowlab scenes --check FILE`): it must exit 2, print nothing on stdout, and print on stderr
 // a message that starts with the file path and contains the file's "// expect: " line (which
-// names the place: line:col for syntax errors, the JSON pointer otherwise).
+// names the place: line:col for syntax errors, the JSON pointer otherwise). Where the fault is in
+// a file the scene names (an OBJ's line), the expect line starts with that file's path relative to
+// the scene ("assets/x.obj:3: error: ..."), and the message must start with it.
 #include <gtest/gtest.h>
 
 #include <sys/wait.h>
@@ -13,6 +15,7 @@
 #include <filesystem>
 #include <regex>
 
+#include "shadowlab/scenes/error.h"
 #include "shadowlab/scenes/io.h"
 #include "shadowlab/scenes/loader.h"
 
@@ -68,10 +71,15 @@ TEST(ScenesBadInput, EveryCaseExitsTwoWithFileAndPlace) {
     std::string expected = match[1].str();
     RunResult r = run("scenes --check '" + f.string() + "'");
     EXPECT_EQ(r.exitCode, 2) << f.filename() << ": " << r.err;
-    EXPECT_EQ(r.err.rfind(f.string(), 0), 0u) << "message must start with the file path:\n" << r.err;
+    const bool inNamedFile = expected.rfind("assets/", 0) == 0;
+    const std::string start = inNamedFile ? (f.parent_path() / expected).string() : f.string();
+    EXPECT_EQ(r.err.rfind(start, 0), 0u) << "message must start with " << start << ":\n" << r.err;
     EXPECT_NE(r.err.find(expected), std::string::npos)
         << f.filename() << "\n  got:      " << r.err << "  expected: " << expected;
     EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << "one line per error:\n" << r.err;
+    EXPECT_EQ(shadowlab::printableText(r.err.substr(0, r.err.size() - 1)), r.err.substr(0, r.err.size() - 1))
+        << "raw bytes that are not UTF-8, or control characters, in:\n"
+        << r.err;
     EXPECT_EQ(r.out, "") << "nothing on stdout for a rejected file";
   }
 }
@@ -100,7 +108,16 @@ TEST(ScenesBadInput, CorpusCoversTheRequiredCases) {
                                "scene_near_ge_far",
                                "scene_no_light",
                                "scene_obj_nan_vertex",
-                               "scene_obj_overflow_uv"})
+                               "scene_obj_overflow_uv",
+                               "scene_obj_two_corner_face",
+                               "scene_obj_two_number_vertex",
+                               "scene_obj_empty_face",
+                               "scene_obj_index_out_of_range",
+                               "scene_obj_utf16",
+                               "scene_obj_folder",
+                               "scene_obj_only_points",
+                               "scene_obj_self_intersecting",
+                               "scene_latin1_token"})
     EXPECT_TRUE(names.count(required)) << required;
 }
 

@@ -18,10 +18,12 @@
 
 #include "image_io.h"
 #include "json_util.h"
+#include "obj_reader.h"
 #include "shadowlab/scenes/json_reader.h"
 #include "shadowlab/scenes/camera_path.h"
 #include "shadowlab/scenes/error.h"
 #include "shadowlab/scenes/io.h"
+#include "shadowlab/scenes/polygon.h"
 
 #ifndef SHADOWLAB_SOURCE_DIR
 #error "SHADOWLAB_SOURCE_DIR must be defined by the build"
@@ -411,61 +413,52 @@ Mesh makeCylinder(double radius, double height, int segments) {
   return m;
 }
 
-// Loads an OBJ (and its MTL files) through tinyobjloader. MTL materials are appended to
-// `materials` as "<object name>/<mtl name>"; faces without one get `fallbackMaterial`.
+// tinyobjloader's MTL files, each named relative to the OBJ file's folder (its own reader splits
+// the folder at ':' as a search path).
+class MtlBesideObj : public tinyobj::MaterialReader {
+ public:
+  explicit MtlBesideObj(fs::path dir) : dir_(std::move(dir)) {}
+  bool operator()(const std::string& name, std::vector<tinyobj::material_t>* materials,
+                  std::map<std::string, int>* matMap, std::string* warn, std::string* err) override {
+    std::error_code ec;
+    if (name.empty() || !fs::is_regular_file(dir_ / name, ec)) return false;  // obj::scanObj has named it
+    std::ifstream in(dir_ / name);
+    if (!in) return false;
+    tinyobj::LoadMtl(matMap, materials, &in, warn, err);
+    return true;
+  }
+
+ private:
+  fs::path dir_;
+};
+
+// Loads an OBJ (and its MTL files): obj::scanObj checks every line, tinyobjloader reads what it
+// passed (numbers as tinyobjloader always read them), triangulatePolygon cuts the faces.
+// MTL materials are appended to `materials` as "<object name>/<mtl name>"; faces without one get
+// `fallbackMaterial`.
 Mesh loadObj(const Reader& r, const std::string& ptr, const std::string& objPath, const std::string& objectName,
              std::vector<Material>& materials, uint32_t fallbackMaterial, bool overrideMaterial) {
   std::error_code ec;
+  if (fs::is_directory(objPath, ec))
+    r.fail(ptr, "OBJ path " + objPath + " is a folder; expected a Wavefront .obj file");
+  if (!fs::exists(objPath, ec)) r.fail(ptr, "OBJ file " + objPath + " not found; expected a Wavefront .obj file");
   if (!fs::is_regular_file(objPath, ec))
-    r.fail(ptr, "OBJ file " + objPath + " not found; expected a Wavefront .obj file");
+    r.fail(ptr, "OBJ path " + objPath + " is not a regular file; expected a Wavefront .obj file");
   fs::path objDir = fs::path(objPath).parent_path();
-  // One pass over the lines before tinyobjloader reads them, for what it lets through silently:
-  // it only warns about a missing MTL, and its number parser reads a token it cannot parse
-  // ("nan", "inf", "1e999", "abc") as 0 or infinity without a word.
+  const obj::ObjText text = obj::scanObj(objPath);
+  tinyobj::attrib_t attrib;
+  std::vector<tinyobj::shape_t> shapes;
+  std::vector<tinyobj::material_t> mtls;
   {
-    std::ifstream in(objPath);
-    std::string line;
-    for (int lineNo = 1; std::getline(in, line); ++lineNo) {
-      size_t p = line.find_first_not_of(" \t");
-      if (p == std::string::npos) continue;
-      if (line.compare(p, 7, "mtllib ") == 0) {
-        std::istringstream names(line.substr(p + 7));
-        std::string name;
-        while (names >> name) {
-          fs::path mtl = objDir / name;
-          if (!fs::is_regular_file(mtl, ec))
-            r.fail(ptr, "MTL file " + mtl.lexically_normal().string() + " (mtllib of " + objPath + ") not found");
-        }
-        continue;
-      }
-      std::istringstream tokens(line.substr(p));
-      std::string keyword, token;
-      tokens >> keyword;
-      if (keyword != "v" && keyword != "vn" && keyword != "vt") continue;
-      while (tokens >> token) {
-        if (token[0] == '#') break;  // a trailing comment
-        char* end = nullptr;
-        // Overflow gives infinity (rejected); underflow gives a tiny or zero value, harmless here.
-        double value = std::strtod(token.c_str(), &end);
-        if (end != token.c_str() + token.size() || !std::isfinite(value))
-          r.fail(ptr, objPath + ":" + std::to_string(lineNo) + ": \"" + keyword + "\" line has \"" + token +
-                          "\"; expected finite numbers");
-      }
+    std::string warn, err;
+    std::istringstream in(text.text);
+    MtlBesideObj mtlReader(objDir);
+    if (!tinyobj::LoadObj(&attrib, &shapes, &mtls, &warn, &err, &in, &mtlReader, /*triangulate=*/false,
+                          /*default_vcols_fallback=*/false)) {
+      while (!err.empty() && (err.back() == '\n' || err.back() == '\r')) err.pop_back();
+      r.fail(ptr, "cannot read OBJ file " + objPath + ": " + err);
     }
   }
-  tinyobj::ObjReaderConfig config;
-  config.triangulate = true;
-  config.vertex_color = false;
-  config.mtl_search_path = objDir.string();
-  tinyobj::ObjReader reader;
-  if (!reader.ParseFromFile(objPath, config)) {
-    std::string e = reader.Error();
-    while (!e.empty() && (e.back() == '\n' || e.back() == '\r')) e.pop_back();
-    r.fail(ptr, "cannot read OBJ file " + objPath + ": " + e);
-  }
-  const auto& attrib = reader.GetAttrib();
-  const auto& shapes = reader.GetShapes();
-  const auto& mtls = reader.GetMaterials();
 
   std::vector<uint32_t> materialIndex(mtls.size(), fallbackMaterial);
   if (!overrideMaterial) {
@@ -510,21 +503,44 @@ Mesh loadObj(const Reader& r, const std::string& ptr, const std::string& objPath
     vertexOf.emplace(key, id);
     return id;
   };
+  // Faces in file order, as obj::scanObj listed them (so an error can name the face's line).
+  size_t face = 0;
   for (const auto& s : shapes) {
     size_t offset = 0;
-    for (size_t f = 0; f < s.mesh.num_face_vertices.size(); ++f) {
-      size_t n = s.mesh.num_face_vertices[f];
-      if (n == 3) {
-        glm::uvec3 t(vertex(s.mesh.indices[offset]), vertex(s.mesh.indices[offset + 1]),
-                     vertex(s.mesh.indices[offset + 2]));
+    for (size_t f = 0; f < s.mesh.num_face_vertices.size(); ++f, ++face) {
+      // tinyobjloader counts a face's corners in a byte (num_face_vertices holds unsigned char):
+      // the line check's count is the true one, and must agree with it modulo 256.
+      if (face >= text.faceCorners.size() || uint8_t(text.faceCorners[face]) != s.mesh.num_face_vertices[f] ||
+          offset + text.faceCorners[face] > s.mesh.indices.size())
+        throw DriverError("OBJ file " + objPath + ": tinyobjloader's face " + std::to_string(face + 1) +
+                          " differs from the line check's; expected the same faces");
+      const size_t n = text.faceCorners[face];
+      const int line = text.faceLine[face];
+      std::vector<glm::vec3> corners(n);
+      for (size_t k = 0; k < n; ++k) {
+        const int vi = s.mesh.indices[offset + k].vertex_index;
+        if (vi < 0 || size_t(vi) * 3 + 2 >= attrib.vertices.size())
+          obj::objError(objPath, line, "a vertex index out of range; expected an index of a \"v\" line");
+        corners[k] = glm::vec3(attrib.vertices[3 * vi], attrib.vertices[3 * vi + 1], attrib.vertices[3 * vi + 2]);
+      }
+      const PolygonTriangles cut = triangulatePolygon(corners);
+      if (!cut.error.empty()) obj::objError(objPath, line, cut.error);
+      const int mid = f < s.mesh.material_ids.size() ? s.mesh.material_ids[f] : -1;
+      const uint32_t material =
+          mid >= 0 && size_t(mid) < materialIndex.size() ? materialIndex[size_t(mid)] : fallbackMaterial;
+      for (const auto& c : cut.triangles) {
+        glm::uvec3 t(vertex(s.mesh.indices[offset + c[0]]), vertex(s.mesh.indices[offset + c[1]]),
+                     vertex(s.mesh.indices[offset + c[2]]));
         m.triangles.push_back(t);
-        int mid = f < s.mesh.material_ids.size() ? s.mesh.material_ids[f] : -1;
-        m.triangleMaterial.push_back(mid >= 0 && size_t(mid) < materialIndex.size() ? materialIndex[mid]
-                                                                                    : fallbackMaterial);
+        m.triangleMaterial.push_back(material);
       }
       offset += n;
     }
   }
+  if (face != text.faceCorners.size())
+    throw DriverError("OBJ file " + objPath + ": tinyobjloader read " + std::to_string(face) +
+                      " faces, the line check " + std::to_string(text.faceCorners.size()) +
+                      "; expected the same faces");
   if (m.triangles.empty()) r.fail(ptr, "OBJ file " + objPath + " has no triangles; expected at least one face");
   for (const auto& p : m.positions)
     if (!finite(p)) r.fail(ptr, "OBJ file " + objPath + " has a non-finite vertex; expected finite coordinates");
