@@ -75,8 +75,8 @@ TEST(SweepNamingCli, RunIsGatedAgainstTheSweepRowOfTheSameConfiguration) {
   EXPECT_EQ(csv.find("0.00050000002"), std::string::npos) << csv;
 
   const std::string baseline = (dir / "sweep" / "results.json").string();
-  CliRun gate = runShadowlab("gate " + (dir / "run" / "metrics.json").string() + " --baseline " + baseline + " --json " +
-                                 (dir / "gate.json").string(),
+  CliRun gate = runShadowlab("gate " + (dir / "run" / "metrics.json").string() + " --baseline " + baseline +
+                                 " --json " + (dir / "gate.json").string(),
                              dir);
   ASSERT_EQ(gate.code, 0) << gate.out << gate.err;
   const nlohmann::json report = nlohmann::json::parse(slurp(dir / "gate.json"));
@@ -90,9 +90,8 @@ TEST(SweepNamingCli, RunIsGatedAgainstTheSweepRowOfTheSameConfiguration) {
   ASSERT_GT(row["metrics"]["error_rate"].get<double>(), 0.0);
   row["metrics"]["error_rate"] = row["metrics"]["error_rate"].get<double>() / 2;
   std::ofstream(dir / "doctored.json") << doctored.dump(2);
-  CliRun failed =
-      runShadowlab("gate " + (dir / "run" / "metrics.json").string() + " --baseline " + (dir / "doctored.json").string(),
-                   dir);
+  CliRun failed = runShadowlab(
+      "gate " + (dir / "run" / "metrics.json").string() + " --baseline " + (dir / "doctored.json").string(), dir);
   EXPECT_EQ(failed.code, 1) << failed.out << failed.err;
   EXPECT_NE((failed.out + failed.err).find("error_rate"), std::string::npos) << failed.out << failed.err;
   fs::remove_all(dir);
@@ -113,8 +112,8 @@ TEST(SweepNamingCli, SamplesPerPixelOutOfRangeExit2BeforeAnythingIsWritten) {
   EXPECT_EQ(firstLine(file.err), sweepFile + ": /spp: error: got 2000; " + expected) << file.err;
   EXPECT_FALSE(fs::exists(out)) << "nothing may be created: " << file.err;
 
-  for (const char* command : {"sweep sphere_on_plane --grid map.size=256", "run sphere_on_plane", "tune grazing --max-error 0.01",
-                              "reference sphere_on_plane"})
+  for (const char* command : {"sweep sphere_on_plane --grid map.size=256", "run sphere_on_plane",
+                              "tune grazing --max-error 0.01", "reference sphere_on_plane"})
     for (const char* spp : {"0", "2000"}) {
       CliRun r = runShadowlab(std::string(command) + " --spp " + spp + " -o " + out, dir);
       EXPECT_EQ(r.code, 2) << command << " --spp " << spp << ": " << r.err;
@@ -143,8 +142,8 @@ TEST(SweepNamingCli, AKeyGivenTwiceIsRefused) {
             "--set bias.slope=2: error: \"bias.slope\" is set again (first by --set bias.slope=1); expected each key "
             "once")
       << set.err;
-  CliRun run = runShadowlab(
-      "run sphere_on_plane --set scene:/camera/width=64 --set scene:/camera/width=32 -o " + out, dir);
+  CliRun run =
+      runShadowlab("run sphere_on_plane --set scene:/camera/width=64 --set scene:/camera/width=32 -o " + out, dir);
   EXPECT_EQ(run.code, 2) << run.err;
   EXPECT_EQ(firstLine(run.err),
             "--set scene:/camera/width=32: error: \"scene:/camera/width\" is set again (first by --set "
