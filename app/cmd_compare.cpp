@@ -6,6 +6,7 @@
 #include <memory>
 
 #include "command.h"
+#include "shadowlab/compare/config_name.h"
 #include "shadowlab/compare/compare.h"
 #include "shadowlab/compare/results.h"
 #include "shadowlab/compare/timings.h"
@@ -89,10 +90,9 @@ int run(const Options& o) {
   row.light = resolveCompareLight(reference, raster, options);
   auto method = raster.meta.find("method");
   if (method != raster.meta.end() && method->is_object()) row.method = *method;
-  row.config =
-      row.method.contains("name") && row.method["name"].is_string() && !row.method["name"].get<std::string>().empty()
-          ? row.method["name"].get<std::string>()
-          : "default";
+  // The one name of a configuration (config_name.h), from the method the raster frame records (a
+  // frame records no scene: values).
+  row.config = configName(row.method, {});
   row.metrics = metrics.toJson();
   row.timings = rasterTimings(rasPath);
   row.timings["compare_ms"] = compareMs;

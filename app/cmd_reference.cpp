@@ -34,10 +34,7 @@ int run(const Options& options) {
   using Clock = std::chrono::steady_clock;
   const auto start = Clock::now();
   // Every argument is checked before anything is traced or written.
-  if (options.spp < 1 || options.spp > 1024) {
-    throw shadowlab::InputError("shadowlab reference: error: --spp " + std::to_string(options.spp) +
-                                "; expected an integer 1..1024");
-  }
+  shadowlab::checkSpp(options.spp, "--spp");
   if (options.threads < 0) {
     throw shadowlab::InputError("shadowlab reference: error: --threads " + std::to_string(options.threads) +
                                 "; expected 0 (all hardware threads) or more");

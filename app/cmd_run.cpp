@@ -50,11 +50,11 @@ int run(const Options& o) {
     throw InputError(formatError(scene.path, "/lights",
                                  "the scene has no light and no projector; expected at least one to compare"));
   }
-  if (o.spp < 1) throw InputError("--spp: error: got " + std::to_string(o.spp) + "; expected an integer >= 1");
+  checkSpp(o.spp, "--spp");
   const std::string light = scene.lightOrDefault(o.light);
 
-  // `config` names what was set, like a sweep row (so a run matches the sweep row of the same
-  // configuration); else the method name.
+  // The one name of the configuration (config_name.h), as sweep, tune and stability name it: the
+  // gate matches this row with theirs.
   const std::string& config = set.config;
 
   app::checkMemory("run", app::compareJobMemory(scene, method), o.maxMemoryGiB);
@@ -147,7 +147,7 @@ app::Registrar reg{"run", [](CLI::App& app) {
                                      "--set scene:/lights/0/elevation_deg=10)");
                      sub->add_option("--light", opts->light,
                                      "Light to render and compare (default: the scene's first)");
-                     sub->add_option("--spp", opts->spp, "Reference samples per pixel")->capture_default_str();
+                     sub->add_option("--spp", opts->spp, "Reference samples per pixel, 1..1024")->capture_default_str();
                      sub->add_option("-o,--out", opts->outDir, "Output folder")->required();
                      app::addMaxMemoryOption(sub, &opts->maxMemoryGiB);
                      sub->add_option("--cache", opts->cacheDir,

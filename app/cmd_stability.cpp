@@ -141,8 +141,8 @@ int run(const Options& o) {
     }
     fitCameras = expandCameraPath(scene.camera, *declared, framesGiven ? o.frames : 0);
     pathJson = {{"kind", toString(declared->kind)}, {"name", declared->name}, {"frames", int(fitCameras.size())}};
-    if (declared->kind == CameraPathKind::Dolly) pathJson["distance_world"] = declared->distanceWorld;
-    if (declared->kind == CameraPathKind::Orbit) pathJson["angle_deg"] = declared->angleDeg;
+    if (declared->kind == CameraPathKind::Dolly) pathJson["distance_world"] = jsonFloat(declared->distanceWorld);
+    if (declared->kind == CameraPathKind::Orbit) pathJson["angle_deg"] = jsonFloat(declared->angleDeg);
     pathConfig = "path=" + declared->name + ",frames=" + std::to_string(fitCameras.size());
   }
   if (!lightPath) frames = int(fitCameras.size());

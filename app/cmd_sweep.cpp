@@ -10,10 +10,12 @@
 #include <cstdlib>
 #include <cstdio>
 #include <filesystem>
+#include <map>
 #include <memory>
 
 #include "command.h"
 #include "shadowlab/compare/sweep.h"
+#include "shadowlab/reference/reference.h"
 #include "shadowlab/scenes/error.h"
 #include "shadowlab/scenes/io.h"
 
@@ -22,7 +24,7 @@ namespace {
 namespace fs = std::filesystem;
 using namespace shadowlab;
 
-struct Options : app::StudyOptions {  // spp 0: not given (the sweep file's, else 1)
+struct Options : app::StudyOptions {
   std::vector<std::string> scenes;
   std::vector<std::string> grid;
   std::string sweepFile;
@@ -63,7 +65,7 @@ std::string sweepArguments(const Options& o, const std::string& cacheDir) {
   for (const auto& s : o.sets) add("--set", s);
   if (!o.methodFile.empty()) add("--method", o.methodFile);
   if (!o.light.empty()) add("--light", o.light);
-  if (o.spp != 0) add("--spp", std::to_string(o.spp));
+  if (o.spp) add("--spp", std::to_string(*o.spp));
   if (!o.device.empty()) add("--device", o.device);
   if (o.keepImages) a += " --keep-images";
   if (o.fullEvidence) a += " --full-evidence";
@@ -209,10 +211,19 @@ int run(const Options& o) {
   SweepSpec spec;
   if (!o.sweepFile.empty()) loadSweepFile(o.sweepFile, spec);
   if (!o.scenes.empty()) spec.scenes = o.scenes;  // the command line names replace the file's
+  std::map<std::string, std::string> given;       // key -> the --grid or --set that gave it
+  auto once = [&](const std::string& key, const std::string& origin, const char* verb) {
+    const auto [first, fresh] = given.emplace(key, origin);
+    if (!fresh)
+      throw InputError(formatError(
+          origin, "",
+          "\"" + key + "\" is " + verb + " again (first by " + first->second + "); expected each key once"));
+  };
   for (const auto& g : o.grid) {
     // A --grid axis replaces the file's axes of that key, in every grid of a union, and is swept
-    // in every one of them.
+    // in every one of them; the same key in two --grid is refused (one would be lost).
     SweepAxis axis = parseGridArgument(g);
+    once(axis.key, axis.origin, "swept");
     auto first =
         std::find_if(spec.grid.begin(), spec.grid.end(), [&](const SweepAxis& a) { return a.key == axis.key; });
     if (first == spec.grid.end()) {
@@ -224,8 +235,10 @@ int run(const Options& o) {
                       spec.grid.end());
     }
   }
+  given.clear();
   for (const auto& s : o.sets) {
     SweepSetting setting = parseSetArgument(s);
+    once(setting.key, setting.origin, "set");
     bool replaced = false;
     for (auto& existing : spec.fixed)
       if (existing.key == setting.key) {
@@ -236,9 +249,9 @@ int run(const Options& o) {
   }
   if (!o.methodFile.empty()) spec.methodFile = o.methodFile;
   if (!o.light.empty()) spec.light = o.light;
-  if (o.spp != 0) {
-    if (o.spp < 1) throw InputError("--spp: error: got " + std::to_string(o.spp) + "; expected an integer >= 1");
-    spec.spp = o.spp;
+  if (o.spp) {
+    checkSpp(*o.spp, "--spp");
+    spec.spp = *o.spp;
   }
   if (o.keepImages) spec.keepImages = true;
   if (!o.frontierMetric.empty()) spec.frontierMetric = o.frontierMetric;

@@ -14,6 +14,7 @@
 
 #include "command.h"
 #include "shadowlab/compare/tune.h"
+#include "shadowlab/reference/reference.h"
 #include "shadowlab/scenes/error.h"
 #include "shadowlab/scenes/io.h"
 
@@ -23,7 +24,6 @@ namespace fs = std::filesystem;
 using namespace shadowlab;
 
 struct Options : app::StudyOptions {
-  Options() { spp = 1; }
   std::vector<std::string> scenes;
   std::string maxError, budgetMs;  // text: checked here, so "abc" is a GCC-style InputError
   std::vector<std::string> maxRates;
@@ -65,8 +65,8 @@ int run(const Options& o) {
   }
   spec.methodFile = o.methodFile;
   spec.light = o.light;
-  if (o.spp < 1) throw InputError("--spp: error: got " + std::to_string(o.spp) + "; expected an integer >= 1");
-  spec.spp = o.spp;
+  spec.spp = o.spp.value_or(1);
+  checkSpp(spec.spp, "--spp");
   TunePlan plan = planTune(spec);
   OutputFolder out(o.outDir);
   const std::string cacheDir = o.cacheDir.empty() ? defaultSweepCacheDir(o.outDir) : o.cacheDir;

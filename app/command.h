@@ -14,6 +14,7 @@
 #include <signal.h>
 
 #include <functional>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -66,7 +67,7 @@ struct StudyOptions {
   std::string methodFile;
   std::string outDir;
   std::string light;
-  int spp = 0;  // 0: not given
+  std::optional<int> spp;  // not given: the sweep file's, else 1
   std::string cacheDir;
   std::string device;
 };
@@ -77,7 +78,7 @@ inline void addStudyOptions(CLI::App* sub, StudyOptions& o, const std::string& w
   sub->add_option("-o,--out", o.outDir, "Output folder (running again continues an interrupted " + what + ")")
       ->required();
   sub->add_option("--light", o.light, "Light to render and compare (default: each scene's first)");
-  sub->add_option("--spp", o.spp, "Reference samples per pixel (default 1)");
+  sub->add_option("--spp", o.spp, "Reference samples per pixel, 1..1024 (default 1)");
   sub->add_option("--cache", o.cacheDir,
                   "Reference cache folder (default: $SHADOWLAB_CACHE, else .shadowlab-cache beside the output folder)");
   sub->add_option("--device", o.device, "Vulkan device name substring (default: lavapipe)");

@@ -9,6 +9,7 @@
 
 #include "shadowlab/scenes/error.h"
 #include "shadowlab/scenes/io.h"
+#include "shadowlab/scenes/json_reader.h"
 #include "shadowlab/scenes/method.h"
 
 namespace fs = std::filesystem;
@@ -391,4 +392,32 @@ TEST(ScenesMethod, TsmKeys) {
   hand.tsmFocus = 0.8f;
   hand.tsmFocusDistance = 0.0f;
   EXPECT_THROW(validateMethod(hand, "code"), InputError);
+}
+
+// Method values are floats; written as the float's exact value widened to a double they read
+// 0.0005000000237487257. methodToJson (metrics.json, results.json/csv, raster.json, tuned.json)
+// writes the shortest decimal that reads back to the same float, as a person would write it.
+TEST(ScenesMethod, JsonNumbersAreTheShortestTextOfTheFloat) {
+  const std::string text = methodToJson(Method{}).dump();
+  for (const char* written : {"\"bias.compare\":0.0005,", "\"tsm.focus\":0.8,", "\"cascades.lambda\":0.75,",
+                              "\"vsm.min_variance\":1e-06}", "\"msm.moment_bias\":3e-05,", "\"bias.slope\":1.5,"})
+    EXPECT_NE(text.find(written), std::string::npos) << written << " in " << text;
+  EXPECT_EQ(text.find("0.0005000000237487257"), std::string::npos) << text;
+  EXPECT_EQ(text.find("0.800000011920929"), std::string::npos) << text;
+  EXPECT_EQ(jsonFloat(0.1f).get<double>(), 0.1);
+  EXPECT_EQ(jsonFloat(1.0f / 3.0f).dump(), "0.33333334");
+  EXPECT_EQ(jsonFloat(16777216.0f).dump(), "16777216.0");
+  EXPECT_TRUE(jsonFloat(std::nanf("")).is_null()) << "no number in JSON is NaN";
+  // Every value reads back to the same float, bit for bit.
+  Method odd;
+  odd.biasSlope = 1.0f / 3.0f;
+  odd.biasCompare = 7.3e-7f;
+  odd.tsmFocus = std::nextafter(0.8f, 1.0f);
+  const nlohmann::json j = nlohmann::json::parse(methodToJson(odd).dump());
+  Method back;
+  for (const auto& key : methodKeys()) applyMethodJson(back, key, j.at(key), "test");
+  EXPECT_EQ(methodToJson(back), methodToJson(odd));
+  EXPECT_EQ(back.biasSlope, odd.biasSlope);
+  EXPECT_EQ(back.biasCompare, odd.biasCompare);
+  EXPECT_EQ(back.tsmFocus, odd.tsmFocus);
 }

@@ -11,6 +11,7 @@
 
 #include "shadowlab/compare/sweep.h"
 #include "shadowlab/scenes/error.h"
+#include "shadowlab/scenes/json_reader.h"
 #include "support/input_error.h"
 
 namespace fs = std::filesystem;
@@ -108,11 +109,12 @@ TEST(SweepPlan, ExpandsTheGridLastAxisFastestWithSortedCanonicalConfigs) {
   SweepPlan plan = planSweep(specWithGrid({"map.size=512,256", "bias.slope=0,1.50"}));
   ASSERT_EQ(plan.configs.size(), 4u);
   ASSERT_EQ(plan.jobs.size(), 4u);
-  // Keys sorted in the text; values canonical (1.50 -> 1.5); the order of the grid is kept.
+  // Keys sorted in the text; values canonical; the order of the grid is kept. 1.50 is bias.slope's
+  // default: not named (config_name.h).
   EXPECT_EQ(plan.configs[0].config, "bias.slope=0,map.size=512");
-  EXPECT_EQ(plan.configs[1].config, "bias.slope=1.5,map.size=512");
+  EXPECT_EQ(plan.configs[1].config, "map.size=512");
   EXPECT_EQ(plan.configs[2].config, "bias.slope=0,map.size=256");
-  EXPECT_EQ(plan.configs[3].config, "bias.slope=1.5,map.size=256");
+  EXPECT_EQ(plan.configs[3].config, "map.size=256");
   EXPECT_EQ(plan.configs[1].method.mapSize, 512);
   EXPECT_FLOAT_EQ(plan.configs[1].method.biasSlope, 1.5f);
   EXPECT_EQ(plan.configs[3].method.mapSize, 256);
@@ -122,14 +124,14 @@ TEST(SweepPlan, ExpandsTheGridLastAxisFastestWithSortedCanonicalConfigs) {
   EXPECT_EQ(plan.variants.size(), 1u);
 }
 
-TEST(SweepPlan, FixedSettingsApplyToEveryConfigurationAndNothingSweptIsDefault) {
+TEST(SweepPlan, FixedSettingsApplyToEveryConfigurationAndAreNamed) {
   SweepSpec spec;
   spec.scenes = {"sphere_on_plane"};
   spec.fixed.push_back(parseSetArgument("filter=pcf"));
   spec.fixed.push_back(parseSetArgument("filter.size=5"));
   SweepPlan plan = planSweep(spec);
   ASSERT_EQ(plan.configs.size(), 1u);
-  EXPECT_EQ(plan.configs[0].config, "default");
+  EXPECT_EQ(plan.configs[0].config, "filter=pcf,filter.size=5");
   EXPECT_EQ(plan.configs[0].method.filter, Filter::Pcf);
   EXPECT_EQ(plan.configs[0].method.filterSize, 5);
 }
@@ -164,8 +166,8 @@ TEST(SweepPlan, SweepFileReadsScenesGridAndSettings) {
   loadSweepFile(path, spec);
   SweepPlan plan = planSweep(spec);
   ASSERT_EQ(plan.configs.size(), 4u);
-  EXPECT_EQ(plan.configs[0].config, "bias.slope=0,map.size=256");
-  EXPECT_EQ(plan.configs[1].config, "bias.slope=2,map.size=256");
+  EXPECT_EQ(plan.configs[0].config, "bias.slope=0,filter=hw2x2,map.size=256");
+  EXPECT_EQ(plan.configs[1].config, "bias.slope=2,filter=hw2x2,map.size=256");
   EXPECT_EQ(plan.configs[0].method.filter, Filter::Hw2x2);
   fs::remove_all(dir);
 }
@@ -222,7 +224,7 @@ TEST(SweepPlan, SweepFileErrorsNameFileAndPlace) {
 TEST(SweepPlan, CanonicalValueText) {
   EXPECT_EQ(canonicalValueText(nlohmann::json(256)), "256");
   EXPECT_EQ(canonicalValueText(nlohmann::json(0.5)), "0.5");
-  EXPECT_EQ(canonicalValueText(nlohmann::json(double(0.1f))), "0.1");
+  EXPECT_EQ(canonicalValueText(jsonFloat(0.1f)), "0.1");  // a method's float, as methodToJson writes it
   EXPECT_EQ(canonicalValueText(nlohmann::json(-0.0)), "0");
   EXPECT_EQ(canonicalValueText(nlohmann::json("pcf")), "pcf");
   EXPECT_EQ(canonicalValueText(nlohmann::json(true)), "true");
@@ -292,9 +294,8 @@ TEST(SweepPlan, SceneFailureKeyNeedsADeclaredFailureAndNoSecondNameForIt) {
 }
 
 // A union of grids: "grid" as an array of grid objects, each expanded as a product on its own.
-// A key one block does not sweep carries the base method's value there, so every configuration
-// names every swept key; a configuration two blocks share is run once; sweptAxes gives one axis
-// per key for the report.
+// A key one block does not sweep carries the base method's value there; a configuration two blocks
+// share is run once; sweptAxes gives one axis per key for the report.
 TEST(SweepPlan, UnionOfGridsExpandsEachBlockAndJoinsThem) {
   std::string dir = tempDir("union");
   std::string path = writeText(dir + "/union.json", R"({
@@ -311,10 +312,10 @@ TEST(SweepPlan, UnionOfGridsExpandsEachBlockAndJoinsThem) {
   std::vector<std::string> configs;
   for (const auto& c : plan.configs) configs.push_back(c.config);
   // Block 1's fit=sphere,map.size=1024 is block 0's filter=none,map.size=1024: not repeated.
-  EXPECT_EQ(configs,
-            (std::vector<std::string>{"filter=none,fit=sphere,map.size=512", "filter=pcf,fit=sphere,map.size=512",
-                                      "filter=none,fit=sphere,map.size=1024", "filter=pcf,fit=sphere,map.size=1024",
-                                      "filter=none,fit=lispsm,map.size=1024"}));
+  // Names hold the keys off their defaults (none and sphere are), bias.slope=2 set in every one.
+  EXPECT_EQ(configs, (std::vector<std::string>{"bias.slope=2,map.size=512", "bias.slope=2,filter=pcf,map.size=512",
+                                               "bias.slope=2,map.size=1024", "bias.slope=2,filter=pcf,map.size=1024",
+                                               "bias.slope=2,fit=lispsm,map.size=1024"}));
   EXPECT_EQ(plan.configs[4].method.fit, Fit::Lispsm);
   EXPECT_EQ(plan.configs[4].method.filter, Filter::None);
   EXPECT_EQ(plan.configs[1].method.filter, Filter::Pcf);

@@ -185,7 +185,7 @@ TEST(SweepResume, RowsOfAnotherMethodAreRunAgain) {
   const std::string dir = tempDir("stale");
   FakeRunner first;
   runSweep(smallPlan({"map.size=256,512"}, {"bias.slope=1"}), first, quietOptions(dir));
-  // Same configs (config text has only map.size) but another fixed bias: a different experiment.
+  // Another fixed bias: other configurations (their names hold the bias), run again.
   FakeRunner second;
   SweepSummary s = runSweep(smallPlan({"map.size=256,512"}, {"bias.slope=3"}), second, quietOptions(dir));
   EXPECT_EQ(s.resumed, 0u);

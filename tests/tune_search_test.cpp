@@ -12,8 +12,10 @@
 #include <filesystem>
 #include <fstream>
 #include <map>
+#include <set>
 
 #include "shadowlab/compare/method_cost.h"
+#include "shadowlab/compare/set_arguments.h"
 #include "shadowlab/compare/tune.h"
 #include "shadowlab/scenes/error.h"
 #include "shadowlab/scenes/io.h"
@@ -358,4 +360,29 @@ TEST(TunePlan, AdaptiveBiasIsACategoricalKeyOfTwoValues) {
   EXPECT_EQ(plan.gridConfigurations, 2u * 17u);
   spec.keys = {"bias.slope"};
   EXPECT_EQ(planTune(spec).gridConfigurations, 17u);
+}
+
+// tune names each configuration as run and sweep do (config_name.h): the method keys off their
+// defaults and the fixed scene: values, so its rows gate against theirs.
+TEST(TuneSearch, NamesConfigurationsLikeRunAndSweep) {
+  const std::string dir = tempDir("names");
+  TuneSpec spec;
+  spec.scenes = {"grazing"};
+  spec.keys = {"bias.slope"};
+  spec.ranges = {"bias.slope=0,1.5,3"};
+  spec.fixed = {parseSetArgument("scene:/camera/width=240")};
+  spec.maxError = 0.5;
+  TunePlan plan = planTune(spec);
+  FakeRunner runner;
+  const TuneResult r = runTune(plan, runner, quiet(dir, /*grid=*/true));
+  std::set<std::string> names;
+  for (const auto& e : r.evaluations) {
+    std::vector<std::string> sets = {"scene:/camera/width=240"};
+    for (const auto& [k, v] : e.values) sets.push_back(k + "=" + v);
+    EXPECT_EQ(e.config, applySetArguments("", sets).config);
+    names.insert(e.config);
+  }
+  EXPECT_EQ(names, (std::set<std::string>{"bias.slope=0,scene:/camera/width=240", "scene:/camera/width=240",
+                                          "bias.slope=3,scene:/camera/width=240"}));
+  fs::remove_all(dir);
 }

@@ -105,10 +105,41 @@ def method_value(row, key):
     return row.get("method", {}).get(key)
 
 
+def config_parts(config):
+    """{key: value text} of a configuration's name: "key=value" parts joined by commas, a comma
+    inside [...], {...} or "..." (a scene: vector, [4,10,6]) not splitting."""
+    parts, depth, quoted, start = [], 0, False, 0
+    for i, c in enumerate(config):
+        if quoted:
+            quoted = c != '"'
+        elif c == '"':
+            quoted = True
+        elif c in "[{":
+            depth += 1
+        elif c in "]}" and depth > 0:
+            depth -= 1
+        elif c == "," and depth == 0:
+            parts.append(config[start:i])
+            start = i + 1
+    parts.append(config[start:])
+    return dict(p.split("=", 1) for p in parts if "=" in p)
+
+
+def value_text(v):
+    """A method value as a configuration's name writes it (config_name.h, canonicalValueText)."""
+    if isinstance(v, bool):
+        return "true" if v else "false"
+    if isinstance(v, float) and v.is_integer() and abs(v) < 1e15:
+        return str(int(v))
+    return str(v) if not isinstance(v, float) else repr(v)
+
+
 def swept_values(row, keys):
-    """The row's values of the swept keys (from its config text), as a tuple in `keys` order."""
-    parts = dict(p.split("=", 1) for p in row["config"].split(",") if "=" in p)
-    return tuple(parts.get(k, "") for k in keys)
+    """The row's values of the swept keys, as a tuple in `keys` order: from its config text, where
+    a method key at its default is not named, else from the row's resolved method."""
+    parts = config_parts(row["config"])
+    method = row.get("method", {})
+    return tuple(parts.get(k, value_text(method[k]) if k in method else "") for k in keys)
 
 
 def best_by(rows, group_key, score):

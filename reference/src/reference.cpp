@@ -538,6 +538,13 @@ static double processCpuSeconds() {
 }
 
 #ifndef SHADOWLAB_REFERENCE_AVX2_TU
+void checkSpp(long long spp, const std::string& file, const std::string& place) {
+  if (spp < kMinSpp || spp > kMaxSpp)
+    throw InputError(formatError(file, place,
+                                 "got " + std::to_string(spp) + "; expected an integer " + std::to_string(kMinSpp) +
+                                     ".." + std::to_string(kMaxSpp) + " (reference samples per pixel)"));
+}
+
 float shadowOriginOffset(const glm::vec3& position, const glm::vec3& p0, const glm::vec3& p1, const glm::vec3& p2) {
   return originOffset(position, p0, p1, p2);
 }
@@ -586,9 +593,7 @@ Frame SHADOWLAB_RENDER_REFERENCE(const Scene& scene, const ReferenceOptions& opt
     return reference_detail::renderReferenceAvx2(scene, options, stats, picture);
 #endif
 #endif
-  if (options.spp < 1 || options.spp > 1024) {
-    throw InputError("reference: error: spp " + std::to_string(options.spp) + "; expected 1..1024");
-  }
+  checkSpp(options.spp, "reference");
   if (options.threads < 0) {
     throw InputError("reference: error: threads " + std::to_string(options.threads) + "; expected 0 (all) or more");
   }

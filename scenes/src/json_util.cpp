@@ -2,6 +2,7 @@
 #include "shadowlab/scenes/json_reader.h"
 
 #include <algorithm>
+#include <charconv>
 #include <cmath>
 #include <set>
 
@@ -226,6 +227,18 @@ std::string describeJson(const nlohmann::json& v) { return detail::describe(v); 
 
 std::string dumpJson(const nlohmann::json& v) {
   return v.dump(-1, ' ', false, nlohmann::json::error_handler_t::replace);
+}
+
+nlohmann::json jsonFloat(float v) {
+  if (!std::isfinite(v)) return nullptr;
+  // std::to_chars without a format gives the fewest digits that read back to `v` as a float;
+  // std::from_chars then gives the double nearest that decimal, whose shortest text (nlohmann's
+  // dump) is those same digits.
+  char text[64];
+  const auto written = std::to_chars(text, text + sizeof text, v);
+  double d = double(v);
+  std::from_chars(text, written.ptr, d);
+  return d;
 }
 
 nlohmann::json parseJsonText(const std::string& text, const std::string& file) {

@@ -62,7 +62,16 @@ class Reader {
   const std::string& file() const { return file_; }
 
   [[noreturn]] void fail(const std::string& ptr, const std::string& what) const {
+    // A value an override put there is the override's fault: name where it came from first.
+    for (const SceneOverride& o : blamed_)
+      if (ptr == o.pointer || ptr.rfind(o.pointer + "/", 0) == 0)
+        throw InputError(formatError(o.origin, "", what + " (" + file_ + ": " + ptr + ")"));
     throw InputError(formatError(file_, ptr, what));
+  }
+  // Overrides that carry an origin, blamed for errors at or below their pointer.
+  void blame(const std::vector<SceneOverride>& overrides) {
+    for (const SceneOverride& o : overrides)
+      if (!o.origin.empty()) blamed_.push_back(o);
   }
   [[noreturn]] void expected(const Node& n, const std::string& what) const {
     fail(n.ptr, "got " + detail::describe(*n.j) + "; expected " + what);
@@ -178,6 +187,7 @@ class Reader {
 
  private:
   std::string file_;
+  std::vector<SceneOverride> blamed_;
 };
 
 std::string numText(double v) {
@@ -1010,6 +1020,11 @@ std::string sceneHash(const json& doc, const Scene& s) {
 
 void applyOverrides(const Reader& r, json& doc, const std::vector<SceneOverride>& overrides) {
   for (const auto& o : overrides) {
+    // Named by its origin when it has one (the scene file then follows the message).
+    auto formatError = [&](const std::string& file, const std::string& place, const std::string& what) {
+      return o.origin.empty() ? shadowlab::formatError(file, place, what)
+                              : shadowlab::formatError(o.origin, "", what + " (" + file + ")");
+    };
     std::string place = "override " + o.pointer;
     json::json_pointer ptr;
     try {
@@ -1089,6 +1104,7 @@ Scene loadScene(const std::string& path, const std::vector<SceneOverride>& overr
   Node root{&doc, ""};
   if (!doc.is_object()) r.expected(root, "a JSON object with camera, objects and lights");
   applyOverrides(r, doc, overrides);
+  r.blame(overrides);
   r.keys(root, {"description", "camera", "materials", "objects", "lights", "projectors", "failure", "paths"});
   if (Node d = r.child(root, "description")) r.string(d);
 

@@ -349,39 +349,38 @@ void crossCheck(const Method& m, const std::string& file, const std::string& pre
   if (m.mapSize < 16 || m.mapSize > 16384) bad("map.size", std::to_string(m.mapSize), "an integer 16..16384");
   if (m.filterTaps < 1 || m.filterTaps > 64) bad("filter.taps", std::to_string(m.filterTaps), "an integer 1..64");
   if (!(m.filterRadius > 0.0f && m.filterRadius <= 32.0f))
-    bad("filter.radius", nlohmann::json(m.filterRadius).dump(), "a number > 0 and <= 32 (map texels)");
+    bad("filter.radius", jsonFloat(m.filterRadius).dump(), "a number > 0 and <= 32 (map texels)");
   for (auto [key, v] : {std::pair<const char*, float>{"bias.constant", m.biasConstant},
                         {"bias.slope", m.biasSlope},
                         {"bias.clamp", m.biasClamp},
                         {"bias.compare", m.biasCompare},
                         {"bias.normal", m.biasNormal}})
-    if (!std::isfinite(v)) bad(key, nlohmann::json(double(v)).dump(), "a finite number");
+    if (!std::isfinite(v)) bad(key, jsonFloat(v).dump(), "a finite number");
   if (!(m.biasAdaptiveEpsilon >= 0.0f && m.biasAdaptiveEpsilon <= 1e3f))
-    bad("bias.adaptive_epsilon", nlohmann::json(double(m.biasAdaptiveEpsilon)).dump(), "a number 0..1000");
+    bad("bias.adaptive_epsilon", jsonFloat(m.biasAdaptiveEpsilon).dump(), "a number 0..1000");
   if (m.cascadeCount < 1 || m.cascadeCount > 8)
     bad("cascades.count", std::to_string(m.cascadeCount), "an integer 1..8");
   if (!(m.cascadeLambda >= 0.0f && m.cascadeLambda <= 1.0f))
-    bad("cascades.lambda", nlohmann::json(double(m.cascadeLambda)).dump(), "a number 0..1");
+    bad("cascades.lambda", jsonFloat(m.cascadeLambda).dump(), "a number 0..1");
   if (!(m.cascadeBlend >= 0.0f && m.cascadeBlend <= 0.5f))
-    bad("cascades.blend", nlohmann::json(double(m.cascadeBlend)).dump(), "a number 0..0.5");
+    bad("cascades.blend", jsonFloat(m.cascadeBlend).dump(), "a number 0..0.5");
   if (!(m.lispsmNScale > 0.0f && m.lispsmNScale <= kNScaleLimit))
-    bad("lispsm.n_scale", nlohmann::json(double(m.lispsmNScale)).dump(), kNScaleExpected);
+    bad("lispsm.n_scale", jsonFloat(m.lispsmNScale).dump(), kNScaleExpected);
   if (!(m.psmSlideBack >= 0.0f && m.psmSlideBack <= kSlideBackLimit))
-    bad("psm.slide_back", nlohmann::json(double(m.psmSlideBack)).dump(), kSlideBackExpected);
-  if (!(m.tsmFocus > 0.0f && m.tsmFocus < 1.0f))
-    bad("tsm.focus", nlohmann::json(double(m.tsmFocus)).dump(), kTsmFocusExpected);
+    bad("psm.slide_back", jsonFloat(m.psmSlideBack).dump(), kSlideBackExpected);
+  if (!(m.tsmFocus > 0.0f && m.tsmFocus < 1.0f)) bad("tsm.focus", jsonFloat(m.tsmFocus).dump(), kTsmFocusExpected);
   if (!(m.tsmFocusDistance > 0.0f && m.tsmFocusDistance <= 1.0f))
-    bad("tsm.focus_distance", nlohmann::json(double(m.tsmFocusDistance)).dump(), kTsmFocusDistanceExpected);
+    bad("tsm.focus_distance", jsonFloat(m.tsmFocusDistance).dump(), kTsmFocusDistanceExpected);
   if (m.filterBlur < 0 || m.filterBlur > 16) bad("filter.blur", std::to_string(m.filterBlur), "an integer 0..16");
   if (!(m.vsmMinVariance >= 0.0f && m.vsmMinVariance <= 1.0f))
-    bad("vsm.min_variance", nlohmann::json(double(m.vsmMinVariance)).dump(), "a number 0..1");
+    bad("vsm.min_variance", jsonFloat(m.vsmMinVariance).dump(), "a number 0..1");
   if (!(m.vsmBleedReduction >= 0.0f && m.vsmBleedReduction <= 0.99f))
-    bad("vsm.bleed_reduction", nlohmann::json(double(m.vsmBleedReduction)).dump(), "a number 0..0.99");
+    bad("vsm.bleed_reduction", jsonFloat(m.vsmBleedReduction).dump(), "a number 0..0.99");
   for (auto [key, v] : {std::pair<const char*, float>{"evsm.exponent_pos", m.evsmExponentPos},
                         {"evsm.exponent_neg", m.evsmExponentNeg}})
-    if (!(v > 0.0f && v <= 100.0f)) bad(key, nlohmann::json(double(v)).dump(), kExponentExpected);
+    if (!(v > 0.0f && v <= 100.0f)) bad(key, jsonFloat(v).dump(), kExponentExpected);
   if (!(m.msmMomentBias >= 0.0f && m.msmMomentBias <= 1.0f))
-    bad("msm.moment_bias", nlohmann::json(double(m.msmMomentBias)).dump(), "a number 0..1");
+    bad("msm.moment_bias", jsonFloat(m.msmMomentBias).dump(), "a number 0..1");
   if (m.name.empty()) bad("name", "\"\"", "a non-empty string");
 }
 
@@ -461,6 +460,7 @@ void applyMethodJson(Method& m, const std::string& key, const nlohmann::json& va
   apply(m, key, v, Where{origin, key});
 }
 
+// Floats through jsonFloat: the shortest text that reads back to the same float (json_reader.h).
 nlohmann::json methodToJson(const Method& m) {
   nlohmann::json j = nlohmann::json::object();
   j["name"] = m.name;
@@ -469,31 +469,31 @@ nlohmann::json methodToJson(const Method& m) {
   j["cull"] = toString(m.cull);
   j["fit"] = toString(m.fit);
   j["cascades.count"] = m.cascadeCount;
-  j["cascades.lambda"] = m.cascadeLambda;
-  j["cascades.blend"] = m.cascadeBlend;
+  j["cascades.lambda"] = jsonFloat(m.cascadeLambda);
+  j["cascades.blend"] = jsonFloat(m.cascadeBlend);
   j["cascades.stabilize"] = m.cascadeStabilize;
-  j["lispsm.n_scale"] = m.lispsmNScale;
-  j["psm.slide_back"] = m.psmSlideBack;
-  j["tsm.focus"] = m.tsmFocus;
-  j["tsm.focus_distance"] = m.tsmFocusDistance;
-  j["bias.constant"] = m.biasConstant;
-  j["bias.slope"] = m.biasSlope;
-  j["bias.clamp"] = m.biasClamp;
-  j["bias.compare"] = m.biasCompare;
-  j["bias.normal"] = m.biasNormal;
+  j["lispsm.n_scale"] = jsonFloat(m.lispsmNScale);
+  j["psm.slide_back"] = jsonFloat(m.psmSlideBack);
+  j["tsm.focus"] = jsonFloat(m.tsmFocus);
+  j["tsm.focus_distance"] = jsonFloat(m.tsmFocusDistance);
+  j["bias.constant"] = jsonFloat(m.biasConstant);
+  j["bias.slope"] = jsonFloat(m.biasSlope);
+  j["bias.clamp"] = jsonFloat(m.biasClamp);
+  j["bias.compare"] = jsonFloat(m.biasCompare);
+  j["bias.normal"] = jsonFloat(m.biasNormal);
   j["bias.receiver_plane"] = m.biasReceiverPlane;
   j["bias.adaptive"] = m.biasAdaptive;
-  j["bias.adaptive_epsilon"] = m.biasAdaptiveEpsilon;
+  j["bias.adaptive_epsilon"] = jsonFloat(m.biasAdaptiveEpsilon);
   j["filter"] = toString(m.filter);
   j["filter.size"] = m.filterSize;
   j["filter.taps"] = m.filterTaps;
-  j["filter.radius"] = m.filterRadius;
+  j["filter.radius"] = jsonFloat(m.filterRadius);
   j["filter.blur"] = m.filterBlur;
-  j["vsm.min_variance"] = m.vsmMinVariance;
-  j["vsm.bleed_reduction"] = m.vsmBleedReduction;
-  j["evsm.exponent_pos"] = m.evsmExponentPos;
-  j["evsm.exponent_neg"] = m.evsmExponentNeg;
-  j["msm.moment_bias"] = m.msmMomentBias;
+  j["vsm.min_variance"] = jsonFloat(m.vsmMinVariance);
+  j["vsm.bleed_reduction"] = jsonFloat(m.vsmBleedReduction);
+  j["evsm.exponent_pos"] = jsonFloat(m.evsmExponentPos);
+  j["evsm.exponent_neg"] = jsonFloat(m.evsmExponentNeg);
+  j["msm.moment_bias"] = jsonFloat(m.msmMomentBias);
   j["projector.reverse_guard"] = m.projectorReverseGuard;
   return j;
 }

@@ -8,6 +8,7 @@
 
 #include "shadowlab/compare/sweep.h"
 #include "shadowlab/compare/compare.h"
+#include "shadowlab/reference/reference.h"
 #include "shadowlab/scenes/error.h"
 #include "shadowlab/scenes/io.h"
 #include "shadowlab/scenes/json_reader.h"
@@ -32,6 +33,29 @@ std::string joinKeys(const std::vector<std::string>& keys) {
   std::string out;
   for (size_t i = 0; i < keys.size(); ++i) out += (i ? ", " : "") + keys[i];
   return out;
+}
+
+// The first ',' at or after `from` outside [...], {...} and "..." (npos when none): a JSON array
+// or object in a --grid list is one value.
+size_t topLevelComma(const std::string& text, size_t from) {
+  int depth = 0;
+  bool quoted = false;
+  for (size_t i = from; i < text.size(); ++i) {
+    const char c = text[i];
+    if (quoted) {
+      if (c == '\\') ++i;
+      else if (c == '"') quoted = false;
+    } else if (c == '"') {
+      quoted = true;
+    } else if (c == '[' || c == '{') {
+      ++depth;
+    } else if ((c == ']' || c == '}') && depth > 0) {
+      --depth;
+    } else if (c == ',' && depth == 0) {
+      return i;
+    }
+  }
+  return std::string::npos;
 }
 
 bool isMethodKey(const std::string& key) {
@@ -90,25 +114,10 @@ nlohmann::json sceneValueFromText(const nlohmann::json& v) {
   const std::string text = v.get<std::string>();
   try {
     auto parsed = nlohmann::json::parse(text);
-    if (parsed.is_primitive()) return parsed;
+    if (!parsed.is_null()) return parsed;  // "null" stays text: no scene value is null
   } catch (const std::exception&) {
   }
   return v;
-}
-
-std::string canonicalValueText(const nlohmann::json& value) {
-  if (value.is_string()) return value.get<std::string>();
-  if (value.is_boolean()) return value.get<bool>() ? "true" : "false";
-  if (value.is_number_integer()) return std::to_string(value.get<int64_t>());
-  if (value.is_number_unsigned()) return std::to_string(value.get<uint64_t>());
-  if (value.is_number_float()) {
-    double d = value.get<double>();
-    if (d == 0.0) return "0";  // also folds -0
-    char buf[64];
-    std::snprintf(buf, sizeof buf, "%.6g", d);
-    return buf;
-  }
-  return dumpJson(value);  // text from --grid / --set may hold any bytes
 }
 
 std::string SweepJob::key() const {
@@ -134,7 +143,7 @@ SweepAxis parseGridArgument(const std::string& text) {
   size_t start = 0;
   int index = 0;
   while (true) {
-    size_t comma = list.find(',', start);
+    size_t comma = topLevelComma(list, start);
     std::string item = trim(list.substr(start, comma == std::string::npos ? std::string::npos : comma - start));
     ++index;
     if (item.empty())
@@ -238,7 +247,8 @@ void loadSweepFile(const std::string& path, SweepSpec& spec) {
       if (!v.is_object()) fail(ptr, "got " + jsonTypeName(v) + "; expected an object {\"key\": value}");
       for (auto s = v.begin(); s != v.end(); ++s) {
         const std::string sptr = ptr + "/" + jsonPointerToken(s.key());
-        if (!s.value().is_primitive() || s.value().is_null())
+        // A scene: value may be any JSON value (a whole vector); a method key takes a scalar.
+        if (s.value().is_null() || (!s.value().is_primitive() && !isSceneKey(s.key())))
           fail(sptr, "got " + jsonTypeName(s.value()) + "; expected a number, string or boolean");
         spec.fixed.push_back({s.key(), nlohmann::json::parse(s.value().dump()), path + ": " + sptr});
       }
@@ -251,8 +261,10 @@ void loadSweepFile(const std::string& path, SweepSpec& spec) {
       if (!v.is_string()) fail(ptr, "got " + jsonTypeName(v) + "; expected a light name");
       spec.light = v.get<std::string>();
     } else if (k == "spp") {
-      if (!v.is_number_integer() || v.get<int64_t>() < 1 || v.get<int64_t>() > 4096)
-        fail(ptr, "got " + describeJson(v) + "; expected an integer from 1 to 4096");
+      if (!v.is_number_integer())
+        fail(ptr, "got " + describeJson(v) + "; expected an integer " + std::to_string(kMinSpp) + ".." +
+                      std::to_string(kMaxSpp) + " (reference samples per pixel)");
+      checkSpp(v.get<int64_t>(), path, ptr);
       spec.spp = v.get<int>();
     } else if (k == "keep_images") {
       if (!v.is_boolean()) fail(ptr, "got " + jsonTypeName(v) + "; expected true or false");
@@ -269,8 +281,7 @@ void loadSweepFile(const std::string& path, SweepSpec& spec) {
 SweepPlan planSweep(const SweepSpec& spec) {
   SweepPlan plan;
   plan.spec = spec;
-  if (spec.spp < 1)
-    throw InputError(formatError("--spp", "", "got " + std::to_string(spec.spp) + "; expected 1 or more"));
+  checkSpp(spec.spp, "--spp");
   // Frontier settings: NaN or a negative threshold would make every comparison meaningless.
   if (!std::isfinite(spec.frontierThreshold) || spec.frontierThreshold < 0) {
     char b[64];
@@ -301,7 +312,8 @@ SweepPlan planSweep(const SweepSpec& spec) {
     checkKey(s.key, s.origin);
     if (!fixedKeys.insert(s.key).second)
       throw InputError(formatError(s.origin, "", "\"" + s.key + "\" is set twice; expected each key once"));
-    if (isSceneKey(s.key)) fixedSceneOverrides.push_back({scenePointerOf(s.key), sceneValueFromText(s.value)});
+    if (isSceneKey(s.key))
+      fixedSceneOverrides.push_back({scenePointerOf(s.key), sceneValueFromText(s.value), s.origin});
     else applyValue(base, s.key, s.value, s.origin);
   }
 
@@ -399,7 +411,7 @@ SweepPlan planSweep(const SweepSpec& spec) {
       for (size_t i = 0; i < axes.size(); ++i) {
         const Point& p = axisPoints[axes[i]][idx[i]];
         const std::string& key = spec.grid[axes[i]].key;
-        if (isSceneKey(key)) c.sceneOverrides.push_back({scenePointerOf(key), p.value});
+        if (isSceneKey(key)) c.sceneOverrides.push_back({scenePointerOf(key), p.value, p.origin});
         else applyValue(c.method, key, p.value, p.origin);
         c.values.emplace_back(key, p.text);
       }
@@ -407,8 +419,8 @@ SweepPlan planSweep(const SweepSpec& spec) {
         if (std::none_of(axes.begin(), axes.end(), [&](size_t a) { return spec.grid[a].key == key; }))
           c.values.emplace_back(key, methodValueText(base, key));
       std::sort(c.values.begin(), c.values.end());
-      for (const auto& [k, v] : c.values) c.config += (c.config.empty() ? "" : ",") + k + "=" + v;
-      if (c.config.empty()) c.config = "default";
+      // The one name of a configuration, as run, tune and stability name it (config_name.h).
+      c.config = configName(c.method, c.sceneOverrides);
       for (size_t i = axes.size(); i-- > 0;) {
         if (++idx[i] < axisPoints[axes[i]].size()) break;
         idx[i] = 0;

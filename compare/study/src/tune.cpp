@@ -130,20 +130,19 @@ class Engine {
 
   size_t evaluation(const Point& raw) {
     const Point p = normalize(raw);
-    std::string config;
     std::vector<std::pair<std::string, std::string>> values;
-    for (size_t k = 0; k < plan_.keys.size(); ++k) {
-      values.emplace_back(plan_.keys[k].key, plan_.keys[k].values[p[k]]);
-      config += (config.empty() ? "" : ",") + plan_.keys[k].key + "=" + plan_.keys[k].values[p[k]];
-    }
-    if (config.empty()) config = "default";
+    for (size_t k = 0; k < plan_.keys.size(); ++k) values.emplace_back(plan_.keys[k].key, plan_.keys[k].values[p[k]]);
+    Method method = plan_.base;
+    for (const auto& [k, v] : values) applyMethodSetting(method, k, v, "shadowlab tune");
+    // The one name of a configuration (config_name.h), as run and sweep name it: the fixed scene:
+    // values are part of it.
+    const std::string config = configName(method, baseConfig_.sceneOverrides);
     auto found = byConfig_.find(config);
     if (found != byConfig_.end()) return found->second;
     TuneEvaluation e;
     e.config = config;
     e.values = values;
-    e.method = plan_.base;
-    for (const auto& [k, v] : values) applyMethodSetting(e.method, k, v, "shadowlab tune");
+    e.method = method;
     validateMethod(e.method, "shadowlab tune: configuration " + config);
     for (const auto& job : sceneJobs_)
       e.cost.push_back(estimateMethodCost(plan_.sweep.variants[job.variantIndex], e.method, job.light));

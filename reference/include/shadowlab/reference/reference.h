@@ -33,8 +33,17 @@ enum class ReferenceSimd {
 // True where this build has the AVX2 trace and the CPU runs it.
 bool referenceHasAvx2();
 
+// Reference samples per pixel: the one range every reader checks (`reference`, `run`, `sweep`,
+// `tune` and sweep files), before anything is traced or written.
+constexpr int kMinSpp = 1;
+constexpr int kMaxSpp = 1024;
+// InputError "FILE: PLACE: error: got N; expected an integer 1..1024 (reference samples per
+// pixel)" (formatError) unless kMinSpp <= spp <= kMaxSpp; FILE names the option ("--spp") or the
+// file, PLACE its JSON pointer ("/spp") or "".
+void checkSpp(long long spp, const std::string& file, const std::string& place = "");
+
 struct ReferenceOptions {
-  int spp = 1;      // stratified samples per pixel (1 = the pixel center); visibility becomes fractional
+  int spp = 1;  // stratified samples per pixel, kMinSpp..kMaxSpp (1 = the pixel center); visibility becomes fractional
   int threads = 0;  // 0 = all hardware threads; results are bit-identical for any value
   // Not part of the cache key (referenceHash): the values are the same, the cache always holds Compare.
   ReferenceChannels channels = ReferenceChannels::All;

@@ -36,6 +36,13 @@ std::string describeJson(const nlohmann::json& v);
 // though no parsed file can) become U+FFFD instead of nlohmann's type_error 316.
 std::string dumpJson(const nlohmann::json& v);
 
+// A float as the JSON number a person would write for it: the double of the shortest decimal that
+// reads back to the same float (0.0005f -> 0.0005, where the float widened to a double prints
+// 0.0005000000237487257); null for NaN and infinities. Every float that enters an output file
+// goes through it (methodToJson: metrics.json, results.json/csv, raster.json, tuned.json), and
+// reading the number back as a float gives the same float.
+nlohmann::json jsonFloat(float v);
+
 // One reference token of a JSON pointer (RFC 6901: "~" -> "~0", "/" -> "~1"), for keys such as
 // "scene:/a/b" that hold slashes.
 std::string jsonPointerToken(const std::string& key);

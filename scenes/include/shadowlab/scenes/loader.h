@@ -15,6 +15,9 @@ namespace shadowlab {
 struct SceneOverride {
   std::string pointer;  // e.g. "/lights/0/elevation_deg"
   nlohmann::json value;
+  // Where the value came from ("--set scene:/camera/width=0", "sweep.json: /grid/..."): an error
+  // at or below `pointer` then names it first, the scene file and place after. Empty: the file.
+  std::string origin = {};
 };
 
 // Loads, validates and resolves a scene file. Relative paths inside it (OBJ, textures, images)

@@ -6,8 +6,10 @@
 //                  "method": {...}, "metrics": {...}, "timings": {...} }
 // results.json:  { "schema": "shadowlab.results/1", "rows": [ {same keys as metrics.json minus schema} ],
 //                  "command_wall_seconds": T, "configurations": N, ... }
-// `config` is the canonical text of the swept method keys, sorted by key: "bias.slope=1,map.size=512"
-// ("default" when nothing was swept). Rows are matched by (scene, config, light).
+// `config` names the configuration, the same way in every command (configName in
+// compare/study/include/shadowlab/compare/config_name.h): its method keys off their defaults and its
+// scene: values, sorted by key, "bias.slope=1,map.size=512" ("default" when there is none). Rows are
+// matched by (scene, config, light).
 // `metrics` holds Metrics::toJson(); `timings` holds the row timings of compare/TIMINGS.md
 // (shadow_gpu_ms, camera_gpu_ms, readback_ms, render_wall_ms, compare_ms, config_wall_ms, ...; ms).
 #include <string>

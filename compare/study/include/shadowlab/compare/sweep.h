@@ -23,6 +23,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "shadowlab/compare/config_name.h"
 #include "shadowlab/compare/results.h"
 #include "shadowlab/scenes/loader.h"
 #include "shadowlab/scenes/method.h"
@@ -69,8 +70,9 @@ struct SweepSpec {
   double frontierThreshold = 0.01;
 };
 
-// "map.size=256,512" (from --grid). InputError when there is no '=', no key or an empty list;
-// the key and the values are validated by planSweep.
+// "map.size=256,512" (from --grid; a comma inside [...], {...} or "..." does not split, so
+// scene:/camera/look_at=[4,10,6],[0,0,0] has two values). InputError when there is no '=', no key
+// or an empty list; the key and the values are validated by planSweep.
 SweepAxis parseGridArgument(const std::string& text);
 // "filter=pcf" (from --set).
 SweepSetting parseSetArgument(const std::string& text);
@@ -79,18 +81,13 @@ SweepSetting parseSetArgument(const std::string& text);
 // InputError naming the file and line:col (syntax) or JSON pointer (shape, keys, values).
 void loadSweepFile(const std::string& path, SweepSpec& spec);
 
-// A scene value from the command line (--set scene:/pointer=TEXT): a JSON literal when TEXT parses
-// as one (30 -> number, true -> bool), else TEXT as a string. Typed values pass unchanged.
+// A scene value from the command line (--set scene:/pointer=TEXT): the JSON value when TEXT parses
+// as one (30 -> number, true -> bool, [4,10,6] -> array), else TEXT as a string. Typed values
+// pass unchanged. (canonicalValueText, a value's text in a configuration's name: config_name.h.)
 nlohmann::json sceneValueFromText(const nlohmann::json& value);
 
-// The canonical text of one value: strings as they are, integers plainly, other numbers with
-// %.6g (so "0.50" and 0.5 are the same configuration), booleans true/false, anything else as
-// compact JSON.
-std::string canonicalValueText(const nlohmann::json& value);
-
 struct SweepConfig {
-  // Canonical "key=value,..." of the swept keys sorted by key ("default" when nothing is swept):
-  // the row's `config`, also the resume key.
+  // configName(method, sceneOverrides) (config_name.h): the row's `config`, also the resume key.
   std::string config;
   std::vector<std::pair<std::string, std::string>> values;  // swept key -> canonical value, sorted
   Method method;                                            // base + fixed + this point of the grid

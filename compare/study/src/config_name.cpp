@@ -1,0 +1,72 @@
+// The one name of a configuration (config_name.h).
+#include "shadowlab/compare/config_name.h"
+
+#include <algorithm>
+#include <cmath>
+#include <utility>
+
+#include "shadowlab/scenes/json_reader.h"
+
+namespace shadowlab {
+
+std::string canonicalValueText(const nlohmann::json& value) {
+  if (value.is_string()) return value.get<std::string>();
+  if (value.is_boolean()) return value.get<bool>() ? "true" : "false";
+  if (value.is_number_integer()) return std::to_string(value.get<int64_t>());
+  if (value.is_number_unsigned()) return std::to_string(value.get<uint64_t>());
+  if (value.is_number_float()) {
+    const double d = value.get<double>();
+    if (d == 0.0) return "0";  // also folds -0
+    // An integral value as an integer (2.0 and 2 are one value); below 1e15 every such double is
+    // exactly an int64.
+    if (std::isfinite(d) && std::floor(d) == d && std::fabs(d) < 1e15) return std::to_string(int64_t(d));
+    // nlohmann writes the shortest digits that read back to the same double, in fixed notation
+    // from 1e-4 up to 1e15 and with an exponent beyond (as Python's repr does).
+    return dumpJson(value);
+  }
+  if (value.is_array()) {
+    std::string out = "[";
+    for (size_t i = 0; i < value.size(); ++i) {
+      const nlohmann::json& v = value[i];
+      out += (i ? "," : "") + (v.is_string() ? dumpJson(v) : canonicalValueText(v));
+    }
+    return out + "]";
+  }
+  if (value.is_object()) {
+    std::string out = "{";
+    bool first = true;
+    for (auto it = value.begin(); it != value.end(); ++it) {
+      out += (first ? "" : ",") + dumpJson(it.key()) + ":" +
+             (it.value().is_string() ? dumpJson(it.value()) : canonicalValueText(it.value()));
+      first = false;
+    }
+    return out + "}";
+  }
+  return dumpJson(value);  // null
+}
+
+std::string configName(const nlohmann::json& methodJson, const std::vector<SceneOverride>& sceneOverrides) {
+  // Through the method parser: a value is then the method's own (a float written by an older build
+  // as its widened double, 0.10000000149011612, names 0.1 as methodToJson writes it today).
+  Method method;
+  for (const std::string& key : methodKeys())
+    if (auto it = methodJson.find(key); it != methodJson.end()) applyMethodJson(method, key, *it, "method");
+  return configName(method, sceneOverrides);
+}
+
+std::string configName(const Method& method, const std::vector<SceneOverride>& sceneOverrides) {
+  static const nlohmann::json defaults = methodToJson(Method{});
+  const nlohmann::json resolved = methodToJson(method);
+  std::vector<std::pair<std::string, std::string>> parts;
+  for (const std::string& key : methodKeys()) {
+    const std::string text = canonicalValueText(resolved.at(key));
+    if (text != canonicalValueText(defaults.at(key))) parts.emplace_back(key, text);
+  }
+  for (const SceneOverride& o : sceneOverrides) parts.emplace_back("scene:" + o.pointer, canonicalValueText(o.value));
+  std::stable_sort(parts.begin(), parts.end(), [](const auto& a, const auto& b) { return a.first < b.first; });
+  std::string name;
+  for (const auto& [key, text] : parts) name += (name.empty() ? "" : ",") + key + "=" + text;
+  return name.empty() ? "default" : name;
+}
+
+}  // namespace shadowlab
