@@ -215,6 +215,7 @@ const std::vector<std::pair<std::string, Setter>>& setters() {
          m.cascadeBlend = floatIn(v, w, 0.0, 0.5, false, "a number 0..0.5 (fraction of a cascade's depth range)");
        }},
       {"cascades.stabilize", [](Method& m, const Value& v, const Where& w) { m.cascadeStabilize = boolOf(v, w); }},
+      {"sdsm.snap", [](Method& m, const Value& v, const Where& w) { m.sdsmSnap = boolOf(v, w); }},
       {"lispsm.n_scale",
        [](Method& m, const Value& v, const Where& w) {
          m.lispsmNScale = floatIn(v, w, 0.0, kNScaleLimit, true, kNScaleExpected);
@@ -416,6 +417,7 @@ nlohmann::json methodToJson(const Method& m) {
   j["cascades.lambda"] = m.cascadeLambda;
   j["cascades.blend"] = m.cascadeBlend;
   j["cascades.stabilize"] = m.cascadeStabilize;
+  j["sdsm.snap"] = m.sdsmSnap;
   j["lispsm.n_scale"] = m.lispsmNScale;
   j["psm.slide_back"] = m.psmSlideBack;
   j["tsm.focus"] = m.tsmFocus;
@@ -443,6 +445,8 @@ nlohmann::json methodToJson(const Method& m) {
 }
 
 void validateMethod(const Method& m, const std::string& origin) { crossCheck(m, origin, ""); }
+
+bool isCascadedFit(Fit f) { return f == Fit::Cascades || f == Fit::Sdsm; }
 
 bool isMomentFilter(Filter f) { return momentCount(f) > 0; }
 
