@@ -1,8 +1,9 @@
 // fit=sdsm's shimmer (compare/stability.h): long_view's evaluation camera fixed, the fit camera
-// dollied 4 units forward in 32 frames (the scene's "walk" path), 4 x 1024 maps. SDSM's crops
-// follow the samples, so they move and change size by fractions of a texel every frame: its shadow
-// edges crawl like unstabilized cascades'. sdsm.snap (power-of-two texel sizes, crops moved by
-// whole texels) keeps the texel grid in place while the samples' boxes stay within a size step.
+// dollied 4 units forward in 32 frames (the scene's "walk" path), 4 x 1024 maps, sdsm with
+// logarithmic splits (cascades.lambda 1). SDSM's crops follow the samples, so they move and change
+// size by fractions of a texel every frame: its shadow edges crawl like unstabilized cascades'. sdsm.snap (power-of-two
+// texel sizes, crops moved by whole texels) keeps the texel grid in place while the samples' boxes stay within a size
+// step.
 #include <gtest/gtest.h>
 
 #include <chrono>
@@ -48,9 +49,14 @@ TEST(SdsmShimmer, SdsmShimmersOnADollyAndTheSnapCutsIt) {
                 row.name, row.s.shimmerRate, row.s.errorRateMean, row.s.errorRateMax);
     EXPECT_GT(row.s.pixelsComparedPerPair[0], 50000u);
   }
+  // Measured: cascades 1.9e-3, stabilized 2.1e-6; sdsm 1.0e-3, snapped 1.0e-6 (error_rate mean
+  // 0.00105, 0.00233, 0.00096, 0.00073).
   const double cascades = rows[0].s.shimmerRate, sdsm = rows[2].s.shimmerRate, snapped = rows[3].s.shimmerRate;
-  EXPECT_GT(sdsm, 1e-3) << "sdsm's crops follow the view: its edges crawl";
-  EXPECT_GT(sdsm, 0.5 * cascades) << "as much as unstabilized cascades' at least";
-  EXPECT_LT(snapped, 0.5 * sdsm) << "the snap keeps the texel grid in place";
+  EXPECT_GT(sdsm, 5e-4) << "sdsm's crops follow the view: its edges crawl";
+  EXPECT_GT(sdsm, 0.25 * cascades) << "of the order of unstabilized cascades'";
+  EXPECT_LT(snapped, 0.01 * sdsm) << "the snap keeps the texel grid in place";
+  EXPECT_LT(snapped, 1e-4);
+  // Snapped sdsm is as steady as stabilized cascades with finer texels: fewer errors.
+  EXPECT_LT(rows[3].s.errorRateMean, rows[1].s.errorRateMean);
   std::printf("  [%.1f s]\n", std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
 }
