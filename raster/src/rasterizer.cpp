@@ -1488,7 +1488,7 @@ const std::vector<glm::vec3>& Rasterizer::Impl::visiblePoints(const Scene& sc, c
   const size_t triangles = vertices.size() / 3;
   std::vector<glm::vec3> halves[2];
   auto reduce = [&](size_t y0, size_t y1) {
-    std::vector<glm::vec3>& out = halves[y0 == 0 ? 0 : 1];
+    std::vector<glm::vec3>& out = halves[y1 == size_t(fitCamera.height) ? 1 : 0];  // rows in order after the join
     for (size_t y = y0; y < y1; ++y) {
       const uint32_t* ids = mappedRow<uint32_t>(cameraIds, y);
       for (int x = 0; x < fitCamera.width; ++x) {
