@@ -37,7 +37,7 @@ double rasterFrameBytes(const Scene& scene, const Method& method) {
 // moments images per light layer (2 or 4 floats a texel each).
 void addDeviceImages(MemoryEstimate& e, const Scene& scene, const Method& method) {
   e.add((isMomentFilter(method.filter) ? 57.0 : 41.0) * pixels(scene), "camera targets");
-  int lightLayers = method.fit == Fit::Cascades ? method.cascadeCount : 1;
+  int lightLayers = isCascadedFit(method.fit) ? method.cascadeCount : 1;
   for (const Light& light : scene.lights)
     if (light.type == LightType::Point) lightLayers = std::max(lightLayers, 6);
   const int layers = lightLayers + int(scene.projectors.size());

@@ -690,6 +690,11 @@ TEST(CompareMetrics, PerCascadeErrorRateAndFootprint) {
   Metrics sphere = compareFrames(p.reference, p.raster);
   EXPECT_TRUE(sphere.cascades.empty());
   EXPECT_FALSE(sphere.toJson().contains("cascades"));
+  // fit=sdsm is cascaded too: the same list as fit=cascades.
+  p.raster.meta["method"] = {{"fit", "sdsm"}, {"cascades.count", 5}};
+  Metrics sdsm = compareFrames(p.reference, p.raster);
+  ASSERT_EQ(sdsm.cascades.size(), 5u);
+  EXPECT_EQ(sdsm.toJson()["cascades"], j["cascades"]);
 }
 
 }  // namespace

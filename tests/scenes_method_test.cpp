@@ -60,6 +60,7 @@ TEST(ScenesMethod, KeysInDocumentationOrder) {
                                                     "cascades.lambda",
                                                     "cascades.blend",
                                                     "cascades.stabilize",
+                                                    "sdsm.snap",
                                                     "lispsm.n_scale",
                                                     "psm.slide_back",
                                                     "tsm.focus",
@@ -188,7 +189,8 @@ TEST(ScenesMethod, TextErrorsAreExact) {
 // not nlohmann's type_error 316 escaping from the message builder (found by fuzz_method).
 TEST(ScenesMethod, ValueThatIsNotUtf8IsAnInputError) {
   EXPECT_EQ(setError("fit", "cascad\xffhes"),
-            "--set: fit: error: got \"cascad\xef\xbf\xbdhes\"; expected one of sphere, tight, cascades, lispsm, psm, tsm");
+            "--set: fit: error: got \"cascad\xef\xbf\xbdhes\"; expected one of sphere, tight, cascades, lispsm, psm, "
+            "tsm, sdsm");
   EXPECT_NE(setError("map.size", "\xff\xfe").find("--set: map.size: error: got \""), std::string::npos);
 }
 
@@ -295,6 +297,31 @@ TEST(ScenesMethod, CascadeKeys) {
   EXPECT_THROW(validateMethod(hand, "code"), InputError);
 }
 
+// fit=sdsm: the kind (in every fit listing, code 6), its one key sdsm.snap (off by default), the
+// JSON round trip, and both as cascaded fits (cascades.count layers).
+TEST(ScenesMethod, SdsmKeys) {
+  EXPECT_FALSE(Method().sdsmSnap);
+  const KindInfo<Fit>* kind = findKind(fitKinds(), "sdsm");
+  ASSERT_NE(kind, nullptr);
+  EXPECT_EQ(int(kind->kind), 6);
+  EXPECT_NE(kindKeys(fitKinds()).find("tsm, sdsm"), std::string::npos);
+  Method m;
+  applyMethodSetting(m, "fit", "sdsm", "--set");
+  applyMethodSetting(m, "sdsm.snap", "true", "--set");
+  EXPECT_EQ(m.fit, Fit::Sdsm);
+  EXPECT_TRUE(m.sdsmSnap);
+  validateMethod(m, "--set");
+  nlohmann::json j = roundTripped(m);
+  EXPECT_EQ(j["fit"], "sdsm");
+  EXPECT_EQ(j["sdsm.snap"], true);
+  applyMethodJson(m, "sdsm.snap", 0, "grid");
+  EXPECT_FALSE(m.sdsmSnap);
+  EXPECT_EQ(setError("sdsm.snap", "yes"), "--set: sdsm.snap: error: got \"yes\"; expected true, false, 1 or 0");
+  EXPECT_TRUE(isCascadedFit(Fit::Sdsm));
+  EXPECT_TRUE(isCascadedFit(Fit::Cascades));
+  for (Fit f : {Fit::Sphere, Fit::Tight, Fit::Lispsm, Fit::Psm, Fit::Tsm}) EXPECT_FALSE(isCascadedFit(f));
+}
+
 // fit=lispsm and its one key: the default 1 (n_opt itself), a positive finite scale, and the
 // JSON round trip; 0, negatives, NaN and infinity are refused with the key named.
 TEST(ScenesMethod, LispsmKeys) {
@@ -316,7 +343,7 @@ TEST(ScenesMethod, LispsmKeys) {
   EXPECT_EQ(setError("lispsm.n_scale", "inf"), "--set: lispsm.n_scale: error: got \"inf\"; " + expected);
   EXPECT_EQ(setError("lispsm.n_scale", "2e6"), "--set: lispsm.n_scale: error: got \"2e6\"; " + expected);
   EXPECT_EQ(setError("fit", "pssm"),
-            "--set: fit: error: got \"pssm\"; expected one of sphere, tight, cascades, lispsm, psm, tsm");
+            "--set: fit: error: got \"pssm\"; expected one of sphere, tight, cascades, lispsm, psm, tsm, sdsm");
   Method json;
   EXPECT_EQ(errorOf([&] { applyMethodJson(json, "lispsm.n_scale", 0.0, "grid"); }),
             "grid: lispsm.n_scale: error: got 0.0; " + expected);

@@ -312,6 +312,10 @@ TEST(TuneCostModel, GrowsWithWhatTheMethodDoes) {
   cascades.cascadeCount = 4;
   EXPECT_EQ(cost(cascades).layers, 4);
   EXPECT_DOUBLE_EQ(cost(cascades).shadowMs, 4 * base.shadowMs);
+  Method sdsm = cascades;  // one layer per slice as well
+  sdsm.fit = Fit::Sdsm;
+  EXPECT_EQ(cost(sdsm).layers, 4);
+  EXPECT_DOUBLE_EQ(cost(sdsm).shadowMs, cost(cascades).shadowMs);
   // Deterministic: the same inputs, the same bits.
   EXPECT_EQ(cost(pcf5).estimatedMs, cost(pcf5).estimatedMs);
 }

@@ -7,6 +7,7 @@
 #include "shadowlab/raster/cascades.h"
 #include "shadowlab/raster/lispsm.h"
 #include "shadowlab/raster/psm.h"
+#include "shadowlab/raster/sdsm.h"
 #include "shadowlab/raster/tsm.h"
 
 #include <glm/gtc/matrix_transform.hpp>
@@ -234,6 +235,34 @@ bool tsmLayer(const Scene& scene, const Camera& camera, const glm::mat4& lightVi
   return true;
 }
 
+// fit=sdsm for a directional light (sdsm.h): the splits over the samples' depth range, each
+// layer's crop the box of its samples (a slice no sample reads: fit=cascades' crop of it, which no
+// pixel looks up); false without samples, where the caller fits as fit=cascades.
+bool sdsmLayers(const Camera& camera, const glm::mat4& lightViewFromWorld, const Method& method,
+                const std::vector<glm::vec3>& visiblePoints, glm::vec3 sceneMin, glm::vec3 sceneMax, LightSpace& out) {
+  const std::vector<SdsmSample> samples = sdsmSamples(visiblePoints, camera, lightViewFromWorld);
+  ViewDepthRange range;
+  if (!sdsmDepthRange(samples, range)) return false;
+  const int count = std::clamp(method.cascadeCount, 1, 8);
+  const std::vector<double> splits = cascadeSplits(range.nearView, range.farView, count, method.cascadeLambda);
+  const std::vector<SdsmBounds> bounds = sdsmPartitionBounds(samples, splits, method.cascadeBlend);
+  for (int i = 0; i < count; ++i) {
+    const CascadeCrop crop = bounds[size_t(i)].samples > 0
+                                 ? sdsmCrop(bounds[size_t(i)], method.mapSize, method.sdsmSnap)
+                                 : cascadeCrop(camera, lightViewFromWorld, splits[size_t(i)], splits[size_t(i) + 1],
+                                               method.mapSize, false, glm::vec2(sceneMin), glm::vec2(sceneMax));
+    MapLayer layer;
+    layer.texelWorldPerW = crop.texelWorld;
+    // The depth range is the scene's: casters between the light and the samples still cast.
+    layer.texFromWorld =
+        texFromViewOrtho(crop.minLight.x, crop.maxLight.x, crop.minLight.y, crop.maxLight.y, -sceneMax.z, -sceneMin.z) *
+        lightViewFromWorld;
+    out.layers.push_back(layer);
+  }
+  for (double c : splits) out.cascadeSplitsView.push_back(float(c));
+  return true;
+}
+
 }  // namespace
 
 glm::mat4 clipFromTex() {
@@ -252,7 +281,8 @@ int cubeFace(glm::vec3 v) {
   return v.z > 0 ? 4 : 5;
 }
 
-LightSpace fitLight(const Scene& scene, const Light& light, const Method& method, const Camera& fitCamera) {
+LightSpace fitLight(const Scene& scene, const Light& light, const Method& method, const Camera& fitCamera,
+                    const std::vector<glm::vec3>* visiblePoints) {
   const int mapSize = method.mapSize;
   LightSpace out;
   glm::vec3 lo = scene.boundsMin(), hi = scene.boundsMax();
@@ -286,6 +316,9 @@ LightSpace fitLight(const Scene& scene, const Light& light, const Method& method
     // scene are wasted).
     glm::vec3 sceneMin, sceneMax;
     sceneBoundsIn(scene, viewFromWorld, sceneMin, sceneMax);
+    if (method.fit == Fit::Sdsm && visiblePoints &&
+        sdsmLayers(camera, viewFromWorld, method, *visiblePoints, sceneMin, sceneMax, out))
+      return out;
     bool stabilize = method.fit == Fit::Cascades && method.cascadeStabilize;
     ViewDepthRange range = cascadeDepthRange(camera, lo, hi);
     if (stabilize) {
@@ -293,7 +326,7 @@ LightSpace fitLight(const Scene& scene, const Light& light, const Method& method
       // every split) would change with the camera's position, the camera's own range does not.
       range = cameraDepthRange(camera);
     }
-    int count = method.fit == Fit::Cascades ? std::clamp(method.cascadeCount, 1, 8) : 1;
+    int count = isCascadedFit(method.fit) ? std::clamp(method.cascadeCount, 1, 8) : 1;
     std::vector<double> splits = cascadeSplits(range.nearView, range.farView, count, method.cascadeLambda);
     for (int i = 0; i < count; ++i) {
       CascadeCrop crop = cascadeCrop(camera, viewFromWorld, splits[size_t(i)], splits[size_t(i) + 1], mapSize,
@@ -305,7 +338,7 @@ LightSpace fitLight(const Scene& scene, const Light& light, const Method& method
                            viewFromWorld;
       out.layers.push_back(layer);
     }
-    if (method.fit == Fit::Cascades)
+    if (isCascadedFit(method.fit))
       for (double c : splits) out.cascadeSplitsView.push_back(float(c));
     return out;
   }

@@ -20,10 +20,10 @@ namespace shadowlab::raster {
 // MapLayer: resolve_params.h.
 
 struct LightSpace {
-  // directional: 1, or one per cascade (fit=cascades); spot: 1; point: 6 cube faces (+X -X +Y -Y +Z -Z)
+  // directional: 1, or one per cascade (fit=cascades, fit=sdsm); spot: 1; point: 6 cube faces (+X -X +Y -Y +Z -Z)
   std::vector<MapLayer> layers;
   bool depthClamp = false;  // directional: casters outside [near, far] still write the map
-  // fit=cascades: the split distances C_0..C_N (view depth, world units); empty otherwise.
+  // fit=cascades, fit=sdsm: the split distances C_0..C_N (view depth, world units); empty otherwise.
   std::vector<float> cascadeSplitsView;
 };
 
@@ -44,8 +44,12 @@ struct LightSpace {
 // perspective with fov = cone angle, near = light.nearPlane, far = the farthest corner of the
 // scene's box. Point: six 90-degree faces. `fitCamera` is the camera the tight and cascaded fits
 // (and their splits) follow; normally scene.camera, another one to measure shimmer with a fixed
-// evaluation view (raster.h).
-LightSpace fitLight(const Scene& scene, const Light& light, const Method& method, const Camera& fitCamera);
+// evaluation view (raster.h). Fit::Sdsm: the cascades' splits over the view-depth range of
+// `visiblePoints` (the world points the fit camera's pixels see: the camera pass's samples),
+// each crop the box of the samples in its slice (sdsm.h); without samples (none given, or the
+// camera sees nothing) exactly Fit::Cascades.
+LightSpace fitLight(const Scene& scene, const Light& light, const Method& method, const Camera& fitCamera,
+                    const std::vector<glm::vec3>* visiblePoints = nullptr);
 MapLayer projectorLayer(const Projector& projector, int mapSize);
 
 // (u, v, depth, w) -> Vulkan clip space (x = 2u - 1, y = 2v - 1: v = 0 is the framebuffer's top).

@@ -59,6 +59,7 @@
 
 #include "light_space.h"
 #include "shadowlab/raster/device_memory.h"
+#include "shadowlab/raster/sdsm.h"
 #include "shadowlab/raster/resolve_abi.h"
 #include "shadowlab/raster/resolve_params.h"
 #include "scene_gpu.h"
@@ -469,6 +470,9 @@ struct Rasterizer::Impl {
   FramePipelines pipelinesFor(const Method& method, const raster::FrameLayers& layers,
                               const raster::ResolveSpecialization& spec, bool partial, bool planes);
   std::string cameraKey(const Scene& scene) const;
+  std::string cameraKey(const Camera& camera) const;
+  const std::vector<glm::vec3>& visiblePoints(const Scene& scene, const Light* light, const Method& method,
+                                              const Camera& fitCamera, bool stencilIds);
   std::string footprintKey(const Scene& scene, const abi::Params& params,
                            const raster::ResolveSpecialization& spec) const;
   Footprint* findFootprint(const std::string& key);
@@ -495,7 +499,7 @@ struct Rasterizer::Impl {
   Frame readback(const Scene& scene, const Light* light, const Method& method, int width, int height);
   void record(VkCommandBuffer cmd, const std::vector<LayerDraw>& layerDraws, int lightLayers,
               const FramePipelines& frame, const Method& method, const glm::mat4& cameraClip, int width, int height,
-              bool drawVisibility, bool drawShadow);
+              bool drawVisibility, bool drawShadow, bool visibilityOnly = false);
   std::string shadowPassKey(const std::vector<LayerDraw>& layerDraws, const IdPipelines& pipes,
                             const Method& method) const;
 
@@ -515,6 +519,9 @@ struct Rasterizer::Impl {
   bool warmupRun = false;
   std::vector<std::vector<float>> spare;  // recycled channel planes (Rasterizer::recycle)
   double visibilityGpuMs = 0;
+  // fit=sdsm's samples (visiblePoints) and the key of the scene and fit camera they are of.
+  std::vector<glm::vec3> samplePoints;
+  std::string samplesKey;  // empty: none kept
 };
 
 Rasterizer::Impl::Impl(const RasterDeviceOptions& options) {
@@ -825,7 +832,7 @@ void Rasterizer::Impl::writeDescriptors() {
 
 void Rasterizer::Impl::record(VkCommandBuffer cmd, const std::vector<LayerDraw>& layerDraws, int lightLayers,
                               const FramePipelines& frame, const Method& method, const glm::mat4& cameraClip, int width,
-                              int height, bool drawVisibility, bool drawShadow) {
+                              int height, bool drawVisibility, bool drawShadow, bool visibilityOnly) {
   const IdPipelines& pipes = frame.ids;
   const VkPipeline resolve = frame.resolve, lookup = frame.lookup;
   const raster::SceneGpu& s = *scene;
@@ -935,7 +942,7 @@ void Rasterizer::Impl::record(VkCommandBuffer cmd, const std::vector<LayerDraw>&
   }
   vkCmdWriteTimestamp2(cmd, VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT, pool, 5);
   // ---- Pass 1b: the moments of filterable maps (placeholders made readable otherwise) ----
-  {
+  if (!visibilityOnly) {
     const bool used = isMomentFilter(method.filter);
     const int size = moments.width();
     auto fullscreen = [&](const vk::Image& target, int layer, VkPipeline pipeline) {
@@ -989,6 +996,10 @@ void Rasterizer::Impl::record(VkCommandBuffer cmd, const std::vector<LayerDraw>&
                  VK_PIPELINE_STAGE_2_COLOR_ATTACHMENT_OUTPUT_BIT, VK_ACCESS_2_COLOR_ATTACHMENT_WRITE_BIT,
                  VK_PIPELINE_STAGE_2_FRAGMENT_SHADER_BIT, VK_ACCESS_2_SHADER_SAMPLED_READ_BIT);
   vkCmdWriteTimestamp2(cmd, VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT, pool, 3);
+  if (visibilityOnly) {  // fit=sdsm's samples (visiblePoints): the host reads the ids next
+    barrierToHost(cmd, VK_PIPELINE_STAGE_2_COLOR_ATTACHMENT_OUTPUT_BIT, VK_ACCESS_2_COLOR_ATTACHMENT_WRITE_BIT);
+    return;
+  }
 
   // ---- Pass 3a: a group's planes (m, cascade) and surface, where not kept ----
   vk::Image& surface = *surfaceBound;
@@ -1548,11 +1559,65 @@ Rasterizer::Impl::PassTimes Rasterizer::Impl::readTimestamps(Drawn drawn) {
 }
 
 // The visibility buffer's key: the scene, the camera's matrices, the image size.
-std::string Rasterizer::Impl::cameraKey(const Scene& sc) const {
-  const Camera& camera = sc.camera;
+std::string Rasterizer::Impl::cameraKey(const Scene& sc) const { return cameraKey(sc.camera); }
+
+std::string Rasterizer::Impl::cameraKey(const Camera& camera) const {
   glm::mat4 cameraClip = camera.clipFromView() * camera.viewFromWorld();
   return scene->hash + "/" + hashHex(fnv1a64(&cameraClip, sizeof(cameraClip))) + "/" + std::to_string(camera.width) +
          "x" + std::to_string(camera.height);
+}
+
+// fit=sdsm's samples, as an engine's depth reduction reads its depth buffer: pass 2 recorded alone
+// for the fit camera (its own submit: the fit must be known before pass 1), its ids read back and
+// each hit pixel's world point reconstructed on the CPU (sdsm.h's visiblePoint: the ray through
+// the pixel's center and the plane of its triangle, as resolve.frag does). Kept per scene and fit
+// camera (a sweep over methods reduces once). The main submit then draws its own visibility buffer
+// again (visibilityKey cleared), so camera_gpu_ms stays the camera pass's, without this one.
+const std::vector<glm::vec3>& Rasterizer::Impl::visiblePoints(const Scene& sc, const Light* light, const Method& method,
+                                                              const Camera& fitCamera, bool stencilIds) {
+  const std::string key = cameraKey(fitCamera);
+  if (samplesKey == key) return samplePoints;
+  samplesKey.clear();
+  if (fitCamera.width != sc.camera.width || fitCamera.height != sc.camera.height)
+    throw InputError("fit camera: error: got an image of " + std::to_string(fitCamera.width) + "x" +
+                     std::to_string(fitCamera.height) + "; expected the scene camera's " +
+                     std::to_string(sc.camera.width) + "x" + std::to_string(sc.camera.height) +
+                     " (fit=sdsm samples it with the camera pass's images)");
+  // The camera's images and the descriptor set record() binds, as the frame will have them (the
+  // layer count is the same with or without the samples).
+  prepareTargets(sc, method, raster::fitFrameLayers(sc, light, method, fitCamera), stencilIds);
+  FramePipelines pipes;
+  pipes.ids = {VK_NULL_HANDLE, VK_NULL_HANDLE, idPipeline(kCameraDepthFormat, false, false, false),
+               idPipeline(kCameraDepthFormat, false, true, false)};
+  const glm::mat4 clip = fitCamera.clipFromView() * fitCamera.viewFromWorld();
+  VkCommandBuffer cmd = commands->begin();
+  record(cmd, {}, 0, pipes, method, clip, fitCamera.width, fitCamera.height, true, false, true);
+  commands->submitAndWait();
+  visibilityKey.clear();  // cameraIds hold the fit camera's ids now
+  cameraIds.invalidate(*context);
+  const CameraRays rays(fitCamera);
+  const std::vector<glm::vec3>& vertices = scene->triangleVertices;
+  const size_t triangles = vertices.size() / 3;
+  std::vector<glm::vec3> halves[2];
+  auto reduce = [&](size_t y0, size_t y1) {
+    std::vector<glm::vec3>& out = halves[y1 == size_t(fitCamera.height) ? 1 : 0];  // rows in order after the join
+    for (size_t y = y0; y < y1; ++y) {
+      const uint32_t* ids = mappedRow<uint32_t>(cameraIds, y);
+      for (int x = 0; x < fitCamera.width; ++x) {
+        if (ids[x] == 0 || ids[x] > triangles) continue;
+        const size_t t = size_t(ids[x] - 1);
+        glm::vec3 p;
+        if (raster::visiblePoint(rays, fitCamera.position, x, int(y), vertices[3 * t], vertices[3 * t + 1],
+                                 vertices[3 * t + 2], p))
+          out.push_back(p);
+      }
+    }
+  };
+  inTwoHalves(size_t(fitCamera.height), reduce);
+  samplePoints = std::move(halves[0]);
+  samplePoints.insert(samplePoints.end(), halves[1].begin(), halves[1].end());
+  samplesKey = key;
+  return samplePoints;
 }
 
 // Evidence on demand's group: everything m and the cascade index are computed from in resolve.frag
@@ -1946,14 +2011,21 @@ Frame Rasterizer::render(const Scene& scene, const Method& method, const std::st
   const Light* light = im.validate(scene, method, lightName);
   const Camera& fit = fitCamera ? *fitCamera : scene.camera;  // what the light frustum follows
   im.upload(scene);
-  const raster::FrameLayers layers = raster::fitFrameLayers(scene, light, method, fit);
+  // Evidence on demand: with a selector, a light, no projectors (their planes are every pixel's)
+  // and the group's planes kept from an earlier frame.
+  const bool onDemand = select && *select && light && scene.projectors.empty();
+  const bool stencilIds = onDemand && im.stencilIdsApply(method);
+  if (!im.surfacePlaceholder.get())
+    im.surfacePlaceholder =
+        vk::Image(*im.context, 1, 1, 1, kSurfaceFormat, VK_IMAGE_USAGE_SAMPLED_BIT, VK_IMAGE_ASPECT_COLOR_BIT);
+  if (!im.surfaceBound) im.surfaceBound = &im.surfacePlaceholder;  // fit=sdsm's sample pass writes the descriptors
+  const std::vector<glm::vec3>* visible =
+      raster::fitReadsVisiblePoints(light, method) ? &im.visiblePoints(scene, light, method, fit, stencilIds) : nullptr;
+  const raster::FrameLayers layers = raster::fitFrameLayers(scene, light, method, fit, visible);
   checkDeviceMemory(im.plannedImages(scene, method, layers), im.memoryLimits());
   const abi::Params params = raster::packResolveParams(scene, light, method, fit, layers, im.projectorTexels());
   im.params.upload(&params, sizeof(params));
   const raster::ResolveSpecialization spec = raster::resolveSpecialization(scene, light, method, layers);
-  // Evidence on demand: with a selector, a light, no projectors (their planes are every pixel's)
-  // and the group's planes kept from an earlier frame.
-  const bool onDemand = select && *select && light && scene.projectors.empty();
   const std::string group = light ? im.footprintKey(scene, params, spec) : std::string();
   const std::string camera = onDemand ? im.cameraKey(scene) : std::string();
   Impl::Footprint* footprint =
@@ -1973,11 +2045,7 @@ Frame Rasterizer::render(const Scene& scene, const Method& method, const std::st
   const bool drawPlanes = groupStart || (onDemand && lookupSurface && !surfaceKept);
   const bool drawsSurface = drawPlanes || resolveSurface;
   if (drawsSurface) surface->key.clear();  // until drawn
-  if (!im.surfacePlaceholder.get())
-    im.surfacePlaceholder =
-        vk::Image(*im.context, 1, 1, 1, kSurfaceFormat, VK_IMAGE_USAGE_SAMPLED_BIT, VK_IMAGE_ASPECT_COLOR_BIT);
   im.surfaceBound = surface ? &surface->image : &im.surfacePlaceholder;
-  const bool stencilIds = onDemand && im.stencilIdsApply(method);
   im.prepareTargets(scene, method, layers, stencilIds);
   const Impl::FramePipelines pipes = im.pipelinesFor(method, layers, spec, onDemand, drawPlanes);
   const Impl::Drawn drawn = im.submit(scene, method, layers, pipes);

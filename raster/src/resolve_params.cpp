@@ -15,10 +15,11 @@ static_assert(abi::kFilterNone == int(Filter::None) && abi::kFilterPoisson == in
                   abi::kFilterMsm == int(Filter::Msm),
               "the shader's filter codes are kinds.h's rows");
 
-FrameLayers fitFrameLayers(const Scene& scene, const Light* light, const Method& method, const Camera& fitCamera) {
+FrameLayers fitFrameLayers(const Scene& scene, const Light* light, const Method& method, const Camera& fitCamera,
+                           const std::vector<glm::vec3>* visiblePoints) {
   FrameLayers out;
   if (light) {
-    LightSpace lightSpace = fitLight(scene, *light, method, fitCamera);
+    LightSpace lightSpace = fitLight(scene, *light, method, fitCamera, visiblePoints);
     out.layers = std::move(lightSpace.layers);
     out.depthClamp = lightSpace.depthClamp;
     out.cascadeSplitsView = std::move(lightSpace.cascadeSplitsView);
@@ -26,6 +27,10 @@ FrameLayers fitFrameLayers(const Scene& scene, const Light* light, const Method&
   out.lightLayers = int(out.layers.size());
   for (const Projector& p : scene.projectors) out.layers.push_back(projectorLayer(p, method.mapSize));
   return out;
+}
+
+bool fitReadsVisiblePoints(const Light* light, const Method& method) {
+  return light && light->type == LightType::Directional && method.fit == Fit::Sdsm;
 }
 
 // Mitchell's best candidate with a fixed seed: any prefix of `taps` points is itself well

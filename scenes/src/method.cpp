@@ -229,6 +229,8 @@ const std::vector<SetterRow>& setters() {
        }},
       {"cascades.stabilize", "fit=cascades: constant-size crops snapped to whole texels",
        [](Method& m, const Value& v, const Where& w) { m.cascadeStabilize = boolOf(v, w); }},
+      {"sdsm.snap", "fit=sdsm: each slice's crop snapped to whole texels of a power-of-two size (less shimmer)",
+       [](Method& m, const Value& v, const Where& w) { m.sdsmSnap = boolOf(v, w); }},
       {"lispsm.n_scale", "fit=lispsm: the warp's projection center, times the optimal n (larger: closer to uniform)",
        [](Method& m, const Value& v, const Where& w) {
          m.lispsmNScale = floatIn(v, w, 0.0, kNScaleLimit, true, kNScaleExpected);
@@ -472,6 +474,7 @@ nlohmann::json methodToJson(const Method& m) {
   j["cascades.lambda"] = jsonFloat(m.cascadeLambda);
   j["cascades.blend"] = jsonFloat(m.cascadeBlend);
   j["cascades.stabilize"] = m.cascadeStabilize;
+  j["sdsm.snap"] = m.sdsmSnap;
   j["lispsm.n_scale"] = jsonFloat(m.lispsmNScale);
   j["psm.slide_back"] = jsonFloat(m.psmSlideBack);
   j["tsm.focus"] = jsonFloat(m.tsmFocus);
@@ -499,6 +502,8 @@ nlohmann::json methodToJson(const Method& m) {
 }
 
 void validateMethod(const Method& m, const std::string& origin) { crossCheck(m, origin, ""); }
+
+bool isCascadedFit(Fit f) { return f == Fit::Cascades || f == Fit::Sdsm; }
 
 bool isMomentFilter(Filter f) { return momentCount(f) > 0; }
 

@@ -21,6 +21,7 @@
 
 #include "shadowlab/compare/classify.h"
 #include "shadowlab/scenes/error.h"
+#include "shadowlab/scenes/method.h"
 
 namespace shadowlab {
 
@@ -369,7 +370,10 @@ Channels readChannels(const Frame& reference, const Frame& raster, const Compare
       auto method = raster.meta.find("method");
       if (method != raster.meta.end() && method->is_object()) {
         auto fit = method->find("fit");
-        if (fit != method->end() && fit->is_string() && fit->get<std::string>() != "cascades") ch.cascade = nullptr;
+        if (fit != method->end() && fit->is_string()) {
+          const KindInfo<Fit>* kind = findKind(fitKinds(), fit->get<std::string>());
+          if (!kind || !isCascadedFit(kind->kind)) ch.cascade = nullptr;
+        }
         auto count = method->find("cascades.count");
         if (count != method->end() && count->is_number_integer()) ch.cascadeCount = std::clamp(count->get<int>(), 0, 8);
       }

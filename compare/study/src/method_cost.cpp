@@ -44,7 +44,7 @@ MethodCost estimateMethodCost(const Scene& scene, const Method& method, const st
   int layers = 1;
   if (light) {
     if (light->type == LightType::Point) layers = 6;
-    else if (light->type == LightType::Directional && method.fit == Fit::Cascades) layers = method.cascadeCount;
+    else if (light->type == LightType::Directional && isCascadedFit(method.fit)) layers = method.cascadeCount;
   }
   layers += int(scene.projectors.size());  // each projector's depth map
   double triangles = 0;

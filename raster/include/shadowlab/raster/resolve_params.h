@@ -35,11 +35,16 @@ struct FrameLayers {
   std::vector<MapLayer> layers;
   int lightLayers = 0;                   // layers[0 .. lightLayers) are the light's
   bool depthClamp = false;               // the light's pass clamps depth (directional lights)
-  std::vector<float> cascadeSplitsView;  // fit=cascades: C_0..C_N (fit-camera view depth); else empty
+  std::vector<float> cascadeSplitsView;  // fit=cascades, sdsm: C_0..C_N (fit-camera view depth); else empty
 };
 
 // The light's layers (none without a light) fitted to `fitCamera`, then the projectors'.
-FrameLayers fitFrameLayers(const Scene& scene, const Light* light, const Method& method, const Camera& fitCamera);
+// `visiblePoints`: the world points the fit camera's pixels see (fit=sdsm reads them; without
+// them it fits as fit=cascades).
+FrameLayers fitFrameLayers(const Scene& scene, const Light* light, const Method& method, const Camera& fitCamera,
+                           const std::vector<glm::vec3>* visiblePoints = nullptr);
+// Whether the fit reads the fit camera's visible points (fit=sdsm with a directional light).
+bool fitReadsVisiblePoints(const Light* light, const Method& method);
 
 // Where a projector's image starts in the projector texel table, and its size.
 struct ProjectorTexels {

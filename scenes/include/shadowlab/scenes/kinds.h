@@ -31,7 +31,8 @@
   X(Cascades, 2, "cascades", "one tight crop per slice of the view depth (cascades.*)")          \
   X(Lispsm, 3, "lispsm", "the tight body under a light-space perspective warp (lispsm.n_scale)") \
   X(Psm, 4, "psm", "perspective shadow map: the map in the camera's post-perspective space (psm.slide_back)") \
-  X(Tsm, 5, "tsm", "the view frustum's trapezoid warped onto the map (tsm.focus, tsm.focus_distance)")
+  X(Tsm, 5, "tsm", "the view frustum's trapezoid warped onto the map (tsm.focus, tsm.focus_distance)") \
+  X(Sdsm, 6, "sdsm", "cascades over the visible samples' depth range, each cropped to its samples (cascades.*, sdsm.snap)")
 
 // A scene light's "type".
 #define SHADOWLAB_LIGHT_TYPES(X)                                                  \

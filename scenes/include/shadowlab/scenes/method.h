@@ -35,6 +35,9 @@ struct Method {
   float cascadeLambda = 0.75f;    // cascades.lambda: 0 uniform .. 1 logarithmic splits
   float cascadeBlend = 0.0f;      // cascades.blend: blend band, fraction of a cascade's depth range, 0..0.5
   bool cascadeStabilize = false;  // cascades.stabilize: constant-size crops snapped to whole texels
+  // Sample distribution shadow maps (fit=sdsm, directional lights; raster/METHODS.md): the cascades'
+  // splits over the view depth range of what the camera sees, each crop the box of its samples.
+  bool sdsmSnap = false;  // sdsm.snap: power-of-two texel sizes, crops snapped to whole texels
   // Light-space perspective shadow maps (fit=lispsm, directional lights): the warp's projection
   // center lies lispsmNScale * n_opt before the body's near face (larger: closer to uniform).
   float lispsmNScale = 1.0f;  // lispsm.n_scale: > 0, <= 1e6
@@ -71,6 +74,9 @@ struct Method {
   float msmMomentBias = 3e-5f;     // msm.moment_bias: moments pulled towards (0.5, ...) by this much, 0..1
   bool projectorReverseGuard = true;  // projector.reverse_guard: only project where w >= 0
 };
+
+// The fits with one map layer per slice of the view depth (cascades.count of them): cascades, sdsm.
+bool isCascadedFit(Fit f);
 
 // The filters that read a moments map rather than comparing depths (vsm, evsm2, evsm4, msm).
 bool isMomentFilter(Filter f);
