@@ -84,3 +84,33 @@ TEST(GltfCli, AGltfPathIsASceneForScenesCheck) {
   EXPECT_NE(r.err.find("BoxTextured.glb: warning: no KHR_lights_punctual light"), std::string::npos) << r.err;
   fs::remove_all(dir);
 }
+
+TEST(GltfCli, AGltfPathRunsSweepsWithOverridesAndRefusesALightPath) {
+  SHADOWLAB_REQUIRE_TEST_MODEL(asset, "glTF2/BoxTextured-glTF-Binary/BoxTextured.glb");
+  const fs::path dir = freshTempDir("gltf_cli_sweep");
+  std::ofstream(dir / "sweep.json") << R"({"scenes": [")" << asset << R"("], "grid": {"map.size": [256]}})";
+  // scene:/pointer addresses the glTF document: the box's root node moved up by 0.5.
+  const CliRun r = runShadowlab("sweep --sweep '" + (dir / "sweep.json").string() +
+                                    "' --grid scene:/nodes/0/matrix/13=0,0.5 --no-report --cache '" +
+                                    (dir / "cache").string() + "' -o '" + (dir / "out").string() + "'",
+                                dir);
+  ASSERT_EQ(r.code, 0) << r.err;
+  const nlohmann::json results = nlohmann::json::parse(std::ifstream(dir / "out" / "results.json"));
+  ASSERT_EQ(results["rows"].size(), 2u) << results.dump();
+  // The pointer is resolved in the glTF document: one it lacks is an error naming it.
+  const CliRun bad =
+      runShadowlab("sweep --sweep '" + (dir / "sweep.json").string() +
+                       "' --grid scene:/nodes/9/matrix/13=0.5 --no-report -o '" + (dir / "bad").string() + "'",
+                   dir);
+  EXPECT_EQ(bad.code, 2) << bad.err;
+  EXPECT_NE(bad.err.find(asset + ": override /nodes/9/matrix/13: error: no such value in the glTF document"),
+            std::string::npos)
+      << bad.err;
+  EXPECT_FALSE(fs::exists(dir / "bad"));
+  const CliRun s = runShadowlab(
+      "stability '" + asset + "' --light-path elevation_deg=60:10:3 -o '" + (dir / "stability").string() + "'", dir);
+  EXPECT_EQ(s.code, 2) << s.err;
+  EXPECT_NE(s.err.find("--light-path: error: scene " + asset + " is a glTF file"), std::string::npos) << s.err;
+  EXPECT_FALSE(fs::exists(dir / "stability"));
+  fs::remove_all(dir);
+}
