@@ -435,3 +435,44 @@ TEST_F(Gltf, AJsonWrapperKeepsItsCameraAndLightsAroundTheAsset) {
   const Scene f = loadScene(path);
   EXPECT_EQ(f.camera.lookAt, glm::vec3(0.5f, 0.5f, 0.0f));
 }
+
+TEST_F(Gltf, CamerasAreChosenByNameOrIndexAndNoZfarReachesPastTheBounds) {
+  GltfBuilder b = squareFile();
+  b.node({{"mesh", 0}});
+  b.doc["cameras"] = {
+      {{"name", "wide"}, {"type", "perspective"}, {"perspective", {{"yfov", 1.0}, {"znear", 0.5}, {"zfar", 50}}}},
+      {{"name", "close up"},
+       {"type", "perspective"},
+       {"perspective", {{"yfov", 0.5}, {"znear", 0.25}, {"aspectRatio", 2.0}}}}};
+  b.node({{"camera", 0}, {"translation", {0, 0, 10}}});
+  b.node({{"camera", 1}, {"translation", {0.5, 0.5, 4}}});
+  b.scene({0, 1, 2});
+  const std::string path = b.write(dir(), "cams");
+  const std::string lights = R"(, "lights": [{"type": "directional", "elevation_deg": 45}])";
+  const Scene first = loadScene(path);  // the first perspective camera a node places
+  EXPECT_EQ(first.camera.position, glm::vec3(0, 0, 10));
+  EXPECT_FLOAT_EQ(first.camera.farPlane, 50.0f);
+  const Scene named = loadScene(wrapper(path, ", \"camera\": \"close up\"", lights));
+  EXPECT_EQ(named.camera.position, glm::vec3(0.5f, 0.5f, 4));
+  EXPECT_FLOAT_EQ(named.camera.vfovDeg, float(0.5 * 180 / kPi));
+  EXPECT_EQ(named.camera.width, 640);
+  EXPECT_EQ(named.camera.height, 320);
+  EXPECT_FLOAT_EQ(named.camera.nearPlane, 0.25f);
+  // No zfar: twice the distance to the farthest corner of the bounds (the square's (0, 0, 0) and
+  // (1, 1, 0) corners are both sqrt(0.5 + 16) away).
+  EXPECT_FLOAT_EQ(named.camera.farPlane, 2 * std::sqrt(16.5f));
+  EXPECT_EQ(loadScene(wrapper(path, ", \"camera\": 1", lights)).camera.position, named.camera.position);
+  const std::string err = inputErrorOf([&] { loadScene(wrapper(path, ", \"camera\": \"tele\"", lights)); });
+  EXPECT_NE(err.find("wrapper.json: /objects/0: error: no camera named \"tele\" in "), std::string::npos) << err;
+  EXPECT_NE(err.find("expected one of \"wide\", \"close up\""), std::string::npos) << err;
+  // A JSON camera and a glTF object's camera: one too many.
+  const std::string both = inputErrorOf([&] {
+    loadScene(wrapper(
+        path, ", \"camera\": 0",
+        lights +
+            R"(, "camera": {"position": [0, 1, 5], "look_at": [0, 0, 0], "vfov_deg": 40, "width": 32, "height": 24})"));
+  });
+  EXPECT_NE(both.find("wrapper.json: /camera: error: both a JSON camera and a glTF object's \"camera\""),
+            std::string::npos)
+      << both;
+}
