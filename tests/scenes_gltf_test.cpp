@@ -5,6 +5,7 @@
 
 #include <unistd.h>
 
+#include <cctype>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
@@ -172,7 +173,13 @@ INSTANTIATE_TEST_SUITE_P(
         BadFile{"MissingBin/BoxTextured.gltf", ": /buffers/0/uri: error: buffer file"},
         BadFile{"draco/2CylinderEngine.gltf",
                 ": /extensionsRequired/0: error: the file requires the extension KHR_draco_mesh_compression"},
-        BadFile{"SchemaFailures/sceneWrongType.gltf", ": /scene: error: got \"hello\"; expected an integer"}));
+        BadFile{"SchemaFailures/sceneWrongType.gltf", ": /scene: error: got \"hello\"; expected an integer"}),
+    [](const ::testing::TestParamInfo<BadFile>& info) {  // the file, e.g. wrongTypes_badUint_gltf
+      std::string name = info.param.file;
+      for (char& c : name)
+        if (!std::isalnum(static_cast<unsigned char>(c))) c = '_';
+      return name;
+    });
 
 // ----------------------------------------------------------------------------------------------
 // The mapping, on files written here.
