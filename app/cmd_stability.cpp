@@ -11,6 +11,8 @@
 // Writes DIR/stability.json: the per-frame numbers and a result row (schema shadowlab.stability/1)
 // that `shadowlab gate` checks (compare/GATE.md). Every input is validated before anything is
 // traced, rendered or written.
+#include <algorithm>
+#include <cctype>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -31,6 +33,13 @@
 #include "shadowlab/scenes/loader.h"
 
 namespace {
+
+// A .gltf or .glb path (any case): a scene of its own, not a JSON document (scenes/FORMAT.md).
+bool sceneIsGltf(const std::string& path) {
+  std::string ext = path.substr(std::min(path.size(), path.find_last_of('.')));
+  std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return char(std::tolower(c)); });
+  return ext == ".gltf" || ext == ".glb";
+}
 
 using namespace shadowlab;
 
@@ -107,6 +116,12 @@ int run(const Options& o) {
   std::vector<Camera> fitCameras;
   nlohmann::json pathJson;
   std::string pathConfig;
+  // A light path moves a JSON light (elevation_deg, azimuth_deg): a glTF file's lights have neither.
+  if (lightPath && sceneIsGltf(scene.path))
+    throw bad("--light-path",
+              "scene " + scene.path +
+                  " is a glTF file, whose lights have no elevation_deg or azimuth_deg to move; expected "
+                  "a JSON scene (a JSON scene may hold the glTF: scenes/FORMAT.md, \"glTF files\")");
   const nlohmann::json sceneDocument = lightPath ? readJsonFile(scene.path) : nlohmann::json();
   int frames = 0;
   if (lightPath) {

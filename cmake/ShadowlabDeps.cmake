@@ -6,6 +6,9 @@ find_package(CLI11 REQUIRED)
 find_package(TBB REQUIRED)
 # Debian's tinyobjloader calls its version "2rc10": ask for none.
 find_package(tinyobjloader REQUIRED)
+# glTF files (scenes/src/gltf_loader.cpp): libtinygltf-dev's header, compiled into shadowlab_scenes
+# without image decoding (scenes/src/gltf_tinygltf.cpp), so its shared library is not linked.
+find_path(TINYGLTF_INCLUDE_DIR tiny_gltf.h REQUIRED DOC "libtinygltf-dev's tiny_gltf.h")
 # Image files (scenes/src/image_io.h): SHADOWLAB_IMAGE_IO=oiio (the default) reads and writes them
 # with OpenImageIO; exr-png with OpenEXR and libpng, whose few MB of libraries fit a bundle for a
 # bare machine (scripts/device-bundle.sh), where OpenImageIO pulls in ~390 MB (GDAL, ffmpeg, ...).

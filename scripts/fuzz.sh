@@ -3,7 +3,7 @@
 # --set strings, sweep files and --grid strings, tolerance files, results and metrics files, light
 # path specs) with libFuzzer, AddressSanitizer and UndefinedBehaviorSanitizer (Debian's clang).
 #
-#   scripts/fuzz.sh TARGET SECONDS    fuzz one target (scene obj image exr method sweep tolerances
+#   scripts/fuzz.sh TARGET SECONDS    fuzz one target (scene obj gltf image exr method sweep tolerances
 #                                     results light_path) for SECONDS; `all` runs every target in turn
 #   scripts/fuzz.sh --list            the targets
 #
@@ -16,7 +16,7 @@
 # Add each finding to tests/fuzz/regressions/TARGET/ (the smoke test replays them) once it is fixed.
 set -euo pipefail
 cd "$(dirname "$0")/.."
-targets=(scene obj image exr method sweep tolerances results light_path)
+targets=(scene obj gltf image exr method sweep tolerances results light_path)
 if [ "${1:-}" = "--list" ]; then printf '%s\n' "${targets[@]}"; exit 0; fi
 if [ $# -ne 2 ]; then echo "usage: scripts/fuzz.sh TARGET|all SECONDS (scripts/fuzz.sh --list)" >&2; exit 2; fi
 target=$1 seconds=$2
@@ -42,6 +42,12 @@ case "$target" in
   scene) seed scenes/data/*.json tests/bad_input/scene_*.json ;;
   obj) seed tests/bad_input/assets/*.obj tests/bad_input/assets/*.mtl
        printf 'mtllib m.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0 0\nvt 1 0\nvt 0 1\nvn 0 0 1\nusemtl a\nf 1/1/1 2/2/1 3/3/1\n#--MTL--\nnewmtl a\nKd 0.5 0.5 0.5\nmap_d alpha.png\n' > "$corpus/seed_obj_mtl" ;;
+  gltf) seed scenes/data/assets/*.glb
+        # Real files nobody here wrote, where assimp-testmodels is installed (not in the repository).
+        seed /usr/share/assimp/models/glTF2/BoxTextured-glTF-Embedded/BoxTextured.gltf \
+             /usr/share/assimp/models/glTF2/RecursiveNodes/RecursiveNodes.gltf \
+             /usr/share/assimp/models/glTF2/BoxWithInfinites-glTF-Binary/BoxWithInfinites.glb \
+             /usr/share/assimp/models/glTF2/SchemaFailures/sceneWrongType.gltf ;;
   image) seed scenes/data/*.png ;;
   exr) seed tests/fuzz/seeds/exr/*.exr ;;
   method) seed tests/bad_input/method_*.json
@@ -59,7 +65,7 @@ asan=detect_leaks=1:abort_on_error=1
 # The targets that read images go through OpenImageIO, whose PNG reader leaks on corrupt files
 # (tests/sanitizers/lsan.supp). A suppression matches the allocation's stack by library name, and
 # the fast unwinder stops at libstdc++ before reaching OIIO's frames: unwind fully for these.
-case "$target" in scene|obj|image) asan=$asan:fast_unwind_on_malloc=0 ;; esac
+case "$target" in scene|obj|gltf|image) asan=$asan:fast_unwind_on_malloc=0 ;; esac
 export ASAN_OPTIONS=${ASAN_OPTIONS:-$asan}
 # Third-party leaks only (the file says which and why); ours are fixed, never suppressed.
 export LSAN_OPTIONS=${LSAN_OPTIONS:-suppressions=$PWD/tests/sanitizers/lsan.supp:print_suppressions=0}

@@ -1,6 +1,6 @@
 #!/usr/bin/python3
-"""Regenerates the bundled scenes' small generated files: fence_alpha.png, projector_image.png
-and long_view.json. Run with Debian's /usr/bin/python3 (numpy + PIL from python3-matplotlib)."""
+"""Regenerates the bundled scenes' small generated files: fence_alpha.png, projector_image.png,
+long_view.json, gltf_checker_alpha.png and assets/gltf_cards.glb (with gltf_cards.json). Run with Debian's /usr/bin/python3 (numpy + PIL from python3-matplotlib)."""
 import json
 import os
 
@@ -66,3 +66,118 @@ out = [
 ]
 with open(os.path.join(here, "long_view.json"), "w") as f:
     f.write("\n".join(out) + "\n")
+
+# gltf_checker_alpha.png: 8x8 RGBA, alpha 255 and 0 in 1-texel squares (texel (0, 0) opaque), the
+# alpha texture of the glTF MASK material tests and of assets/gltf_cards.glb. Colour is a plain
+# orange: only alpha is read.
+ch = np.zeros((8, 8, 4), dtype=np.uint8)
+ch[..., 0], ch[..., 1], ch[..., 2] = 230, 140, 40
+yy, xx = np.mgrid[0:8, 0:8]
+ch[..., 3] = np.where((xx + yy) % 2 == 0, 255, 0)
+Image.fromarray(ch, mode="RGBA").save(os.path.join(here, "gltf_checker_alpha.png"))
+
+# assets/gltf_cards.glb: what a glTF asset brings that a JSON scene does not, and no more: a node
+# hierarchy (a "rack" turned 20 degrees about y, its children placed in its frame), one card mesh
+# instanced under three nodes with an alpha-MASK material (the checker above, in the GLB's binary
+# chunk, tiled 4 x 4 by KHR_texture_transform), one post mesh instanced under two nodes, and a
+# KHR_lights_punctual spot light on a node of its own. gltf_cards.json adds the ground and the camera.
+import math
+import struct
+
+
+def glb(doc, chunks):
+    """doc: the glTF JSON (bufferViews filled from chunks, in order); returns the GLB bytes."""
+    binary = b""
+    views = []
+    for data in chunks:
+        while len(binary) % 4:
+            binary += b"\0"
+        views.append({"buffer": 0, "byteOffset": len(binary), "byteLength": len(data)})
+        binary += data
+    while len(binary) % 4:
+        binary += b"\0"
+    doc["bufferViews"] = views
+    doc["buffers"] = [{"byteLength": len(binary)}]
+    text = json.dumps(doc, separators=(",", ":")).encode()
+    while len(text) % 4:
+        text += b" "
+    total = 12 + 8 + len(text) + 8 + len(binary)
+    return (struct.pack("<III", 0x46546C67, 2, total) + struct.pack("<II", len(text), 0x4E4F534A) + text +
+            struct.pack("<II", len(binary), 0x004E4942) + binary)
+
+
+def floats(values):
+    return struct.pack("<%df" % len(values), *values)
+
+
+with open(os.path.join(here, "gltf_checker_alpha.png"), "rb") as f:
+    checker_png = f.read()
+# The card: a 1.2 x 1.6 quad in xy facing +z, uv (0, 0) at its top-left corner.
+card_pos = [-0.6, -0.8, 0, 0.6, -0.8, 0, 0.6, 0.8, 0, -0.6, 0.8, 0]
+card_uv = [0, 1, 1, 1, 1, 0, 0, 0]
+card_idx = [0, 1, 2, 0, 2, 3]
+# The post: a 0.2 x 2 x 0.2 box standing on y = 0 (24 vertices, one quad per face, outward).
+post_pos, post_idx = [], []
+hx, hy, hz = 0.1, 1.0, 0.1
+faces = [((1, 0, 0), (0, 0, -1), (0, 1, 0)), ((-1, 0, 0), (0, 0, 1), (0, 1, 0)), ((0, 1, 0), (1, 0, 0), (0, 0, -1)),
+         ((0, -1, 0), (1, 0, 0), (0, 0, 1)), ((0, 0, 1), (1, 0, 0), (0, 1, 0)), ((0, 0, -1), (-1, 0, 0), (0, 1, 0))]
+for n, u, v in faces:
+    base = len(post_pos) // 3
+    for su, sv in ((-1, -1), (1, -1), (1, 1), (-1, 1)):
+        post_pos += [n[k] * (hx, hy, hz)[k] + su * u[k] * (hx, hy, hz)[k] + sv * v[k] * (hx, hy, hz)[k] +
+                     (0, hy, 0)[k] for k in range(3)]
+    post_idx += [base, base + 1, base + 2, base, base + 2, base + 3]
+chunks = [floats(card_pos), floats(card_uv), struct.pack("<6H", *card_idx), floats(post_pos),
+          struct.pack("<%dH" % len(post_idx), *post_idx), checker_png]
+
+
+def bounds(values):
+    return [min(values[k::3]) for k in range(3)], [max(values[k::3]) for k in range(3)]
+
+
+cmin, cmax = bounds(card_pos)
+pmin, pmax = bounds(post_pos)
+turn = math.radians(20)
+# The spot: at (0, 5, 3), looking at (0, 0, -0.5): the rotation taking -z to that direction, about x.
+spot_angle = math.atan2(5, 3.5)  # below the horizon, seen along -z
+spot_q = [-math.sin(spot_angle / 2), 0, 0, math.cos(spot_angle / 2)]
+doc = {
+    "asset": {"version": "2.0", "generator": "shadowlab scenes/data/make_assets.py"},
+    "extensionsUsed": ["KHR_lights_punctual", "KHR_texture_transform"],
+    "extensions": {"KHR_lights_punctual": {"lights": [
+        {"name": "spot", "type": "spot", "intensity": 50, "spot": {"outerConeAngle": 0.55}}]}},
+    "scene": 0,
+    "scenes": [{"nodes": [0, 6]}],
+    "nodes": [
+        {"name": "rack", "rotation": [0, math.sin(turn / 2), 0, math.cos(turn / 2)], "translation": [0, 0, -0.5],
+         "children": [1, 2, 3, 4, 5]},
+        {"name": "card_left", "mesh": 0, "translation": [-1.4, 1.0, 0]},
+        {"name": "card_middle", "mesh": 0, "translation": [0, 1.0, 0]},
+        {"name": "card_right", "mesh": 0, "translation": [1.4, 1.0, 0]},
+        {"name": "post_left", "mesh": 1, "translation": [-2.2, 0, 0]},
+        {"name": "post_right", "mesh": 1, "translation": [2.2, 0, 0]},
+        {"name": "spot_node", "translation": [0, 5, 3], "rotation": spot_q,
+         "extensions": {"KHR_lights_punctual": {"light": 0}}},
+    ],
+    "meshes": [
+        {"name": "card", "primitives": [{"attributes": {"POSITION": 0, "TEXCOORD_0": 1}, "indices": 2, "material": 0}]},
+        {"name": "post", "primitives": [{"attributes": {"POSITION": 3}, "indices": 4, "material": 1}]},
+    ],
+    "materials": [
+        {"name": "checker_card", "alphaMode": "MASK", "alphaCutoff": 0.5, "doubleSided": True,
+         "pbrMetallicRoughness": {"baseColorFactor": [1, 1, 1, 1], "baseColorTexture": {
+             "index": 0, "extensions": {"KHR_texture_transform": {"scale": [4, 4]}}}}},
+        {"name": "post", "doubleSided": True, "pbrMetallicRoughness": {"baseColorFactor": [0.5, 0.5, 0.55, 1]}},
+    ],
+    "textures": [{"source": 0}],
+    "images": [{"bufferView": 5, "mimeType": "image/png"}],
+    "accessors": [
+        {"bufferView": 0, "componentType": 5126, "count": 4, "type": "VEC3", "min": cmin, "max": cmax},
+        {"bufferView": 1, "componentType": 5126, "count": 4, "type": "VEC2"},
+        {"bufferView": 2, "componentType": 5123, "count": 6, "type": "SCALAR"},
+        {"bufferView": 3, "componentType": 5126, "count": len(post_pos) // 3, "type": "VEC3", "min": pmin, "max": pmax},
+        {"bufferView": 4, "componentType": 5123, "count": len(post_idx), "type": "SCALAR"},
+    ],
+}
+with open(os.path.join(here, "assets", "gltf_cards.glb"), "wb") as f:
+    f.write(glb(doc, chunks))

@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <cstdio>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
@@ -16,6 +17,7 @@
 #include <glm/gtc/matrix_transform.hpp>
 #include <tiny_obj_loader.h>
 
+#include "gltf_loader.h"
 #include "image_io.h"
 #include "json_util.h"
 #include "obj_reader.h"
@@ -648,7 +650,73 @@ void readMaterials(const Reader& r, const Node& root, const fs::path& dir, std::
 
 const std::vector<std::string> kObjectCommon = {"type", "name", "id", "material", "casts_shadow", "transform"};
 
-void readObjects(const Reader& r, const Node& root, const fs::path& dir, Scene& scene) {
+// What the scene's glTF objects bring besides triangles (gltf_loader.h), gathered while reading
+// objects and applied once they are all read (finishGltf).
+struct GltfState {
+  std::vector<SceneOverride> overrides;  // a .gltf/.glb path as the scene: overrides address the glTF
+  bool any = false;
+  bool hasCamera = false, explicitCamera = false, infiniteFar = false;
+  Camera camera;
+  std::vector<Light> lights;
+  uint64_t hash = 0;
+};
+
+// A {"type": "gltf"} object: its file flattened into one mesh (in the glTF scene's world space; the
+// object's transform is applied by the caller), its lights and camera moved by that transform.
+Mesh readGltfObject(const Reader& r, const Node& o, const fs::path& dir, const std::string& name, Scene& scene,
+                    uint32_t material, uint64_t budget, GltfState& st) {
+  Node p = r.require(o, "path", "a path to a .gltf or .glb file");
+  gltf::Request q;
+  q.path = resolvePath(r.string(p, "a path to a .gltf or .glb file"), dir);
+  std::error_code ec;
+  if (!fs::is_regular_file(q.path, ec))
+    r.fail(p.ptr, "glTF file " + q.path + " not found; expected a .gltf or .glb file");
+  q.objectName = name;
+  q.fallbackMaterial = material;
+  q.overrides = st.overrides;
+  q.triangleBudget = budget;
+  q.budgetWhy = "(triangle ids travel through float channels, exact below 2^24)";
+  q.requestFile = r.file();
+  q.requestPtr = o.ptr;
+  if (Node n = r.child(o, "scene")) q.sceneIndex = int(r.integer(n, 0, std::numeric_limits<int>::max()));
+  Node cam = r.child(o, "camera");
+  if (cam) {
+    if (cam.j->is_string()) q.cameraName = r.string(cam, "a camera name or index");
+    else q.cameraIndex = int(r.integer(cam, 0, std::numeric_limits<int>::max()));
+    if (st.explicitCamera) r.fail(cam.ptr, "a second glTF object chooses the camera; expected one at most");
+  }
+  gltf::Content c = gltf::load(q, scene.materials);
+  for (const auto& w : c.warnings) std::fprintf(stderr, "%s\n", w.c_str());
+  const glm::mat4 xf = readTransform(r, o);
+  const glm::mat3 xf3(xf);
+  auto point = [&](glm::vec3 v) { return glm::vec3(xf * glm::vec4(v, 1.0f)); };
+  for (Light l : c.lights) {
+    l.position = point(l.position);
+    l.direction = glm::normalize(xf3 * l.direction);
+    st.lights.push_back(l);
+  }
+  if (c.hasCamera && (cam || !st.hasCamera)) {
+    Camera k = c.camera;
+    const glm::vec3 forward = glm::normalize(xf3 * (c.camera.lookAt - c.camera.position));
+    k.position = point(c.camera.position);
+    k.lookAt = k.position + forward;
+    k.up = glm::normalize(xf3 * c.camera.up);
+    st.camera = k;
+    st.infiniteFar = c.infiniteFar;
+    st.hasCamera = true;
+    st.explicitCamera = bool(cam);
+  }
+  st.any = true;
+  st.hash = fnv1a64(&c.hash, sizeof c.hash, st.hash ^ 0x9e3779b97f4a7c15ull);
+  Mesh m;
+  m.positions = std::move(c.positions);
+  m.uvs = std::move(c.uvs);
+  m.triangles = std::move(c.triangles);
+  m.triangleMaterial = std::move(c.triangleMaterial);
+  return m;
+}
+
+void readObjects(const Reader& r, const Node& root, const fs::path& dir, Scene& scene, GltfState& gltfState) {
   Node os = r.require(root, "objects", "an array of objects");
   if (!os.j->is_array() || os.j->empty()) r.expected(os, "a non-empty array of objects");
   std::map<uint32_t, std::string> idOwner;
@@ -665,7 +733,7 @@ void readObjects(const Reader& r, const Node& root, const fs::path& dir, Scene& 
   for (size_t i = 0; i < os.j->size(); ++i) {
     Node o = r.at(os, i);
     if (!o.j->is_object()) r.expected(o, "an object");
-    Node typeNode = r.require(o, "type", "one of plane, quad, box, sphere, cylinder, obj");
+    Node typeNode = r.require(o, "type", "one of plane, quad, box, sphere, cylinder, obj, gltf");
     std::string type = typeNode.j->is_string() ? typeNode.j->get<std::string>() : "";
     std::vector<std::string> extra;
     if (type == "plane" || type == "quad") extra = {"size", "uv_scale"};
@@ -673,7 +741,8 @@ void readObjects(const Reader& r, const Node& root, const fs::path& dir, Scene& 
     else if (type == "sphere") extra = {"radius", "segments", "rings"};
     else if (type == "cylinder") extra = {"radius", "height", "segments"};
     else if (type == "obj") extra = {"path"};
-    else r.expected(typeNode, "one of plane, quad, box, sphere, cylinder, obj");
+    else if (type == "gltf") extra = {"path", "scene", "camera"};
+    else r.expected(typeNode, "one of plane, quad, box, sphere, cylinder, obj, gltf");
     std::vector<std::string> allowed = kObjectCommon;
     allowed.insert(allowed.end(), extra.begin(), extra.end());
     r.keys(o, allowed);
@@ -737,6 +806,8 @@ void readObjects(const Reader& r, const Node& root, const fs::path& dir, Scene& 
       int segments = 256;
       if (Node n = r.child(o, "segments")) segments = int(r.integer(n, 3, 4096));
       mesh = makeCylinder(radius, height, segments);
+    } else if (type == "gltf") {
+      mesh = readGltfObject(r, o, dir, obj.name, scene, material, kMaxSceneTriangles - sceneTriangles, gltfState);
     } else {
       Node p = r.require(o, "path", "a path to an .obj file");
       std::string path = resolvePath(r.string(p, "a path to an .obj file"), dir);
@@ -1082,6 +1153,60 @@ void checkComputed(const Reader& r, const Scene& s) {
              "the projective texture matrix is not finite; expected moderate coordinates");
 }
 
+bool hasGltfObject(const json& doc) {
+  auto it = doc.find("objects");
+  if (it == doc.end() || !it->is_array()) return false;
+  for (const auto& o : *it)
+    if (o.is_object() && o.contains("type") && o["type"] == "gltf") return true;
+  return false;
+}
+
+// The glTF objects' lights join the scene's (after the JSON lights; a clashing name gets "_2",
+// "_3", ...), and the scene camera is the JSON "camera", else the glTF camera (its far plane past
+// the scene's bounds when the glTF camera has no zfar), else one framing the bounds. A glTF path
+// without lights gets a default sun, with a warning.
+void finishGltf(const Reader& r, const Node& root, Scene& scene, const GltfState& st, bool gltfScene) {
+  std::set<std::string> names;
+  for (const auto& l : scene.lights) names.insert(l.name);
+  for (Light l : st.lights) {
+    const std::string base = l.name;
+    for (int k = 2; names.count(l.name); ++k) l.name = base + "_" + std::to_string(k);
+    names.insert(l.name);
+    scene.lights.push_back(l);
+  }
+  const Node camera = r.child(root, "camera");
+  if (camera && st.explicitCamera)
+    r.fail(camera.ptr, "both a JSON camera and a glTF object's \"camera\" are given; expected one of them");
+  if (!camera) {
+    const glm::vec3 lo = scene.boundsMin(), hi = scene.boundsMax();
+    if (st.hasCamera) {
+      scene.camera = st.camera;
+      if (st.infiniteFar) {
+        // No zfar means an infinite far plane: past the farthest corner of the scene's bounds.
+        float farthest = 0;
+        for (int k = 0; k < 8; ++k) {
+          const glm::vec3 corner((k & 1) ? hi.x : lo.x, (k & 2) ? hi.y : lo.y, (k & 4) ? hi.z : lo.z);
+          farthest = std::max(farthest, glm::length(corner - scene.camera.position));
+        }
+        scene.camera.farPlane = std::max(2.0f * farthest, 10.0f * scene.camera.nearPlane);
+      }
+    } else {
+      scene.camera = gltf::framingCamera(lo, hi);
+    }
+  }
+  if (gltfScene && scene.lights.empty()) {
+    Light sun;
+    sun.name = "sun";
+    const double er = 50 * kPi / 180.0, ar = 30 * kPi / 180.0;
+    sun.direction = -glm::vec3(glm::dvec3(std::cos(er) * std::sin(ar), std::sin(er), std::cos(er) * std::cos(ar)));
+    scene.lights.push_back(sun);
+    std::fprintf(stderr,
+                 "%s: warning: no KHR_lights_punctual light; added a directional light \"sun\" (elevation 50, "
+                 "azimuth 30 degrees)\n",
+                 r.file().c_str());
+  }
+}
+
 std::string envOr(const char* name, const std::string& fallback) {
   const char* v = std::getenv(name);
   return v && *v ? std::string(v) : fallback;
@@ -1099,12 +1224,20 @@ Scene loadScene(const std::string& path, const std::vector<SceneOverride>& overr
     }
     throw InputError(formatError(path, "", "cannot open scene file: no such file" + hint));
   }
-  json doc = readJsonFile(path);
+  // A .gltf/.glb path is the scene of one glTF object (its overrides address the glTF document).
+  const bool gltfScene = gltf::isGltfPath(path);
+  json doc = gltfScene ? json{{"objects",
+                               {{{"type", "gltf"},
+                                 {"name", gltf::sanitizeName(fs::path(path).stem().string())},
+                                 {"path", fs::path(path).filename().string()}}}}}
+                       : readJsonFile(path);
   Reader r(path);
   Node root{&doc, ""};
   if (!doc.is_object()) r.expected(root, "a JSON object with camera, objects and lights");
-  applyOverrides(r, doc, overrides);
-  r.blame(overrides);
+  if (!gltfScene) {
+    applyOverrides(r, doc, overrides);
+    r.blame(overrides);
+  }
   r.keys(root, {"description", "camera", "materials", "objects", "lights", "projectors", "failure", "paths"});
   if (Node d = r.child(root, "description")) r.string(d);
 
@@ -1112,17 +1245,22 @@ Scene loadScene(const std::string& path, const std::vector<SceneOverride>& overr
   Scene scene;
   scene.path = path;
   scene.name = fs::path(path).stem().string();
-  readCamera(r, root, scene.camera);
+  GltfState gltfState;
+  if (gltfScene) gltfState.overrides = overrides;
+  // With a glTF object the camera may come from the glTF file (finishGltf).
+  if (r.child(root, "camera") || !hasGltfObject(doc)) readCamera(r, root, scene.camera);
   readMaterials(r, root, dir, scene.materials);
-  readObjects(r, root, dir, scene);
+  readObjects(r, root, dir, scene, gltfState);
   readLights(r, root, scene);
   readProjectors(r, root, dir, scene);
+  if (gltfState.any) finishGltf(r, root, scene, gltfState, gltfScene);
   if (scene.lights.empty() && scene.projectors.empty())
     r.fail("/lights", "the scene has no light and no projector; expected at least one of them");
   readFailure(r, root, scene);
   readPaths(r, root, scene);
   checkComputed(r, scene);
   scene.hash = sceneHash(doc, scene);
+  if (gltfState.any) scene.hash = hashHex(fnv1a64(scene.hash.data(), scene.hash.size(), gltfState.hash));
   return scene;
 }
 
@@ -1158,6 +1296,7 @@ std::vector<std::string> bundledSceneNames() {
 std::string resolveScenePath(const std::string& nameOrPath) {
   if (nameOrPath.find('/') != std::string::npos) return nameOrPath;
   if (nameOrPath.size() >= 5 && nameOrPath.compare(nameOrPath.size() - 5, 5, ".json") == 0) return nameOrPath;
+  if (gltf::isGltfPath(nameOrPath)) return nameOrPath;
   return bundledScenesDir() + "/" + nameOrPath + ".json";
 }
 

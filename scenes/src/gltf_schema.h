@@ -1,0 +1,17 @@
+#pragma once
+// The value types of the glTF 2.0 properties shadowlab reads, checked before tinygltf parses the
+// document: tinygltf skips an optional property of the wrong type without a word ("name": 42,
+// "scale": "not a number", "index": -1), which would silently change a scene. Internal to
+// shadowlab_scenes (gltf_loader.cpp).
+#include <string>
+
+#include <nlohmann/json.hpp>
+
+namespace shadowlab::gltf {
+
+// Throws InputError "file: /json/pointer: error: got ...; expected ..." at the first value whose
+// type differs from glTF 2.0's JSON schema (for the properties in gltf_schema.cpp's table; other
+// properties and extensions are not read and not checked).
+void checkSchema(const std::string& file, const nlohmann::json& doc);
+
+}  // namespace shadowlab::gltf
