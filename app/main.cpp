@@ -6,7 +6,10 @@
 
 #include <malloc.h>
 
+#include <unistd.h>
+
 #include "command.h"
+#include "shadowlab/raster/raster.h"
 #include "shadowlab/scenes/error.h"
 
 namespace shadowlab::app {
@@ -37,17 +40,28 @@ int main(int argc, char** argv) {
     int code = cli.exit(e);
     return code == 0 ? 0 : 2;
   }
-  try {
-    for (auto* sub : cli.get_subcommands()) return runners.at(sub->get_name())();
-    return 2;
-  } catch (const InputError& e) {
-    std::fprintf(stderr, "%s\n", e.what());
-    return 2;
-  } catch (const DriverError& e) {
-    std::fprintf(stderr, "shadowlab: internal error: %s\n", e.what());
-    return 3;
-  } catch (const std::exception& e) {
-    std::fprintf(stderr, "shadowlab: internal error: %s\n", e.what());
-    return 3;
+  const int code = [&] {
+    try {
+      for (auto* sub : cli.get_subcommands()) return runners.at(sub->get_name())();
+      return 2;
+    } catch (const InputError& e) {
+      std::fprintf(stderr, "%s\n", e.what());
+      return 2;
+    } catch (const DriverError& e) {
+      std::fprintf(stderr, "shadowlab: internal error: %s\n", e.what());
+      return 3;
+    } catch (const std::exception& e) {
+      std::fprintf(stderr, "shadowlab: internal error: %s\n", e.what());
+      return 3;
+    }
+  }();
+  // A device still running a shader that never returned (--gpu-timeout-s): the driver's exit
+  // handlers would wait for its threads forever, so the process ends here, its outputs written or
+  // removed already (every output is atomic).
+  if (shadowlab::rasterDeviceHung()) {
+    std::fflush(stdout);
+    std::fflush(stderr);
+    _exit(code);
   }
+  return code;
 }

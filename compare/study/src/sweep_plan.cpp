@@ -8,6 +8,7 @@
 
 #include "shadowlab/compare/sweep.h"
 #include "shadowlab/compare/compare.h"
+#include "shadowlab/raster/raster.h"
 #include "shadowlab/scenes/error.h"
 #include "shadowlab/scenes/io.h"
 #include "shadowlab/scenes/json_reader.h"
@@ -35,6 +36,7 @@ std::string joinKeys(const std::vector<std::string>& keys) {
 }
 
 bool isMethodKey(const std::string& key) {
+  if (key.rfind("technique.", 0) == 0) return true;  // a technique file's own keys (checked per configuration)
   const auto& keys = methodKeys();
   return std::find(keys.begin(), keys.end(), key) != keys.end();
 }
@@ -412,6 +414,7 @@ SweepPlan planSweep(const SweepSpec& spec) {
       }
       if (!seenConfigs.insert(c.config).second) continue;
       validateMethod(c.method, "shadowlab sweep: configuration " + c.config);
+      precompileTechnique(c.method);  // once per file content: a compile error is exit 2 before any output
       plan.configs.push_back(std::move(c));
     }
   }
