@@ -5,6 +5,8 @@
 // drawn. Quarter-size cameras keep the executable fast on lavapipe.
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <cmath>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
@@ -197,4 +199,44 @@ TEST_F(RasterTechnique, CompileErrorNamesTheUsersLine) {
     const std::string what = e.what();
     EXPECT_EQ(what.substr(0, what.find('\n')), undeclared + ":2:20: error: 'technique_radius': undeclared identifier");
   }
+}
+
+// A file that reads q.planeSlope needs the triangle's normal in the lookup pass too (the surface
+// image has none: kSpecTechniqueNormal): the lookup's bytes are the resolve's vis in 8 bits, as for
+// the built-in filters (raster_lookup_test.cpp's rule), fractional pixels included.
+TEST_F(RasterTechnique, LookupEqualsTheResolveWhenTheFileReadsThePlane) {
+  REQUIRE_DEVICE();
+  const auto dir = shadowlab::testing::freshTempDir("raster_technique_plane");
+  const std::string path =
+      writeFile(dir, "plane.glsl",
+                "float shadowVisibility(ShadowQuery q) {\n"
+                "  ivec2 c = ivec2(floor(q.st));\n"
+                "  float sum = 0.0;\n"
+                "  for (int y = -1; y <= 1; ++y)\n"
+                "    for (int x = -1; x <= 1; ++x) {\n"
+                "      ivec2 t = clamp(c + ivec2(x, y), ivec2(0), ivec2(int(q.mapSize) - 1));\n"
+                "      float ref = q.depth + dot(q.planeSlope, vec2(c + ivec2(x, y)) + 0.5 - q.st);\n"
+                "      sum += texelFetch(mapDepth, ivec3(t, q.layer), 0).r >= ref ? 1.0 : 0.0;\n"
+                "    }\n"
+                "  return sum / 9.0;\n"
+                "}\n");
+  const Scene s = quarterScene("grazing");
+  Method m;
+  m.mapSize = 512;
+  m.biasCompare = 0;
+  m.technique = path;
+  const Frame f = R->render(s, m);
+  const std::vector<uint8_t> bytes = R->lookupVisibility();
+  const auto& vis = f.get("light." + s.lights.front().name + ".vis");
+  ASSERT_EQ(bytes.size(), vis.size());
+  size_t mismatches = 0, fractional = 0;
+  for (size_t i = 0; i < vis.size(); ++i) {
+    const float v = vis[i] >= 1.0f ? 1.0f : (vis[i] > 0.0f ? vis[i] : 0.0f);
+    int expected = v == 0.0f ? 0 : v == 1.0f ? 255 : int(std::lround(double(v) * 255.0));
+    if (v > 0.0f && v < 1.0f) expected = v >= 0.5f ? std::clamp(expected, 128, 254) : std::clamp(expected, 1, 127);
+    mismatches += bytes[i] != expected;
+    fractional += v > 0.0f && v < 1.0f;
+  }
+  EXPECT_EQ(mismatches, 0u);
+  EXPECT_GT(fractional, 10u);
 }
