@@ -67,7 +67,7 @@ void compile(benchmark::State& state, const char* example) {
   std::ifstream in(kExamples + example);
   const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
   Method m;
-  int n = 0;
+  static int n = 0;  // across repetitions too: every content is new
   for (auto _ : state) {
     const std::string path = (dir / example).string();
     std::ofstream(path) << text << "// " << n++ << "\n";
