@@ -192,3 +192,22 @@ TEST_F(TechniqueCli, SweepTuneGateEndToEnd) {
   EXPECT_EQ(tuned.at("technique"), kExamples + "poisson_ign.glsl");
   EXPECT_TRUE(tuned.contains("technique.radius"));
 }
+
+// stability takes a technique (its stability.json names it); a grid of a key one file of the grid
+// does not declare is exit 2 naming that file, before any output.
+TEST_F(TechniqueCli, StabilityAndAGridOfUndeclaredKeys) {
+  const auto st =
+      runShadowlab("stability grazing --set technique=" + kExamples + "pcss.glsl --light-path elevation_deg=45:30:3" +
+                       kSmall + cache + " -o " + (dir / "stab").string(),
+                   dir);
+  ASSERT_EQ(st.code, 0) << st.err;
+  EXPECT_EQ(readJson(dir / "stab/stability.json").at("method").at("technique.hash").get<std::string>().substr(0, 5),
+            "pcss@");
+  const auto g =
+      runShadowlab("sweep contact --grid technique=" + kExamples + "poisson_ign.glsl," + kExamples +
+                       "pcf.glsl --grid technique.taps=4,12" + kSmall + " --no-report -o " + (dir / "grid").string(),
+                   dir, "SHADOWLAB_CACHE='" + (dir / "cache").string() + "' ");
+  EXPECT_EQ(g.code, 2) << g.err;
+  EXPECT_NE(g.err.find("technique.taps: error: not declared by " + kExamples + "pcf.glsl"), std::string::npos) << g.err;
+  EXPECT_FALSE(fs::exists(dir / "grid"));
+}

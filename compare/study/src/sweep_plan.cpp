@@ -76,6 +76,9 @@ void applyValue(Method& m, const std::string& key, const nlohmann::json& value, 
 
 std::string methodValueText(const Method& m, const std::string& key) {
   nlohmann::json j = methodToJson(m);
+  // A technique's key its file does not declare (a grid over files that declare different keys):
+  // the method's check names the file.
+  if (!j.contains(key) && key.rfind("technique.", 0) == 0) validateMethod(m, "shadowlab sweep: configuration");
   if (!j.contains(key)) throw DriverError("methodToJson has no key \"" + key + "\"");
   return canonicalValueText(j.at(key));
 }
@@ -342,7 +345,10 @@ SweepPlan planSweep(const SweepSpec& spec) {
         Method probe = base;
         applyValue(probe, axis.key, axis.values[i], origin);
         p.value = axis.values[i];
-        p.text = methodValueText(probe, axis.key);
+        // A technique's key before the technique is known (--grid technique=... beside it): the
+        // value as given, checked against the file once each configuration is whole.
+        const bool pending = axis.key.rfind("technique.", 0) == 0 && probe.technique.empty();
+        p.text = pending ? canonicalValueText(sceneValueFromText(axis.values[i])) : methodValueText(probe, axis.key);
       }
       if (!seen.insert(p.text).second)
         throw InputError(formatError(
