@@ -21,6 +21,7 @@ struct Options {
   std::string junitOut;
   bool updateBaseline = false;
   bool brief = false;
+  bool techniqueChanged = false;
 };
 
 int updateBaseline(const Options& o, const shadowlab::ResultFile& current) {
@@ -55,6 +56,7 @@ int run(const Options& o) {
   // Everything is read and checked before anything is written: a bad input never leaves a
   // half-updated baseline or a report of a gate that did not run.
   Tolerances tolerances = o.tolerances.empty() ? defaultTolerances() : loadTolerances(o.tolerances);
+  tolerances.techniqueChanged = o.techniqueChanged;
   std::vector<ResultFile> files;
   for (const std::string& path : o.currents) files.push_back(loadResultFile(path));
   ResultFile current = mergeResultFiles(files);
@@ -95,6 +97,9 @@ shadowlab::app::Registrar reg{
       sub->add_flag("--update-baseline", o->updateBaseline,
                     "Rewrite the baseline from the current results (prints what changed) instead of gating");
       sub->add_flag("--brief", o->brief, "Table shows only regressions, improvements and new entries");
+      sub->add_flag("--technique-changed", o->techniqueChanged,
+                    "Gate rows whose technique file changed since the baseline (another technique.hash) against "
+                    "it, instead of refusing them");
       return std::function<int()>([o] { return run(*o); });
     }};
 

@@ -13,7 +13,10 @@
 
 #include <malloc.h>
 
+#include <unistd.h>
+
 #include "command.h"
+#include "shadowlab/raster/raster.h"
 #include "shadowlab/scenes/error.h"
 #include "shadowlab_version.h"
 
@@ -128,13 +131,24 @@ int main(int argc, char** argv) {
     if (::write(errorFd, text.data(), text.size()) < 0) return code;
     return code;
   };
-  try {
-    return runners.at(name)();
-  } catch (const InputError& e) {
-    return fail(2, app::errorLine(name, e.what()));
-  } catch (const DriverError& e) {
-    return fail(3, app::errorLine(name, e.what()));
-  } catch (const std::exception& e) {
-    return fail(3, app::errorLine(name, std::string("internal error: ") + e.what()));
+  const int code = [&] {
+    try {
+      return runners.at(name)();
+    } catch (const InputError& e) {
+      return fail(2, app::errorLine(name, e.what()));
+    } catch (const DriverError& e) {
+      return fail(3, app::errorLine(name, e.what()));
+    } catch (const std::exception& e) {
+      return fail(3, app::errorLine(name, std::string("internal error: ") + e.what()));
+    }
+  }();
+  // A device still running a shader that never returned (--gpu-timeout-s): the driver's exit
+  // handlers would wait for its threads forever, so the process ends here, its outputs written or
+  // removed already (every output is atomic).
+  if (shadowlab::rasterDeviceHung()) {
+    std::fflush(stdout);
+    std::fflush(stderr);
+    _exit(code);
   }
+  return code;
 }

@@ -61,6 +61,14 @@ layout(constant_id = kSpecPlanesOnly) const bool kPlanesOnly = false;
 // a deferred renderer reconstructing the point from its depth buffer. The same p, bit for bit: the
 // point is origin + dir * t with the t the planes pass computed by the same expression.
 layout(constant_id = kSpecSurface) const bool kSurface = false;
+// A technique file (method key technique; raster/METHODS.md "Your own technique"): compiled at run
+// time with SHADOWLAB_TECHNIQUE defined (raster/src/technique_compiler.cpp), its shadowVisibility()
+// replaces filterVisibility wherever the built-in filters would run (filter is none then).
+#ifdef SHADOWLAB_TECHNIQUE
+const bool kTechnique = true;
+#else
+const bool kTechnique = false;
+#endif
 
 // Params P (binding kBindingParams) comes from resolve_abi.h.
 layout(set = 0, binding = kBindingMapDepth) uniform sampler2DArray mapDepth;         // NEAREST, raw depth
@@ -133,6 +141,7 @@ struct Lookup {
   vec2 st;     // lookup position in texels
   float ref;   // reference depth at st (receiver depth - compare bias)
   vec2 slope;  // receiver plane: d(depth)/d(texel u, v), zero when bias.receiver_plane is off
+  vec2 planeSlope;  // the receiver plane's d(depth)/d(texel u, v) whatever the bias (techniques read it)
 };
 
 // A point's lookup in a light layer with everything derived on the way (normal offset, plane).
@@ -270,8 +279,36 @@ MomentLookup momentLookup(Lookup L) {
   return r;
 }
 
+// The pixel being resolved (the listed one in the evidence pass): a technique's per-pixel noise.
+ivec2 gPixel = ivec2(0);
+
+#ifdef SHADOWLAB_TECHNIQUE
+// The user's file (the includer hands it over with its own line numbers), after its declared keys
+// as specialization constants technique_<name> (ids kSpecCount + i).
+#include "shadowlab/technique"
+// The lookup as an engine's shader would see it (ShadowQuery, resolve_abi.h); the result clamped to
+// [0, 1] (the same bits for every value inside).
+float techniqueVisibility(Lookup L) {
+  ShadowQuery q;
+  q.uv = L.st / L.layer.size;
+  q.st = L.st;
+  q.layer = L.layer.index;
+  q.depth = L.ref;
+  q.depthSlope = L.slope;
+  q.planeSlope = L.planeSlope;
+  q.mapSize = L.layer.size;
+  q.texelSize = 1.0 / L.layer.size;
+  q.pixel = gPixel;
+  q.lightType = kLightType;
+  return clamp(shadowVisibility(q), 0.0, 1.0);
+}
+#endif
+
 // The filters other than none (whose one comparison the caller makes with its own fetch).
 float filterVisibility(Lookup L) {
+#ifdef SHADOWLAB_TECHNIQUE
+  return techniqueVisibility(L);
+#endif
   if (kMomentFilter) return momentLookup(L).vis;
   ivec2 center = ivec2(floor(L.st));
   if (kFilter == kFilterHw2x2) {
@@ -364,7 +401,7 @@ LayerHit lookUp(int layerIndex, Surface s) {
   h.inMap = h.tQ.w > 0.0 && all(greaterThanEqual(h.uvz.xy, vec2(0.0))) && all(lessThanEqual(h.uvz.xy, vec2(1.0)));
   h.planeSlope = planeSlope(l, h.tQ, s.normal, s.e1, h.texelWorld);
   float ref = kAdaptive ? h.uvz.z - adaptiveEpsilon(l, q, h.tQ, h.uvz.z) : h.uvz.z - P.bias.x;
-  h.lookup = Lookup(l, h.uvz.xy * l.size, ref, kReceiverPlane || kAdaptive ? h.planeSlope : vec2(0.0));
+  h.lookup = Lookup(l, h.uvz.xy * l.size, ref, kReceiverPlane || kAdaptive ? h.planeSlope : vec2(0.0), h.planeSlope);
   return h;
 }
 
@@ -373,8 +410,9 @@ LayerHit lookUp(int layerIndex, Surface s) {
 float blendVisibility(LayerHit h) {
   if (!h.inMap) return 1.0;
   ivec2 c = centerTexel(h.lookup);
-  return kFilter == kFilterNone ? (texelFetch(mapDepth, ivec3(c, h.lookup.layer.index), 0).r >= refAt(h.lookup, c) ? 1.0 : 0.0)
-                                : filterVisibility(h.lookup);
+  return kFilter == kFilterNone && !kTechnique
+             ? (texelFetch(mapDepth, ivec3(c, h.lookup.layer.index), 0).r >= refAt(h.lookup, c) ? 1.0 : 0.0)
+             : filterVisibility(h.lookup);
 }
 
 float cascadeFar(int k) { return P.cascadeFar[k / 4][k % 4]; }
@@ -479,7 +517,8 @@ LightChannels shadeLight(Surface s) {
       vis = ml.vis;
       momentEvidence = vec4(ml.mean, ml.variance, ml.bound, 0.0);
     } else {
-      vis = kFilter == kFilterNone  ? (mapDepthCenter >= refAt(L, c) ? 1.0 : 0.0)
+      vis = kTechnique                ? filterVisibility(L)
+            : kFilter == kFilterNone  ? (mapDepthCenter >= refAt(L, c) ? 1.0 : 0.0)
             : kFilter == kFilterHw2x2 ? hwVis
                                       : filterVisibility(L);
     }
@@ -599,6 +638,7 @@ void main() {
     uint pixel = evidencePixels[pc.first + k];  // x | y << 16
     px = ivec2(int(pixel & 0xffffu), int(pixel >> 16));
   }
+  gPixel = px;
   Surface s = visibleSurface(px);
   LightChannels light = shadeLight(s);  // without a light (kLightNone) the readback ignores it
   if (kLookupOnly) {

@@ -42,10 +42,12 @@
 #include "shadowlab/raster/raster.h"
 
 #include <algorithm>
+#include <atomic>
 #include <functional>
 #include <array>
 #include <chrono>
 #include <cmath>
+#include <cstdlib>
 #include <cstring>
 #include <iterator>
 #include <list>
@@ -65,6 +67,8 @@
 #include "scene_gpu.h"
 #include "shadowlab/scenes/error.h"
 #include "shadowlab/scenes/io.h"
+#include "shadowlab/scenes/technique.h"
+#include "technique_compiler.h"
 #include "vk/buffer.h"
 #include "vk/check.h"
 #include "vk/commands.h"
@@ -197,7 +201,7 @@ bool resolveWritesSurface(const raster::ResolveSpecialization& spec) {
 // normal offset, no receiver plane, no adaptive bias), the surface image holds the visible point.
 bool lookupReadsSurface(const raster::ResolveSpecialization& spec) {
   return spec[abi::kSpecLightType] != uint32_t(abi::kLightNone) && !spec[abi::kSpecNormalOffset] &&
-         !spec[abi::kSpecReceiverPlane] && !spec[abi::kSpecAdaptive];
+         !spec[abi::kSpecReceiverPlane] && !spec[abi::kSpecAdaptive] && !spec[abi::kSpecTechniqueNormal];
 }
 
 // A filterable map's moments format: RG32F for 2 moments, RGBA32F for 4 (raster/METHODS.md).
@@ -346,8 +350,17 @@ struct Rasterizer::Impl {
   std::map<std::tuple<VkFormat, bool, bool, bool, bool>, vk::PipelineHandle> idPipelines;
   std::map<DepthFormat, bool> stencilFormatOk;  // whether the device renders and samples it
   // Keyed by resolve.frag's specialization constants (resolve_abi.h's kSpec*).
+  // and the technique's key (techniqueKey; empty: the built-in resolve.frag).
   using ResolveKey = raster::ResolveSpecialization;
-  std::map<ResolveKey, vk::PipelineHandle> resolvePipelines;
+  std::map<std::pair<ResolveKey, std::string>, vk::PipelineHandle> resolvePipelines;
+  // The method's technique (method key technique): resolve.frag compiled with the file, one module
+  // per content hash; the current render's module, key (id and constants) and constants (the
+  // declared keys' values, specialization constants kSpecCount + i). useTechnique sets them.
+  std::map<std::string, vk::ShaderModule> techniqueModules;
+  VkShaderModule techniqueModule = VK_NULL_HANDLE;
+  std::string techniqueKey;
+  std::vector<uint32_t> techniqueConstants;
+  void useTechnique(const Method& method);
   // Keyed by (filter, cols pass): the moments pass's two pipelines per filterable filter.
   std::map<std::pair<Filter, bool>, vk::PipelineHandle> momentsPipelines;
   std::set<std::string> warmed;
@@ -379,7 +392,7 @@ struct Rasterizer::Impl {
   vk::Image evidenceOut[kResolveAttachments];
   vk::Image occluderOut;  // the pixels listed for the occluder's evidence alone: vis, occluder, in_map
   vk::QueryPool evidenceQueries;
-  std::set<raster::ResolveSpecialization> evidenceWarmed;
+  std::set<std::pair<raster::ResolveSpecialization, std::string>> evidenceWarmed;
   // The planes that depend on the scene and the camera only (hit, object_id, prim_id, as the last
   // full frame read them back) and, per group, on the light's layers too (m, cascade): what
   // evidence on demand copies instead of resolving (render()'s `select`).
@@ -530,7 +543,18 @@ Rasterizer::Impl::Impl(const RasterDeviceOptions& options) {
   co.validation = options.validation;
   context = std::make_unique<vk::Context>(co);
   keepShadowMaps = options.keepShadowMaps;
-  commands = std::make_unique<vk::Commands>(*context);
+  double timeoutS = options.gpuTimeoutS;
+  if (!(timeoutS > 0)) {
+    timeoutS = 120;
+    if (const char* env = std::getenv("SHADOWLAB_GPU_TIMEOUT_S"); env && *env) {
+      char* end = nullptr;
+      timeoutS = std::strtod(env, &end);
+      if (*end || !(timeoutS > 0 && timeoutS <= 1e6))
+        throw InputError(std::string("SHADOWLAB_GPU_TIMEOUT_S: error: got \"") + env +
+                         "\"; expected seconds, a number > 0 and <= 1e6");
+    }
+  }
+  commands = std::make_unique<vk::Commands>(*context, uint64_t(timeoutS * 1e9));
   createLayouts();
   idVert = vk::createShaderModule(*context, kSpv_id_vert, sizeof(kSpv_id_vert));
   idFrag = vk::createShaderModule(*context, kSpv_id_frag, sizeof(kSpv_id_frag));
@@ -645,12 +669,38 @@ VkPipeline Rasterizer::Impl::idPipeline(VkFormat format, bool depthClamp, bool m
   return idPipelines.emplace(key, vk::createGraphicsPipeline(*context, d)).first->second.get();
 }
 
+void Rasterizer::Impl::useTechnique(const Method& method) {
+  techniqueModule = VK_NULL_HANDLE;
+  techniqueKey.clear();
+  techniqueConstants.clear();
+  if (method.technique.empty()) return;
+  const TechniqueFile& t = loadTechniqueFile(method.technique);
+  auto it = techniqueModules.find(t.hash);
+  if (it == techniqueModules.end()) {
+    auto compiled = raster::compileTechnique(t);
+    it = techniqueModules
+             .emplace(t.hash, vk::createShaderModule(*context, compiled->spirv.data(), compiled->spirv.size() * 4))
+             .first;
+  }
+  techniqueModule = it->second.get();
+  techniqueKey = t.hash;
+  for (const TechniqueParam& p : t.params) {
+    auto v = method.techniqueParams.find(p.name);
+    techniqueConstants.push_back(techniqueParamBits(p, v == method.techniqueParams.end() ? p.defaultValue : v->second));
+    techniqueKey += "/" + std::to_string(techniqueConstants.back());
+  }
+}
+
 VkPipeline Rasterizer::Impl::resolvePipeline(const ResolveKey& key) {
-  auto it = resolvePipelines.find(key);
+  // The technique replaces the filter where one runs: not in the planes pass, not without a light.
+  const bool technique =
+      techniqueModule && !key[abi::kSpecPlanesOnly] && key[abi::kSpecLightType] != uint32_t(abi::kLightNone);
+  const std::pair<ResolveKey, std::string> mapKey(key, technique ? techniqueKey : std::string());
+  auto it = resolvePipelines.find(mapKey);
   if (it != resolvePipelines.end()) return it->second.get();
   vk::GraphicsPipelineDesc d;
   d.vertex = fullscreenVert.get();
-  d.fragment = resolveFrag.get();
+  d.fragment = technique ? techniqueModule : resolveFrag.get();
   d.layout = pipelineLayout.get();
   d.depthTest = false;
   if (key[abi::kSpecLookupOnly]) d.colorFormats = {key[abi::kSpecCompact] ? kResolveFormats[0] : kLookupFormat};
@@ -661,7 +711,10 @@ VkPipeline Rasterizer::Impl::resolvePipeline(const ResolveKey& key) {
       d.colorFormats.push_back(kSurfaceFormat);  // the group's surface, for the lookup after it
   }
   d.fragmentSpecialization.assign(key.begin(), key.end());  // straight-line code per case
-  return resolvePipelines.emplace(key, vk::createGraphicsPipeline(*context, d)).first->second.get();
+  if (technique)
+    d.fragmentSpecialization.insert(d.fragmentSpecialization.end(), techniqueConstants.begin(),
+                                    techniqueConstants.end());
+  return resolvePipelines.emplace(mapKey, vk::createGraphicsPipeline(*context, d)).first->second.get();
 }
 
 VkPipeline Rasterizer::Impl::momentsPipeline(Filter filter, bool cols) {
@@ -1152,7 +1205,21 @@ Frame Rasterizer::Impl::readback(const Scene& sc, const Light* light, const Meth
 }
 
 Rasterizer::Rasterizer(const RasterDeviceOptions& options) : impl_(std::make_unique<Impl>(options)) {}
-Rasterizer::~Rasterizer() = default;
+Rasterizer::~Rasterizer() {
+  // A device that stopped answering is still running what it was given: destroying what it reads
+  // could crash it, waiting for it would never end. Left as it is; the process ends with _exit.
+  if (impl_ && impl_->context && impl_->context->hung()) (void)impl_.release();
+}
+
+namespace {
+std::atomic<bool> gDeviceHung{false};
+}  // namespace
+bool rasterDeviceHung() { return gDeviceHung.load(); }
+void markRasterDeviceHung() { gDeviceHung = true; }
+
+void precompileTechnique(const Method& method) {
+  if (!method.technique.empty()) raster::compileTechnique(loadTechniqueFile(method.technique));
+}
 Rasterizer::Rasterizer(Rasterizer&&) noexcept = default;
 Rasterizer& Rasterizer::operator=(Rasterizer&&) noexcept = default;
 
@@ -1460,12 +1527,12 @@ Rasterizer::Impl::FramePipelines Rasterizer::Impl::pipelinesFor(const Method&, c
     compactSpec[abi::kSpecCompact] = 1u;
     compactSpec[abi::kSpecProjectorCount] = 0u;
     p.evidence = resolvePipeline(compactSpec);
-    p.evidenceFirstUse = evidenceWarmed.insert(compactSpec).second;
+    p.evidenceFirstUse = evidenceWarmed.insert({compactSpec, techniqueKey}).second;
     if (light) {
       raster::ResolveSpecialization occluderSpec = lookupSpec;
       occluderSpec[abi::kSpecCompact] = 1u;
       p.evidenceOccluder = resolvePipeline(occluderSpec);
-      p.evidenceFirstUse = evidenceWarmed.insert(occluderSpec).second || p.evidenceFirstUse;
+      p.evidenceFirstUse = evidenceWarmed.insert({occluderSpec, techniqueKey}).second || p.evidenceFirstUse;
     }
   } else {
     p.resolve = resolvePipeline(spec);
@@ -1478,8 +1545,8 @@ Rasterizer::Impl::FramePipelines Rasterizer::Impl::pipelinesFor(const Method&, c
     raster::ResolveSpecialization planesSpec = spec;
     planesSpec[abi::kSpecPlanesOnly] = 1u;
     planesSpec[abi::kSpecProjectorCount] = 0u;
-    for (int k :
-         {abi::kSpecFilter, abi::kSpecPcfSize, abi::kSpecAdaptive, abi::kSpecReceiverPlane, abi::kSpecNormalOffset})
+    for (int k : {abi::kSpecFilter, abi::kSpecPcfSize, abi::kSpecAdaptive, abi::kSpecReceiverPlane,
+                  abi::kSpecNormalOffset, abi::kSpecTechniqueNormal})
       planesSpec[size_t(k)] = 0u;
     static_assert(int(Filter::None) == 0, "kSpecFilter 0 is filter none");
     p.planes = resolvePipeline(planesSpec);
@@ -1489,6 +1556,7 @@ Rasterizer::Impl::FramePipelines Rasterizer::Impl::pipelinesFor(const Method&, c
   std::string warmKey = std::to_string(int(mapFormat)) + "/" + std::to_string(depthClamp) + "/" +
                         std::to_string(partial) + "/" + std::to_string(planes);
   for (uint32_t k : spec) warmKey += "/" + std::to_string(k);
+  warmKey += "/" + techniqueKey;
   p.firstUse = warmed.insert(warmKey).second;
   return p;
 }
@@ -2047,6 +2115,7 @@ Frame Rasterizer::render(const Scene& scene, const Method& method, const std::st
   if (drawsSurface) surface->key.clear();  // until drawn
   im.surfaceBound = surface ? &surface->image : &im.surfacePlaceholder;
   im.prepareTargets(scene, method, layers, stencilIds);
+  im.useTechnique(method);
   const Impl::FramePipelines pipes = im.pipelinesFor(method, layers, spec, onDemand, drawPlanes);
   const Impl::Drawn drawn = im.submit(scene, method, layers, pipes);
   if (drawsSurface) surface->key = group;

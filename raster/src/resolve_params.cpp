@@ -5,6 +5,7 @@
 #include <cmath>
 
 #include "light_space.h"
+#include "shadowlab/scenes/technique.h"
 
 namespace shadowlab::raster {
 
@@ -164,6 +165,8 @@ ResolveSpecialization resolveSpecialization(const Scene& scene, const Light* lig
   // Uniform switches as specialization constants: lavapipe runs both sides of a branch on a
   // uniform-buffer value, so their code costs every pixel even when off.
   spec[abi::kSpecReceiverPlane] = method.biasReceiverPlane ? 1u : 0u;
+  spec[abi::kSpecTechniqueNormal] =
+      light && !method.technique.empty() && loadTechniqueFile(method.technique).readsPlaneSlope ? 1u : 0u;
   spec[abi::kSpecNormalOffset] = method.biasNormal != 0.0f ? 1u : 0u;
   spec[abi::kSpecPcfSize] = method.filter == Filter::Pcf ? uint32_t(method.filterSize) : 0u;
   return spec;

@@ -4,6 +4,7 @@
 #include "shadowlab/scenes/method_keys.h"
 
 #include <cerrno>
+#include <cstdio>
 #include <cmath>
 #include <cstdlib>
 #include <functional>
@@ -11,6 +12,7 @@
 #include "json_util.h"
 #include "shadowlab/scenes/json_reader.h"
 #include "shadowlab/scenes/error.h"
+#include "shadowlab/scenes/technique.h"
 
 namespace shadowlab {
 
@@ -197,6 +199,73 @@ const char* const kTsmFocusDistanceExpected = "a number > 0 and <= 1 (share of t
 // EVSM's warp exponents: the 32F moments clamp them to 42 (raster/METHODS.md); beyond 100 is a typo.
 const char* const kExponentExpected = "a number > 0 and <= 100 (clamped to 42, what 32-bit moments hold)";
 
+// technique=path: a file the method names, read and checked at once (technique.h's errors name it).
+std::string techniqueOf(const Value& v, const Where& w) {
+  std::string path;
+  if (!v.asString(path) || path.empty()) fail(w.file, w.place, v.got(), "a path to a GLSL technique file");
+  loadTechniqueFile(path);
+  return path;
+}
+
+// technique.<name>: the value as a number (true/false as 1/0); the file's declaration checks it
+// in crossCheck, whatever order the keys came in.
+void applyTechniqueKey(Method& m, const std::string& key, const Value& v, const Where& w) {
+  const std::string name = key.substr(std::string("technique.").size());
+  if (name == "hash") {
+    std::string id;
+    if (!v.asString(id) || id.empty()) fail(w.file, w.place, v.got(), "a technique id stem@hash");
+    m.techniqueHash = id;
+    return;
+  }
+  double x = 0;
+  bool b = false;
+  if (v.asDouble(x)) m.techniqueParams[name] = x;
+  else if (v.asBool(b)) m.techniqueParams[name] = b ? 1 : 0;
+  else fail(w.file, w.place, v.got(), "a number, true or false (a key the technique file declares)");
+}
+
+// The technique's cross-checks: keys it declares, in their ranges; the pinned hash; no filter.
+void checkTechnique(const Method& m, const std::string& file, const std::string& prefix) {
+  auto bad = [&](const std::string& key, const std::string& what) {
+    throw InputError(formatError(file, prefix + key, what));
+  };
+  if (m.technique.empty()) {
+    if (!m.techniqueParams.empty())
+      bad("technique." + m.techniqueParams.begin()->first, "set without a technique; expected technique=file.glsl");
+    if (!m.techniqueHash.empty()) bad("technique.hash", "set without a technique; expected technique=file.glsl");
+    return;
+  }
+  const TechniqueFile& t = loadTechniqueFile(m.technique);
+  if (m.filter != Filter::None)
+    bad("filter", "got " + toString(m.filter) + " beside technique=" + m.technique +
+                      "; expected none (the technique is the filter)");
+  if (!m.techniqueHash.empty() && m.techniqueHash != t.id())
+    bad("technique.hash", "got " + m.techniqueHash + ", but " + m.technique + " is now " + t.id() +
+                              "; expected the file the method was measured with (edited since?)");
+  for (const auto& [name, value] : m.techniqueParams) {
+    const TechniqueParam* p = t.find(name);
+    if (!p) {
+      std::string declared;
+      for (const TechniqueParam& d : t.params) declared += (declared.empty() ? "" : ", ") + ("technique." + d.name);
+      bad("technique." + name, "not declared by " + m.technique + "; expected one of its keys: " +
+                                   (declared.empty() ? std::string("(it declares none)") : declared));
+    }
+    const bool integral = std::floor(value) == value;
+    auto num = [](double x) {
+      char buf[32];
+      std::snprintf(buf, sizeof buf, "%.9g", x);
+      return std::string(buf);
+    };
+    if (value < p->lo || value > p->hi || (p->type != TechniqueParam::Type::Float && !integral))
+      bad("technique." + name, "got " + num(value) + "; expected " +
+                                   (p->type == TechniqueParam::Type::Bool
+                                        ? std::string("true or false")
+                                        : (p->type == TechniqueParam::Type::Int ? "an integer " : "a number ") +
+                                              num(p->lo) + ".." + num(p->hi)) +
+                                   " (" + m.technique + ":" + std::to_string(p->line) + ")");
+  }
+}
+
 using Setter = std::function<void(Method&, const Value&, const Where&)>;
 
 // One method key: its name, one line of help (`shadowlab methods`) and its parser. The default is
@@ -310,6 +379,8 @@ const std::vector<SetterRow>& setters() {
        }},
       {"projector.reverse_guard", "projectors project only where w >= 0 (not behind the projector)",
        [](Method& m, const Value& v, const Where& w) { m.projectorReverseGuard = boolOf(v, w); }},
+      {"technique", "a GLSL file defining float shadowVisibility(ShadowQuery q) (filter=none; its keys: technique.*)",
+       [](Method& m, const Value& v, const Where& w) { m.technique = techniqueOf(v, w); }},
   };
   return table;
 }
@@ -327,6 +398,7 @@ void apply(Method& m, const std::string& key, const Value& v, const Where& w) {
     m.name = s;
     return;
   }
+  if (key.rfind("technique.", 0) == 0) return applyTechniqueKey(m, key, v, w);
   for (const SetterRow& row : setters())
     if (row.key == key) {
       row.set(m, v, w);
@@ -384,6 +456,7 @@ void crossCheck(const Method& m, const std::string& file, const std::string& pre
   if (!(m.msmMomentBias >= 0.0f && m.msmMomentBias <= 1.0f))
     bad("msm.moment_bias", jsonFloat(m.msmMomentBias).dump(), "a number 0..1");
   if (m.name.empty()) bad("name", "\"\"", "a non-empty string");
+  checkTechnique(m, file, prefix);
 }
 
 }  // namespace
@@ -498,6 +571,19 @@ nlohmann::json methodToJson(const Method& m) {
   j["evsm.exponent_neg"] = jsonFloat(m.evsmExponentNeg);
   j["msm.moment_bias"] = jsonFloat(m.msmMomentBias);
   j["projector.reverse_guard"] = m.projectorReverseGuard;
+  if (!m.technique.empty()) {  // only then: other methods' results keep their columns
+    const TechniqueFile& t = loadTechniqueFile(m.technique);
+    j["technique"] = m.technique;
+    j["technique.hash"] = t.id();
+    for (const TechniqueParam& p : t.params) {
+      auto it = m.techniqueParams.find(p.name);
+      const double v = it == m.techniqueParams.end() ? p.defaultValue : it->second;
+      auto& out = j["technique." + p.name];
+      if (p.type == TechniqueParam::Type::Bool) out = v != 0;
+      else if (p.type == TechniqueParam::Type::Int) out = int(v);
+      else out = float(v);
+    }
+  }
   return j;
 }
 

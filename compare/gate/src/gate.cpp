@@ -466,6 +466,16 @@ GateResult runGate(const ResultFile& current, const ResultFile& baseline, const 
     const std::string& curPointer = current.pointers[found->second];
     const std::string& curPath = current.pathOf(found->second);
     ++result.rowsCompared;
+    // A technique file (method key technique) edited since the baseline: the same row key, other
+    // code. Refused, naming both (stem@hash), rather than gated as if it were the same technique.
+    const auto baseTechnique = base.method.find("technique.hash"), curTechnique = cur.method.find("technique.hash");
+    if (!tolerances.techniqueChanged && baseTechnique != base.method.end() && curTechnique != cur.method.end() &&
+        *baseTechnique != *curTechnique)
+      problems.push_back(
+          formatError(curPath, curPointer + "/method/technique.hash",
+                      "row \"" + base.key() + "\" was measured with technique " + curTechnique->dump() +
+                          " but the baseline " + baseline.path + " with " + baseTechnique->dump() +
+                          "; expected the same technique file (--technique-changed gates the edited one against it)"));
     if (comparesNothing(cur)) {  // its rates are null: one failing check instead of one per metric
       nothingCompared(found->second, base.metrics.value("pixels_compared", nlohmann::json()));
       continue;

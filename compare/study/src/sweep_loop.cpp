@@ -498,6 +498,16 @@ SweepSummary runSweep(const SweepPlan& plan, SweepRunner& runner, const SweepOpt
     auto it = stored.find(job.key());
     if (it == stored.end()) continue;
     if (it->second.sceneHash != plan.variants[job.variantIndex].hash) continue;
+    // A technique file edited since the row was measured: the same config text, another file.
+    // Refused, naming both, rather than silently measured again beside rows of the old one.
+    const nlohmann::json &was = it->second.row.method, &now = methodJson[job.configIndex];
+    if (was.contains("technique.hash") && now.contains("technique.hash") &&
+        was["technique.hash"] != now["technique.hash"])
+      throw InputError(formatError(
+          journalPath, "",
+          "row \"" + job.key() + "\" was measured with technique " + was["technique.hash"].get<std::string>() +
+              " but " + now.value("technique", std::string()) + " is now " + now["technique.hash"].get<std::string>() +
+              "; expected the same file (restore it, or use another -o folder)"));
     if (it->second.row.method != methodJson[job.configIndex]) continue;
     // Timings of two devices on one axis would compare a GPU with a CPU rasterizer: refuse rather
     // than mix (another -o folder, or the same --device, is what the user wants).

@@ -9,6 +9,7 @@
 #include "shadowlab/compare/sweep.h"
 #include "shadowlab/compare/compare.h"
 #include "shadowlab/reference/reference.h"
+#include "shadowlab/raster/raster.h"
 #include "shadowlab/scenes/error.h"
 #include "shadowlab/scenes/io.h"
 #include "shadowlab/scenes/json_reader.h"
@@ -59,6 +60,7 @@ size_t topLevelComma(const std::string& text, size_t from) {
 }
 
 bool isMethodKey(const std::string& key) {
+  if (key.rfind("technique.", 0) == 0) return true;  // a technique file's own keys (checked per configuration)
   const auto& keys = methodKeys();
   return std::find(keys.begin(), keys.end(), key) != keys.end();
 }
@@ -98,6 +100,9 @@ void applyValue(Method& m, const std::string& key, const nlohmann::json& value, 
 
 std::string methodValueText(const Method& m, const std::string& key) {
   nlohmann::json j = methodToJson(m);
+  // A technique's key its file does not declare (a grid over files that declare different keys):
+  // the method's check names the file.
+  if (!j.contains(key) && key.rfind("technique.", 0) == 0) validateMethod(m, "shadowlab sweep: configuration");
   if (!j.contains(key)) throw DriverError("methodToJson has no key \"" + key + "\"");
   return canonicalValueText(j.at(key));
 }
@@ -355,7 +360,10 @@ SweepPlan planSweep(const SweepSpec& spec) {
         Method probe = base;
         applyValue(probe, axis.key, axis.values[i], origin);
         p.value = axis.values[i];
-        p.text = methodValueText(probe, axis.key);
+        // A technique's key before the technique is known (--grid technique=... beside it): the
+        // value as given, checked against the file once each configuration is whole.
+        const bool pending = axis.key.rfind("technique.", 0) == 0 && probe.technique.empty();
+        p.text = pending ? canonicalValueText(sceneValueFromText(axis.values[i])) : methodValueText(probe, axis.key);
       }
       if (!seen.insert(p.text).second)
         throw InputError(formatError(
@@ -427,6 +435,7 @@ SweepPlan planSweep(const SweepSpec& spec) {
       }
       if (!seenConfigs.insert(c.config).second) continue;
       validateMethod(c.method, "shadowlab sweep: configuration " + c.config);
+      precompileTechnique(c.method);  // once per file content: a compile error is exit 2 before any output
       plan.configs.push_back(std::move(c));
     }
   }

@@ -48,6 +48,15 @@ std::string tunableList() {
 const TunableKey* findTunable(const std::string& key) {
   for (const auto& k : tunableKeys())
     if (key == k.key) return &k;
+  // A technique file's own keys (technique.<name>, --fixed technique=file.glsl): each value of its
+  // --range list tried; the file's declaration checks them.
+  if (key.rfind("technique.", 0) == 0 && key != "technique.hash") {
+    static std::map<std::string, std::pair<std::string, TunableKey>> interned;  // stable key strings
+    auto& slot = interned[key];
+    if (slot.first.empty()) slot = {key, TunableKey{nullptr, TuneRole::Categorical, "", ""}};
+    slot.second.key = slot.first.c_str();
+    return &slot.second;
+  }
   return nullptr;
 }
 
@@ -260,7 +269,15 @@ TunePlan planTune(const TuneSpec& spec) {
     if (!ranges.emplace(key, std::make_pair(text, origin)).second)
       throw InputError(formatError(origin, "", "a second range for \"" + key + "\"; expected one"));
   }
-  for (const auto& k : tunableKeys()) {
+  std::vector<TunableKey> candidates = tunableKeys();
+  for (const auto& k : keys)
+    if (k.rfind("technique.", 0) == 0) {
+      if (!ranges.count(k))
+        throw InputError(formatError("--keys " + k, "",
+                                     "a technique's key has no default range; expected --range " + k + "=v1,v2,..."));
+      candidates.push_back(*findTunable(k));
+    }
+  for (const auto& k : candidates) {
     if (!tuned.count(k.key)) continue;
     TuneKey t;
     t.key = k.key;

@@ -1,6 +1,7 @@
 #include "vk/commands.h"
 
 #include <cstdint>
+#include <cstdio>
 #include <string>
 
 #include "shadowlab/scenes/error.h"
@@ -9,10 +10,14 @@
 namespace shadowlab::vk {
 
 namespace {
-constexpr uint64_t kSubmitTimeoutNs = 120ull * 1000000000ull;  // 2 minutes
+std::string seconds(uint64_t ns) {
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%g", double(ns) * 1e-9);
+  return buf;
+}
 }  // namespace
 
-Commands::Commands(const Context& context) : context_(context) {
+Commands::Commands(const Context& context, uint64_t timeoutNs) : context_(context), timeoutNs_(timeoutNs) {
   VkCommandBufferAllocateInfo info{VK_STRUCTURE_TYPE_COMMAND_BUFFER_ALLOCATE_INFO};
   info.commandPool = context.commandPool();
   info.level = VK_COMMAND_BUFFER_LEVEL_PRIMARY;
@@ -48,12 +53,13 @@ void Commands::submitAndWait() {
   // waits forever. The largest jobs the limits allow take seconds on lavapipe.
   const VkResult waited = injectedFailure("vkWaitForFences")
                               ? VK_ERROR_DEVICE_LOST
-                              : vkWaitForFences(context_.device(), 1, &fence, VK_TRUE, kSubmitTimeoutNs);
+                              : vkWaitForFences(context_.device(), 1, &fence, VK_TRUE, timeoutNs_);
   if (waited == VK_TIMEOUT) {
     context_.markHung();  // nothing may wait on this device again (see Context::hung)
     throw DriverError("vkWaitForFences: error: the device did not finish the submitted passes within " +
-                      std::to_string(kSubmitTimeoutNs / 1000000000ull) +
-                      " s; expected a working device (a hung or lost GPU?)");
+                      seconds(timeoutNs_) +
+                      " s (--gpu-timeout-s); expected a working device and shaders that return (a hung or lost "
+                      "GPU, a technique file that never returns?)");
   }
   if (waited != VK_SUCCESS) throwVkError("vkWaitForFences(...)", waited, __FILE__, __LINE__);
 }

@@ -7,7 +7,8 @@ namespace shadowlab::vk {
 
 class Commands {
  public:
-  explicit Commands(const Context& context);
+  // timeoutNs bounds every wait for a submission (a hung device, a shader that never returns).
+  explicit Commands(const Context& context, uint64_t timeoutNs = 120ull * 1000000000ull);
   ~Commands();
   Commands(const Commands&) = delete;
   Commands& operator=(const Commands&) = delete;
@@ -19,6 +20,7 @@ class Commands {
   const Context& context_;
   VkCommandBuffer cmd_ = VK_NULL_HANDLE;
   Fence fence_;
+  uint64_t timeoutNs_;
 };
 
 }  // namespace shadowlab::vk

@@ -1,5 +1,7 @@
 #include "vk/context.h"
 
+#include "shadowlab/raster/raster.h"
+
 #include <dlfcn.h>
 #include <link.h>
 #include <sys/mman.h>
@@ -310,6 +312,11 @@ Memory Context::allocate(const VkMemoryRequirements& requirements, VkMemoryPrope
   VK_CHECK_ALLOC(vkAllocateMemory(device_, &alloc, nullptr, &memory), what, deviceName());
   if (typeIndex) *typeIndex = alloc.memoryTypeIndex;
   return Memory(device_, memory);
+}
+
+void Context::markHung() const {
+  hung_ = true;
+  markRasterDeviceHung();
 }
 
 }  // namespace shadowlab::vk

@@ -60,7 +60,7 @@ class Context {
   void adviseHugePages(void* mapped, VkDeviceSize size) const;
   // Set when a submission did not finish in time: the owner must then not wait for the device
   // (vkDeviceWaitIdle has no timeout) before it destroys what the device may still use.
-  void markHung() const { hung_ = true; }
+  void markHung() const;
   bool hung() const { return hung_; }
 
  private:

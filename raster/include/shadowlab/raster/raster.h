@@ -21,6 +21,10 @@ struct RasterDeviceOptions {
   // axis): render() then skips the pass and reports the time it took when drawn. false: every
   // render draws them (bench/raster_bare_bench: a configuration's whole cost, every iteration).
   bool keepShadowMaps = true;
+  // Every wait for the GPU ends after this many seconds with a DriverError (exit 3): a hung device,
+  // or a technique file that never returns. The device is then left as it is (Context::hung).
+  // 0: $SHADOWLAB_GPU_TIMEOUT_S when set (a number > 0), else 120.
+  double gpuTimeoutS = 0;
 };
 
 struct RasterTimings {
@@ -133,6 +137,18 @@ class Rasterizer {
   struct Impl;
   std::unique_ptr<Impl> impl_;
 };
+
+// Compiles the method's technique file (method key technique; nothing without one), as render()
+// would, so a command can refuse a file that does not compile (InputError, file:line:column) before
+// it creates any output. Cached by content: render() does not compile it again.
+void precompileTechnique(const Method& method);
+
+// Whether a device of this process stopped answering (a wait ran past gpuTimeoutS: a hung GPU, a
+// technique that never returns). Its threads may still run the shader: the Rasterizer then leaks
+// the device rather than wait for it, and the process must end with _exit (app/main.cpp), since
+// the driver's exit handlers would wait for those threads forever.
+bool rasterDeviceHung();
+void markRasterDeviceHung();
 
 // A readable picture of a raster frame (same look as referencePicture).
 std::vector<uint8_t> rasterPicture(const Scene& scene, const Frame& frame);

@@ -81,7 +81,12 @@ SHADOWLAB_CONST(int, kSpecPlanesOnly, 14)
 // where the lookup needs no normal: no normal offset, no receiver plane, no adaptive bias
 // (rasterizer.cpp, lookupReadsSurface).
 SHADOWLAB_CONST(int, kSpecSurface, 15)
-SHADOWLAB_CONST(int, kSpecCount, 16)
+// 0/1: the method's technique file reads ShadowQuery::planeSlope, which needs the triangle's normal:
+// its lookup pass then reads the visibility buffer, not the surface image (rasterizer.cpp,
+// lookupReadsSurface). resolve.frag does not declare it; it keys the pipelines.
+SHADOWLAB_CONST(int, kSpecTechniqueNormal, 16)
+// A technique file's declared keys follow, kSpecCount + i (raster/src/technique_compiler.cpp).
+SHADOWLAB_CONST(int, kSpecCount, 17)
 
 // The descriptor set (set 0), one row per binding: X(Name, binding, kind). The kinds name
 // Vulkan descriptor types (rasterizer.cpp maps them); the set layout, the pool and the writes
@@ -164,6 +169,29 @@ layout(std140, set = 0, binding = kBindingParamsLoops) readonly buffer ParamsLoo
 }
 PLoops;
 #endif
+#endif
+
+// What a technique file's `float shadowVisibility(ShadowQuery q)` gets (raster/METHODS.md "Your own
+// technique"): what an engine's lookup has, nothing it would not (no truth, no occluder ids). The
+// maps are the globals `mapDepth` (sampler2DArray, NEAREST: texelFetch(mapDepth, ivec3(texel,
+// q.layer), 0).r is a raw map depth) and `mapShadow` (sampler2DArrayShadow, LINEAR with compare
+// LESS_OR_EQUAL: texture(mapShadow, vec4(uv, q.layer, depth)) is 1 where lit).
+#if !defined(__cplusplus) && defined(SHADOWLAB_TECHNIQUE)
+struct ShadowQuery {
+  vec2 uv;          // the lookup point in the map, [0, 1] across it (v = 0 on the top row): st / mapSize
+  vec2 st;          // the same in texels: texel (i, j) covers [i, i + 1) x [j, j + 1)
+  int layer;        // the map layer (a cascade, a cube face): texelFetch's and texture's third coordinate
+  float depth;      // the receiver's map depth at st after the configured biases (bias.compare or
+                    // bias.adaptive, bias.normal's offset): lit where a stored depth >= it
+  vec2 depthSlope;  // d(depth)/d(texel) the configured bias applies per tap (bias.receiver_plane or
+                    // bias.adaptive on; else 0): a tap at texel t compares against
+                    // depth + dot(depthSlope, vec2(t) + 0.5 - st), as the built-in filters do
+  vec2 planeSlope;  // the receiver plane's d(depth)/d(texel), whatever the biases
+  float mapSize;    // texels per side
+  float texelSize;  // 1 / mapSize
+  ivec2 pixel;      // the camera pixel (x right, y down): per-pixel noise
+  int lightType;    // kLightDirectional, kLightSpot or kLightPoint
+};
 #endif
 
 #ifdef __cplusplus

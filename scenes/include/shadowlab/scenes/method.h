@@ -4,6 +4,7 @@
 // --grid take (documented with defaults in raster/METHODS.md), e.g.
 //   { "name": "pcf5", "map.size": 2048, "bias.slope": 1.5, "filter": "pcf", "filter.size": 5 }
 // Comments are allowed. Unknown keys, wrong types and out-of-range values are InputErrors.
+#include <map>
 #include <string>
 #include <vector>
 
@@ -73,6 +74,13 @@ struct Method {
   float evsmExponentNeg = 5.0f;    // evsm.exponent_neg: negative warp exponent, > 0 (clamped to 42, 32F)
   float msmMomentBias = 3e-5f;     // msm.moment_bias: moments pulled towards (0.5, ...) by this much, 0..1
   bool projectorReverseGuard = true;  // projector.reverse_guard: only project where w >= 0
+  // technique: a GLSL file whose shadowVisibility() replaces the filter (filter stays none;
+  // technique.h, raster/METHODS.md "Your own technique"); empty: the built-in filters. Its declared
+  // keys technique.<name> set here (the others take the file's defaults), and technique.hash as a
+  // method JSON pins it ("stem@hash": an edited file is refused rather than taken for the old one).
+  std::string technique;
+  std::map<std::string, double> techniqueParams;
+  std::string techniqueHash;
 };
 
 // The fits with one map layer per slice of the view depth (cascades.count of them): cascades, sdsm.

@@ -67,6 +67,9 @@ struct Tolerances {
   std::map<std::string, ToleranceSpec> metrics;  // "metrics": per metric name
   ToleranceSpec fallback;                        // "default"
   TimingTolerance timing;                        // "timing"
+  // A row whose technique file (method key technique) changed since the baseline (another
+  // technique.hash) is refused unless this is set (gate --technique-changed): then it is gated.
+  bool techniqueChanged = false;
 
   // A listed metric: its entry's fields, direction else builtinDirection(metric), abs/rel else 0.
   // An unlisted metric: the default's fields, direction else builtinDirection(metric).

@@ -1,0 +1,273 @@
+// Technique files without a GPU: the checks that name file:line:column before glslang sees the
+// text (technique.h), the declarations and the content hash.
+#include "shadowlab/scenes/technique.h"
+
+#include <cerrno>
+#include <cmath>
+#include <cstdlib>
+#include <cstring>
+#include <map>
+#include <memory>
+#include <mutex>
+#include <regex>
+
+#include "json_util.h"
+#include "shadowlab/scenes/error.h"
+#include "shadowlab/scenes/io.h"
+
+namespace shadowlab {
+namespace {
+
+// Without a declared range a number may be anything the shader's float holds comfortably.
+constexpr double kUnbounded = 1e30;
+const char* const kDeclarationSyntax = "// shadowlab: key <name> <float|int|bool> <default> [range <lo>..<hi>]";
+
+[[noreturn]] void failAt(const std::string& path, size_t line, size_t column, const std::string& what) {
+  throw InputError(path + ":" + std::to_string(line) + ":" + std::to_string(column) + ": error: " + what);
+}
+
+// The 1-based line and column of byte `offset` (0-based).
+void place(const std::string& text, size_t offset, size_t& line, size_t& column) {
+  detail::lineColumn(text, offset + 1, line, column);
+}
+
+// The first byte that is not UTF-8 (or a NUL, which no text file holds): its offset, or npos.
+size_t firstNonUtf8(const std::string& s) {
+  const auto* b = reinterpret_cast<const unsigned char*>(s.data());
+  const size_t n = s.size();
+  for (size_t i = 0; i < n;) {
+    const unsigned c = b[i];
+    if (c == 0) return i;
+    if (c < 0x80) {
+      ++i;
+      continue;
+    }
+    size_t len = 0;
+    unsigned minCode = 0, code = 0;
+    if ((c & 0xE0) == 0xC0) len = 2, minCode = 0x80, code = c & 0x1F;
+    else if ((c & 0xF0) == 0xE0) len = 3, minCode = 0x800, code = c & 0x0F;
+    else if ((c & 0xF8) == 0xF0) len = 4, minCode = 0x10000, code = c & 0x07;
+    else return i;
+    if (i + len > n) return i;
+    for (size_t k = 1; k < len; ++k) {
+      if ((b[i + k] & 0xC0) != 0x80) return i;
+      code = (code << 6) | (b[i + k] & 0x3F);
+    }
+    if (code < minCode || code > 0x10FFFF || (code >= 0xD800 && code <= 0xDFFF)) return i;
+    i += len;
+  }
+  return std::string::npos;
+}
+
+// The text with every comment replaced by spaces (newlines kept), so offsets and lines stay.
+std::string withoutComments(const std::string& s) {
+  std::string out = s;
+  for (size_t i = 0; i < out.size(); ++i) {
+    if (out[i] == '/' && i + 1 < out.size() && out[i + 1] == '/') {
+      while (i < out.size() && out[i] != '\n') out[i++] = ' ';
+    } else if (out[i] == '/' && i + 1 < out.size() && out[i + 1] == '*') {
+      out[i] = out[i + 1] = ' ';
+      i += 2;
+      while (i < out.size() && !(out[i] == '*' && i + 1 < out.size() && out[i + 1] == '/')) {
+        if (out[i] != '\n') out[i] = ' ';
+        ++i;
+      }
+      if (i < out.size()) out[i] = out[i + 1] = ' ', ++i;
+    }
+  }
+  return out;
+}
+
+bool parseNumber(const std::string& text, TechniqueParam::Type type, double& out) {
+  if (type == TechniqueParam::Type::Bool) {
+    if (text == "true" || text == "1") return out = 1, true;
+    if (text == "false" || text == "0") return out = 0, true;
+    return false;
+  }
+  if (text.empty()) return false;
+  for (char c : text)
+    if (!(std::isdigit(static_cast<unsigned char>(c)) || c == '.' || c == '-' || c == '+' || c == 'e' || c == 'E'))
+      return false;
+  errno = 0;
+  char* end = nullptr;
+  const double v = std::strtod(text.c_str(), &end);
+  if (errno != 0 || end != text.c_str() + text.size() || !std::isfinite(v)) return false;
+  if (type == TechniqueParam::Type::Int && (std::floor(v) != v || std::fabs(v) > 2147483647.0)) return false;
+  out = v;
+  return true;
+}
+
+const char* typeName(TechniqueParam::Type t) {
+  return t == TechniqueParam::Type::Float ? "float" : t == TechniqueParam::Type::Int ? "int" : "bool";
+}
+
+// One "// shadowlab: ..." line (`rest` starts at byte `offset` of the file).
+TechniqueParam parseDeclaration(const TechniqueFile& f, const std::string& rest, size_t offset,
+                                const std::vector<TechniqueParam>& seen) {
+  struct Token {
+    std::string text;
+    size_t offset;
+  };
+  std::vector<Token> tokens;
+  for (size_t i = 0; i < rest.size();) {
+    if (std::isspace(static_cast<unsigned char>(rest[i]))) {
+      ++i;
+      continue;
+    }
+    size_t j = i;
+    while (j < rest.size() && !std::isspace(static_cast<unsigned char>(rest[j]))) ++j;
+    tokens.push_back({rest.substr(i, j - i), offset + i});
+    i = j;
+  }
+  size_t line = 0, column = 0;
+  auto fail = [&](size_t at, const std::string& what) {
+    place(f.source, at, line, column);
+    failAt(f.path, line, column, what);
+  };
+  if (tokens.empty()) fail(offset, "an empty shadowlab: line; expected " + std::string(kDeclarationSyntax));
+  if (tokens[0].text != "key")
+    fail(tokens[0].offset, "got \"" + tokens[0].text + "\"; expected key (" + kDeclarationSyntax + ")");
+  if (tokens.size() < 4)
+    fail(tokens.back().offset, "an incomplete declaration; expected " + std::string(kDeclarationSyntax));
+  TechniqueParam p;
+  p.name = tokens[1].text;
+  place(f.source, tokens[0].offset, line, column);
+  p.line = int(line);
+  static const std::regex identifier("[a-z_][a-z0-9_]*");
+  if (!std::regex_match(p.name, identifier) || p.name.size() > 48)
+    fail(tokens[1].offset, "key name \"" + p.name + "\"; expected lowercase letters, digits and _ (a GLSL identifier)");
+  if (p.name == "hash") fail(tokens[1].offset, "key name \"hash\" is the harness's (technique.hash); expected another");
+  for (const TechniqueParam& s : seen)
+    if (s.name == p.name)
+      fail(tokens[1].offset, "key \"" + p.name + "\" declared twice (first on line " + std::to_string(s.line) + ")");
+  const std::string& type = tokens[2].text;
+  if (type == "float") p.type = TechniqueParam::Type::Float;
+  else if (type == "int") p.type = TechniqueParam::Type::Int;
+  else if (type == "bool") p.type = TechniqueParam::Type::Bool;
+  else fail(tokens[2].offset, "type \"" + type + "\"; expected float, int or bool");
+  if (!parseNumber(tokens[3].text, p.type, p.defaultValue))
+    fail(tokens[3].offset, "default \"" + tokens[3].text + "\"; expected " +
+                               (p.type == TechniqueParam::Type::Bool  ? std::string("true or false")
+                                : p.type == TechniqueParam::Type::Int ? std::string("an integer")
+                                                                      : std::string("a finite number")));
+  p.lo = p.type == TechniqueParam::Type::Bool ? 0 : -kUnbounded;
+  p.hi = p.type == TechniqueParam::Type::Bool ? 1 : kUnbounded;
+  if (tokens.size() > 4) {
+    if (tokens[4].text != "range" || tokens.size() < 6 || p.type == TechniqueParam::Type::Bool)
+      fail(tokens[4].offset,
+           "got \"" + tokens[4].text + "\" after the default; expected " +
+               (p.type == TechniqueParam::Type::Bool ? std::string("the end of the line (a bool has no range)")
+                                                     : std::string("range <lo>..<hi>")));
+    if (tokens.size() > 6)
+      fail(tokens[6].offset, "got \"" + tokens[6].text + "\" after the range; expected the end of the line");
+    const std::string& r = tokens[5].text;
+    const size_t dots = r.find("..");
+    if (dots == std::string::npos || !parseNumber(r.substr(0, dots), p.type, p.lo) ||
+        !parseNumber(r.substr(dots + 2), p.type, p.hi) || !(p.lo <= p.hi))
+      fail(tokens[5].offset, "range \"" + r + "\"; expected <lo>..<hi>, two " + typeName(p.type) + "s with lo <= hi");
+    if (p.defaultValue < p.lo || p.defaultValue > p.hi)
+      fail(tokens[3].offset, "default " + tokens[3].text + " outside the range " + r + "; expected a default in it");
+  }
+  return p;
+}
+
+// The checks of technique.h on `f.source`, filling f.params.
+void check(TechniqueFile& f) {
+  const std::string& s = f.source;
+  size_t line = 0, column = 0;
+  const size_t bad = firstNonUtf8(s);
+  if (bad != std::string::npos) {
+    place(s, bad, line, column);
+    char hex[8];
+    std::snprintf(hex, sizeof hex, "0x%02x", unsigned(static_cast<unsigned char>(s[bad])));
+    failAt(f.path, line, column,
+           std::string("byte ") + hex + " is not UTF-8 text; expected a GLSL source file (UTF-8, no NUL bytes)");
+  }
+  const std::string code = withoutComments(s);
+  f.readsPlaneSlope = code.find("planeSlope") != std::string::npos || code.find("##") != std::string::npos;
+  // Preprocessor lines that would change what the harness compiles around the file.
+  static const std::regex directive(R"(^[ \t]*#[ \t]*(include|version|extension)\b)", std::regex::multiline);
+  for (auto it = std::sregex_iterator(code.begin(), code.end(), directive); it != std::sregex_iterator(); ++it) {
+    place(s, size_t(it->position(0)), line, column);
+    const std::string what = (*it)[1];
+    failAt(f.path, line, column,
+           "#" + what + " in a technique file; expected one self-contained file (the harness sets the version, " +
+               "the extensions and includes the ABI: raster/METHODS.md \"Your own technique\")");
+  }
+  // Declarations: whole-line comments "// shadowlab: ...".
+  static const std::regex declaration(R"(^[ \t]*//[ \t]*shadowlab:(.*)$)", std::regex::multiline);
+  for (auto it = std::sregex_iterator(s.begin(), s.end(), declaration); it != std::sregex_iterator(); ++it) {
+    const size_t restOffset = size_t(it->position(1));
+    f.params.push_back(parseDeclaration(f, (*it)[1], restOffset, f.params));
+  }
+  // The function: a definition `<type> <name>(<params>) {`.
+  static const std::regex definition(R"(\b([A-Za-z_]\w*)\s+([A-Za-z_]\w*)\s*\(([^()]*)\)\s*\{)");
+  static const std::regex signature(R"(^\s*(?:(?:in|const)\s+)*ShadowQuery\s+[A-Za-z_]\w*\s*$)");
+  size_t wrongAt = std::string::npos, similarAt = std::string::npos;
+  std::string wrong, similar;
+  for (auto it = std::sregex_iterator(code.begin(), code.end(), definition); it != std::sregex_iterator(); ++it) {
+    const std::string type = (*it)[1], name = (*it)[2], params = (*it)[3];
+    if (type == "return" || type == "else") continue;
+    if (name == kTechniqueFunction) {
+      if (type == "float" && std::regex_match(params, signature)) return;
+      if (wrongAt == std::string::npos)
+        wrongAt = size_t(it->position(1)), wrong = type + " " + name + "(" + params + ")";
+    } else if (similarAt == std::string::npos && !detail::didYouMean(name, {kTechniqueFunction}).empty()) {
+      similarAt = size_t(it->position(2)), similar = name;
+    }
+  }
+  if (wrongAt != std::string::npos) {
+    place(s, wrongAt, line, column);
+    failAt(f.path, line, column,
+           "got " + wrong + "; expected the signature " + kTechniqueSignature + " (ShadowQuery: raster/METHODS.md)");
+  }
+  if (similarAt != std::string::npos) {
+    place(s, similarAt, line, column);
+    failAt(
+        f.path, line, column,
+        "function \"" + similar + "\" (did you mean \"" + kTechniqueFunction + "\"?); expected " + kTechniqueSignature);
+  }
+  failAt(f.path, 1, 1,
+         std::string("no function ") + kTechniqueFunction + "; expected a definition of " + kTechniqueSignature +
+             " (raster/METHODS.md \"Your own technique\")");
+}
+
+}  // namespace
+
+const TechniqueParam* TechniqueFile::find(const std::string& name) const {
+  for (const TechniqueParam& p : params)
+    if (p.name == name) return &p;
+  return nullptr;
+}
+
+const TechniqueFile& loadTechniqueFile(const std::string& path) {
+  std::string bytes = readFile(path);
+  const std::string hash = hashHex(fnv1a64(bytes.data(), bytes.size()));
+  static std::mutex mutex;
+  // Never erased: references stay valid, and an edited file is a new entry (a new hash).
+  static std::map<std::string, std::unique_ptr<TechniqueFile>> cache;
+  std::lock_guard<std::mutex> lock(mutex);
+  auto& slot = cache[path + '\n' + hash];
+  if (slot) return *slot;
+  auto f = std::make_unique<TechniqueFile>();
+  f->path = path;
+  f->source = std::move(bytes);
+  f->hash = hash;
+  std::string name = path.substr(path.find_last_of('/') + 1);
+  const size_t dot = name.find_last_of('.');
+  f->stem = dot == std::string::npos || dot == 0 ? name : name.substr(0, dot);
+  check(*f);
+  slot = std::move(f);
+  return *slot;
+}
+
+uint32_t techniqueParamBits(const TechniqueParam& p, double value) {
+  if (p.type == TechniqueParam::Type::Bool) return value != 0 ? 1u : 0u;
+  if (p.type == TechniqueParam::Type::Int) return uint32_t(int32_t(value));
+  const float f = float(value);
+  uint32_t bits = 0;
+  std::memcpy(&bits, &f, 4);
+  return bits;
+}
+
+}  // namespace shadowlab
