@@ -152,12 +152,21 @@ class ReportTest(unittest.TestCase):
         manifest, _ = self.run_charts(rows)
         f = next(x for x in manifest["findings"] if x["scene"] == "grazing")
         text = {k: " ".join("".join(p["text"] for p in s) for s in f[k]) for k in ("wrong", "fixes", "costs", "fails")}
-        self.assertTrue(text["wrong"].startswith("acne dominates"), text["wrong"])
-        self.assertIn("worst with bias.slope=0,filter=none,map.size=512 (acne_rate 46%)", text["wrong"])
+        self.assertTrue(text["wrong"].startswith("acne: 87% of the errors; "), text["wrong"])
+        self.assertIn("worst: bias.slope=0,filter=none,map.size=512 (acne_rate 46%)", text["wrong"])
         # Best: vsm at slope 0, 1024 (0 acne, 0 leak, 0.15 % aliasing); cheapest within 2x of 0.15 %:
         # none at slope 4 is 2 % leak (no), so the best itself; the bias-1 none rows are 5 % acne.
-        self.assertIn("Best: bias.slope=0,filter=vsm,map.size=1024 (error_rate 0.15%, 6 ms", text["fixes"])
+        self.assertIn("Best: bias.slope=0,filter=vsm,map.size=1024 (0.15%, 6 ms", text["fixes"])
         self.assertNotIn("bias.slope=8", json.dumps(f), "the empty row is ranked nowhere")
+        flat_text = {k: " ".join("".join(p["text"] for p in s) for s in x[k])
+                     for x in manifest["findings"] if x["scene"] == "flat" for k in ("fixes", "costs")}
+        # flat: 0.15 % best (vsm, 6 ms); within 2x (0.3 %) the cheapest is none at slope 4, 1024: 0.22 %, 2 ms.
+        self.assertIn("Cheapest within 2x of its error: bias.slope=4,filter=none,map.size=1024 (0.22%, 2 ms).",
+                      flat_text["fixes"])
+        # Budgets: 1.5x the fastest (1 ms) and the median time (2.5 ms); the best costs 6x the fastest.
+        self.assertEqual(flat_text["costs"], "Within 1.5 ms: bias.slope=4,filter=none,map.size=512 (0.42%). "
+                         "Within 2.5 ms: bias.slope=4,filter=none,map.size=1024 (0.22%). "
+                         "The best costs 6x the fastest (1 ms).")
         self.assertIn("error_rate above 1% at every map size: none / sphere", text["fails"])
         # Along the bias, per family: the depth comparison's acne and both families' leaks.
         self.assertIn("none / sphere: acne above 1% up to bias.slope 1 (5%); leaks above 1% from bias.slope 4 (2%).",

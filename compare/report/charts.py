@@ -845,13 +845,12 @@ def findings(scenes, rows_by_scene, classes, fam, results, panels):
             totals.sort(key=lambda t: -t[0])
             t, metric, label = totals[0]
             worst = max(rows, key=lambda r: num(r["metrics"], metric) or 0.0)
-            sentence = [_piece(f"{label} dominates", link("class_mix", s)),
-                        _piece(f" ({t / whole:.0%} of all errors); worst with "),
-                        _piece(worst["config"], row_href(worst)),
+            sentence = [_piece(f"{label}: {t / whole:.0%} of the errors", link("class_mix", s)),
+                        _piece("; worst: "), _piece(worst["config"], row_href(worst)),
                         _piece(f" ({metric} {pct(num(worst['metrics'], metric))}).")]
             entry["wrong"].append(sentence)
             if len(totals) > 1 and totals[1][0] > 0.15 * whole:
-                entry["wrong"].append([_piece(f"Next: {totals[1][2]} ({totals[1][0] / whole:.0%}).")])
+                entry["wrong"].append([_piece(f"Then {totals[1][2]}: {totals[1][0] / whole:.0%}.")])
         # What fixes it and what it costs: the best configuration, the cheapest within 2x of its error,
         # and the best at the fastest configuration's budget and the median time.
         best = min(rows, key=lambda r: (num(r["metrics"], "error_rate"), method_gpu_ms(r)))
@@ -860,10 +859,10 @@ def findings(scenes, rows_by_scene, classes, fam, results, panels):
         cheap = min(within, key=lambda r: (method_gpu_ms(r), num(r["metrics"], "error_rate")))
         acc = link("accuracy_vs_time", s)
         entry["fixes"].append([_piece("Best: "), _piece(best["config"], row_href(best)),
-                               _piece(f" (error_rate {pct(e_best)}, {ms(method_gpu_ms(best))}; "),
+                               _piece(f" ({pct(e_best)}, {ms(method_gpu_ms(best))}; "),
                                _piece("triptych", f"#triptych-{s}-best"), _piece(").")])
         if cheap is not best:
-            entry["fixes"].append([_piece("Cheapest within 2x of that error: "),
+            entry["fixes"].append([_piece("Cheapest within 2x of its error: "),
                                    _piece(cheap["config"], row_href(cheap)),
                                    _piece(f" ({pct(num(cheap['metrics'], 'error_rate'))}, "
                                           f"{ms(method_gpu_ms(cheap))}).")])
@@ -881,11 +880,10 @@ def findings(scenes, rows_by_scene, classes, fam, results, panels):
             if r["_index"] in shown:
                 continue
             shown.add(r["_index"])
-            entry["costs"].append([_piece(f"Within {ms(b)}: "), _piece(r["config"], row_href(r)),
-                                   _piece(f" ({pct(num(r['metrics'], 'error_rate'))}; "),
-                                   _piece("front", acc), _piece(").")])
-        entry["costs"].append([_piece(f"Best costs {method_gpu_ms(best) / max(times[0], 1e-9):.3g}x the fastest "
-                                      f"configuration ({ms(times[0])}).")])
+            entry["costs"].append([_piece(f"Within {ms(b)}", acc), _piece(": "), _piece(r["config"], row_href(r)),
+                                   _piece(f" ({pct(num(r['metrics'], 'error_rate'))}).")])
+        entry["costs"].append([_piece(f"The best costs {method_gpu_ms(best) / max(times[0], 1e-9):.3g}x the fastest "
+                                      f"({ms(times[0])}).")])
         # What fails first: the failure frontiers when swept, else per family the largest map size
         # whose best error_rate exceeds the threshold, and the depth-comparison families' acne at
         # their smallest bias.
