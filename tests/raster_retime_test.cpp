@@ -41,7 +41,9 @@ TEST_F(RasterRetime, RunsTheMethodPassesAgainWithoutChangingTheFrame) {
     for (int frame = 0; frame < 2; ++frame) {
       RasterTimings t;
       R->render(s, m, "", &t);
-      if (frame == 1) EXPECT_TRUE(t.shadowMapsKept) << what;
+      if (frame == 1) {
+        EXPECT_TRUE(t.shadowMapsKept) << what;
+      }
       const std::vector<uint8_t> before = R->lookupVisibility();
       const std::vector<Rasterizer::MethodTiming> runs = R->retimeMethod(3);
       ASSERT_EQ(runs.size(), 3u) << what;
