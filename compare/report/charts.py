@@ -920,7 +920,9 @@ def findings(scenes, rows_by_scene, classes, fam, results, panels):
                 for n, (where, items) in enumerate(sorted(by_size.items(), key=lambda kv: -kv[0][0])):
                     sentence.append(_piece(("; " if n else "") + where[1] + ": "))
                     for m, (label, r) in enumerate(items):
-                        sentence.append(_piece((", " if m else "") + label, row_href(r)))
+                        if m:
+                            sentence.append(_piece(", "))
+                        sentence.append(_piece(label, row_href(r)))
                         sentence.append(_piece(f" ({pct(num(r['metrics'], 'error_rate'))})"))
                 sentence.append(_piece("."))
                 entry["fails"].append(sentence)
@@ -956,7 +958,8 @@ def findings(scenes, rows_by_scene, classes, fam, results, panels):
                         parts += [_piece(("; " if parts else "") + f"leaks above {pct(threshold)} from {key} {b:g} ("),
                                   _piece(pct(num(r["metrics"], "leak_rate")), row_href(r)), _piece(")")]
                     if parts:
-                        entry["fails"].append([_piece(fam.label(k) + ": ", link(bias_chart, s))] + parts + [_piece(".")])
+                        entry["fails"].append([_piece(fam.label(k), link(bias_chart, s)), _piece(": ")] + parts
+                                              + [_piece(".")])
     return out
 
 
