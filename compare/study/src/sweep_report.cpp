@@ -570,10 +570,9 @@ std::vector<std::string> writeSweepReport(const SweepPlan& plan, const std::vect
         if (rows[i].scene != name) continue;
         double e = num(rows[i].metrics, "error_rate");
         if (!std::isfinite(e) || !comparedSomething(rows[i])) continue;
-        // The best: the lowest error, then the fastest (the findings' "Best" is the same row).
-        if (!best || e < num(rows[*best].metrics, "error_rate") ||
-            (e == num(rows[*best].metrics, "error_rate") && methodMs(rows[i]) < methodMs(rows[*best])))
-          best = i;
+        // The best: the first lowest error in row order, as the runner keeps it (keepForTriptych)
+        // and as the findings name it.
+        if (!best || e < num(rows[*best].metrics, "error_rate")) best = i;
         if (!worst || e > num(rows[*worst].metrics, "error_rate")) worst = i;
       }
       if (!best) continue;
