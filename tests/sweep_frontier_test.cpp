@@ -277,6 +277,6 @@ TEST(FrontierCli, GrazingElevationSweepFindsAcneFrontiersSlopeBiasHoldsLower) {
   std::string html = slurp(out + "/report.html");
   EXPECT_NE(html.find("Failure frontiers"), std::string::npos);
   EXPECT_NE(html.find(constant["sentence"].get<std::string>().substr(0, 20)), std::string::npos);
-  EXPECT_TRUE(fs::exists(out + "/figures/frontiers.png")) << slurp(out + "/figures/charts.log");
+  EXPECT_TRUE(fs::exists(out + "/figures/frontiers.svg")) << slurp(out + "/figures/charts.log");
   fs::remove_all(dir);
 }

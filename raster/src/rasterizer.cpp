@@ -530,6 +530,20 @@ struct Rasterizer::Impl {
   // The untimed first run of a pipeline combination (lavapipe compiles its shaders at the first
   // draw): every pass scissored to one pixel, then the timed run draws the frame.
   bool warmupRun = false;
+  // retimeMethod's runs: pass 1 (every layer), 1b and 4 only; the visibility buffer, the planes and
+  // the resolve are skipped (their outputs stay as the last frame left them).
+  bool methodOnly = false;
+  // What the last submit recorded, for retimeMethod.
+  struct LastSubmit {
+    bool valid = false;
+    std::vector<LayerDraw> layerDraws;
+    int lightLayers = 0;
+    FramePipelines pipes;
+    Method method;
+    glm::mat4 cameraClip{1.0f};
+    int width = 0, height = 0;
+    bool light = false;
+  } last;
   std::vector<std::vector<float>> spare;  // recycled channel planes (Rasterizer::recycle)
   double visibilityGpuMs = 0;
   // fit=sdsm's samples (visiblePoints) and the key of the scene and fit camera they are of.
@@ -1056,7 +1070,7 @@ void Rasterizer::Impl::record(VkCommandBuffer cmd, const std::vector<LayerDraw>&
 
   // ---- Pass 3a: a group's planes (m, cascade) and surface, where not kept ----
   vk::Image& surface = *surfaceBound;
-  if (frame.planes != VK_NULL_HANDLE) {
+  if (frame.planes != VK_NULL_HANDLE && !methodOnly) {
     VkRenderingAttachmentInfo colors[2];
     vk::transition(cmd, resolveOut[0], VK_IMAGE_LAYOUT_UNDEFINED, VK_IMAGE_LAYOUT_GENERAL, VK_PIPELINE_STAGE_2_HOST_BIT,
                    0, VK_PIPELINE_STAGE_2_COLOR_ATTACHMENT_OUTPUT_BIT, VK_ACCESS_2_COLOR_ATTACHMENT_WRITE_BIT);
@@ -1069,7 +1083,7 @@ void Rasterizer::Impl::record(VkCommandBuffer cmd, const std::vector<LayerDraw>&
     vk::transition(cmd, surface, VK_IMAGE_LAYOUT_GENERAL, VK_IMAGE_LAYOUT_GENERAL,
                    VK_PIPELINE_STAGE_2_COLOR_ATTACHMENT_OUTPUT_BIT, VK_ACCESS_2_COLOR_ATTACHMENT_WRITE_BIT,
                    VK_PIPELINE_STAGE_2_FRAGMENT_SHADER_BIT, VK_ACCESS_2_SHADER_SAMPLED_READ_BIT);
-  } else if (&surface == &surfacePlaceholder) {
+  } else if (&surface == &surfacePlaceholder && !methodOnly) {
     vk::transition(cmd, surface, VK_IMAGE_LAYOUT_UNDEFINED, VK_IMAGE_LAYOUT_GENERAL,
                    VK_PIPELINE_STAGE_2_FRAGMENT_SHADER_BIT, 0, VK_PIPELINE_STAGE_2_FRAGMENT_SHADER_BIT,
                    VK_ACCESS_2_SHADER_SAMPLED_READ_BIT);
@@ -1077,7 +1091,7 @@ void Rasterizer::Impl::record(VkCommandBuffer cmd, const std::vector<LayerDraw>&
 
   // ---- Pass 3: resolve, one fragment per pixel, into the resolve attachments (evidence on
   // demand: none; pass 5 resolves the listed pixels after the readback of pass 4) ----
-  if (resolve != VK_NULL_HANDLE) {
+  if (resolve != VK_NULL_HANDLE && !methodOnly) {
     const int attachments = resolveAttachments(method.filter);
     VkRenderingAttachmentInfo colors[kResolveAttachments + 1];
     for (int i = 0; i < attachments; ++i) {
@@ -1250,6 +1264,34 @@ std::vector<uint8_t> Rasterizer::lookupVisibility() const {
   for (int y = 0; y < img.height(); ++y) {
     const uint8_t* row = mappedRow<uint8_t>(img, size_t(y));
     std::copy(row, row + img.width(), out.data() + size_t(y) * size_t(img.width()));
+  }
+  return out;
+}
+
+std::vector<Rasterizer::MethodTiming> Rasterizer::retimeMethod(int repeats) {
+  Impl& im = *impl_;
+  std::vector<MethodTiming> out;
+  if (!im.last.valid) return out;
+  const Impl::LastSubmit& l = im.last;
+  for (int k = 0; k < repeats; ++k) {
+    VkCommandBuffer cmd = im.commands->begin();
+    im.methodOnly = true;
+    try {
+      im.record(cmd, l.layerDraws, l.lightLayers, l.pipes, l.method, l.cameraClip, l.width, l.height,
+                /*drawVisibility=*/false, /*drawShadow=*/true);
+    } catch (...) {
+      im.methodOnly = false;
+      throw;
+    }
+    im.methodOnly = false;
+    im.commands->submitAndWait();
+    // Drawn: the shadow layers (their time also becomes the one a next frame with kept maps reports).
+    const Impl::PassTimes p = im.readTimestamps({false, true});
+    MethodTiming m;
+    m.shadowGpuMs = p.shadowGpuMs;
+    m.lookupGpuMs = l.light ? p.lookupGpuMs : 0.0;
+    m.momentsGpuMs = isMomentFilter(l.method.filter) ? p.momentsGpuMs : 0.0;
+    out.push_back(m);
   }
   return out;
 }
@@ -1592,6 +1634,15 @@ Rasterizer::Impl::Drawn Rasterizer::Impl::submit(const Scene& sc, const Method& 
   }
   visibilityKey = key;
   shadowKey = mapKey;
+  last.valid = true;
+  last.layerDraws = layerDraws;
+  last.lightLayers = layers.lightLayers;
+  last.pipes = pipes;
+  last.method = method;
+  last.cameraClip = cameraClip;
+  last.width = camera.width;
+  last.height = camera.height;
+  last.light = pipes.lookup != VK_NULL_HANDLE;
   return {drawVisibility, drawShadow};
 }
 

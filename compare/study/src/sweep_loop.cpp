@@ -364,8 +364,10 @@ void writeSweepOutputs(const SweepPlan& plan, const std::vector<const StoredRow*
   for (size_t i = 0; i < rows.size(); ++i) {
     nlohmann::json r = rows[i].toJson();
     r["device"] = have[i]->device;
+    r["family"] = methodFamily(rows[i].method);  // the report's unit of colour and marker
     results["rows"].push_back(std::move(r));
   }
+  results["families"] = methodFamilies(rows);
   results["configurations"] = rows.size();
   results["rows_run"] = summary.ran;
   results["rows_resumed"] = summary.resumed;

@@ -86,11 +86,27 @@ std::string fmt(double v, const char* f = "%.4g") {
   return buf;
 }
 
+// A rate as a percentage with three significant digits (0.0123 -> "1.23%", 0.46 -> "46%").
 std::string pct(double rate) {
   if (!std::isfinite(rate)) return "&ndash;";
   char buf[64];
-  std::snprintf(buf, sizeof buf, "%.3f%%", rate * 100.0);
+  std::snprintf(buf, sizeof buf, "%.3g%%", rate * 100.0);
   return buf;
+}
+
+// A number with three significant digits (the report's tables).
+std::string sig3(double v) { return fmt(v, "%.3g"); }
+
+// Escaped text that may break after ',', '_', '/' and '=' (configurations, paths, metric names):
+// long names wrap inside their cell instead of widening the table past the page.
+std::string breakable(const std::string& s) {
+  std::string out;
+  for (char c : s) {
+    std::string one(1, c);
+    out += escapeMarkup(one);
+    if (c == ',' || c == '_' || c == '/' || c == '=') out += "<wbr>";
+  }
+  return out;
 }
 
 // The error classes' rate metrics (classes.h), in table order: the report's class columns.
@@ -103,7 +119,7 @@ std::vector<const char*> errorRateMetrics() {
 
 std::string headerCells(const std::vector<const char*>& names) {
   std::string h;
-  for (const char* n : names) h += std::string("<th>") + n + "</th>";
+  for (const char* n : names) h += "<th>" + breakable(n) + "</th>";
   return h;
 }
 
@@ -156,33 +172,15 @@ std::string chartPython(const SweepOptions& options) {
 }
 
 // What the prestarted Python runs (`python -c`): with SIGINT ignored and its output discarded, the
-// imports and one throw-away figure in every format (fonts, the backends; no mathtext, which
-// charts.py does not use: PlainLogFormatter), the same first-use work charts.py would pay; then
-// it reads "LOG\0SCRIPT\0ARG\0...\0run" from stdin (the sweep's report) and runs SCRIPT as
-// `python SCRIPT ARG...` would, stdout and stderr
-// into LOG, SIGINT back to its default. End of input without that message (the sweep ended
-// without a report): it exits, having written nothing. A failing warm-up is ignored: the script
-// meets the same problem and reports it into LOG.
+// standard modules charts.py imports (json, statistics, zlib: the script draws without a plotting
+// library), then it reads "LOG\0SCRIPT\0ARG\0...\0run" from stdin (the sweep's report) and runs
+// SCRIPT as `python SCRIPT ARG...` would, stdout and stderr into LOG, SIGINT back to its default.
+// End of input without that message (the sweep ended without a report): it exits, having written
+// nothing.
 const char* kChartBootstrap = R"PY(
 import os, signal, sys
 signal.signal(signal.SIGINT, signal.SIG_IGN)
-try:
-    import io
-    import matplotlib
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-    fig, ax = plt.subplots(figsize=(3, 2))
-    ax.plot([1, 2, 4], [1e-3, 1e-2, 1e-1], marker="o", label="warm-up")
-    ax.set_title("warm-up 10\u207b\u00b3")
-    ax.set_xlabel("x")
-    ax.legend()
-    fig.tight_layout()
-    for ext in ("png", "pdf", "svg"):
-        fig.savefig(io.BytesIO(), format=ext)
-    plt.close(fig)
-    del fig, ax
-except Exception:
-    pass
+import json, math, statistics, zlib
 data = b""
 while True:
     chunk = os.read(0, 65536)
@@ -232,30 +230,61 @@ std::string fileSafe(const std::string& s) {
   return out;
 }
 
+// The page fits 900 px and 1400 px windows and print without horizontal scrolling: tables use
+// small text, wrap long names at their separators (breakable) and never exceed the body's width;
+// charts are inline SVG laid out in points (their text at least 8 pt printed), scaled down to fit.
 const char* kStyle = R"CSS(
-body { font-family: -apple-system, "Segoe UI", Roboto, "DejaVu Sans", Arial, sans-serif; margin: 2em auto;
-       max-width: 1200px; padding: 0 1em; color: #1d1d1f; line-height: 1.45; }
-h1 { font-size: 1.6em; margin-bottom: 0.2em; } h2 { margin-top: 1.8em; border-bottom: 1px solid #ddd; }
+body { font-family: -apple-system, "Segoe UI", Roboto, "DejaVu Sans", Arial, sans-serif; margin: 1.5em auto;
+       max-width: 1200px; padding: 0 1em; color: #1d1d1f; line-height: 1.4; }
+h1 { font-size: 1.6em; margin-bottom: 0.2em; } h2 { margin-top: 1.6em; border-bottom: 1px solid #ddd; }
 h3 { margin-bottom: 0.3em; }
-table { border-collapse: collapse; margin: 0.6em 0 1.2em; font-size: 0.88em; }
-th, td { border: 1px solid #d0d0d0; padding: 0.25em 0.55em; text-align: right; vertical-align: top; }
-th { background: #f3f3f3; } td.t, th.t { text-align: left; font-family: "DejaVu Sans Mono", monospace; }
+table { border-collapse: collapse; margin: 0.6em 0 1.2em; font-size: 0.8em; max-width: 100%; }
+th, td { border: 1px solid #d0d0d0; padding: 0.2em 0.4em; text-align: right; vertical-align: top;
+         overflow-wrap: anywhere; }
+th { background: #f3f3f3; font-weight: 600; } td.t, th.t { text-align: left; }
+table.findings { width: 100%; font-size: 0.85em; } table.findings td { min-width: 5em; }
+table.rows td:nth-child(2) { min-width: 9em; } tr.empty td { color: #999; }
+tr:target { background: #fff3b0; } .spread { color: #666; white-space: nowrap; }
 figure { margin: 1em 0 2em; } figure img { max-width: 100%; height: auto; border: 1px solid #e3e3e3; }
-figcaption { font-size: 0.9em; color: #444; margin-top: 0.3em; }
+figure.chart svg { display: block; max-width: 100%; height: auto; }
+figcaption { font-size: 0.9em; color: #444; margin-top: 0.3em; max-width: 60em; }
 .note { background: #fff8e1; border-left: 4px solid #f0b400; padding: 0.4em 0.8em; margin: 0.5em 0; }
 .muted { color: #666; font-size: 0.9em; } code { font-family: "DejaVu Sans Mono", monospace; }
 details summary { cursor: pointer; margin: 0.5em 0; }
+@media print {
+  body { max-width: none; margin: 0; padding: 0; font-size: 9pt; }
+  table { font-size: 7.5pt; } figure { break-inside: avoid; } h2 { break-after: avoid; }
+  figure.chart svg { max-width: 100%; }
+}
 )CSS";
 
 // Marks the page for headless checks: imagesOk is "true" only when every picture decoded.
+// Marks the page for headless checks: imagesOk is "true" only when every picture decoded, figures
+// counts the inline charts that laid out, overflow is the page's width beyond the window (px). A
+// link to a row opens the collapsed table of every row first.
 const char* kImageCheck = R"JS(
+function shadowlabOpenRow() {
+  var t = location.hash && document.getElementById(location.hash.slice(1));
+  if (t && t.id.indexOf('row-') === 0) { document.getElementById('all-rows').open = true; t.scrollIntoView(); }
+}
+window.addEventListener('hashchange', shadowlabOpenRow);
 window.addEventListener('load', function () {
+  shadowlabOpenRow();
   var images = document.images, bad = [];
   for (var i = 0; i < images.length; i++) {
     if (!(images[i].complete && images[i].naturalWidth > 0)) bad.push(images[i].getAttribute('src'));
   }
-  document.body.dataset.imagesOk = bad.length === 0 ? 'true' : 'false';
-  document.body.dataset.imagesCount = String(images.length);
+  var charts = document.querySelectorAll('figure.chart svg'), laid = 0;
+  for (var k = 0; k < charts.length; k++) {
+    var box = charts[k].getBoundingClientRect();
+    if (box.width > 0 && box.height > 0) laid++;
+  }
+  var d = document.body.dataset;
+  d.imagesOk = bad.length === 0 ? 'true' : 'false';
+  d.imagesCount = String(images.length);
+  d.figures = String(laid);
+  d.tooltips = String(document.querySelectorAll('figure.chart svg title').length);
+  d.overflow = String(Math.max(0, document.documentElement.scrollWidth - document.documentElement.clientWidth));
   if (bad.length) console.error('shadowlab report: pictures that did not load: ' + bad.join(', '));
 });
 )JS";
@@ -334,6 +363,74 @@ double methodMs(const ResultRow& r) {
   return num(r.timings, timing::kShadowGpuMs, 0.0) + num(r.timings, timing::kLookupGpuMs, 0.0);
 }
 
+namespace {
+// The method's time with three significant digits, and the range of its timed repetitions when the
+// row has them ("1.23 (1.2&ndash;1.31)").
+std::string timeWithSpread(const ResultRow& r) {
+  std::string out = sig3(methodMs(r));
+  const double lo = num(r.timings, timing::kMethodGpuMsMin), hi = num(r.timings, timing::kMethodGpuMsMax);
+  if (std::isfinite(lo) && std::isfinite(hi))
+    out += " <span class=\"spread\">(" + sig3(lo) + "&ndash;" + sig3(hi) + ")</span>";
+  return out;
+}
+}  // namespace
+
+std::string methodFamily(const nlohmann::json& method) {
+  auto text = [&](const char* key, const char* fallback) {
+    auto it = method.find(key);
+    return it != method.end() && it->is_string() && !it->get<std::string>().empty() ? it->get<std::string>()
+                                                                                    : std::string(fallback);
+  };
+  const std::string technique = text("technique", "");
+  if (!technique.empty()) return "technique " + technique;
+  return text("filter", kindKey(filterKinds(), Filter::None)) + " / " + text("fit", kindKey(fitKinds(), Fit::Sphere));
+}
+
+nlohmann::json methodFamilies(const std::vector<ResultRow>& rows) {
+  // Order: the kinds tables' (filter, then fit), unknown keys after them by name, techniques last.
+  auto rank = [](const nlohmann::json& method) {
+    auto index = [&](const auto& kinds, const char* key, const char* fallback) {
+      auto it = method.find(key);
+      const std::string k = it != method.end() && it->is_string() ? it->get<std::string>() : fallback;
+      for (size_t i = 0; i < kinds.size(); ++i)
+        if (k == kinds[i].key) return i;
+      return kinds.size();
+    };
+    const bool technique = method.contains("technique") && method["technique"].is_string() &&
+                           !method["technique"].get<std::string>().empty();
+    return std::make_tuple(technique, index(filterKinds(), "filter", "none"), index(fitKinds(), "fit", "sphere"),
+                           methodFamily(method));
+  };
+  std::map<std::string, decltype(rank(nlohmann::json()))> seen;
+  for (const auto& r : rows) {
+    std::string k = methodFamily(r.method);
+    if (!seen.count(k)) seen.emplace(k, rank(r.method));
+  }
+  std::vector<std::pair<decltype(rank(nlohmann::json())), std::string>> order;
+  for (const auto& [k, v] : seen) order.emplace_back(v, k);
+  std::sort(order.begin(), order.end());
+  // Ten colours that stay apart in print (matplotlib's tab10, its grey made near-black so that no
+  // family looks like the charts' grid), and eight marker shapes: a family is told apart by both.
+  static const char* kColours[] = {"#1f77b4", "#ff7f0e", "#2ca02c", "#d62728", "#9467bd",
+                                   "#8c564b", "#e377c2", "#222222", "#bcbd22", "#17becf"};
+  static const char* kMarkers[] = {"circle",        "square",   "triangle", "diamond",
+                                   "triangle_down", "pentagon", "hexagon",  "star"};
+  nlohmann::json out = nlohmann::json::array();
+  for (size_t i = 0; i < order.size(); ++i)
+    out.push_back({{"key", order[i].second},
+                   {"label", order[i].second},
+                   {"color", kColours[i % std::size(kColours)]},
+                   {"marker", kMarkers[i % std::size(kMarkers)]}});
+  return out;
+}
+
+bool comparedSomething(const ResultRow& r) {
+  const auto marked = r.metrics.find("compared_nothing");
+  if (marked != r.metrics.end() && marked->is_boolean() && marked->get<bool>()) return false;
+  const double pixels = num(r.metrics, "pixels_compared");
+  return !(std::isfinite(pixels) && pixels == 0.0);
+}
+
 std::string defaultReportScript(const std::string& sourceDir) {
   const char* env = std::getenv("SHADOWLAB_REPORT_SCRIPT");
   if (env && *env) return env;
@@ -381,7 +478,8 @@ void writeResultsCsv(const std::string& path, const std::vector<ResultRow>& rows
 std::vector<size_t> paretoFront(const std::vector<ResultRow>& rows, const std::string& scene) {
   std::vector<size_t> idx;
   for (size_t i = 0; i < rows.size(); ++i)
-    if (rows[i].scene == scene && std::isfinite(num(rows[i].metrics, "error_rate"))) idx.push_back(i);
+    if (rows[i].scene == scene && comparedSomething(rows[i]) && std::isfinite(num(rows[i].metrics, "error_rate")))
+      idx.push_back(i);
   std::stable_sort(idx.begin(), idx.end(), [&](size_t a, size_t b) {
     double ta = methodMs(rows[a]), tb = methodMs(rows[b]);
     if (ta != tb) return ta < tb;
@@ -471,7 +569,9 @@ std::vector<std::string> writeSweepReport(const SweepPlan& plan, const std::vect
       for (size_t i = 0; i < rows.size(); ++i) {
         if (rows[i].scene != name) continue;
         double e = num(rows[i].metrics, "error_rate");
-        if (!std::isfinite(e)) continue;
+        if (!std::isfinite(e) || !comparedSomething(rows[i])) continue;
+        // The best: the first lowest error in row order, as the runner keeps it (keepForTriptych)
+        // and as the findings name it.
         if (!best || e < num(rows[*best].metrics, "error_rate")) best = i;
         if (!worst || e > num(rows[*worst].metrics, "error_rate")) worst = i;
       }
@@ -519,7 +619,9 @@ std::vector<std::string> writeSweepReport(const SweepPlan& plan, const std::vect
     }
   }
 
-  // The page.
+  // The page: findings first (what goes wrong, what fixes it, what it costs, what fails first), then
+  // the best configurations, the charts (inline SVG: a tooltip and a link to its row on every point),
+  // the triptychs, the run's facts and every row.
   std::ostringstream h;
   const std::time_t now = std::time(nullptr);
   char stamp[64];
@@ -529,9 +631,173 @@ std::vector<std::string> writeSweepReport(const SweepPlan& plan, const std::vect
     << "<title>shadowlab sweep: " << escapeMarkup(std::to_string(plan.sceneNames.size())) << " scene(s) x "
     << plan.configs.size() << " configuration(s)</title>\n<style>" << kStyle << "</style>\n</head>\n<body>\n";
   h << "<h1>shadowlab sweep report</h1>\n<p class=\"muted\">" << rows.size() << " rows: " << plan.sceneNames.size()
-    << " scene(s) &times; " << plan.configs.size() << " configuration(s). Generated " << stamp << ".</p>\n";
+    << " scene(s) &times; " << plan.configs.size() << " configuration(s). Generated " << stamp
+    << ". Rates are fractions of the compared pixels; times are <code>method_gpu_ms</code> (shadow pass + lookup "
+       "pass, what an engine pays; the median of the timed repetitions). Each link goes to the chart, triptych or "
+       "row that shows it.</p>\n";
+
+  // Findings (from figures/charts.json: the chart script computes them from results.json).
+  const nlohmann::json findings =
+      manifest.is_object() ? manifest.value("findings", nlohmann::json::array()) : nlohmann::json::array();
+  h << "<h2 id=\"findings\">Findings</h2>\n";
+  if (findings.empty() || !findings.is_array()) {
+    h << "<p class=\"note\">No findings: the chart script did not write them (see the notes under Charts).</p>\n";
+  } else {
+    h << "<table class=\"findings\">\n<tr><th class=\"t\">scene</th><th class=\"t\">what goes wrong</th>"
+         "<th class=\"t\">what fixes it</th><th class=\"t\">what it costs</th><th class=\"t\">what fails "
+         "first</th></tr>\n";
+    auto pieces = [&](const nlohmann::json& sentences) {
+      std::string out;
+      if (!sentences.is_array()) return out;
+      for (const auto& sentence : sentences) {
+        if (!sentence.is_array()) continue;
+        out += out.empty() ? "" : " ";
+        for (const auto& p : sentence) {
+          const std::string text = p.value("text", std::string());
+          const std::string href = p.value("href", std::string());
+          // Only links inside the page: a finding names a chart panel, triptych or row.
+          if (!href.empty() && href[0] == '#')
+            out += "<a href=\"" + escapeMarkup(href) + "\">" + breakable(text) + "</a>";
+          else out += breakable(text);
+        }
+      }
+      return out;
+    };
+    for (const auto& f : findings) {
+      h << "<tr><td class=\"t\">" << breakable(f.value("scene", std::string())) << "</td>";
+      for (const char* k : {"wrong", "fixes", "costs", "fails"})
+        h << "<td class=\"t\">" << pieces(f.value(k, nlohmann::json::array())) << "</td>";
+      h << "</tr>\n";
+    }
+    h << "</table>\n";
+  }
+
+  // Summary: the Pareto front per scene.
+  h << "<h2>Best configurations per scene</h2>\n<p>For each scene, the configurations on the Pareto front of the "
+       "method's time (<code>method_gpu_ms</code> = <code>shadow_gpu_ms</code> + <code>lookup_gpu_ms</code>: the "
+       "shadow pass and a lookup pass that computes only the method's visibility, what an engine would pay) against "
+       "<code>error_rate</code>: each row is the lowest error reachable within its time budget; every configuration "
+       "not listed is slower, less accurate, or both. # is the point's number on the accuracy chart; the time is "
+       "the median of the timed repetitions, their range after it. Rows that compared no pixel are not ranked.</p>\n";
+  for (const auto& name : plan.sceneNames) {
+    auto front = paretoFront(rows, name);
+    h << "<h3>" << escapeMarkup(name) << "</h3>\n";
+    if (front.empty()) {
+      h << "<p class=\"note\">No row with an error rate.</p>\n";
+      continue;
+    }
+    h << "<table>\n<tr><th>#</th><th>time budget (method_gpu_ms)</th><th "
+         "class=\"t\">configuration</th><th>error_rate</th>"
+      << headerCells(errorRateMetrics()) << "<th>m_p95 (px)</th><th>harness: camera_gpu_ms</th>"
+      << headerCells({timing::kReadbackMs, timing::kCompareMs}) << "</tr>\n";
+    int n = 0;
+    for (size_t i : front) {
+      const ResultRow& r = rows[i];
+      h << "<tr><td>" << ++n << "</td><td>&le; " << timeWithSpread(r) << "</td><td class=\"t\"><a href=\"#row-" << i
+        << "\">" << breakable(r.config) << "</a></td><td>" << pct(num(r.metrics, "error_rate")) << "</td>";
+      for (const char* k : errorRateMetrics()) h << "<td>" << pct(num(r.metrics, k)) << "</td>";
+      h << "<td>" << sig3(num(r.metrics, "m_p95")) << "</td>";
+      for (const char* k : {timing::kCameraGpuMs, timing::kReadbackMs, timing::kCompareMs})
+        h << "<td>" << sig3(num(r.timings, k)) << "</td>";
+      h << "</tr>\n";
+    }
+    h << "</table>\n";
+  }
+
+  // Failure frontiers (only when a scene: parameter is swept).
+  const nlohmann::json frontiers = results.value("frontiers", nlohmann::json::array());
+  if (frontiers.is_array() && !frontiers.empty()) {
+    const nlohmann::json fr =
+        results.value("sweep", nlohmann::json::object()).value("frontier", nlohmann::json::object());
+    h << "<h2>Failure frontiers</h2>\n<p>For each scene parameter swept with <code>scene:</code> and each method "
+         "configuration, the values walked from easy to hard (the direction of the scene's declared "
+         "<code>failure</code> values; the grid's order for other parameters) and the first value where <code>"
+      << escapeMarkup(fr.value("metric", std::string("error_rate"))) << "</code> exceeds "
+      << pct(fr.value("threshold", 0.01))
+      << ".</p>\n<table>\n<tr><th class=\"t\">scene</th><th class=\"t\">parameter</th>"
+         "<th class=\"t\">method</th><th>holds to</th><th>breaks at</th><th class=\"t\">frontier</th></tr>\n";
+    for (const auto& f : frontiers) {
+      auto val = [](const nlohmann::json& v) {
+        return v.is_null() ? std::string("&ndash;") : escapeMarkup(canonicalValueText(v));
+      };
+      h << "<tr><td class=\"t\">" << breakable(f.value("scene", std::string())) << "</td><td class=\"t\">"
+        << breakable(f.value("parameter", std::string())) << "</td><td class=\"t\">"
+        << breakable(f.value("method", std::string())) << "</td><td>" << val(f.value("holds_to", nlohmann::json()))
+        << "</td><td>" << val(f.value("breaks_at", nlohmann::json())) << "</td><td class=\"t\">"
+        << escapeMarkup(f.value("sentence", std::string())) << "</td></tr>\n";
+    }
+    h << "</table>\n";
+  }
+
+  // Charts: each SVG inline (its points' tooltips and links work in the page), its PDF for print.
+  h << "<h2>Charts</h2>\n";
+  for (const auto& n : notes)
+    if (n.rfind("charts", 0) == 0) h << "<p class=\"note\">" << escapeMarkup(n) << "</p>\n";
+  if (manifest.is_object()) {
+    for (const auto& c : manifest.value("charts", nlohmann::json::array())) {
+      const std::string id = c.value("id", std::string());
+      const std::string svgFile = c.value("svg", std::string());
+      std::string svg;
+      // Only a file the script wrote into figures/, read from there (never a path outside it).
+      if (svgFile.rfind("figures/", 0) == 0 && svgFile.find("..") == std::string::npos) {
+        try {
+          svg = readFile(joinPath(options.outDir, svgFile));
+        } catch (const std::exception&) {
+        }
+      }
+      h << "<figure class=\"chart\" id=\"" << escapeMarkup(id) << "\">\n<h3>"
+        << escapeMarkup(c.value("title", std::string())) << "</h3>\n";
+      if (svg.rfind("<svg", 0) == 0) h << svg;
+      else  // an <img> that cannot load: the page's check reports it
+        h << "<img src=\"" << escapeMarkup(svgFile) << "\" alt=\"" << escapeMarkup(c.value("title", std::string()))
+          << " (missing)\">\n";
+      h << "<figcaption>" << escapeMarkup(c.value("caption", std::string()));
+      std::string links;
+      for (const char* kind : {"pdf", "svg"}) {
+        std::string f = c.value(kind, std::string());
+        if (!f.empty())
+          links += std::string(links.empty() ? "" : ", ") + "<a href=\"" + escapeMarkup(f) + "\">" + kind + "</a>";
+      }
+      if (!links.empty()) h << " For print: " << links << ".";
+      h << "</figcaption>\n</figure>\n";
+    }
+    for (const auto& s : manifest.value("skipped", nlohmann::json::array())) {
+      std::string text =
+          "Chart \"" + s.value("title", std::string()) + "\" skipped: " + s.value("reason", std::string());
+      notes.push_back(text);
+      h << "<p class=\"note\">" << escapeMarkup(text) << "</p>\n";
+    }
+  }
+
+  // Triptychs.
+  h << "<h2>Best and worst configuration of each scene</h2>\n<p>Reference (Embree) | raster | errors, rendered again "
+       "for this report. Error colours are explained by the legend drawn into the errors panel.</p>\n";
+  if (!options.triptychs) h << "<p class=\"note\">Triptychs were not rendered for this report.</p>\n";
+  for (const auto& name : plan.sceneNames) {
+    auto it = picks.find(name);
+    if (it == picks.end()) continue;
+    for (const auto& p : it->second) {
+      const ResultRow& r = rows[p.row];
+      h << "<figure id=\"triptych-" << escapeMarkup(name) << "-" << p.label << "\">\n<h3>" << escapeMarkup(name) << ": "
+        << p.label << " (<a href=\"#row-" << p.row << "\">" << breakable(r.config) << "</a>)</h3>\n";
+      if (p.file.empty()) {
+        h << "<p class=\"note\">No triptych: this sweep's runner makes no pictures, or rendering it failed (see the "
+             "notes).</p>\n";
+      } else {
+        h << "<img src=\"" << escapeMarkup(p.file) << "\" alt=\"" << escapeMarkup(name + " " + p.label + " triptych")
+          << "\">\n";
+      }
+      std::string byClass;
+      for (const PixelClassInfo& c : kPixelClasses)
+        if (c.error && c.rateMetric)
+          byClass += (byClass.empty() ? "" : ", ") + std::string(c.key) + " " + pct(num(r.metrics, c.rateMetric));
+      h << "<figcaption>error_rate " << pct(num(r.metrics, "error_rate")) << " (" << escapeMarkup(byClass)
+        << "); method " << sig3(methodMs(r)) << " ms (method_gpu_ms).</figcaption>\n</figure>\n";
+    }
+  }
 
   // Run facts.
+  h << "<h2>Run</h2>\n";
   const nlohmann::json machine = results.value("machine", nlohmann::json::object());
   const nlohmann::json runInfo = results.value("runner", nlohmann::json::object());
   h << "<table>\n";
@@ -544,15 +810,15 @@ std::vector<std::string> writeSweepReport(const SweepPlan& plan, const std::vect
   if (runInfo.contains("device") && runInfo["device"].is_string())
     fact("raster device", escapeMarkup(runInfo["device"].get<std::string>()));
   if (runInfo.contains("reference_cache") && runInfo["reference_cache"].is_string())
-    fact("reference cache", escapeMarkup(runInfo["reference_cache"].get<std::string>()) + " (" +
+    fact("reference cache", breakable(runInfo["reference_cache"].get<std::string>()) + " (" +
                                 std::to_string(runInfo.value("references_traced", 0)) + " traced, " +
                                 std::to_string(runInfo.value("references_loaded", 0)) + " loaded)");
   fact("rows run / resumed",
        std::to_string(results.value("rows_run", 0)) + " / " + std::to_string(results.value("rows_resumed", 0)));
   const double sweepSeconds = results.value("loop_wall_seconds", 0.0);
   const size_t ran = results.value("rows_run", size_t(0));
-  fact("configuration loop", fmt(sweepSeconds, "%.2f") + " s" +
-                                 (ran ? " (" + fmt(sweepSeconds / double(ran) * 1000.0, "%.1f") + " ms per row)" : ""));
+  fact("configuration loop", fmt(sweepSeconds, "%.3g") + " s" +
+                                 (ran ? " (" + fmt(sweepSeconds / double(ran) * 1000.0, "%.3g") + " ms per row)" : ""));
   fact("outputs",
        "<a href=\"results.json\">results.json</a>, <a href=\"results.csv\">results.csv</a>, "
        "<a href=\"rows.jsonl\">rows.jsonl</a>, <a href=\"classes.json\">classes.json</a>");
@@ -571,10 +837,10 @@ std::vector<std::string> writeSweepReport(const SweepPlan& plan, const std::vect
         break;
       }
     if (!scene) continue;
-    h << "<tr><td class=\"t\">" << escapeMarkup(plan.sceneNames[s]) << "</td><td class=\"t\">"
-      << escapeMarkup(plan.scenePaths[s]) << "</td><td>" << scene->triangleCount() << "</td><td>" << scene->camera.width
+    h << "<tr><td class=\"t\">" << breakable(plan.sceneNames[s]) << "</td><td class=\"t\">"
+      << breakable(plan.scenePaths[s]) << "</td><td>" << scene->triangleCount() << "</td><td>" << scene->camera.width
       << "&times;" << scene->camera.height << "</td><td class=\"t\">" << escapeMarkup(light) << "</td><td class=\"t\">"
-      << escapeMarkup(scene->hash) << "</td></tr>\n";
+      << breakable(scene->hash.substr(0, 16)) << "</td></tr>\n";
   }
   h << "</table>\n";
 
@@ -604,132 +870,22 @@ std::vector<std::string> writeSweepReport(const SweepPlan& plan, const std::vect
   h << "<p class=\"muted\">Every other method key keeps its default (raster/METHODS.md). Each row's full method is in "
        "results.json.</p>\n";
 
-  // Summary: the Pareto front per scene.
-  h << "<h2>Best configurations per scene</h2>\n<p>For each scene, the configurations on the Pareto front of the "
-       "method's time (<code>method_gpu_ms</code> = <code>shadow_gpu_ms</code> + <code>lookup_gpu_ms</code>: the "
-       "shadow pass and a lookup pass that computes only the method's visibility, what an engine would pay) against "
-       "<code>error_rate</code>: each row is the lowest error reachable within its time budget; every configuration "
-       "not listed is slower, less accurate, or both. The harness's own stages (the camera pass with its evidence "
-       "resolve, the readback, the comparison) stand in their own columns (compare/TIMINGS.md).</p>\n";
-  for (const auto& name : plan.sceneNames) {
-    auto front = paretoFront(rows, name);
-    h << "<h3>" << escapeMarkup(name) << "</h3>\n";
-    if (front.empty()) {
-      h << "<p class=\"note\">No row with an error rate.</p>\n";
-      continue;
-    }
-    h << "<table>\n<tr><th>time budget (method_gpu_ms)</th><th "
-         "class=\"t\">configuration</th><th>error_rate</th>"
-      << headerCells(errorRateMetrics())
-      << "<th>m_p95 (px)</th><th>harness: camera_gpu_ms</th><th>readback_ms</th><th>compare_ms</th></tr>\n";
-    for (size_t i : front) {
-      const ResultRow& r = rows[i];
-      h << "<tr><td>&le; " << fmt(methodMs(r), "%.2f") << "</td><td class=\"t\">" << escapeMarkup(r.config)
-        << "</td><td>" << pct(num(r.metrics, "error_rate")) << "</td>";
-      for (const char* k : errorRateMetrics()) h << "<td>" << pct(num(r.metrics, k)) << "</td>";
-      h << "<td>" << fmt(num(r.metrics, "m_p95")) << "</td>";
-      for (const char* k : {timing::kCameraGpuMs, timing::kReadbackMs, timing::kCompareMs})
-        h << "<td>" << fmt(num(r.timings, k), "%.1f") << "</td>";
-      h << "</tr>\n";
-    }
-    h << "</table>\n";
-  }
-
-  // Failure frontiers (only when a scene: parameter is swept).
-  const nlohmann::json frontiers = results.value("frontiers", nlohmann::json::array());
-  if (frontiers.is_array() && !frontiers.empty()) {
-    const nlohmann::json fr =
-        results.value("sweep", nlohmann::json::object()).value("frontier", nlohmann::json::object());
-    h << "<h2>Failure frontiers</h2>\n<p>For each scene parameter swept with <code>scene:</code> and each method "
-         "configuration, the values walked from easy to hard (the direction of the scene's declared "
-         "<code>failure</code> values; the grid's order for other parameters) and the first value where <code>"
-      << escapeMarkup(fr.value("metric", std::string("error_rate"))) << "</code> exceeds "
-      << pct(fr.value("threshold", 0.01))
-      << ".</p>\n<table>\n<tr><th class=\"t\">scene</th><th class=\"t\">parameter</th>"
-         "<th class=\"t\">method</th><th>holds to</th><th>breaks at</th><th class=\"t\">frontier</th></tr>\n";
-    for (const auto& f : frontiers) {
-      auto val = [](const nlohmann::json& v) {
-        return v.is_null() ? std::string("&ndash;") : escapeMarkup(canonicalValueText(v));
-      };
-      h << "<tr><td class=\"t\">" << escapeMarkup(f.value("scene", std::string())) << "</td><td class=\"t\">"
-        << escapeMarkup(f.value("parameter", std::string())) << "</td><td class=\"t\">"
-        << escapeMarkup(f.value("method", std::string())) << "</td><td>" << val(f.value("holds_to", nlohmann::json()))
-        << "</td><td>" << val(f.value("breaks_at", nlohmann::json())) << "</td><td class=\"t\">"
-        << escapeMarkup(f.value("sentence", std::string())) << "</td></tr>\n";
-    }
-    h << "</table>\n";
-  }
-
-  // Charts.
-  h << "<h2>Charts</h2>\n";
-  for (const auto& n : notes)
-    if (n.rfind("charts", 0) == 0) h << "<p class=\"note\">" << escapeMarkup(n) << "</p>\n";
-  if (manifest.is_object()) {
-    for (const auto& c : manifest.value("charts", nlohmann::json::array())) {
-      const std::string png = c.value("png", std::string());
-      h << "<figure id=\"" << escapeMarkup(c.value("id", std::string())) << "\">\n<h3>"
-        << escapeMarkup(c.value("title", std::string())) << "</h3>\n<img src=\"" << escapeMarkup(png) << "\" alt=\""
-        << escapeMarkup(c.value("title", std::string())) << "\">\n<figcaption>"
-        << escapeMarkup(c.value("caption", std::string()));
-      std::string links;
-      for (const char* kind : {"pdf", "svg"}) {
-        std::string f = c.value(kind, std::string());
-        if (!f.empty())
-          links += std::string(links.empty() ? "" : ", ") + "<a href=\"" + escapeMarkup(f) + "\">" + kind + "</a>";
-      }
-      if (!links.empty()) h << " For papers: " << links << ".";
-      h << "</figcaption>\n</figure>\n";
-    }
-    for (const auto& s : manifest.value("skipped", nlohmann::json::array())) {
-      std::string text =
-          "Chart \"" + s.value("title", std::string()) + "\" skipped: " + s.value("reason", std::string());
-      notes.push_back(text);
-      h << "<p class=\"note\">" << escapeMarkup(text) << "</p>\n";
-    }
-  }
-
-  // Triptychs.
-  h << "<h2>Best and worst configuration of each scene</h2>\n<p>Reference (Embree) | raster | errors, rendered again "
-       "for this report. Error colours are explained by the legend drawn into the errors panel.</p>\n";
-  if (!options.triptychs) h << "<p class=\"note\">Triptychs were not rendered for this report.</p>\n";
-  for (const auto& name : plan.sceneNames) {
-    auto it = picks.find(name);
-    if (it == picks.end()) continue;
-    for (const auto& p : it->second) {
-      const ResultRow& r = rows[p.row];
-      h << "<figure>\n<h3>" << escapeMarkup(name) << ": " << p.label << " (" << escapeMarkup(r.config) << ")</h3>\n";
-      if (p.file.empty()) {
-        h << "<p class=\"note\">No triptych: this sweep's runner makes no pictures, or rendering it failed (see the "
-             "notes).</p>\n";
-      } else {
-        h << "<img src=\"" << escapeMarkup(p.file) << "\" alt=\"" << escapeMarkup(name + " " + p.label + " triptych")
-          << "\">\n";
-      }
-      std::string byClass;
-      for (const PixelClassInfo& c : kPixelClasses)
-        if (c.error && c.rateMetric)
-          byClass += (byClass.empty() ? "" : ", ") + std::string(c.key) + " " + pct(num(r.metrics, c.rateMetric));
-      h << "<figcaption>error_rate " << pct(num(r.metrics, "error_rate")) << " (" << escapeMarkup(byClass)
-        << "); method " << fmt(methodMs(r), "%.2f") << " ms (method_gpu_ms).</figcaption>\n</figure>\n";
-    }
-  }
-
-  // Every row.
-  h << "<h2>All rows</h2>\n<details>\n<summary>" << rows.size() << " rows (also in results.csv)</summary>\n<table>\n"
-    << "<tr><th class=\"t\">scene</th><th class=\"t\">configuration</th><th class=\"t\">light</th><th>error_rate</th>"
-    << headerCells(errorRateMetrics())
-    << "<th>m_median</th><th>m_p95</th>"
-       "<th>m_max</th><th>shadow_gpu_ms</th><th>lookup_gpu_ms</th><th>method_gpu_ms</th><th>camera_gpu_ms</th>"
-       "<th>readback_ms</th><th>compare_ms</th><th>config_wall_ms</th></tr>\n";
-  for (const auto& r : rows) {
-    h << "<tr><td class=\"t\">" << escapeMarkup(r.scene) << "</td><td class=\"t\">" << escapeMarkup(r.config)
-      << "</td><td class=\"t\">" << escapeMarkup(r.light) << "</td>";
+  // Every row (its anchor row-<index in results.json>: the charts' points and the findings link here).
+  h << "<h2>All rows</h2>\n<details id=\"all-rows\">\n<summary>" << rows.size()
+    << " rows (every column in results.csv)</summary>\n<table class=\"rows\">\n"
+    << "<tr><th class=\"t\">scene</th><th class=\"t\">configuration</th><th class=\"t\">family</th><th>error_rate</th>"
+    << headerCells(errorRateMetrics()) << "<th>m_p95</th><th>method_gpu_ms</th>"
+    << headerCells({timing::kCameraGpuMs, timing::kReadbackMs, timing::kCompareMs, timing::kConfigWallMs}) << "</tr>\n";
+  for (size_t i = 0; i < rows.size(); ++i) {
+    const ResultRow& r = rows[i];
+    h << "<tr id=\"row-" << i << "\"" << (comparedSomething(r) ? "" : " class=\"empty\"") << "><td class=\"t\">"
+      << breakable(r.scene) << "</td><td class=\"t\">" << breakable(r.config) << "</td><td class=\"t\">"
+      << breakable(methodFamily(r.method)) << "</td>";
     h << "<td>" << pct(num(r.metrics, "error_rate")) << "</td>";
     for (const char* k : errorRateMetrics()) h << "<td>" << pct(num(r.metrics, k)) << "</td>";
-    for (const char* k : {"m_median", "m_p95", "m_max"}) h << "<td>" << fmt(num(r.metrics, k)) << "</td>";
-    for (const char* k : {timing::kShadowGpuMs, timing::kLookupGpuMs, timing::kMethodGpuMs, timing::kCameraGpuMs,
-                          timing::kReadbackMs, timing::kCompareMs, timing::kConfigWallMs})
-      h << "<td>" << fmt(num(r.timings, k), "%.2f") << "</td>";
+    h << "<td>" << sig3(num(r.metrics, "m_p95")) << "</td><td>" << timeWithSpread(r) << "</td>";
+    for (const char* k : {timing::kCameraGpuMs, timing::kReadbackMs, timing::kCompareMs, timing::kConfigWallMs})
+      h << "<td>" << sig3(num(r.timings, k)) << "</td>";
     h << "</tr>\n";
   }
   h << "</table>\n</details>\n";

@@ -100,6 +100,20 @@ class Rasterizer {
   // planes must be as render() returned them: an evidence-on-demand frame's planes are reused
   // knowing their values (zeros and the lookup's bytes, rewritten only where they change).
   void recycle(Frame&& frame);
+  // One timed run of the method's passes (retimeMethod), GPU timestamps in ms.
+  struct MethodTiming {
+    double shadowGpuMs = 0;   // the shadow pass: every map layer drawn, then the moments pass
+    double lookupGpuMs = 0;   // the lookup pass (0 without a light)
+    double momentsGpuMs = 0;  // the moments pass's part of shadowGpuMs (0 for the other filters)
+    double methodGpuMs() const { return shadowGpuMs + lookupGpuMs; }
+  };
+  // Runs the last render()'s method passes again `repeats` times, each submitted and timed on its
+  // own: the shadow pass (every map layer drawn, never the kept maps; then the moments pass) and
+  // the lookup pass, none of the harness's passes. Their inputs are the last frame's, so the maps
+  // and the lookup's bytes come out the same (lookupVisibility() is unchanged). A sweep times each
+  // configuration so, its render() serving as the warm-up (compare/TIMINGS.md: the median and the
+  // range of these runs). Empty before the first render.
+  std::vector<MethodTiming> retimeMethod(int repeats);
   // The last render()'s lookup pass output: the light's visibility, one byte (UNORM, 255 = lit)
   // per pixel, row-major; empty before the first render, stale after a render without a light.
   // It equals the frame's vis channel converted to 8 bits, 255 only where vis is exactly 1 and 0

@@ -320,6 +320,18 @@ std::vector<size_t> paretoFront(const std::vector<ResultRow>& rows, const std::s
 // A row's method time, the report's and tune's time axis: method_gpu_ms, else (a row journaled
 // before the lookup pass existed) shadow_gpu_ms + lookup_gpu_ms, an absent term counting 0.
 double methodMs(const ResultRow& r);
+// A row's method family, the unit every chart of the report draws in one colour and marker: the
+// technique when the method names one ("technique <name>"), else "<filter> / <fit>" (filter x fit;
+// a filter with a sized light is a filter of its own). From the row's method JSON (ResultRow::method).
+std::string methodFamily(const nlohmann::json& method);
+// The families of `rows`, the table results.json carries as "families" (and each row as "family"):
+// [{key, label, color, marker}] in the kinds tables' order (filters, then fits; techniques last),
+// each with its own colour ("#rrggbb") and marker (circle, square, triangle, diamond,
+// triangle_down, pentagon, hexagon, star).
+nlohmann::json methodFamilies(const std::vector<ResultRow>& rows);
+// False for a row whose frame compared no pixel (metrics pixels_compared 0, or a row marked
+// "compared_nothing"): its rates are 0 of 0, so the report and the charts never rank it.
+bool comparedSomething(const ResultRow& r);
 // The chart script: $SHADOWLAB_REPORT_SCRIPT when set, else <sourceDir>/compare/report/charts.py
 // (the executables know their source folder through the SHADOWLAB_SOURCE_DIR definition).
 std::string defaultReportScript(const std::string& sourceDir);
