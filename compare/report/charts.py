@@ -75,9 +75,8 @@ def method_spread(row):
 
 def compared_nothing(row):
     """A row whose frame compared no pixel (its rates are 0 of 0): never ranked or drawn as best."""
-    if row.get("compared_nothing") is True or row.get("empty_comparison") is True:
-        return True
-    return num(row.get("metrics", {}), "pixels_compared") == 0
+    metrics = row.get("metrics", {})
+    return metrics.get("nothing_compared") is True or num(metrics, "pixels_compared") == 0
 
 
 def rankable(row):

@@ -425,7 +425,7 @@ nlohmann::json methodFamilies(const std::vector<ResultRow>& rows) {
 }
 
 bool comparedSomething(const ResultRow& r) {
-  const auto marked = r.metrics.find("compared_nothing");
+  const auto marked = r.metrics.find("nothing_compared");
   if (marked != r.metrics.end() && marked->is_boolean() && marked->get<bool>()) return false;
   const double pixels = num(r.metrics, "pixels_compared");
   return !(std::isfinite(pixels) && pixels == 0.0);

@@ -330,7 +330,7 @@ std::string methodFamily(const nlohmann::json& method);
 // triangle_down, pentagon, hexagon, star).
 nlohmann::json methodFamilies(const std::vector<ResultRow>& rows);
 // False for a row whose frame compared no pixel (metrics pixels_compared 0, or a row marked
-// "compared_nothing"): its rates are 0 of 0, so the report and the charts never rank it.
+// "nothing_compared"): its rates are 0 of 0, so the report and the charts never rank it.
 bool comparedSomething(const ResultRow& r);
 // The chart script: $SHADOWLAB_REPORT_SCRIPT when set, else <sourceDir>/compare/report/charts.py
 // (the executables know their source folder through the SHADOWLAB_SOURCE_DIR definition).
