@@ -40,15 +40,15 @@ std::string firstLine(const std::string& s) { return s.substr(0, s.find('\n')); 
 
 // `run` with a method key and a scene: value, `sweep` with the scene: value set for every
 // configuration and the method key in its grid: the gate finds the run's row in the sweep's results
-// and passes; a doctored baseline fails it. (The gate wants every baseline row in the current
-// results, compare/GATE.md, so the sweep holds this one row; names of rows with a key at its
-// default: tests/sweep_config_name_test.cpp.) Method values are printed as written (0.0005, not the
-// float's widened 0.0005000000237487257).
+// and passes, leaving the sweep's other rows out (not run); a doctored baseline fails it, and a run
+// of a configuration the sweep does not have is refused (exit 2), not passed on no comparison.
+// (Names of rows with a key at its default: tests/sweep_config_name_test.cpp.) Method values are
+// printed as written (0.0005, not the float's widened 0.0005000000237487257).
 TEST(SweepNamingCli, RunIsGatedAgainstTheSweepRowOfTheSameConfiguration) {
   const fs::path dir = freshTempDir("shadowlab_naming_gate");
   const std::string scene = smallScene(dir);
   const std::string cache = (dir / "cache").string();
-  CliRun sweep = runShadowlab("sweep " + scene + " --grid map.size=256 --set scene:/camera/height=120 -o " +
+  CliRun sweep = runShadowlab("sweep " + scene + " --grid map.size=256,512 --set scene:/camera/height=120 -o " +
                                   (dir / "sweep").string() + " --cache " + cache + " --no-report",
                               dir);
   if (sweep.code == 3) GTEST_SKIP() << "no Vulkan device (shadowlab exit 3): " << sweep.err;
@@ -59,8 +59,9 @@ TEST(SweepNamingCli, RunIsGatedAgainstTheSweepRowOfTheSameConfiguration) {
   ASSERT_EQ(run.code, 0) << run.err;
 
   const auto rows = shadowlab::loadResultRows((dir / "sweep" / "results.json").string());
-  ASSERT_EQ(rows.size(), 1u);
+  ASSERT_EQ(rows.size(), 2u);
   EXPECT_EQ(rows[0].config, "map.size=256,scene:/camera/height=120");
+  EXPECT_EQ(rows[1].config, "map.size=512,scene:/camera/height=120");
   const auto single = shadowlab::loadResultRows((dir / "run" / "metrics.json").string());
   ASSERT_EQ(single.size(), 1u);
   EXPECT_EQ(single[0].config, rows[0].config);
@@ -82,6 +83,7 @@ TEST(SweepNamingCli, RunIsGatedAgainstTheSweepRowOfTheSameConfiguration) {
   const nlohmann::json report = nlohmann::json::parse(slurp(dir / "gate.json"));
   EXPECT_EQ(report["counts"]["rows_compared"], 1) << report["counts"].dump();
   EXPECT_EQ(report["counts"]["rows_new"], 0) << report["counts"].dump();
+  EXPECT_EQ(report["counts"]["rows_not_run"], 1) << report["counts"].dump();
 
   // The same baseline with the matched row's error_rate halved (a 256 map aliases: it is not 0):
   // the run is now worse than the baseline and the gate fails on that row.
@@ -94,6 +96,16 @@ TEST(SweepNamingCli, RunIsGatedAgainstTheSweepRowOfTheSameConfiguration) {
       "gate " + (dir / "run" / "metrics.json").string() + " --baseline " + (dir / "doctored.json").string(), dir);
   EXPECT_EQ(failed.code, 1) << failed.out << failed.err;
   EXPECT_NE((failed.out + failed.err).find("error_rate"), std::string::npos) << failed.out << failed.err;
+
+  // A run of a configuration the sweep did not run compares nothing: bad input, not a pass.
+  CliRun other = runShadowlab("run " + scene + " --set scene:/camera/height=120 --set map.size=128 -o " +
+                                  (dir / "other").string() + " --cache " + cache,
+                              dir);
+  ASSERT_EQ(other.code, 0) << other.err;
+  CliRun unmatched =
+      runShadowlab("gate " + (dir / "other" / "metrics.json").string() + " --baseline " + baseline, dir);
+  EXPECT_EQ(unmatched.code, 2) << unmatched.out << unmatched.err;
+  EXPECT_NE(unmatched.err.find("matches none of the 2 rows of the baseline"), std::string::npos) << unmatched.err;
   fs::remove_all(dir);
 }
 

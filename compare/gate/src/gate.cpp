@@ -389,6 +389,7 @@ std::string GateResult::summary() const {
     << ", " << improvements << " improved, " << passes << " within tolerance, " << reported << " reported only, "
     << newMetrics << (newMetrics == 1 ? " new metric; " : " new metrics; ") << rowsCompared
     << (rowsCompared == 1 ? " row" : " rows") << " compared, " << rowsNew << " new";
+  if (rowsNotRun > 0) s << ", " << rowsNotRun << " baseline " << (rowsNotRun == 1 ? "row" : "rows") << " not run";
   return s.str();
 }
 
@@ -451,10 +452,17 @@ GateResult runGate(const ResultFile& current, const ResultFile& baseline, const 
                 (baselineCount.is_number() ? ", " + formatValue(baselineCount) + " in the baseline" : "");
     result.checks.push_back(std::move(c));
   };
+  // One run gated against a sweep: its row is one of the sweep's configurations (configuration
+  // names are the same in every command), the sweep's other rows were not run here.
+  const bool oneRun = current.schema == "shadowlab.metrics/1" && baseline.schema == "shadowlab.results/1";
   std::set<std::string> matched;
   for (size_t b = 0; b < baseline.rows.size(); ++b) {
     const ResultRow& base = baseline.rows[b];
     auto found = currentIndex.find(base.key());
+    if (found == currentIndex.end() && oneRun) {
+      ++result.rowsNotRun;
+      continue;
+    }
     if (found == currentIndex.end()) {
       problems.push_back(formatError(baseline.path, baseline.pointers[b],
                                      "row \"" + base.key() + "\" is in the baseline but missing from " + current.path +
@@ -620,6 +628,11 @@ GateResult runGate(const ResultFile& current, const ResultFile& baseline, const 
       result.checks.push_back(std::move(c));
     }
   }
+  if (oneRun && result.rowsCompared == 0 && !current.rows.empty())
+    problems.push_back(formatError(current.path, current.pointers[0],
+                                   "row \"" + current.rows[0].key() + "\" matches none of the " +
+                                       std::to_string(baseline.rows.size()) + " rows of the baseline " +
+                                       baseline.path + "; expected a row of the same scene, light and configuration"));
   for (size_t i = 0; i < current.rows.size(); ++i) {
     if (matched.count(current.rows[i].key())) continue;
     ++result.rowsNew;
@@ -699,6 +712,7 @@ nlohmann::json gateToJson(const GateResult& result, const ResultFile& current, c
   j["counts"] = {
       {"regressions", result.regressions}, {"improvements", result.improvements},  {"passes", result.passes},
       {"reported", result.reported},       {"rows_compared", result.rowsCompared}, {"rows_new", result.rowsNew},
+      {"rows_not_run", result.rowsNotRun},
       {"new_metrics", result.newMetrics}};
   nlohmann::json checks = nlohmann::json::array();
   for (const GateCheck& c : result.checks) {

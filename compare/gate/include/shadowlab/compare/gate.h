@@ -106,14 +106,17 @@ struct GateCheck {
 struct GateResult {
   std::vector<GateCheck> checks;  // regressions first, then the rest in row/metric order
   int rowsCompared = 0, rowsNew = 0;
+  int rowsNotRun = 0;  // one run gated against a sweep: the baseline's rows of other configurations
   int regressions = 0, improvements = 0, passes = 0, reported = 0;
   int newMetrics = 0;  // metrics of matched rows that the baseline lacks (verdict New)
   bool passed() const { return regressions == 0; }
   std::string summary() const;  // one line
 };
 
-// Compares every baseline row with its current row. InputError (exit 2) for a baseline row or
-// metric missing from current, duplicate rows, NaN (null) values, or a tolerance naming a metric
+// Compares every baseline row with its current row. One run (a metrics.json) against a sweep's
+// results.json compares its row with the sweep's row of the same name and leaves the sweep's other
+// rows out (rowsNotRun); a run that matches no row there is an InputError. InputError (exit 2) for a
+// baseline row or metric missing from current (a results file), duplicate rows, NaN (null) values, or a tolerance naming a metric
 // no row has (a typo would otherwise never apply).
 GateResult runGate(const ResultFile& current, const ResultFile& baseline, const Tolerances& tolerances);
 
