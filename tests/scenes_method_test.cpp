@@ -428,7 +428,7 @@ TEST(ScenesMethod, TsmKeys) {
 TEST(ScenesMethod, JsonNumbersAreTheShortestTextOfTheFloat) {
   const std::string text = methodToJson(Method{}).dump();
   for (const char* written : {"\"bias.compare\":0.0005,", "\"tsm.focus\":0.8,", "\"cascades.lambda\":0.75,",
-                              "\"vsm.min_variance\":1e-06}", "\"msm.moment_bias\":3e-05,", "\"bias.slope\":1.5,"})
+                              "\"vsm.min_variance\":1e-06", "\"msm.moment_bias\":3e-05,", "\"bias.slope\":1.5,"})
     EXPECT_NE(text.find(written), std::string::npos) << written << " in " << text;
   EXPECT_EQ(text.find("0.0005000000237487257"), std::string::npos) << text;
   EXPECT_EQ(text.find("0.800000011920929"), std::string::npos) << text;
@@ -443,7 +443,8 @@ TEST(ScenesMethod, JsonNumbersAreTheShortestTextOfTheFloat) {
   odd.tsmFocus = std::nextafter(0.8f, 1.0f);
   const nlohmann::json j = nlohmann::json::parse(methodToJson(odd).dump());
   Method back;
-  for (const auto& key : methodKeys()) applyMethodJson(back, key, j.at(key), "test");
+  for (const auto& key : methodKeys())
+    if (j.contains(key)) applyMethodJson(back, key, j.at(key), "test");  // technique: written only when set
   EXPECT_EQ(methodToJson(back), methodToJson(odd));
   EXPECT_EQ(back.biasSlope, odd.biasSlope);
   EXPECT_EQ(back.biasCompare, odd.biasCompare);

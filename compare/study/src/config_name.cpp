@@ -51,6 +51,10 @@ std::string configName(const nlohmann::json& methodJson, const std::vector<Scene
   Method method;
   for (const std::string& key : methodKeys())
     if (auto it = methodJson.find(key); it != methodJson.end()) applyMethodJson(method, key, *it, "method");
+  // A technique file's own keys (technique.<name>); its hash is checked where rows meet, not named.
+  for (auto it = methodJson.begin(); it != methodJson.end(); ++it)
+    if (it.key().rfind("technique.", 0) == 0 && it.key() != "technique.hash")
+      applyMethodJson(method, it.key(), it.value(), "method");
   return configName(method, sceneOverrides);
 }
 
@@ -59,9 +63,16 @@ std::string configName(const Method& method, const std::vector<SceneOverride>& s
   const nlohmann::json resolved = methodToJson(method);
   std::vector<std::pair<std::string, std::string>> parts;
   for (const std::string& key : methodKeys()) {
-    const std::string text = canonicalValueText(resolved.at(key));
-    if (text != canonicalValueText(defaults.at(key))) parts.emplace_back(key, text);
+    const auto value = resolved.find(key), byDefault = defaults.find(key);
+    if (value == resolved.end()) continue;  // a key written only when set (technique)
+    const std::string text = canonicalValueText(*value);
+    if (byDefault == defaults.end() || text != canonicalValueText(*byDefault)) parts.emplace_back(key, text);
   }
+  // The technique file's declared keys, every one (their defaults are the file's, not Method's); the
+  // hash is not part of the name, so an edited file meets its old rows and is refused naming both.
+  for (auto it = resolved.begin(); it != resolved.end(); ++it)
+    if (it.key().rfind("technique.", 0) == 0 && it.key() != "technique.hash")
+      parts.emplace_back(it.key(), canonicalValueText(it.value()));
   for (const SceneOverride& o : sceneOverrides) parts.emplace_back("scene:" + o.pointer, canonicalValueText(o.value));
   std::stable_sort(parts.begin(), parts.end(), [](const auto& a, const auto& b) { return a.first < b.first; });
   std::string name;
