@@ -15,19 +15,6 @@ namespace {
 
 using namespace shadowlab;
 
-// A default as the user would write it: a float field's value in its shortest form that reads
-// back as the same float ("0.0005", not 0.0005000000237 from the float's double).
-nlohmann::json shortest(const nlohmann::json& value) {
-  if (!value.is_number_float()) return value;
-  const float f = float(value.get<double>());
-  char buf[32];
-  for (int digits = 1; digits <= 9; ++digits) {
-    std::snprintf(buf, sizeof buf, "%.*g", digits, double(f));
-    if (float(std::strtod(buf, nullptr)) == f) break;
-  }
-  return nlohmann::json::parse(buf);
-}
-
 int run(bool json) {
   const std::vector<MethodKeyInfo>& table = methodKeyTable();
   if (json) {
@@ -35,7 +22,7 @@ int run(bool json) {
     for (const MethodKeyInfo& k : table)
       rows.push_back({{"key", k.key},
                       {"type", k.type},
-                      {"default", shortest(k.defaultValue)},
+                      {"default", k.defaultValue},
                       {"range", k.range},
                       {"help", k.help}});
     std::printf("%s\n", nlohmann::json{{"schema", "shadowlab.methods/1"}, {"keys", rows}}.dump(2).c_str());
@@ -44,8 +31,9 @@ int run(bool json) {
   size_t keyWidth = 0;
   for (const MethodKeyInfo& k : table) keyWidth = std::max(keyWidth, k.key.size());
   for (const MethodKeyInfo& k : table) {
-    const nlohmann::json d = shortest(k.defaultValue);
-    const std::string defaultText = d.is_string() ? d.get<std::string>() : d.dump();
+    // methodToJson wrote each float default as its shortest text (jsonFloat): "0.0005".
+    const nlohmann::json& d = k.defaultValue;
+    const std::string defaultText = d.is_null() ? "none" : d.is_string() ? d.get<std::string>() : d.dump();
     std::printf("%-*s  %s, default %s: %s\n%-*s  expected %s\n", int(keyWidth), k.key.c_str(), k.type.c_str(),
                 defaultText.c_str(), k.help.c_str(), int(keyWidth), "", k.range.c_str());
   }

@@ -499,7 +499,10 @@ const std::vector<MethodKeyInfo>& methodKeyTable() {
                     "the method's name in results (default: a method file's name)"});
     for (const SetterRow& row : setters()) {
       const std::string range = rangeOf(row.key);
-      rows.push_back({row.key, typeOf(defaults[row.key], range), defaults[row.key], range, row.help});
+      // A key methodToJson writes only when set (technique) has no default: null, "none" when listed.
+      const auto it = defaults.find(row.key);
+      const nlohmann::json value = it == defaults.end() ? nlohmann::json() : *it;
+      rows.push_back({row.key, it == defaults.end() ? "path" : typeOf(value, range), value, range, row.help});
     }
     return rows;
   }();
