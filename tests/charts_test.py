@@ -227,24 +227,5 @@ class ReportTest(unittest.TestCase):
 
 
 
-class SweptValuesTest(unittest.TestCase):
-    """A configuration's name leaves out a method key at its default (config_name.h): its value
-    comes from the row's method, written as the name would write it."""
-
-    def test_default_values_come_from_the_method(self):
-        row = {"config": "map.size=256,scene:/camera/look_at=[4,10,6]",
-               "method": {"map.size": 256, "bias.slope": 1.5, "bias.compare": 0.0005, "filter": "none",
-                          "cascades.count": 4, "tsm.focus": 1.0, "bias.adaptive": False}}
-        keys = ["map.size", "bias.slope", "bias.compare", "filter", "tsm.focus", "bias.adaptive",
-                "scene:/camera/look_at", "scene:/lights/0/elevation_deg"]
-        self.assertEqual(charts.swept_values(row, keys),
-                         ("256", "1.5", "0.0005", "none", "1", "false", "[4,10,6]", ""))
-
-    def test_commas_inside_brackets_do_not_split(self):
-        self.assertEqual(charts.config_parts('a=[1,2],b={"x":1,"y":2},c="p,q",d=3'),
-                         {"a": "[1,2]", "b": '{"x":1,"y":2}', "c": '"p,q"', "d": "3"})
-        self.assertEqual(charts.config_parts("default"), {})
-
-
 if __name__ == "__main__":
     unittest.main()

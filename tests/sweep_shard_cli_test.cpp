@@ -108,7 +108,8 @@ TEST(SweepShardCli, ThreeShardsMergedEqualAnUnshardedRunInEveryMetric) {
   const fs::path dir = tempDir("merge");
   const std::string cache = " --cache '" + (dir / "cache").string() + "'";
   // Warm the reference cache first so neither timing below includes tracing.
-  auto warm = runShadowlab("sweep " + kPlan + " --grid map.size=16 -o '" + (dir / "warm").string() + "'" + cache, dir);
+  auto warm = runShadowlab("sweep sphere_on_plane contact --grid map.size=16 --set scene:/camera/width=64 "
+                           "--set scene:/camera/height=48 --no-report -o '" + (dir / "warm").string() + "'" + cache, dir);
   ASSERT_EQ(warm.code, 0) << warm.err;
 
   auto t0 = std::chrono::steady_clock::now();

@@ -120,6 +120,12 @@ TEST_F(TechniqueCli, LoopingFileExits3WithinTheLimit) {
       "run contact --set technique=" + path + " --gpu-timeout-s 3" + kSmall + cache + " -o " + (dir / "out").string(),
       dir);
   const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  // llvmpipe (lavapipe) ends every shader loop after a bounded number of iterations itself, so on
+  // it the file returns and the run succeeds: the time limit is never reached and cannot be tested.
+  if (r.code == 0 && r.out.find("llvmpipe") != std::string::npos)
+    GTEST_SKIP() << "lavapipe ended the looping shader itself (llvmpipe bounds loop iterations): the "
+                    "GPU time limit is only reachable on a device that lets a shader run on; "
+                 << seconds << " s";
   EXPECT_EQ(r.code, 3) << r.err;
   EXPECT_NE(r.err.find("within 3 s"), std::string::npos) << r.err;
   EXPECT_LT(seconds, 60.0);
