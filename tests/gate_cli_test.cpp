@@ -202,9 +202,16 @@ TEST_F(GateCli, MetricsJsonAgainstResultsJson) {
   spit(dir_ / "one.json", one.dump(2));
   CliRun r = gate(path("metrics.json") + " --baseline " + path("one.json"));
   EXPECT_EQ(r.code, 0) << r.out << r.err;
-  // Against the two-row baseline, the other row is missing: bad input, not a pass.
+  // Against the two-row baseline the run's row is compared and the other counted as not run
+  // (compare/GATE.md); a run matching no row of it is bad input, not a pass.
   CliRun m = gate(path("metrics.json") + " --baseline " + path("base.json"));
-  EXPECT_EQ(m.code, 2) << m.out << m.err;
+  EXPECT_EQ(m.code, 0) << m.out << m.err;
+  EXPECT_NE(m.out.find("1 row compared, 0 new, 1 baseline row not run"), std::string::npos) << m.out;
+  row["config"] = "map.size=7";
+  spit(dir_ / "other.json", row.dump(2));
+  CliRun none = gate(path("other.json") + " --baseline " + path("base.json"));
+  EXPECT_EQ(none.code, 2) << none.out << none.err;
+  EXPECT_NE(none.err.find("matches none of the 2 rows of the baseline"), std::string::npos) << none.err;
 }
 
 TEST_F(GateCli, MissingBaselineExits2AndWritesNothing) {

@@ -255,11 +255,13 @@ TEST(SweepCli, RowThatComparedNothingIsMarkedAndNeverRanked) {
   std::getline(csv, first);
   std::getline(csv, second);
   auto cell = [](const std::string& line, size_t column) {
-    std::vector<std::string> cells;
-    std::string c;
-    std::istringstream in(line);
-    while (std::getline(in, c, ',')) cells.push_back(c);
-    if (!line.empty() && line.back() == ',') cells.push_back("");
+    std::vector<std::string> cells(1);  // RFC 4180: a quoted cell holds commas (configuration names)
+    bool quoted = false;
+    for (char ch : line) {
+      if (ch == '"') quoted = !quoted;
+      else if (ch == ',' && !quoted) cells.emplace_back();
+      else cells.back() += ch;
+    }
     return column < cells.size() ? cells[column] : std::string("(none)");
   };
   auto column = [&](const std::string& name) {
