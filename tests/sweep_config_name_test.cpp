@@ -13,6 +13,7 @@
 #include "shadowlab/compare/sweep.h"
 #include "shadowlab/reference/reference.h"
 #include "shadowlab/scenes/error.h"
+#include "support/cli.h"
 #include "support/input_error.h"
 
 namespace fs = std::filesystem;
@@ -22,10 +23,7 @@ using shadowlab::testing::inputErrorOf;
 namespace {
 
 std::string tempDir(const std::string& name) {
-  fs::path d = fs::temp_directory_path() / ("shadowlab_config_name_" + name + "_" + std::to_string(::getpid()));
-  fs::remove_all(d);
-  fs::create_directories(d);
-  return d.string();
+  return shadowlab::testing::freshTempDir("shadowlab_config_name_" + name).string();
 }
 
 std::string writeText(const std::string& path, const std::string& text) {
