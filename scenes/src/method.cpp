@@ -584,7 +584,7 @@ nlohmann::json methodToJson(const Method& m) {
       auto& out = j["technique." + p.name];
       if (p.type == TechniqueParam::Type::Bool) out = v != 0;
       else if (p.type == TechniqueParam::Type::Int) out = int(v);
-      else out = float(v);
+      else out = jsonFloat(float(v));  // the shortest text, as every method float
     }
   }
   return j;
