@@ -343,6 +343,49 @@ TEST(ScenesLights, DirectionalFromElevationAzimuthAndOthers) {
   EXPECT_EQ(m.lights[2].direction, glm::vec3(0, -1, 0));  // normalized
 }
 
+TEST(ScenesLights, SizedLightsTakeRadiusAndAngularDiameter) {
+  Scene m = loadText(mini(
+      R"({"type": "plane", "size": [4, 4]})",
+      R"({"type": "spot", "name": "spot", "position": [0, 4, 0], "look_at": [0, 0, 0], "cone_deg": 50, "radius": 0.3},
+         {"type": "point", "name": "bulb", "position": [1, 2, 3], "radius": 0.5},
+         {"type": "directional", "name": "sun", "elevation_deg": 45, "angular_diameter_deg": 0.53},
+         {"type": "directional", "name": "hard", "elevation_deg": 45})"));
+  ASSERT_EQ(m.lights.size(), 4u);
+  EXPECT_FLOAT_EQ(m.lights[0].radius, 0.3f);
+  EXPECT_FLOAT_EQ(m.lights[1].radius, 0.5f);
+  EXPECT_FLOAT_EQ(m.lights[2].angularDiameterDeg, 0.53f);
+  EXPECT_TRUE(m.lights[0].sized() && m.lights[1].sized() && m.lights[2].sized());
+  EXPECT_FALSE(m.lights[3].sized());
+  EXPECT_EQ(m.lights[3].radius, 0.0f);
+  EXPECT_EQ(m.lights[3].angularDiameterDeg, 0.0f);
+  // A size of 0 is the hard light; the scene hash still names the document as written.
+  Scene zero = loadText(mini(R"({"type": "plane", "size": [4, 4]})",
+                             R"({"type": "point", "position": [1, 2, 3], "radius": 0})"));
+  EXPECT_FALSE(zero.lights[0].sized());
+
+  EXPECT_NE(errorOf([&] {
+              loadText(mini(R"({"type": "plane", "size": [4, 4]})",
+                            R"({"type": "point", "position": [1, 2, 3], "radius": -0.1})"));
+            }).find("/lights/0/radius: error: got -0.1; expected a radius >= 0"),
+            std::string::npos);
+  EXPECT_NE(errorOf([&] {
+              loadText(mini(R"({"type": "plane", "size": [4, 4]})",
+                            R"({"type": "directional", "elevation_deg": 45, "angular_diameter_deg": 25})"));
+            }).find("/lights/0/angular_diameter_deg: error: got 25; expected an angle in degrees 0..20"),
+            std::string::npos);
+  // Each type takes its own size key only.
+  EXPECT_NE(errorOf([&] {
+              loadText(mini(R"({"type": "plane", "size": [4, 4]})",
+                            R"({"type": "directional", "elevation_deg": 45, "radius": 1})"));
+            }).find("/lights/0/radius"),
+            std::string::npos);
+  EXPECT_NE(errorOf([&] {
+              loadText(mini(R"({"type": "plane", "size": [4, 4]})",
+                            R"({"type": "point", "position": [1, 2, 3], "angular_diameter_deg": 1})"));
+            }).find("/lights/0/angular_diameter_deg"),
+            std::string::npos);
+}
+
 TEST(ScenesLights, ProjectorOnlySceneIsValid) {
   fs::path dir = tempDir("projonly");
   fs::copy_file(bundledScenesDir() + "/projector_image.png", dir / "img.png");

@@ -854,9 +854,13 @@ void readLights(const Reader& r, const Node& root, Scene& scene) {
     Light light;
     light.type = kind->kind;
     switch (light.type) {  // the keys each type takes
-      case LightType::Directional: r.keys(l, {"type", "name", "direction", "elevation_deg", "azimuth_deg"}); break;
-      case LightType::Spot: r.keys(l, {"type", "name", "position", "direction", "look_at", "cone_deg", "near"}); break;
-      case LightType::Point: r.keys(l, {"type", "name", "position", "near"}); break;
+      case LightType::Directional:
+        r.keys(l, {"type", "name", "direction", "elevation_deg", "azimuth_deg", "angular_diameter_deg"});
+        break;
+      case LightType::Spot:
+        r.keys(l, {"type", "name", "position", "direction", "look_at", "cone_deg", "near", "radius"});
+        break;
+      case LightType::Point: r.keys(l, {"type", "name", "position", "near", "radius"}); break;
     }
     light.name = type == "directional" ? "sun" : type;
     if (ls.j->size() > 1) light.name += std::to_string(i + 1);
@@ -885,9 +889,16 @@ void readLights(const Reader& r, const Node& root, Scene& scene) {
         glm::dvec3 toLight(std::cos(er) * std::sin(ar), std::sin(er), std::cos(er) * std::cos(ar));
         light.direction = glm::vec3(-toLight);
       }
+      if (Node n = r.child(l, "angular_diameter_deg"))
+        light.angularDiameterDeg =
+            float(r.range(n, 0, false, kMaxAngularDiameterDeg, false,
+                          "an angle in degrees 0.." + std::to_string(int(kMaxAngularDiameterDeg)) +
+                              " (the light's angular diameter; 0: a hard light)"));
     } else {
       light.position = r.vec3(r.require(l, "position", "3 numbers (x, y, z)"));
       if (Node n = r.child(l, "near")) light.nearPlane = float(r.positive(n));
+      if (Node n = r.child(l, "radius"))
+        light.radius = float(r.range(n, 0, false, 1e30, false, "a radius >= 0 (a sphere light; 0: a hard light)"));
       if (light.type == LightType::Spot) {
         Node d = r.child(l, "direction"), at = r.child(l, "look_at");
         if (d && at) r.fail(d.ptr, "both direction and look_at given; expected one of them");

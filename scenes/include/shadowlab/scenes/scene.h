@@ -53,6 +53,10 @@ enum class LightType { SHADOWLAB_LIGHT_TYPES(SHADOWLAB_ENUMERATOR) };
 // Every light type, in code order (kinds.h's rows).
 const std::vector<KindInfo<LightType>>& lightTypeKinds();
 
+// The largest `angular_diameter_deg` a directional light takes (a 20-degree disc is already far
+// softer than any sky light an engine models as one sun).
+constexpr float kMaxAngularDiameterDeg = 20.0f;
+
 struct Light {
   std::string name;
   LightType type = LightType::Directional;
@@ -60,6 +64,11 @@ struct Light {
   glm::vec3 position{0};          // spot and point lights, world space
   float coneDeg = 60.0f;          // spot: full apex angle; lit only where angle(p - position, direction) <= coneDeg / 2
   float nearPlane = 0.05f;        // spot and point: depth-map near plane, world units
+  // Sized lights (0 = today's hard light, bit for bit). A sized light's visibility is the visible
+  // fraction of the light as seen from the point (over its solid angle).
+  float radius = 0.0f;              // spot and point: a sphere light of this radius around position, world units
+  float angularDiameterDeg = 0.0f;  // directional: the full angle the light's disc subtends (the sun: about 0.53)
+  bool sized() const { return radius > 0.0f || angularDiameterDeg > 0.0f; }
 };
 
 struct Projector {
