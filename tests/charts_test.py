@@ -182,6 +182,15 @@ class ReportTest(unittest.TestCase):
         flat = next(x for x in manifest["findings"] if x["scene"] == "flat")
         self.assertIn("No family's error_rate exceeds 1% at any map size.",
                       " ".join("".join(p["text"] for p in s) for s in flat["fails"]))
+        # At a glance: one short sentence per question, the same answers.
+        glance = {k: "".join(p["text"] for p in f["glance"][k]) for k in ("wrong", "fixes", "costs", "fails")}
+        self.assertEqual(glance["wrong"], "acne 87%")
+        self.assertEqual(glance["fixes"], "bias.slope=0,filter=vsm,map.size=1024: 0.15%")
+        self.assertEqual(glance["costs"], "3 ms: bias.slope=0,filter=vsm,map.size=512 (0.3%)")
+        self.assertEqual(glance["fails"], "none / sphere at every map size")
+        flat_glance = {k: "".join(p["text"] for p in flat["glance"][k]) for k in ("costs", "fails")}
+        self.assertEqual(flat_glance["costs"], "2 ms: bias.slope=4,filter=none,map.size=1024 (0.22%)")
+        self.assertEqual(flat_glance["fails"], "no family above 1%")
 
     def test_pareto_fronts_do_not_depend_on_row_order(self):
         rows = planted_rows()

@@ -277,6 +277,43 @@ TEST(ReportChromium, RealSweepReportLoadsEveryPictureWithoutConsoleErrors) {
   fs::remove_all(dir);
 }
 
+// The findings' first table answers every bundled scene on the first screen (1400 x 900): one
+// row per scene, its bottom above the window's. The configurations are as long as the main job's.
+TEST(ReportChromium, FindingsAtAGlanceFitTheFirstScreenForEveryBundledScene) {
+  if (!fs::exists(kChromium))
+    GTEST_SKIP() << "SKIPPED LOUDLY: " << kChromium << " is not installed (apt-get install chromium)";
+  const std::string dir = tempDir("glance");
+  SweepSpec spec;  // no scenes: every bundled scene
+  spec.grid = {parseGridArgument("map.size=512,1024"), parseGridArgument("bias.slope=0,2"),
+               parseGridArgument("filter=none,pcf"), parseGridArgument("fit=sphere,psm")};
+  SweepPlan plan = planSweep(spec);
+  ASSERT_GE(plan.sceneNames.size(), 10u);
+  FakeRunner fake;
+  SweepOptions o;
+  o.outDir = dir + "/sweep";
+  o.progress = nullptr;
+  o.reportScript = defaultReportScript(SHADOWLAB_SOURCE_DIR);
+  SweepSummary s = runSweep(plan, fake, o);
+  ASSERT_EQ(s.reportHtml, o.outDir + "/report.html");
+  const std::string html = slurp(s.reportHtml);
+  ASSERT_NE(html.find("<table class=\"glance\""), std::string::npos) << slurp(o.outDir + "/figures/charts.log");
+  // Each glance row links to its scene's detailed finding.
+  for (const auto& name : plan.sceneNames)
+    EXPECT_NE(html.find("href=\"#finding-" + name + "\""), std::string::npos) << name;
+  PageCheck page = openInChromium(s.reportHtml, dir + "/chromium", "1400,900");
+  ASSERT_EQ(page.rc, 0) << page.log;
+  std::smatch m;
+  static const std::regex rowsAttr(R"re(<body[^>]*data-glance-rows="([0-9]+)")re");
+  static const std::regex bottomAttr(R"re(<body[^>]*data-glance-bottom="([0-9]+)")re");
+  ASSERT_TRUE(std::regex_search(page.dom, m, rowsAttr)) << "the page measures the glance table";
+  EXPECT_EQ(size_t(std::stoi(m[1])), plan.sceneNames.size());
+  ASSERT_TRUE(std::regex_search(page.dom, m, bottomAttr));
+  const int bottom = std::stoi(m[1]);
+  EXPECT_LE(bottom, 900) << "the glance table ends below the first screen";
+  std::fprintf(stderr, "glance table: %zu scenes, bottom at %d px of 900\n", plan.sceneNames.size(), bottom);
+  fs::remove_all(dir);
+}
+
 TEST(ReportChromium, ChartsWhoseKeyIsNotSweptAreSkippedWithANote) {
   const std::string dir = tempDir("skip");
   SweepSpec spec;

@@ -826,19 +826,27 @@ def findings(scenes, rows_by_scene, classes, fam, results, panels):
     bias_chart = next((k for k in panels if k.startswith("bias_")), None)
     for s in scenes:
         rows = [r for r in rows_by_scene[s] if rankable(r)]
-        entry = {"scene": s, "wrong": [], "fixes": [], "costs": [], "fails": []}
+        # glance: one short sentence per column, the report's first screen (a line or two a cell).
+        entry = {"scene": s, "wrong": [], "fixes": [], "costs": [], "fails": [],
+                 "glance": {"wrong": [], "fixes": [], "costs": [], "fails": []}}
+        glance = entry["glance"]
         out.append(entry)
         if not rows:
             entry["wrong"].append([_piece("No configuration compared any pixel.")])
+            glance["wrong"] = [_piece("nothing compared")]
             continue
         # What goes wrong: the dominant class over all configurations, and where it is worst.
         totals = [(sum(num(r["metrics"], m) or 0.0 for r in rows), m, label) for m, label, _ in classes]
         whole = sum(t for t, _, _ in totals)
         if whole <= 0:
             entry["wrong"].append([_piece("No configuration has an error.")])
+            glance["wrong"] = [_piece("no errors")]
         else:
             totals.sort(key=lambda t: -t[0])
             t, metric, label = totals[0]
+            glance["wrong"] = [_piece(f"{label} {t / whole:.0%}", link("class_mix", s))]
+            if len(totals) > 1 and totals[1][0] > 0.15 * whole:
+                glance["wrong"].append(_piece(f", {totals[1][2]} {totals[1][0] / whole:.0%}"))
             worst = max(rows, key=lambda r: num(r["metrics"], metric) or 0.0)
             sentence = [_piece(f"{label}: {t / whole:.0%} of the errors", link("class_mix", s)),
                         _piece("; worst: "), _piece(worst["config"], row_href(worst)),
@@ -857,6 +865,10 @@ def findings(scenes, rows_by_scene, classes, fam, results, panels):
         entry["fixes"].append([_piece("Best: "), _piece(best["config"], row_href(best)),
                                _piece(f" ({pct(e_best)}, {ms(method_gpu_ms(best))}; "),
                                _piece("triptych", f"#triptych-{s}-best"), _piece(").")])
+        glance["fixes"] = [_piece(best["config"], row_href(best)), _piece(f": {pct(e_best)}")]
+        glance["costs"] = [_piece(ms(method_gpu_ms(cheap)), acc), _piece(": "),
+                           _piece(cheap["config"], row_href(cheap)),
+                           _piece(f" ({pct(num(cheap['metrics'], 'error_rate'))})")]
         if cheap is not best:
             entry["fixes"].append([_piece("Cheapest within 2x of its error: "),
                                    _piece(cheap["config"], row_href(cheap)),
@@ -885,6 +897,15 @@ def findings(scenes, rows_by_scene, classes, fam, results, panels):
         # their smallest bias.
         mine = [f for f in frontiers if f.get("scene") == s]
         if mine:
+            def breaks_index(f):
+                return next((i for i, p in enumerate(f["points"]) if p.get("value") == f.get("breaks_at")), math.inf)
+
+            broken = [f for f in mine if not f.get("holds") and f.get("breaks_at") is not None]
+            if broken:
+                f = min(broken, key=breaks_index)  # the first to break, walking from easy to hard
+                glance["fails"] = [_piece(f"{f['method']} at {f.get('breaks_at')}", link("frontiers", s))]
+            else:
+                glance["fails"] = [_piece("no frontier crossed", link("frontiers", s))]
             for f in mine[:4]:
                 entry["fails"].append([_piece(f.get("sentence") or f"{f['method']}: breaks at {f.get('breaks_at')}",
                                               link("frontiers", s))])
@@ -909,6 +930,8 @@ def findings(scenes, rows_by_scene, classes, fam, results, panels):
                 else:
                     fails.append((fam.label(k), (broke, f"from map.size {broke:g} down"), by_family[k][broke]))
             if fails:
+                label, where, r = max(fails, key=lambda f: f[1][0])  # the largest map size that fails
+                glance["fails"] = [_piece(f"{label} {where[1]}", row_href(r))]
                 by_size = {}
                 for label, where, r in fails:
                     by_size.setdefault(where, []).append((label, r))
@@ -953,9 +976,15 @@ def findings(scenes, rows_by_scene, classes, fam, results, panels):
                         b, r = min(leak, key=lambda p: p[0])
                         parts += [_piece(("; " if parts else "") + f"leaks above {pct(threshold)} from {key} {b:g} ("),
                                   _piece(pct(num(r["metrics"], "leak_rate")), row_href(r)), _piece(")")]
+                    if parts and not glance["fails"]:
+                        b, r = (max(acne, key=lambda p: p[0]) if acne else min(leak, key=lambda p: p[0]))
+                        what = "acne" if acne else "leaks"
+                        glance["fails"] = [_piece(f"{fam.label(k)}: {what} at {key} {b:g}", row_href(r))]
                     if parts:
                         entry["fails"].append([_piece(fam.label(k), link(bias_chart, s)), _piece(": ")] + parts
                                               + [_piece(".")])
+            if not glance["fails"]:
+                glance["fails"] = [_piece(f"no family above {pct(threshold)}", link("error_by_size", s))]
     return out
 
 

@@ -243,6 +243,7 @@ th, td { border: 1px solid #d0d0d0; padding: 0.2em 0.4em; text-align: right; ver
          overflow-wrap: anywhere; }
 th { background: #f3f3f3; font-weight: 600; } td.t, th.t { text-align: left; }
 table.findings { width: 100%; font-size: 0.85em; } table.findings td { min-width: 5em; }
+table.glance { width: 100%; font-size: 0.8em; line-height: 1.25; } table.glance td { padding: 0.1em 0.4em; }
 table.rows td:nth-child(2) { min-width: 9em; } tr.empty td { color: #999; }
 tr:target { background: #fff3b0; } .spread { color: #666; white-space: nowrap; }
 figure { margin: 1em 0 2em; } figure img { max-width: 100%; height: auto; border: 1px solid #e3e3e3; }
@@ -285,6 +286,11 @@ window.addEventListener('load', function () {
   d.figures = String(laid);
   d.tooltips = String(document.querySelectorAll('figure.chart svg title').length);
   d.overflow = String(Math.max(0, document.documentElement.scrollWidth - document.documentElement.clientWidth));
+  var glance = document.getElementById('glance');
+  if (glance) {
+    d.glanceBottom = String(Math.ceil(glance.getBoundingClientRect().bottom + window.scrollY));
+    d.glanceRows = String(glance.querySelectorAll('tr').length - 1);
+  }
   if (bad.length) console.error('shadowlab report: pictures that did not load: ' + bad.join(', '));
 });
 )JS";
@@ -643,9 +649,6 @@ std::vector<std::string> writeSweepReport(const SweepPlan& plan, const std::vect
   if (findings.empty() || !findings.is_array()) {
     h << "<p class=\"note\">No findings: the chart script did not write them (see the notes under Charts).</p>\n";
   } else {
-    h << "<table class=\"findings\">\n<tr><th class=\"t\">scene</th><th class=\"t\">what goes wrong</th>"
-         "<th class=\"t\">what fixes it</th><th class=\"t\">what it costs</th><th class=\"t\">what fails "
-         "first</th></tr>\n";
     auto pieces = [&](const nlohmann::json& sentences) {
       std::string out;
       if (!sentences.is_array()) return out;
@@ -663,8 +666,32 @@ std::vector<std::string> writeSweepReport(const SweepPlan& plan, const std::vect
       }
       return out;
     };
+    // At a glance: one short sentence per scene and question, so that every scene fits the first
+    // screen; the table after it says the same at length.
+    std::ostringstream glance;
     for (const auto& f : findings) {
-      h << "<tr><td class=\"t\">" << breakable(f.value("scene", std::string())) << "</td>";
+      const nlohmann::json g = f.value("glance", nlohmann::json::object());
+      if (!g.is_object() || g.empty()) continue;
+      glance << "<tr><td class=\"t\"><a href=\"#finding-" << escapeMarkup(f.value("scene", std::string())) << "\">"
+             << breakable(f.value("scene", std::string())) << "</a></td>";
+      for (const char* k : {"wrong", "fixes", "costs", "fails"})
+        glance << "<td class=\"t\">" << pieces(nlohmann::json::array({g.value(k, nlohmann::json::array())}))
+               << "</td>";
+      glance << "</tr>\n";
+    }
+    if (!glance.str().empty()) {
+      h << "<table class=\"glance\" id=\"glance\">\n<tr><th class=\"t\">scene</th><th class=\"t\">what goes "
+           "wrong (share of the errors)</th><th class=\"t\">what fixes it (lowest error_rate)</th><th "
+           "class=\"t\">what it costs (cheapest within 2x of that error)</th><th class=\"t\">what fails "
+           "first</th></tr>\n"
+        << glance.str() << "</table>\n<h3>In detail</h3>\n";
+    }
+    h << "<table class=\"findings\">\n<tr><th class=\"t\">scene</th><th class=\"t\">what goes wrong</th>"
+         "<th class=\"t\">what fixes it</th><th class=\"t\">what it costs</th><th class=\"t\">what fails "
+         "first</th></tr>\n";
+    for (const auto& f : findings) {
+      h << "<tr id=\"finding-" << escapeMarkup(f.value("scene", std::string())) << "\"><td class=\"t\">"
+        << breakable(f.value("scene", std::string())) << "</td>";
       for (const char* k : {"wrong", "fixes", "costs", "fails"})
         h << "<td class=\"t\">" << pieces(f.value(k, nlohmann::json::array())) << "</td>";
       h << "</tr>\n";
