@@ -7,7 +7,7 @@ scripts/install-deps.sh
 scripts/build.sh -DSHADOWLAB_WERROR=ON
 jobs=$(nproc 2>/dev/null || echo 2)
 ctest --preset release -j"$jobs"
-# The parsers' fuzz smoke: libFuzzer + ASan + UBSan (clang), 20 s per target from the seeds and
+# The parsers' fuzz smoke: libFuzzer + ASan + UBSan (clang), 12 s per target from the seeds and
 # tests/fuzz/regressions/ (scripts/fuzz.sh runs the long campaigns; tests/fuzz/CMakeLists.txt says
 # why the sweep target is left to it).
 cmake -S . -B build-fuzz -DSHADOWLAB_FUZZ=ON -DCMAKE_BUILD_TYPE=RelWithDebInfo -DCMAKE_CXX_COMPILER=clang++ >/dev/null

@@ -10,6 +10,7 @@
 #include <fstream>
 
 #include "shadowlab/compare/sweep.h"
+#include "shadowlab/compare/sweep_frontier.h"
 #include "shadowlab/scenes/error.h"
 #include "shadowlab/scenes/json_reader.h"
 #include "support/input_error.h"
@@ -368,5 +369,87 @@ TEST(SweepPlan, UnionOfGridsExpandsEachBlockAndJoinsThem) {
             std::string::npos)
       << e;
   EXPECT_NE(e.find("/grid/1"), std::string::npos) << e;
+  fs::remove_all(dir);
+}
+
+// A grid of a union may name its scenes: its configurations run on those scenes only, and a
+// scene: key it sweeps alone need not be swept elsewhere (a sized light's radius on the one scene
+// that has one). A configuration another grid also produces runs wherever either grid runs it.
+TEST(SweepPlan, AGridOfAUnionRunsOnItsNamedScenesOnly) {
+  std::string dir = tempDir("blockscenes");
+  std::string path = writeText(dir + "/blocks.json", R"({
+    "scenes": ["sphere_on_plane", "contact"],
+    "grid": [
+      {"scenes": ["contact"], "map.size": [512], "filter": ["none", "poisson"]},
+      {"map.size": [512, 1024]},
+      {"scenes": ["contact"], "filter": ["pcf"], "scene:/lights/0/elevation_deg": [60, 30, 15]}
+    ]
+  })");
+  SweepSpec spec;
+  loadSweepFile(path, spec);
+  SweepPlan plan = planSweep(spec);
+  std::vector<std::string> configs;
+  for (const auto& c : plan.configs) configs.push_back(c.config);
+  EXPECT_EQ(configs, (std::vector<std::string>{
+                         "map.size=512", "filter=poisson,map.size=512", "map.size=1024",
+                         "filter=pcf,scene:/lights/0/elevation_deg=60", "filter=pcf,scene:/lights/0/elevation_deg=30",
+                         "filter=pcf,scene:/lights/0/elevation_deg=15"}));
+  // map.size=512 came first from contact's grid; the unrestricted grid makes it run everywhere.
+  EXPECT_TRUE(plan.configs[0].onlyScenes.empty());
+  ASSERT_EQ(plan.configs[1].onlyScenes.size(), 1u);
+  std::map<std::string, std::vector<std::string>> jobs;
+  for (const auto& j : plan.jobs) jobs[j.sceneName].push_back(j.config);
+  EXPECT_EQ(jobs["sphere_on_plane"], (std::vector<std::string>{"map.size=512", "map.size=1024"}));
+  EXPECT_EQ(jobs["contact"].size(), 6u);
+  // The elevation is read from contact's own light only.
+  for (const auto& j : plan.jobs)
+    if (j.config == "filter=pcf,scene:/lights/0/elevation_deg=15") {
+      EXPECT_EQ(j.sceneName, "contact");
+      EXPECT_NEAR(plan.variants[j.variantIndex].lights[0].direction.y, -std::sin(15.0 * M_PI / 180.0), 1e-6);
+    }
+  // Frontiers along the elevation: contact's pcf configuration only, over its three values.
+  std::vector<ResultRow> rows;
+  for (const auto& j : plan.jobs) {
+    ResultRow r;
+    r.scene = j.sceneName;
+    r.config = j.config;
+    r.light = "sun";
+    r.metrics["error_rate"] = j.config.find("=15") != std::string::npos ? 0.2 : 0.001;
+    rows.push_back(r);
+  }
+  const nlohmann::json fr = computeFrontiers(plan, rows, "error_rate", 0.01);
+  ASSERT_EQ(fr.size(), 1u) << fr.dump();
+  EXPECT_EQ(fr[0]["scene"], "contact");
+  // The grid's other keys take the base method's values there (map.size 2048).
+  EXPECT_EQ(fr[0]["method"], "filter=pcf,map.size=2048");
+  EXPECT_EQ(fr[0]["points"].size(), 3u);
+  EXPECT_EQ(fr[0]["breaks_at"], 15.0);
+
+  // Errors: "scenes" in a single grid object, not a list, a grid of scenes only, an unknown scene,
+  // and a requested scene that no grid runs.
+  auto errorOfFile = [&](const std::string& name, const std::string& text) {
+    const std::string f = writeText(dir + "/" + name, text);
+    return inputErrorOf([&] {
+      SweepSpec s;
+      loadSweepFile(f, s);
+      planSweep(s);
+    });
+  };
+  EXPECT_NE(errorOfFile("single.json", R"({"grid": {"scenes": ["contact"], "map.size": [512]}})")
+                .find("/grid/scenes: error: \"scenes\" inside a single grid object"),
+            std::string::npos);
+  EXPECT_NE(errorOfFile("notlist.json", R"({"grid": [{"scenes": "contact", "map.size": [512]}]})")
+                .find("/grid/0/scenes: error: got a string; expected an array of scene names or paths"),
+            std::string::npos);
+  EXPECT_NE(errorOfFile("onlyscenes.json", R"({"grid": [{"map.size": [512]}, {"scenes": ["contact"]}]})")
+                .find("/grid/1: error: got a grid object without axes"),
+            std::string::npos);
+  EXPECT_NE(errorOfFile("unknown.json", R"({"grid": [{"scenes": ["no_such_scene"], "map.size": [512]}]})")
+                .find("/grid/0/scenes: error: scene \"no_such_scene\" not found"),
+            std::string::npos);
+  EXPECT_NE(errorOfFile("none.json", R"({"scenes": ["sphere_on_plane", "contact"],
+                                          "grid": [{"scenes": ["contact"], "map.size": [512]}]})")
+                .find("no configuration of the grid runs on this scene"),
+            std::string::npos);
   fs::remove_all(dir);
 }

@@ -103,6 +103,11 @@ nlohmann::json computeFrontiers(const SweepPlan& plan, const std::vector<ResultR
       };
       std::vector<std::pair<std::string, std::vector<Point>>> groups;  // label -> points, first-seen order
       for (const auto& cfg : plan.configs) {
+        // Only the configurations this scene runs that carry the parameter (a grid of a union may
+        // sweep it on its own scenes only).
+        if (!cfg.runsOn(plan.scenePaths[s])) continue;
+        if (std::none_of(cfg.values.begin(), cfg.values.end(), [&](const auto& kv) { return kv.first == axis->key; }))
+          continue;
         std::string label, valueText;
         for (const auto& [k, v] : cfg.values) {
           if (k == axis->key) {

@@ -1,6 +1,7 @@
 // Sweep specification -> validated plan. Everything that can be wrong with the user's input is
 // found here, before runSweep creates a single file (the CLI promises "nothing written" on exit 2).
 #include <algorithm>
+#include <filesystem>
 #include <cmath>
 #include <cstdio>
 #include <map>
@@ -211,6 +212,28 @@ void loadSweepFile(const std::string& path, SweepSpec& spec) {
       auto readGrid = [&](const ojson& object, const std::string& objectPtr, int block) {
         for (auto g = object.begin(); g != object.end(); ++g) {
           const std::string gptr = objectPtr + "/" + jsonPointerToken(g.key());
+          if (g.key() == "scenes") {
+            if (block < 0)
+              fail(gptr, "\"scenes\" inside a single grid object; expected it in a grid of a union (an array of "
+                         "grid objects), or the top-level \"scenes\" for the whole sweep");
+            const ojson& list = g.value();
+            if (!list.is_array() || list.empty())
+              fail(gptr, "got " + (list.is_array() ? std::string("an empty array") : jsonTypeName(list)) +
+                             "; expected an array of scene names or paths (the scenes this grid runs on)");
+            std::vector<std::string> names;
+            for (size_t i = 0; i < list.size(); ++i) {
+              if (!list[i].is_string() || list[i].get<std::string>().empty())
+                fail(gptr + "/" + std::to_string(i), "got " + jsonTypeName(list[i]) + "; expected a scene name or path");
+              std::string sname = list[i].get<std::string>();
+              const bool isPath =
+                  sname.find('/') != std::string::npos || (sname.size() > 5 && sname.substr(sname.size() - 5) == ".json");
+              if (isPath && sname[0] != '/') sname = baseDir + sname;
+              names.push_back(sname);
+            }
+            spec.blockScenes[block] = names;
+            spec.blockScenesOrigin[block] = path + ": " + gptr;
+            continue;
+          }
           SweepAxis axis;
           axis.key = g.key();
           axis.block = block;
@@ -239,8 +262,8 @@ void loadSweepFile(const std::string& path, SweepSpec& spec) {
         if (v.empty()) fail(ptr, "empty list of grids; expected at least one grid object");
         for (size_t b = 0; b < v.size(); ++b) {
           const std::string bptr = ptr + "/" + std::to_string(b);
-          if (!v[b].is_object() || v[b].empty())
-            fail(bptr, "got " + (v[b].is_object() ? std::string("an empty object") : jsonTypeName(v[b])) +
+          if (!v[b].is_object() || v[b].empty() || (v[b].size() == 1 && v[b].contains("scenes")))
+            fail(bptr, "got " + (v[b].is_object() ? std::string("a grid object without axes") : jsonTypeName(v[b])) +
                            "; expected a grid object {\"key\": [v1, v2, ...]}");
           readGrid(v[b], bptr, int(b));
         }
@@ -374,7 +397,17 @@ SweepPlan planSweep(const SweepSpec& spec) {
   }
 
   // The axes of each block; a key a block does not sweep takes the base method's value there (a
-  // scene: key has no such value, so it must be swept in every block).
+  // scene: key has no such value, so it must be swept in every block, unless only blocks that name
+  // their scenes sweep it: a configuration without it then runs without it).
+  for (const auto& [b, names] : spec.blockScenes)
+    if (b < 0 || b >= blocks)
+      throw InputError(formatError(spec.blockScenesOrigin.count(b) ? spec.blockScenesOrigin.at(b) : "shadowlab sweep",
+                                   "", "\"scenes\" names a grid that has no axes; expected it beside a grid's axes"));
+  auto onlyRestrictedBlocksSweep = [&](const std::string& key) {
+    for (const auto& axis : spec.grid)
+      if (axis.key == key && (axis.block < 0 || !spec.blockScenes.count(axis.block))) return false;
+    return true;
+  };
   std::vector<std::vector<size_t>> blockAxes(static_cast<size_t>(blocks));
   for (size_t a = 0; a < spec.grid.size(); ++a)
     for (int b = 0; b < blocks; ++b)
@@ -396,7 +429,7 @@ SweepPlan planSweep(const SweepSpec& spec) {
     for (const std::string& key : sweptKeys) {
       const auto& axes = blockAxes[size_t(b)];
       const bool inBlock = std::any_of(axes.begin(), axes.end(), [&](size_t a) { return spec.grid[a].key == key; });
-      if (!inBlock && isSceneKey(key))
+      if (!inBlock && isSceneKey(key) && !onlyRestrictedBlocksSweep(key))
         throw InputError(formatError("shadowlab sweep", "/grid/" + std::to_string(b),
                                      "\"" + key +
                                          "\" is swept in another grid of the union but not in this one; "
@@ -424,7 +457,8 @@ SweepPlan planSweep(const SweepSpec& spec) {
         c.values.emplace_back(key, p.text);
       }
       for (const std::string& key : sweptKeys)
-        if (std::none_of(axes.begin(), axes.end(), [&](size_t a) { return spec.grid[a].key == key; }))
+        if (std::none_of(axes.begin(), axes.end(), [&](size_t a) { return spec.grid[a].key == key; }) &&
+            !isSceneKey(key))
           c.values.emplace_back(key, methodValueText(base, key));
       std::sort(c.values.begin(), c.values.end());
       // The one name of a configuration, as run, tune and stability name it (config_name.h).
@@ -433,7 +467,31 @@ SweepPlan planSweep(const SweepSpec& spec) {
         if (++idx[i] < axisPoints[axes[i]].size()) break;
         idx[i] = 0;
       }
-      if (!seenConfigs.insert(c.config).second) continue;
+      auto restricted = spec.blockScenes.find(b);
+      if (restricted != spec.blockScenes.end())
+        for (const std::string& name : restricted->second) {
+          const std::string scenePath = resolveScenePath(name);
+          std::error_code ec;
+          if (!std::filesystem::is_regular_file(scenePath, ec))
+            throw InputError(formatError(spec.blockScenesOrigin.count(b) ? spec.blockScenesOrigin.at(b)
+                                                                         : std::string("shadowlab sweep"),
+                                         "", "scene \"" + name + "\" not found (" + scenePath +
+                                                 "); expected a bundled scene name or a scene file"));
+          c.onlyScenes.push_back(scenePath);
+        }
+      if (!seenConfigs.insert(c.config).second) {
+        // The first block's place; its scenes are the union of the blocks' (every scene when one
+        // block runs it everywhere).
+        auto first = std::find_if(plan.configs.begin(), plan.configs.end(),
+                                  [&](const SweepConfig& e) { return e.config == c.config; });
+        if (first != plan.configs.end() && !first->onlyScenes.empty()) {
+          if (c.onlyScenes.empty()) first->onlyScenes.clear();
+          else
+            for (const auto& p : c.onlyScenes)
+              if (!first->runsOn(p)) first->onlyScenes.push_back(p);
+        }
+        continue;
+      }
       validateMethod(c.method, "shadowlab sweep: configuration " + c.config);
       precompileTechnique(c.method);  // once per file content: a compile error is exit 2 before any output
       plan.configs.push_back(std::move(c));
@@ -475,6 +533,7 @@ SweepPlan planSweep(const SweepSpec& spec) {
     }
     for (size_t ci = 0; ci < plan.configs.size(); ++ci) {
       const SweepConfig& c = plan.configs[ci];
+      if (!c.runsOn(plan.scenePaths[si])) continue;
       std::vector<SceneOverride> overrides = c.sceneOverrides;
       for (auto& o : overrides)
         if (o.pointer == failurePointer) {
@@ -526,6 +585,11 @@ SweepPlan planSweep(const SweepSpec& spec) {
       job.config = c.config;
       plan.jobs.push_back(std::move(job));
     }
+    if (sceneName.empty())
+      throw InputError(formatError(plan.scenePaths[si], "",
+                                   "no configuration of the grid runs on this scene (every grid of the union names "
+                                   "its \"scenes\" and none names it); expected it in a grid's \"scenes\", or a "
+                                   "grid without \"scenes\""));
     plan.sceneNames.push_back(sceneName);
   }
   return plan;

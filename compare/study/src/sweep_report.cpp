@@ -637,7 +637,9 @@ std::vector<std::string> writeSweepReport(const SweepPlan& plan, const std::vect
     << "<title>shadowlab sweep: " << escapeMarkup(std::to_string(plan.sceneNames.size())) << " scene(s) x "
     << plan.configs.size() << " configuration(s)</title>\n<style>" << kStyle << "</style>\n</head>\n<body>\n";
   h << "<h1>shadowlab sweep report</h1>\n<p class=\"muted\">" << rows.size() << " rows: " << plan.sceneNames.size()
-    << " scene(s) &times; " << plan.configs.size() << " configuration(s). Generated " << stamp
+    << " scene(s), " << plan.configs.size() << " configuration(s)"
+    << (rows.size() == plan.sceneNames.size() * plan.configs.size() ? "" : " (some grids run on named scenes only)")
+    << ". Generated " << stamp
     << ". Rates are fractions of the compared pixels; times are <code>method_gpu_ms</code> (shadow pass + lookup "
        "pass, what an engine pays; the median of the timed repetitions). Each link goes to the chart, triptych or "
        "row that shows it.</p>\n";

@@ -12,6 +12,7 @@
 // The runner is injectable: production uses makePipelineRunner() (reference cache + one Rasterizer
 // + compareFrames, exactly what runPipeline does); tests inject a fake to exercise resume,
 // interruption and grid logic without renderers.
+#include <algorithm>
 #include <atomic>
 #include <cstdio>
 #include <map>
@@ -59,6 +60,11 @@ struct SweepSetting {
 struct SweepSpec {
   std::vector<std::string> scenes;  // bundled names or paths; empty = every bundled scene
   std::vector<SweepAxis> grid;      // in the order given; the last axis varies fastest (per block)
+  // A union of grids' block -> the scenes its configurations run on (names or paths, as `scenes`;
+  // a block not listed runs on every scene). A scene: key swept only in such blocks need not be
+  // swept in the others: each scene runs the configurations whose values it can take.
+  std::map<int, std::vector<std::string>> blockScenes;
+  std::map<int, std::string> blockScenesOrigin;  // "sweep.json: /grid/3/scenes", for messages
   std::vector<SweepSetting> fixed;  // --set / "set": applied to every configuration, before the grid
   std::string methodFile;           // optional base method file (--method / "method")
   std::string light;                // empty: each scene's first light
@@ -94,6 +100,12 @@ struct SweepConfig {
   // The scene: keys of this point; scene:failure has the pointer "failure" here, replaced by each
   // scene's own failure pointer when the scene is loaded.
   std::vector<SceneOverride> sceneOverrides;
+  // The scenes it runs on (resolved paths) when every block that produced it names its scenes
+  // (SweepSpec::blockScenes); empty: every scene of the sweep.
+  std::vector<std::string> onlyScenes;
+  bool runsOn(const std::string& scenePath) const {
+    return onlyScenes.empty() || std::find(onlyScenes.begin(), onlyScenes.end(), scenePath) != onlyScenes.end();
+  }
 };
 
 struct SweepJob {
@@ -110,7 +122,7 @@ struct SweepPlan {
   SweepSpec spec;
   std::vector<std::string> scenePaths;  // resolved, one per requested scene
   std::vector<std::string> sceneNames;
-  std::vector<SweepConfig> configs;  // the expanded grid (same for every scene)
+  std::vector<SweepConfig> configs;  // the expanded grid (every scene runs those whose runsOn() holds)
   std::vector<Scene> variants;       // each scene under each distinct set of scene: values
   std::vector<SweepJob> jobs;        // scene-major, then configuration in grid order
 };
