@@ -192,6 +192,33 @@ class ReportTest(unittest.TestCase):
         self.assertEqual(flat_glance["costs"], "2 ms: bias.slope=4,filter=none,map.size=1024 (0.22%)")
         self.assertEqual(flat_glance["fails"], "no family above 1%")
 
+    def test_light_size_chart_draws_each_family_against_the_swept_light_size(self):
+        rows = planted_rows()
+        self.assertIn("light_size", [k["id"] for k in self.run_charts(rows)[0]["skipped"]],
+                      "no sized light swept: the chart is skipped with its reason")
+        # Scene "soft": a fixed kernel's penumbra error grows with the light; pcss's stays low.
+        for radius, pcf_mae, pcss_mae in ((0.1, 0.02, 0.03), (0.3, 0.08, 0.035), (0.6, 0.2, 0.04)):
+            for filt, mae in (("none", pcf_mae), ("vsm", pcss_mae)):
+                r = row("soft", filt, 1024, 2, 0.0, 0.0, 0.01, 2.0)
+                r["config"] = f"filter={filt},scene:/lights/0/radius={radius:g}"
+                r["metrics"]["penumbra_mae"] = mae
+                rows.append(r)
+        manifest, figures = self.run_charts(rows)
+        chart = next(c for c in manifest["charts"] if c["id"] == "light_size")
+        self.assertEqual(chart["panels"], {"soft": "light_size-soft"}, "only the scene whose light is swept")
+        svg = self.svg(figures, "light_size")
+        self.assertIn("penumbra_mae", svg)
+        self.assertIn("radius (/lights/0/radius)", svg)
+        # One marker per family and size, each with its row's tooltip and link.
+        self.assertEqual(svg.count("penumbra_mae 0.2"), 1)
+        self.assertEqual(svg.count("penumbra_mae 0.04"), 1)
+        self.assertEqual(sum(svg.count(f'href="#row-{i}"') for i in range(len(rows) - 6, len(rows))), 6)
+        self.assertEqual(charts.light_size_of({"config": "filter=pcf,scene:/lights/0/radius=0.3"}),
+                         ("/lights/0/radius", 0.3))
+        self.assertEqual(charts.light_size_of({"config": "scene:/lights/1/angular_diameter_deg=2"}),
+                         ("/lights/1/angular_diameter_deg", 2.0))
+        self.assertIsNone(charts.light_size_of({"config": "scene:/lights/0/elevation_deg=30"}))
+
     def test_pareto_fronts_do_not_depend_on_row_order(self):
         rows = planted_rows()
         manifest, _ = self.run_charts(rows)

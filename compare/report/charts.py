@@ -479,6 +479,83 @@ def chart_error_by_size(scenes, rows_by_scene, swept, fam):
     return c, caption, {"panels": panels}
 
 
+LIGHT_SIZE_KEYS = ("radius", "angular_diameter_deg")  # a sized light's keys (scenes/FORMAT.md)
+
+
+def light_size_of(row):
+    """(key, value) of the sized light's scene: value in the row's configuration name, or None."""
+    for part in row.get("config", "").split(","):
+        if part.startswith("scene:/lights/") and "=" in part:
+            pointer, value = part.split("=", 1)
+            if pointer.rsplit("/", 1)[-1] in LIGHT_SIZE_KEYS:
+                try:
+                    return pointer[len("scene:"):], float(value)
+                except ValueError:
+                    return None
+    return None
+
+
+def chart_light_size(scenes, rows_by_scene, fam):
+    """Per scene whose sized light is swept: the visibility error against the light's size, one line
+    per family (at each size the family's configuration with the lowest error)."""
+    per_scene, pointers = {}, {}
+    for s in scenes:
+        by = {}
+        for r in rows_by_scene[s]:
+            size = light_size_of(r)
+            if size is None or not rankable(r):
+                continue
+            pointers[s] = size[0]
+            metric = "penumbra_mae" if num(r["metrics"], "penumbra_mae") is not None else "error_rate"
+            e = num(r["metrics"], metric)
+            if e is None:
+                continue
+            cur = by.setdefault(fam.of(r), {}).get(size[1])
+            if cur is None or e < cur[0]:
+                by[fam.of(r)][size[1]] = (e, metric, r)
+        if by:
+            per_scene[s] = {k: sorted(v.items()) for k, v in by.items()}
+    if not per_scene:
+        return None, ("no sized light is swept (sweep one, e.g. a grid with \"scenes\": [\"soft_post\"] and "
+                      "\"scene:/lights/0/radius\": [0.1, 0.3, 0.6])"), None
+    shown = list(per_scene)
+    used = [k for k in fam.order if any(k in per_scene[s] for s in shown)]
+    probe = Canvas(PAGE_WIDTH, 10)
+    top = family_legend(probe, fam, used, 14) + 16
+    boxes, height = panel_layout(len(shown), min(3, len(shown)), 150.0, top)
+    c = Canvas(PAGE_WIDTH, height)
+    family_legend(c, fam, used, 14)
+    panels, metrics = {}, set()
+    for (x, y, w, h), scene in zip(boxes, shown):
+        pid = "light_size-" + scene
+        panels[scene] = pid
+        c.begin_group(pid)
+        curves = per_scene[scene]
+        sizes = sorted({v for cv in curves.values() for v, _ in cv})
+        errs = [e for cv in curves.values() for _, (e, _, _) in cv]
+        metric = next(m for cv in curves.values() for _, (_, m, _) in cv)
+        metrics.add(metric)
+        hi = max(errs) if errs and max(errs) > 0 else 1e-3
+        ax = Axes(c, x, y, w, h, (sizes[0], sizes[-1]) if len(sizes) > 1 else (sizes[0] - 1, sizes[0] + 1),
+                  (0.0, hi * 1.15))
+        ax.frame(title=scene, xlabel=pointers[scene].rsplit("/", 1)[-1] + " (" + pointers[scene] + ")",
+                 ylabel=metric, yticks=nice_linear_ticks(0.0, hi * 1.15),
+                 xticks=nice_linear_ticks(sizes[0], sizes[-1]) if len(sizes) > 1 else [sizes[0]])
+        for k in [k for k in fam.order if k in curves]:
+            cv = curves[k]
+            pts = [(ax.px(v), ax.py(e)) for v, (e, _, _) in cv]
+            c.line(pts, fam.colour(k), 1.1)
+            for (v, (e, m, r)), (px, py) in zip(cv, pts):
+                c.marker(px, py, fam.shape(k), fam.colour(k), 2.8, title=tooltip(r, f"\n{m} {e:.3g}"),
+                         href=row_href(r))
+        c.end_group()
+    caption = ("The visibility error against the sized light's size, one line per family (its colour and marker): "
+               + " / ".join(sorted(metrics)) + " (compare/METRICS.md), at each size the family's configuration with "
+               "the lowest. A fixed filter kernel keeps one penumbra width whatever the light; a contact-hardening "
+               "filter (pcss, dpcf) follows the light's size.")
+    return c, caption, {"panels": panels}
+
+
 def chart_class_mix(scenes, rows_by_scene, classes):
     """Per scene, the error classes' shares of all its configurations' errors: which class dominates."""
     bars = []
@@ -1066,6 +1143,7 @@ def main(argv):
             run("bias_" + key.replace(".", "_"), f"The bias trade-off per family: {key}", chart_bias, scenes,
                 rows_by_scene, swept, fam, key, label)
         run("error_by_size", "Error rate against map size", chart_error_by_size, scenes, rows_by_scene, swept, fam)
+        run("light_size", "Error against light size", chart_light_size, scenes, rows_by_scene, fam)
         run("time_breakdown", "Where the time goes", chart_time_breakdown, scenes, rows_by_scene, fam)
         run("m_footprint", "Texel footprint m", chart_m_footprint, scenes, rows_by_scene, swept, fam)
         frontiers = [f for f in results.get("frontiers", []) if f.get("points")]
