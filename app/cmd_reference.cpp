@@ -24,6 +24,7 @@ struct Options {
   std::string scene;
   std::string outDir;
   int spp = 1;
+  int lightSamples = shadowlab::kDefaultLightSamples;
   int threads = 0;
   bool allChannels = false;
   std::vector<std::string> sets;
@@ -35,6 +36,7 @@ int run(const Options& options) {
   const auto start = Clock::now();
   // Every argument is checked before anything is traced or written.
   shadowlab::checkSpp(options.spp, "--spp");
+  shadowlab::checkLightSamples(options.lightSamples, "--light-samples");
   if (options.threads < 0) {
     throw shadowlab::InputError("shadowlab reference: error: --threads " + std::to_string(options.threads) +
                                 "; expected 0 (all hardware threads) or more");
@@ -55,6 +57,7 @@ int run(const Options& options) {
 
   shadowlab::ReferenceOptions referenceOptions;
   referenceOptions.spp = options.spp;
+  referenceOptions.lightSamples = options.lightSamples;
   referenceOptions.threads = options.threads;
   // The picture is drawn during the trace (the same bytes as referencePicture draws from every
   // channel), so only the channels written are traced: the Compare set unless --all-channels.
@@ -98,6 +101,7 @@ int run(const Options& options) {
       {"width", frame.width},
       {"height", frame.height},
       {"spp", options.spp},
+      {"light_samples", options.lightSamples},
       {"threads", options.threads},
       {"channels", shadowlab::referenceChannelsKey(channelSet)},
       {"lights", frame.meta["lights"]},
@@ -136,6 +140,9 @@ shadowlab::app::Registrar reg{
       sub->add_option("--set", options->sets, "scene:/json/pointer=value: override one scene value (repeatable)")
           ->allow_extra_args(false);
       sub->add_option("--spp", options->spp, "stratified samples per pixel, 1..1024 (fractional visibility)")
+          ->capture_default_str();
+      sub->add_option("--light-samples", options->lightSamples,
+                      "samples of a sized light per pixel sample, 1..4096 (soft shadows; hard lights take none)")
           ->capture_default_str();
       sub->add_option("--threads", options->threads, "worker threads, 0 = all; results are identical for any value")
           ->capture_default_str();

@@ -28,6 +28,7 @@ struct Options {
   std::vector<std::string> sets;
   std::string light;
   int spp = 1;
+  int lightSamples = kDefaultLightSamples;
   std::string outDir;
   std::string cacheDir;
   std::string device;
@@ -52,6 +53,7 @@ int run(const Options& o) {
                                  "the scene has no light and no projector; expected at least one to compare"));
   }
   checkSpp(o.spp, "--spp");
+  checkLightSamples(o.lightSamples, "--light-samples");
   const std::string light = scene.lightOrDefault(o.light);
 
   // The one name of the configuration (config_name.h), as sweep, tune and stability name it: the
@@ -76,6 +78,7 @@ int run(const Options& o) {
   app::checkDeviceMemory("run", rasterizer, scene, method, light);  // before the reference is traced
   ReferenceOptions referenceOptions;
   referenceOptions.spp = o.spp;
+  referenceOptions.lightSamples = o.lightSamples;
   referenceOptions.progress = app::terminalProgress("run: tracing the reference");
   // config_wall_ms: this configuration end to end (reference traced or loaded, render, compare),
   // as a sweep row measures it; the device start above is the command's, not the configuration's.
@@ -153,6 +156,9 @@ app::Registrar reg{"run", [](CLI::App& app) {
                      sub->add_option("--light", opts->light,
                                      "Light to render and compare (default: the scene's first)");
                      sub->add_option("--spp", opts->spp, "Reference samples per pixel, 1..1024")->capture_default_str();
+                     sub->add_option("--light-samples", opts->lightSamples,
+                                     "Reference samples of a sized light per pixel sample, 1..4096")
+                         ->capture_default_str();
                      sub->add_option("-o,--out", opts->outDir, "Output folder")->required();
                      app::addMaxMemoryOption(sub, &opts->maxMemoryGiB);
                      sub->add_option("--cache", opts->cacheDir,

@@ -66,6 +66,7 @@ std::string sweepArguments(const Options& o, const std::string& cacheDir) {
   if (!o.methodFile.empty()) add("--method", o.methodFile);
   if (!o.light.empty()) add("--light", o.light);
   if (o.spp) add("--spp", std::to_string(*o.spp));
+  if (o.lightSamples) add("--light-samples", std::to_string(*o.lightSamples));
   if (!o.device.empty()) add("--device", o.device);
   if (o.keepImages) a += " --keep-images";
   if (o.fullEvidence) a += " --full-evidence";
@@ -253,6 +254,10 @@ int run(const Options& o) {
     checkSpp(*o.spp, "--spp");
     spec.spp = *o.spp;
   }
+  if (o.lightSamples) {
+    checkLightSamples(*o.lightSamples, "--light-samples");
+    spec.lightSamples = *o.lightSamples;
+  }
   if (o.keepImages) spec.keepImages = true;
   if (!o.frontierMetric.empty()) spec.frontierMetric = o.frontierMetric;
   if (!o.frontierThreshold.empty()) {
@@ -273,7 +278,8 @@ int run(const Options& o) {
 
   // ---- work ------------------------------------------------------------------------------------
   // A shard writes no report, and neither does --no-report: nothing would draw the kept rows.
-  auto runner = makePipelineRunner(cacheDir, spec.spp, o.device, 1, o.fullEvidence, !o.noReport && !shard.active());
+  auto runner = makePipelineRunner(cacheDir, spec.spp, o.device, 1, o.fullEvidence, !o.noReport && !shard.active(),
+                                   spec.lightSamples);
   SweepOptions options;
   options.outDir = o.outDir;
   options.progress = stderr;

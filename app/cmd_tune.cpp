@@ -67,6 +67,8 @@ int run(const Options& o) {
   spec.light = o.light;
   spec.spp = o.spp.value_or(1);
   checkSpp(spec.spp, "--spp");
+  spec.lightSamples = o.lightSamples.value_or(kDefaultLightSamples);
+  checkLightSamples(spec.lightSamples, "--light-samples");
   TunePlan plan = planTune(spec);
   OutputFolder out(o.outDir);
   const std::string cacheDir = o.cacheDir.empty() ? defaultSweepCacheDir(o.outDir) : o.cacheDir;
@@ -75,7 +77,8 @@ int run(const Options& o) {
 
   // ---- work ------------------------------------------------------------------------------------
   // Its triptychs show the chosen configuration, not a scene's best or worst row: nothing kept.
-  auto runner = makePipelineRunner(cacheDir, spec.spp, o.device, plan.sweep.sceneNames.size(), false, false);
+  auto runner =
+      makePipelineRunner(cacheDir, spec.spp, o.device, plan.sweep.sceneNames.size(), false, false, spec.lightSamples);
   TuneOptions options;
   options.outDir = o.outDir;
   options.progress = stderr;

@@ -68,6 +68,7 @@ struct StudyOptions {
   std::string outDir;
   std::string light;
   std::optional<int> spp;  // not given: the sweep file's, else 1
+  std::optional<int> lightSamples;  // not given: the sweep file's, else kDefaultLightSamples
   std::string cacheDir;
   std::string device;
 };
@@ -79,6 +80,8 @@ inline void addStudyOptions(CLI::App* sub, StudyOptions& o, const std::string& w
       ->required();
   sub->add_option("--light", o.light, "Light to render and compare (default: each scene's first)");
   sub->add_option("--spp", o.spp, "Reference samples per pixel, 1..1024 (default 1)");
+  sub->add_option("--light-samples", o.lightSamples,
+                  "Reference samples of a sized light per pixel sample, 1..4096 (default 64)");
   sub->add_option("--cache", o.cacheDir,
                   "Reference cache folder (default: $SHADOWLAB_CACHE, else .shadowlab-cache beside the output folder)");
   sub->add_option("--device", o.device, "Vulkan device name substring (default: lavapipe)");

@@ -17,6 +17,9 @@ std::string referenceHash(const Scene& scene, const ReferenceOptions& options) {
   // holds the Compare channel set, where /1 entries hold every channel.
   std::string key = "shadowlab.reference/2;scene=" + scene.hash + ";camera=" + scene.camera.hash() +
                     ";spp=" + std::to_string(options.spp);
+  // Light samples change only a sized light's values: a scene of hard lights keeps its key.
+  if (std::any_of(scene.lights.begin(), scene.lights.end(), [](const Light& light) { return light.sized(); }))
+    key += ";light_samples=" + std::to_string(options.lightSamples);
   return hashHex(fnv1a64(key.data(), key.size()));
 }
 

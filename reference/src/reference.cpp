@@ -97,6 +97,28 @@ struct PreparedLight {
   const Light* light = nullptr;
   glm::vec3 toLight{0.0f};    // directional: unit, -direction
   double cosHalfCone = -1.0;  // spot: lit where cos(angle to the axis) >= this
+  // A sized light (Light::sized(); reference/README.md, "Sized lights"): its stratified pattern.
+  bool sized = false;
+  uint32_t index = 0;                               // the light's index in the scene: part of each point's seed
+  int samples = 0;                                  // light samples per point (ReferenceOptions::lightSamples)
+  float stratumWidth = 1.0f, stratumHeight = 1.0f;  // 1 / strata across, 1 / strata down
+  // Per light sample k, padded with zeros to whole packets: its stratum's column and row, and the
+  // two keys its jitter hashes with the point's seed.
+  std::vector<float> stratumX, stratumY;
+  std::vector<uint32_t> keyX, keyY;
+  // Directional: the cap around toLight, half angle angularDiameterDeg / 2.
+  glm::vec3 tangent{0.0f}, bitangent{0.0f};
+  float oneMinusCos = 0.0f;  // 1 - cos(half angle)
+  double sinHalf = 0.0;      // sin(half angle)
+};
+
+// A sized light's result at one point: `lit` of `samples` light samples reach the light. A
+// deterministic point (outside a spot's cone, inside the light's sphere, the whole cap below the
+// horizon, no hit) has sampled = false and vis exactly 0 or 1.
+struct SoftPoint {
+  float vis = 0.0f;
+  int lit = 0;
+  bool sampled = false;
 };
 
 struct PreparedProjector {
@@ -132,6 +154,75 @@ std::vector<glm::vec2> samplePattern(int spp) {
     pattern.emplace_back(float((i + 0.5) / spp), float(inverse + rowShift));
   }
   return pattern;
+}
+
+// Integer hash (lowbias32, Wellons' hash-prospector): the sized lights' jitter. Integer operations,
+// so both compilations give the same bits.
+using UintN = stdx::fixed_size_simd<uint32_t, kLanes>;
+template <typename T>
+inline T mixBits(T x) {
+  x ^= x >> 16;
+  x *= 0x7feb352du;
+  x ^= x >> 15;
+  x *= 0x846ca68bu;
+  x ^= x >> 16;
+  return x;
+}
+
+// A point's seed for a sized light's jitter: the pixel, the pixel sample (0 the center, s + 1 the
+// spp pattern's sample s) and the light.
+inline uint32_t pointSeed(int px, int py, uint32_t pixelSample, uint32_t light) {
+  return mixBits(uint32_t(px) ^ mixBits(uint32_t(py) ^ mixBits(pixelSample ^ mixBits(light + 0x9e3779b9u))));
+}
+
+// (cos a, sin a) for a in [-pi/4, pi/4] by their Taylor polynomials (remainders below 3e-9, under
+// float's rounding there), plain multiplies and adds: the same bits in both compilations.
+[[gnu::always_inline]] inline void cosSinQuarter(const FloatN& a, FloatN& c, FloatN& s) {
+  const FloatN a2 = a * a;
+  s = a * (1.0f + a2 * (-1.0f / 6.0f + a2 * (1.0f / 120.0f + a2 * (-1.0f / 5040.0f + a2 * (1.0f / 362880.0f)))));
+  c = 1.0f +
+      a2 * (-0.5f + a2 * (1.0f / 24.0f + a2 * (-1.0f / 720.0f + a2 * (1.0f / 40320.0f + a2 * (-1.0f / 3628800.0f)))));
+}
+
+// An orthonormal basis around the unit axis (Duff et al. 2017, "Building an Orthonormal Basis,
+// Revisited").
+inline void basisAround(const glm::vec3& axis, glm::vec3& tangent, glm::vec3& bitangent) {
+  const float sign = std::copysign(1.0f, axis.z);
+  const float a = -1.0f / (sign + axis.z);
+  const float b = axis.x * axis.y * a;
+  tangent = glm::vec3(1.0f + sign * axis.x * axis.x * a, sign * b, -sign * axis.x);
+  bitangent = glm::vec3(b, sign + axis.y * axis.y * a, -axis.y);
+}
+
+// A sized light's pattern: `samples` equal-area strata of the unit square, strataX across (the
+// largest divisor of samples <= its square root) by samples / strataX down; sample k in column
+// k % strataX, row k / strataX. Each point jitters each sample inside its stratum by a hash.
+void prepareSized(PreparedLight& prepared, int samples) {
+  const Light& light = *prepared.light;
+  prepared.sized = true;
+  prepared.samples = samples;
+  int across = int(std::sqrt(double(samples)));
+  while (samples % across != 0) --across;
+  prepared.stratumWidth = 1.0f / float(across);
+  prepared.stratumHeight = 1.0f / float(samples / across);
+  const size_t padded = size_t(samples + kLanes - 1) / kLanes * kLanes;
+  prepared.stratumX.assign(padded, 0.0f);
+  prepared.stratumY.assign(padded, 0.0f);
+  prepared.keyX.assign(padded, 0u);
+  prepared.keyY.assign(padded, 0u);
+  for (int k = 0; k < samples; ++k) {
+    prepared.stratumX[size_t(k)] = float(k % across);
+    prepared.stratumY[size_t(k)] = float(k / across);
+    prepared.keyX[size_t(k)] = mixBits(uint32_t(2 * k) + 0x85ebca6bu);
+    prepared.keyY[size_t(k)] = mixBits(uint32_t(2 * k + 1) + 0x85ebca6bu);
+  }
+  if (light.type == LightType::Directional) {
+    basisAround(prepared.toLight, prepared.tangent, prepared.bitangent);
+    const double half = double(light.angularDiameterDeg) * 0.5 * M_PI / 180.0;
+    const double sinQuarter = std::sin(half * 0.5);
+    prepared.oneMinusCos = float(2.0 * sinQuarter * sinQuarter);
+    prepared.sinHalf = std::sin(half);
+  }
 }
 
 // shadowOriginOffset, inlined into the trace.
@@ -287,6 +378,76 @@ class Tracer {
     value.copy_to(distance, stdx::element_aligned);
   }
 
+  // A sized light at each lane in `lanes` (hit lanes; the others get SoftPoint{}): the visible
+  // fraction of the light's cap as seen from the lane's shadow origin, by prepared.samples
+  // stratified directions, uniform in solid angle, in rtcOccluded8 packets of 8 samples of one
+  // point. A sample whose direction is below the surface's horizon (N . dir <= 0) does not reach
+  // the light; a sphere light's ray ends where it meets the sphere.
+  void evalSizedLight(const PreparedLight& prepared, const HitPacket& hits, const bool* lanes, const int* px,
+                      const int* py, uint32_t pixelSample, SoftPoint* out) {
+    const Light& light = *prepared.light;
+    for (int lane = 0; lane < kLanes; ++lane) {
+      out[lane] = SoftPoint{};
+      if (!lanes[lane] || !hits.hit(lane)) continue;
+      const glm::vec3 position = hits.positionAt(lane), origin = hits.originAt(lane);
+      glm::vec3 axis = prepared.toLight, tangent = prepared.tangent, bitangent = prepared.bitangent;
+      float oneMinusCos = prepared.oneMinusCos;
+      double sinHalf = prepared.sinHalf;
+      if (light.type != LightType::Directional) {
+        if (light.type == LightType::Spot) {
+          // The cone test of the hard light (evalLight), on the direction to the light's center.
+          double fromLight[3];
+          for (int a = 0; a < 3; ++a) fromLight[a] = double(position[a]) - double(light.position[a]);
+          const double length =
+              std::sqrt(fromLight[0] * fromLight[0] + fromLight[1] * fromLight[1] + fromLight[2] * fromLight[2]);
+          const double along = fromLight[0] * double(light.direction.x) + fromLight[1] * double(light.direction.y) +
+                               fromLight[2] * double(light.direction.z);
+          const double cosAngle = length > 0.0 ? along / length : -1.0;
+          if (cosAngle < prepared.cosHalfCone) continue;  // outside the cone: 0
+        }
+        const glm::dvec3 toCenter = glm::dvec3(light.position) - glm::dvec3(origin);
+        const double distance2 = glm::dot(toCenter, toCenter);
+        const double radius = double(light.radius);
+        if (distance2 <= radius * radius) {  // inside or on the light's sphere: fully lit
+          out[lane].vis = 1.0f;
+          continue;
+        }
+        const double distance = std::sqrt(distance2);
+        sinHalf = radius / distance;
+        const double sin2 = sinHalf * sinHalf;
+        oneMinusCos = float(sin2 / (1.0 + std::sqrt(1.0 - sin2)));  // 1 - sqrt(1 - r^2 / d^2), without cancellation
+        axis = glm::vec3(toCenter / distance);
+        basisAround(axis, tangent, bitangent);
+      }
+      const glm::vec3 normal = hits.normalAt(lane);
+      // The whole cap below the horizon: 0, no ray.
+      if (glm::dot(glm::dvec3(normal), glm::dvec3(axis)) <= -sinHalf) continue;
+      out[lane].sampled = true;
+      const UintN seed = pointSeed(px[lane], py[lane], pixelSample, prepared.index);
+      const FloatN center[3] = {light.position.x - origin.x, light.position.y - origin.y, light.position.z - origin.z};
+      const float radius2 = light.radius * light.radius;
+      int lit = 0;
+      for (int k = 0; k < prepared.samples; k += kLanes) {
+        FloatN dir[3];
+        sampleCap(prepared, k, seed, tangent, bitangent, axis, oneMinusCos, dir);
+        const MaskN valid = MaskN(IntN([](int i) { return i; }) < prepared.samples - k) &&
+                            normal.x * dir[0] + normal.y * dir[1] + normal.z * dir[2] > 0.0f;
+        FloatN tfar = kInf;
+        if (light.type != LightType::Directional) {
+          // The exact ray/sphere distance: along - sqrt(r^2 - (perpendicular distance)^2).
+          const FloatN along = center[0] * dir[0] + center[1] * dir[1] + center[2] * dir[2];
+          const FloatN cx = center[1] * dir[2] - center[2] * dir[1];
+          const FloatN cy = center[2] * dir[0] - center[0] * dir[2];
+          const FloatN cz = center[0] * dir[1] - center[1] * dir[0];
+          tfar = along - stdx::sqrt(stdx::max(FloatN(0.0f), radius2 - (cx * cx + cy * cy + cz * cz)));
+        }
+        lit += stdx::popcount(valid && !traceOccluded(origin, dir, tfar, valid));
+      }
+      out[lane].lit = lit;
+      out[lane].vis = float(double(lit) / double(prepared.samples));
+    }
+  }
+
   void evalProjector(const PreparedProjector& prepared, const HitPacket& hits, ProjectorSample* out) {
     const Projector& projector = *prepared.projector;
     alignas(kSimdAlign) float dir[3][kLanes] = {}, tfar[kLanes] = {};
@@ -395,6 +556,67 @@ class Tracer {
     }
   }
 
+  // Light samples k..k+7 of a sized light's cap around `axis`: each sample's stratum of the unit
+  // square, jittered by the hash of the point's seed and the sample's key, then Shirley and Chiu's
+  // concentric map to the unit disc and the disc to the cap (1 - cos(theta) = r^2 (1 - cos(theta_max))):
+  // both maps preserve area, so the directions are uniform in solid angle, one per equal-solid-angle
+  // stratum.
+  [[gnu::flatten]] static void sampleCap(const PreparedLight& prepared, int k, const UintN& seed,
+                                         const glm::vec3& tangent, const glm::vec3& bitangent, const glm::vec3& axis,
+                                         float oneMinusCos, FloatN (&dir)[3]) {
+    const UintN hx = mixBits(seed ^ UintN(&prepared.keyX[size_t(k)], stdx::element_aligned));
+    const UintN hy = mixBits(seed ^ UintN(&prepared.keyY[size_t(k)], stdx::element_aligned));
+    constexpr float kUnit = 1.0f / 16777216.0f;  // 24 bits to [0, 1)
+    const FloatN jx = stdx::static_simd_cast<FloatN>(stdx::static_simd_cast<IntN>(hx >> 8)) * kUnit;
+    const FloatN jy = stdx::static_simd_cast<FloatN>(stdx::static_simd_cast<IntN>(hy >> 8)) * kUnit;
+    const FloatN u = (FloatN(&prepared.stratumX[size_t(k)], stdx::element_aligned) + jx) * prepared.stratumWidth;
+    const FloatN v = (FloatN(&prepared.stratumY[size_t(k)], stdx::element_aligned) + jy) * prepared.stratumHeight;
+    const FloatN sx = 2.0f * u - 1.0f, sy = 2.0f * v - 1.0f;
+    const MaskN wide = stdx::abs(sx) > stdx::abs(sy);
+    const FloatN r = select(wide, sx, sy);
+    const FloatN other = select(wide, sy, sx);
+    const FloatN ratio = other / select(r == 0.0f, FloatN(1.0f), r);
+    FloatN c, s;
+    cosSinQuarter(ratio * float(M_PI / 4.0), c, s);
+    // (r cos(phi), r sin(phi)) / |r|: phi = pi/4 * sy/sx where |sx| > |sy|, else pi/2 - pi/4 * sx/sy.
+    const FloatN sign = select(r < 0.0f, FloatN(-1.0f), FloatN(1.0f));
+    const FloatN ex = sign * select(wide, c, s), ey = sign * select(wide, s, c);
+    const FloatN h = r * r * oneMinusCos;
+    const FloatN cosTheta = 1.0f - h;
+    const FloatN sinTheta = stdx::sqrt(h * (2.0f - h));
+    const FloatN lx = sinTheta * ex, ly = sinTheta * ey;
+    for (int a = 0; a < 3; ++a) dir[a] = tangent[a] * lx + bitangent[a] * ly + axis[a] * cosTheta;
+  }
+
+  // Occlusion (any hit) of 8 rays from one origin, the valid lanes; Embree marks an occluded ray by
+  // setting tfar to -inf.
+  [[gnu::flatten]] MaskN traceOccluded(const glm::vec3& origin, const FloatN (&dir)[3], const FloatN& tfar,
+                                       const MaskN& valid) {
+    const int count = stdx::popcount(valid);
+    if (count == 0) return MaskN(false);
+    shadowRays += unsigned(count);
+    RTCRay8 ray;
+    alignas(kSimdAlign) int validLanes[kLanes];
+    IntN validN = 0;
+    stdx::where(valid, validN) = -1;
+    validN.copy_to(validLanes, kAligned);
+    const FloatN zero = 0.0f;
+    FloatN(origin.x).copy_to(ray.org_x, kAligned);
+    FloatN(origin.y).copy_to(ray.org_y, kAligned);
+    FloatN(origin.z).copy_to(ray.org_z, kAligned);
+    select(valid, dir[0], zero).copy_to(ray.dir_x, kAligned);
+    select(valid, dir[1], FloatN(1.0f)).copy_to(ray.dir_y, kAligned);
+    select(valid, dir[2], zero).copy_to(ray.dir_z, kAligned);
+    zero.copy_to(ray.tnear, kAligned);
+    select(valid, tfar, zero).copy_to(ray.tfar, kAligned);
+    zero.copy_to(ray.time, kAligned);
+    IntN(-1).copy_to(reinterpret_cast<int*>(ray.mask), kAligned);
+    IntN([](int lane) { return lane; }).copy_to(reinterpret_cast<int*>(ray.id), kAligned);
+    IntN(0).copy_to(reinterpret_cast<int*>(ray.flags), kAligned);
+    rtcOccluded8(validLanes, embree_.handle(), &shadowContext_.rtc, &ray);
+    return valid && load(ray.tfar) < 0.0f;
+  }
+
   TraceContext shadowContext_{RayKind::Shadow};
   const Scene& scene_;
   const EmbreeScene& embree_;
@@ -411,11 +633,17 @@ struct Planes {
   float* primId = nullptr;
   float* p[3] = {};
   float* n[3] = {};
-  std::vector<float*> vis, occluderDist;
+  std::vector<float*> vis, occluderDist, visSigma;  // visSigma: null for a hard light
   std::vector<float*> coverage, u, v, rgb[3];
 
-  Planes(float* const* base, size_t channelCount, size_t lightCount, size_t projectorCount, bool all)
-      : vis(lightCount), occluderDist(lightCount), coverage(projectorCount), u(projectorCount), v(projectorCount) {
+  Planes(float* const* base, size_t channelCount, const std::vector<PreparedLight>& lights, size_t projectorCount,
+         bool all)
+      : vis(lights.size()),
+        occluderDist(lights.size()),
+        visSigma(lights.size()),
+        coverage(projectorCount),
+        u(projectorCount),
+        v(projectorCount) {
     size_t index = 0;
     hit = base[index++];
     objectId = base[index++];
@@ -424,9 +652,10 @@ struct Planes {
       for (int a = 0; a < 3; ++a) p[a] = base[index++];
       for (int a = 0; a < 3; ++a) n[a] = base[index++];
     }
-    for (size_t l = 0; l < lightCount; ++l) {
+    for (size_t l = 0; l < lights.size(); ++l) {
       vis[l] = base[index++];
       occluderDist[l] = base[index++];
+      if (lights[l].sized) visSigma[l] = base[index++];
     }
     for (size_t q = 0; q < projectorCount; ++q) {
       coverage[q] = base[index++];
@@ -470,6 +699,54 @@ inline void putBlock(float* tilePlane, const float* values, int rowLanes, int ro
     select(hit, load(hits.normal[a]), FloatN(0.0f)).copy_to(values, kAligned);
     putBlock(planes.n[a] + blockPixel, values, rowLanes, rows);
   }
+}
+
+// A sized light's vis and vis_sigma of a packet (reference/README.md, "Sized lights"). vis: the
+// center's SoftPoint at spp 1 (centerOnly), else the mean over the samples on the center's object,
+// or the center's own where none is. vis_sigma: the standard error's binomial bound over the points
+// that were sampled, sqrt(p (1 - p) / n) per point with p = (lit + 1/2) / (n + 1), combined over
+// the pixel's points. occluder_dist (the hard ray's, toward the center) becomes -1 where the
+// center's origin is inside the light's sphere (fully lit).
+template <typename Put>
+void putSizedLight(Tracer& tracer, const PreparedLight& prepared, const HitPacket& center, const int* px, const int* py,
+                   bool centerOnly, const int* sameObject, SoftPoint* centerSoft, const double* visSum,
+                   const int* sampledPoints, const int* litSamples, float* distance, const Put& put, float* visPlane,
+                   float* sigmaPlane) {
+  const Light& light = *prepared.light;
+  if (!centerOnly) {
+    bool lanes[kLanes];
+    bool any = false;
+    for (int lane = 0; lane < kLanes; ++lane) {
+      lanes[lane] = center.hit(lane) && sameObject[lane] == 0;
+      any = any || lanes[lane];
+    }
+    if (any) {
+      tracer.evalSizedLight(prepared, center, lanes, px, py, 0, centerSoft);
+    } else {
+      std::fill(centerSoft, centerSoft + kLanes, SoftPoint{});
+    }
+  }
+  const double samples = double(prepared.samples);
+  alignas(kSimdAlign) float vis[kLanes], sigma[kLanes];
+  for (int lane = 0; lane < kLanes; ++lane) {
+    const bool own = centerOnly || sameObject[lane] == 0;
+    const double points = own ? 1.0 : double(sameObject[lane]);
+    const double sampled = own ? (centerSoft[lane].sampled ? 1.0 : 0.0) : double(sampledPoints[lane]);
+    const double lit = own ? double(centerSoft[lane].lit) : double(litSamples[lane]);
+    vis[lane] = own ? centerSoft[lane].vis : float(visSum[lane] / points);
+    sigma[lane] = 0.0f;
+    if (sampled > 0.0) {
+      const double n = samples * sampled;
+      const double p = (lit + 0.5) / (n + 1.0);
+      sigma[lane] = float(sampled / points * std::sqrt(p * (1.0 - p) / n));
+    }
+    if (light.type != LightType::Directional && center.hit(lane)) {
+      const glm::dvec3 toCenter = glm::dvec3(light.position) - glm::dvec3(center.originAt(lane));
+      if (glm::dot(toCenter, toCenter) <= double(light.radius) * double(light.radius)) distance[lane] = -1.0f;
+    }
+  }
+  put(visPlane, vis);
+  put(sigmaPlane, sigma);
 }
 
 // A tile's values are written to a small buffer first (kTileSize x kTileSize floats per channel,
@@ -545,6 +822,14 @@ void checkSpp(long long spp, const std::string& file, const std::string& place) 
                                      ".." + std::to_string(kMaxSpp) + " (reference samples per pixel)"));
 }
 
+void checkLightSamples(long long samples, const std::string& file, const std::string& place) {
+  if (samples < kMinLightSamples || samples > kMaxLightSamples)
+    throw InputError(formatError(file, place,
+                                 "got " + std::to_string(samples) + "; expected an integer " +
+                                     std::to_string(kMinLightSamples) + ".." + std::to_string(kMaxLightSamples) +
+                                     " (light samples per pixel sample of a sized light)"));
+}
+
 float shadowOriginOffset(const glm::vec3& position, const glm::vec3& p0, const glm::vec3& p1, const glm::vec3& p2) {
   return originOffset(position, p0, p1, p2);
 }
@@ -564,6 +849,7 @@ std::vector<std::string> referenceChannelNames(const Scene& scene, ReferenceChan
   for (const Light& light : scene.lights) {
     names.push_back("light." + light.name + ".vis");
     names.push_back("light." + light.name + ".occluder_dist");
+    if (light.sized()) names.push_back("light." + light.name + ".vis_sigma");
   }
   for (const Projector& projector : scene.projectors) {
     const std::string prefix = "proj." + projector.name + ".";
@@ -594,6 +880,7 @@ Frame SHADOWLAB_RENDER_REFERENCE(const Scene& scene, const ReferenceOptions& opt
 #endif
 #endif
   checkSpp(options.spp, "reference");
+  checkLightSamples(options.lightSamples, "reference");
   if (options.threads < 0) {
     throw InputError("reference: error: threads " + std::to_string(options.threads) + "; expected 0 (all) or more");
   }
@@ -632,6 +919,8 @@ Frame SHADOWLAB_RENDER_REFERENCE(const Scene& scene, const ReferenceOptions& opt
     prepared.light = &light;
     prepared.toLight = glm::normalize(-light.direction);
     if (light.type == LightType::Spot) prepared.cosHalfCone = std::cos(double(light.coneDeg) * 0.5 * M_PI / 180.0);
+    prepared.index = uint32_t(lights.size());
+    if (light.sized()) prepareSized(prepared, options.lightSamples);
     lights.push_back(prepared);
   }
   std::vector<PreparedProjector> projectors;
@@ -660,6 +949,8 @@ Frame SHADOWLAB_RENDER_REFERENCE(const Scene& scene, const ReferenceOptions& opt
                 {"spp", options.spp},
                 {"reference_hash", referenceHash(scene, options)},
                 {"channels", referenceChannelsKey(options.channels)}};
+  if (std::any_of(scene.lights.begin(), scene.lights.end(), [](const Light& light) { return light.sized(); }))
+    frame.meta["light_samples"] = options.lightSamples;
 
   const int threads = options.threads > 0 ? options.threads : std::max(1, tbb::info::default_concurrency());
   // TBB caps its workers at the hardware concurrency; an explicit --threads above that (e.g. 4
@@ -720,7 +1011,7 @@ Frame SHADOWLAB_RENDER_REFERENCE(const Scene& scene, const ReferenceOptions& opt
       std::vector<float> tileBuffer(channelCount * kTilePixels);
       std::vector<float*> tileBase(channelCount);
       for (size_t c = 0; c < channelCount; ++c) tileBase[c] = tileBuffer.data() + c * kTilePixels;
-      const Planes planes(tileBase.data(), channelCount, lightCount, projectorCount, all);
+      const Planes planes(tileBase.data(), channelCount, lights, projectorCount, all);
       // Camera rays need the surface point and normal only for shadow rays and the All channels.
       const bool surface = all || lightCount > 0 || projectorCount > 0 || pictureBytes;
       std::vector<float> pictureCoverage(projectorCount);
@@ -729,6 +1020,12 @@ Frame SHADOWLAB_RENDER_REFERENCE(const Scene& scene, const ReferenceOptions& opt
       std::vector<float> centerVis(lightCount * kLanes), centerDist(lightCount * kLanes);
       std::vector<ProjectorSample> centerProj(projectorCount * kLanes);
       std::vector<double> visSum(lightCount * kLanes);
+      // Sized lights, per light and lane: the points sampled and their light samples that reach the
+      // light (vis_sigma), the center's own result.
+      std::vector<int> sampledPoints(lightCount * kLanes), litSamples(lightCount * kLanes);
+      std::vector<SoftPoint> centerSoft(lightCount * kLanes);
+      SoftPoint soft[kLanes];
+      const bool everyLane[kLanes] = {true, true, true, true, true, true, true, true};
       std::vector<ProjectorSample> projSum(projectorCount * kLanes);
       alignas(kSimdAlign) float sampleVis[kLanes], sampleDist[kLanes];
       ProjectorSample sampleProj[kLanes];
@@ -745,18 +1042,27 @@ Frame SHADOWLAB_RENDER_REFERENCE(const Scene& scene, const ReferenceOptions& opt
               active[lane] = px[lane] < x1 && py[lane] < y1;
             }
             tracer.tracePrimary(px, py, active, 0.5f, 0.5f, surface, center);
-            for (size_t l = 0; l < lightCount; ++l)
+            for (size_t l = 0; l < lightCount; ++l) {
               tracer.evalLight(lights[l], center, true, &centerVis[l * kLanes], &centerDist[l * kLanes]);
+              if (!lights[l].sized) continue;
+              // A sized light: occluder_dist is the hard ray's, toward the light's center; vis
+              // comes from the light samples (the center's own, at spp 1).
+              if (pattern.empty())
+                tracer.evalSizedLight(lights[l], center, everyLane, px, py, 0, &centerSoft[l * kLanes]);
+            }
             for (size_t p = 0; p < projectorCount; ++p)
               tracer.evalProjector(projectors[p], center, &centerProj[p * kLanes]);
 
             int sameObject[kLanes] = {};
             if (!pattern.empty()) {
               std::fill(visSum.begin(), visSum.end(), 0.0);
+              std::fill(sampledPoints.begin(), sampledPoints.end(), 0);
+              std::fill(litSamples.begin(), litSamples.end(), 0);
               std::fill(projSum.begin(), projSum.end(), ProjectorSample{});
               bool sampleActive[kLanes];
               for (int lane = 0; lane < kLanes; ++lane) sampleActive[lane] = active[lane] && center.hit(lane);
-              for (const glm::vec2& offset : pattern) {
+              for (size_t sampleIndex = 0; sampleIndex < pattern.size(); ++sampleIndex) {
+                const glm::vec2& offset = pattern[sampleIndex];
                 tracer.tracePrimary(px, py, sampleActive, offset.x, offset.y, surface, sample);
                 // Only samples on the center's object count: the pixel's fractional visibility
                 // is that of the surface its id and position describe.
@@ -765,6 +1071,16 @@ Frame SHADOWLAB_RENDER_REFERENCE(const Scene& scene, const ReferenceOptions& opt
                   if (sample.hit(lane)) ++sameObject[lane];
                 }
                 for (size_t l = 0; l < lightCount; ++l) {
+                  if (lights[l].sized) {
+                    tracer.evalSizedLight(lights[l], sample, everyLane, px, py, uint32_t(sampleIndex + 1), soft);
+                    for (int lane = 0; lane < kLanes; ++lane) {
+                      if (!sample.hit(lane)) continue;
+                      visSum[l * kLanes + lane] += soft[lane].vis;
+                      sampledPoints[l * kLanes + lane] += soft[lane].sampled ? 1 : 0;
+                      litSamples[l * kLanes + lane] += soft[lane].lit;
+                    }
+                    continue;
+                  }
                   tracer.evalLight(lights[l], sample, false, sampleVis, sampleDist);
                   for (int lane = 0; lane < kLanes; ++lane)
                     if (sample.hit(lane)) visSum[l * kLanes + lane] += sampleVis[lane];
@@ -794,6 +1110,13 @@ Frame SHADOWLAB_RENDER_REFERENCE(const Scene& scene, const ReferenceOptions& opt
             if (all) putSurface(center, planes, blockPixel, rowLanes, rows);
             for (size_t l = 0; l < lightCount; ++l) {
               const float* vis = &centerVis[l * kLanes];
+              if (lights[l].sized) {
+                putSizedLight(tracer, lights[l], center, px, py, pattern.empty(), sameObject, &centerSoft[l * kLanes],
+                              &visSum[l * kLanes], &sampledPoints[l * kLanes], &litSamples[l * kLanes],
+                              &centerDist[l * kLanes], put, planes.vis[l], planes.visSigma[l]);
+                put(planes.occluderDist[l], &centerDist[l * kLanes]);
+                continue;
+              }
               if (!pattern.empty()) {
                 for (int lane = 0; lane < kLanes; ++lane) {
                   const int count = sameObject[lane];

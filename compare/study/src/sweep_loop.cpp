@@ -336,6 +336,7 @@ nlohmann::json sweepDescription(const SweepPlan& plan) {
   if (!plan.spec.methodFile.empty()) d["method_file"] = plan.spec.methodFile;
   d["light"] = plan.spec.light;
   d["spp"] = plan.spec.spp;
+  d["light_samples"] = plan.spec.lightSamples;
   d["keep_images"] = plan.spec.keepImages;
   d["frontier"] = {{"metric", plan.spec.frontierMetric}, {"threshold", plan.spec.frontierThreshold}};
   return d;

@@ -294,6 +294,12 @@ void loadSweepFile(const std::string& path, SweepSpec& spec) {
                       std::to_string(kMaxSpp) + " (reference samples per pixel)");
       checkSpp(v.get<int64_t>(), path, ptr);
       spec.spp = v.get<int>();
+    } else if (k == "light_samples") {
+      if (!v.is_number_integer())
+        fail(ptr, "got " + describeJson(v) + "; expected an integer " + std::to_string(kMinLightSamples) + ".." +
+                      std::to_string(kMaxLightSamples) + " (light samples per pixel sample of a sized light)");
+      checkLightSamples(v.get<int64_t>(), path, ptr);
+      spec.lightSamples = v.get<int>();
     } else if (k == "keep_images") {
       if (!v.is_boolean()) fail(ptr, "got " + jsonTypeName(v) + "; expected true or false");
       spec.keepImages = v.get<bool>();
@@ -301,7 +307,8 @@ void loadSweepFile(const std::string& path, SweepSpec& spec) {
       if (!v.is_string()) fail(ptr, "got " + jsonTypeName(v) + "; expected a string");
     } else {
       fail(ptr, "unknown key \"" + k +
-                    "\"; expected one of scenes, grid, set, method, light, spp, keep_images, description");
+                    "\"; expected one of scenes, grid, set, method, light, spp, light_samples, keep_images, "
+                    "description");
     }
   }
 }
@@ -310,6 +317,7 @@ SweepPlan planSweep(const SweepSpec& spec) {
   SweepPlan plan;
   plan.spec = spec;
   checkSpp(spec.spp, "--spp");
+  checkLightSamples(spec.lightSamples, "--light-samples");
   // Frontier settings: NaN or a negative threshold would make every comparison meaningless.
   if (!std::isfinite(spec.frontierThreshold) || spec.frontierThreshold < 0) {
     char b[64];

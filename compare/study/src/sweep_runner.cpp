@@ -37,12 +37,13 @@ double msSince(Clock::time_point t0) { return std::chrono::duration<double, std:
 class PipelineRunner final : public SweepRunner {
  public:
   PipelineRunner(const std::string& cacheDir, int spp, const std::string& device, size_t keepReferences,
-                 bool fullEvidence, bool keepTriptychs)
+                 bool fullEvidence, bool keepTriptychs, int lightSamples)
       : cache_(cacheDir),
         keep_(keepReferences < 1 ? 1 : keepReferences),
         fullEvidence_(fullEvidence),
         keepTriptychs_(keepTriptychs) {
     referenceOptions_.spp = spp;
+    referenceOptions_.lightSamples = lightSamples;
     deviceOptions_.device = device;
     // The first reference read needs the image library: where that is a module loaded on first
     // use (~0.2 s; a build without OpenEXR and libpng), it loads from now on beside the plan's
@@ -180,6 +181,7 @@ class PipelineRunner final : public SweepRunner {
     j["references_loaded"] = loaded_;
     j["reference_wall_seconds"] = referenceWallSeconds_;  // references traced or loaded, summed
     j["reference_spp"] = referenceOptions_.spp;
+    j["reference_light_samples"] = referenceOptions_.lightSamples;
     // Rows compared through a group's CompareContext, and contexts built (compareRow).
     j["compare_context_rows"] = contextRows_;
     j["compare_contexts_built"] = contextsBuilt_;
@@ -449,8 +451,10 @@ class PipelineRunner final : public SweepRunner {
 }  // namespace
 
 std::unique_ptr<SweepRunner> makePipelineRunner(const std::string& cacheDir, int spp, const std::string& device,
-                                                size_t keepReferences, bool fullEvidence, bool keepTriptychs) {
-  return std::make_unique<PipelineRunner>(cacheDir, spp, device, keepReferences, fullEvidence, keepTriptychs);
+                                                size_t keepReferences, bool fullEvidence, bool keepTriptychs,
+                                                int lightSamples) {
+  return std::make_unique<PipelineRunner>(cacheDir, spp, device, keepReferences, fullEvidence, keepTriptychs,
+                                          lightSamples);
 }
 
 }  // namespace shadowlab

@@ -60,6 +60,7 @@ std::string planFingerprint(const SweepPlan& plan) {
         {job.key(), plan.variants[job.variantIndex].hash, methodToJson(plan.configs[job.configIndex].method)});
   nlohmann::json fp = {{"jobs", jobs},
                        {"spp", plan.spec.spp},
+                       {"light_samples", plan.spec.lightSamples},
                        {"light", plan.spec.light},
                        {"frontier", {plan.spec.frontierMetric, plan.spec.frontierThreshold}},
                        {"method_file_content", ""}};
@@ -88,6 +89,7 @@ nlohmann::json sweepSpecToJson(const SweepPlan& plan) {
   j["method_file"] = absolutePath(spec.methodFile);
   j["light"] = spec.light;
   j["spp"] = spec.spp;
+  j["light_samples"] = spec.lightSamples;
   j["keep_images"] = spec.keepImages;
   j["frontier_metric"] = spec.frontierMetric;
   j["frontier_threshold"] = spec.frontierThreshold;
@@ -113,6 +115,7 @@ SweepSpec sweepSpecFromJson(const nlohmann::json& j, const std::string& origin) 
     spec.methodFile = j.at("method_file").get<std::string>();
     spec.light = j.at("light").get<std::string>();
     spec.spp = j.at("spp").get<int>();
+    spec.lightSamples = j.value("light_samples", spec.lightSamples);
     spec.keepImages = j.at("keep_images").get<bool>();
     spec.frontierMetric = j.at("frontier_metric").get<std::string>();
     spec.frontierThreshold = j.at("frontier_threshold").get<double>();

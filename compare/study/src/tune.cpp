@@ -496,6 +496,7 @@ bool checkDenseGrid(const TunePlan& plan, SweepRunner& runner, const TuneOptions
   spec.methodFile = plan.spec.methodFile;
   spec.light = plan.spec.light;
   spec.spp = plan.spec.spp;
+  spec.lightSamples = plan.spec.lightSamples;
   for (const auto& k : plan.keys) {
     SweepAxis axis;
     axis.key = k.key;

@@ -229,6 +229,7 @@ TunePlan planTune(const TuneSpec& spec) {
   sweep.methodFile = spec.methodFile;
   sweep.light = spec.light;
   sweep.spp = spec.spp;
+  sweep.lightSamples = spec.lightSamples;
   std::set<std::string> fixedKeys;
   for (const auto& f : spec.fixed) fixedKeys.insert(f.key);
   // Keys.

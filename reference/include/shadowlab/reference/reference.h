@@ -14,7 +14,8 @@ namespace shadowlab {
 // values in both sets; Compare leaves out those no later stage reads.
 enum class ReferenceChannels {
   // What compare, stability and the pictures of compare read: hit, object_id, light.L.vis,
-  // light.L.occluder_dist, proj.P.coverage and proj.P.R/G/B. The reference cache holds this set.
+  // light.L.occluder_dist, light.L.vis_sigma (sized lights only), proj.P.coverage and
+  // proj.P.R/G/B. The reference cache holds this set.
   Compare,
   // Compare's plus prim_id, P.x/y/z, N.x/y/z and proj.P.u/v: for people, tests and referencePicture.
   All,
@@ -42,8 +43,22 @@ constexpr int kMaxSpp = 1024;
 // file, PLACE its JSON pointer ("/spp") or "".
 void checkSpp(long long spp, const std::string& file, const std::string& place = "");
 
+// Light samples per pixel sample of a sized light (Light::sized(), reference/README.md "Sized
+// lights"): the one range every reader checks (`--light-samples`, the sweep file's
+// `light_samples`). Hard lights take none.
+constexpr int kMinLightSamples = 1;
+constexpr int kMaxLightSamples = 4096;
+constexpr int kDefaultLightSamples = 64;
+// InputError "FILE: PLACE: error: got N; expected an integer 1..4096 (light samples per pixel
+// sample of a sized light)" unless kMinLightSamples <= samples <= kMaxLightSamples; FILE names the
+// option ("--light-samples") or the file, PLACE its JSON pointer ("/light_samples") or "".
+void checkLightSamples(long long samples, const std::string& file, const std::string& place = "");
+
 struct ReferenceOptions {
   int spp = 1;  // stratified samples per pixel, kMinSpp..kMaxSpp (1 = the pixel center); visibility becomes fractional
+  // Stratified samples of each sized light's solid angle per pixel sample, kMinLightSamples..
+  // kMaxLightSamples. Part of the cache key (referenceHash) only where the scene has a sized light.
+  int lightSamples = kDefaultLightSamples;
   int threads = 0;  // 0 = all hardware threads; results are bit-identical for any value
   // Not part of the cache key (referenceHash): the values are the same, the cache always holds Compare.
   ReferenceChannels channels = ReferenceChannels::All;
@@ -84,8 +99,9 @@ Frame renderReference(const Scene& scene, const ReferenceOptions& options, Refer
 // N the camera-facing unit normal. 2^-17 times the largest coordinate magnitude among the four.
 float shadowOriginOffset(const glm::vec3& position, const glm::vec3& p0, const glm::vec3& p1, const glm::vec3& p2);
 
-// A hash of everything the reference depends on (scene hash, camera, spp): the cache key. The channel
-// set is left out (the values are the same; the cache holds Compare).
+// A hash of everything the reference depends on (scene hash, camera, spp, and lightSamples where the
+// scene has a sized light): the cache key. The channel set is left out (the values are the same; the
+// cache holds Compare).
 std::string referenceHash(const Scene& scene, const ReferenceOptions& options);
 
 // A readable picture: grey shading times the first light's visibility (plus a little ambient),

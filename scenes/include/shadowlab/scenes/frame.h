@@ -20,7 +20,11 @@
 //     P.x P.y P.z              world-space hit point
 //     N.x N.y N.z              unit geometric normal, facing the camera
 //     light.LIGHT.occluder_dist  world distance from the point to the nearest occluder along the
-//                              shadow ray, -1 where unoccluded (for spp > 1: of the center sample)
+//                              shadow ray, -1 where unoccluded (for spp > 1: of the center sample;
+//                              for a sized light: of the ray toward the light's center)
+//     light.LIGHT.vis_sigma    sized lights only (Light::sized()): the standard error of vis, a
+//                              conservative bound (reference/README.md, "Sized lights"); 0 where
+//                              vis is exact (no hit, outside a spot's cone, inside the light)
 //     proj.PROJ.u|v            projective texture coordinate (before the frustum test)
 //   rasterizer only (raster/), for the one light it rendered
 //     light.LIGHT.receiver_depth  the visible point's depth in the light's map space, [0,1]

@@ -69,6 +69,7 @@ struct SweepSpec {
   std::string methodFile;           // optional base method file (--method / "method")
   std::string light;                // empty: each scene's first light
   int spp = 1;                      // reference samples per pixel
+  int lightSamples = 64;            // reference samples of a sized light per pixel sample (kDefaultLightSamples)
   bool keepImages = false;          // write raster.exr + errors.png per configuration
   // Failure frontiers (sweep_frontier.h): the metric walked along swept scene: parameters and the
   // rate above which a configuration counts as broken. Checked by planSweep.
@@ -178,9 +179,10 @@ class SweepRunner {
 // (--full-evidence) renders every row's full frame instead. `keepTriptychs`: keep each scene's best
 // and worst row so far (a few planes and the classification) for writeTriptych, which then draws
 // them without rendering again; off where no report will ask (--no-report).
+// `lightSamples`: the reference's ReferenceOptions::lightSamples (sized lights only).
 std::unique_ptr<SweepRunner> makePipelineRunner(const std::string& cacheDir, int spp, const std::string& device = "",
                                                 size_t keepReferences = 1, bool fullEvidence = false,
-                                                bool keepTriptychs = true);
+                                                bool keepTriptychs = true, int lightSamples = 64);
 
 // The cache folder a sweep into `outDir` uses when none is given: $SHADOWLAB_CACHE, else
 // <parent of outDir>/.shadowlab-cache, so sweeps side by side share their references.

@@ -50,6 +50,7 @@ struct TuneSpec {
   std::string methodFile;           // base method file (--method)
   std::string light;                // empty: each scene's first light
   int spp = 1;
+  int lightSamples = 64;  // reference samples of a sized light per pixel sample (kDefaultLightSamples)
   // The target: exactly one of maxError (error_rate on every scene <= it, with maxRates: each
   // named metric <= its value too) and budgetMs (the lowest worst-case error_rate whose estimated
   // cost is within it). NaN: not given.
