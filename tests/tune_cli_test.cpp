@@ -54,7 +54,7 @@ TEST(TuneCli, BadArgumentsExit2NamingThemAndWriteNothing) {
       {"grazing --max-error 0.002 --range bias.slope=0:1:0", "error: got 0 intervals; expected an integer 1..64"},
       {"grazing --max-error 0.002 --fixed map.size=512",
        "--keys map.size: error: \"map.size\" is both tuned and fixed"},
-      {"grazing --max-error 0.002 --max acne=0.1", "--max acne=0.1: error: unknown rate \"acne\"; expected one of"},
+      {"grazing --max-error 0.002 --max acne=0.1", "--max acne=0.1: error: unknown metric \"acne\"; expected one of"},
       {"grazing --budget-ms 5 --max acne_rate=0.1", "--max: error: given without --max-error"},
       {"grazin --max-error 0.002", "grazin"},
   };
