@@ -1,4 +1,4 @@
-// `shadowlab tune SCENES... (--max-error E [--max rate=v]... | --budget-ms B) [--keys k1,k2,...]
+// `shadowlab tune SCENES... (--max-error E [--max metric=v]... | --budget-ms B) [--keys k1,k2,...]
 // [--range key=lo:hi]... [--fixed key=value]... -o DIR`: the least expensive method that meets the
 // target on every scene (or the most accurate within the budget), by a search rather than a grid;
 // resumable; writes tuned.json, tune.json, tune.html, results.json/csv, report.html (compare/TUNE.md).
@@ -118,7 +118,9 @@ app::Registrar reg{
       sub->add_option("--max-error", opts->maxError,
                       "Target: error_rate <= E on every scene; the least estimated cost wins (exit 1 when no "
                       "configuration meets it)");
-      sub->add_option("--max", opts->maxRates, "With --max-error: also RATE <= V, e.g. acne_rate=0.0005 (repeatable)")
+      sub->add_option("--max", opts->maxRates,
+                      "With --max-error: also METRIC <= V, e.g. acne_rate=0.0005 or penumbra_mae=0.02 (repeatable; "
+                      "compare/TUNE.md)")
           ->allow_extra_args(false);
       sub->add_option("--budget-ms", opts->budgetMs,
                       "Instead: the lowest worst-case error_rate whose ESTIMATED cost (the cost model of "

@@ -87,7 +87,9 @@ TEST(CompareClassTable, CodesKeysAndMetricNamesAreTheStableOnes) {
                   {PixelClass::Aliasing, 5, "aliasing"},
                   {PixelClass::Coverage, 6, "coverage"},
                   {PixelClass::Other, 7, "other"},
-                  {PixelClass::Bleed, 8, "bleed"}};
+                  {PixelClass::Bleed, 8, "bleed"},
+                  {PixelClass::PenumbraWide, 9, "penumbra_wide"},
+                  {PixelClass::PenumbraHard, 10, "penumbra_hard"}};
   for (const auto& x : expected) {
     EXPECT_EQ(int(x.cls), x.code) << x.key;
     EXPECT_STREQ(toString(x.cls), x.key);
@@ -102,7 +104,8 @@ TEST(CompareClassTable, CodesKeysAndMetricNamesAreTheStableOnes) {
   }
   EXPECT_EQ(metrics, (std::set<std::string>{"geometry_mismatch", "acne", "leak", "bleed", "aliasing", "coverage",
                                             "other", "acne_rate", "leak_rate", "bleed_rate", "aliasing_rate",
-                                            "coverage_rate", "other_rate"}));
+                                            "coverage_rate", "other_rate", "penumbra_wide", "penumbra_wide_rate",
+                                            "penumbra_hard", "penumbra_hard_rate"}));
   Metrics one;  // a comparison of one pixel: an empty one also says "nothing_compared"
   one.pixelsCompared = 1;
   const nlohmann::json j = one.toJson();
@@ -132,7 +135,23 @@ TEST(CompareClassTable, CodesKeysAndMetricNamesAreTheStableOnes) {
                                          "m_median",
                                          "m_p95",
                                          "m_max",
-                                         "m_capped"}));
+                                         "m_capped",
+                                         "penumbra_wide",
+                                         "penumbra_hard",
+                                         "penumbra_wide_rate",
+                                         "penumbra_hard_rate",
+                                         "lit_pixels",
+                                         "lit_mae",
+                                         "lit_rmse",
+                                         "penumbra_pixels",
+                                         "penumbra_mae",
+                                         "penumbra_rmse",
+                                         "umbra_pixels",
+                                         "umbra_mae",
+                                         "umbra_rmse",
+                                         "over_shadowing",
+                                         "under_shadowing",
+                                         "within_uncertainty"}));
 }
 
 TEST(CompareClassTable, ColoursAreTheOnesErrorsPngHasAlwaysUsed) {
@@ -356,7 +375,8 @@ TEST(ClassTallies, PlantedClassesGiveExactCountsAndRates) {
   EXPECT_EQ(j["acne"], 37u);
   EXPECT_EQ(j["acne_rate"], 37.0 / double(compared));
   EXPECT_EQ(j["geometry_mismatch"], 13u);
-  EXPECT_EQ(errorClassSummary(m, false), "acne 37, leak 5, bleed 0, aliasing 0, coverage 0, other 0");
+  EXPECT_EQ(errorClassSummary(m, false),
+            "acne 37, leak 5, bleed 0, aliasing 0, coverage 0, penumbra_wide 0, penumbra_hard 0, other 0");
 }
 
 TEST(ClassTallies, NothingComparedGivesZeroRates) {

@@ -54,7 +54,7 @@ TEST(TuneCli, BadArgumentsExit2NamingThemAndWriteNothing) {
       {"grazing --max-error 0.002 --range bias.slope=0:1:0", "error: got 0 intervals; expected an integer 1..64"},
       {"grazing --max-error 0.002 --fixed map.size=512",
        "--keys map.size: error: \"map.size\" is both tuned and fixed"},
-      {"grazing --max-error 0.002 --max acne=0.1", "--max acne=0.1: error: unknown rate \"acne\"; expected one of"},
+      {"grazing --max-error 0.002 --max acne=0.1", "--max acne=0.1: error: unknown metric \"acne\"; expected one of"},
       {"grazing --budget-ms 5 --max acne_rate=0.1", "--max: error: given without --max-error"},
       {"grazin --max-error 0.002", "grazin"},
   };
@@ -144,5 +144,50 @@ TEST(TuneCli, UnreachableTargetExits1WithAVerdictAndTheOutputs) {
   EXPECT_NE(r.out.find("no setting meets 1e-05 on grazing, thin_wall; best found"), std::string::npos) << r.out;
   for (const char* f : {"tuned.json", "tune.json", "tune.html", "results.json", "results.csv"})
     EXPECT_TRUE(fs::is_regular_file(out + "/" + f)) << f;
+  fs::remove_all(dir);
+}
+
+// --max takes the visibility errors of compare/METRICS.md "Soft shadows" as well as the class
+// rates: known names reach the value's check, unknown ones are refused with the whole list.
+TEST(TuneCli, MaxAcceptsTheSoftShadowMetrics) {
+  const fs::path dir = tempDir("soft_max");
+  const std::string out = (dir / "out").string();
+  struct Case {
+    std::string args, expect;
+  } cases[] = {
+      {"--max penumbra_mae=1.5", "--max penumbra_mae=1.5: error: got \"1.5\"; expected a number from 0 to 1"},
+      {"--max over_shadowing=-1", "--max over_shadowing=-1: error: got \"-1\""},
+      {"--max penumbra_hard_rate=0.1 --max penumbra_hard_rate=0.2", "--max penumbra_hard_rate: error: given twice"},
+      {"--max penumbra=0.1", "--max penumbra=0.1: error: unknown metric \"penumbra\"; expected one of acne_rate, "},
+  };
+  for (const Case& c : cases) {
+    CliRun r = runShadowlab("tune grazing --max-error 0.002 " + c.args + " -o '" + out + "'", dir);
+    EXPECT_EQ(r.code, 2) << c.args << "\n" << r.err;
+    EXPECT_NE(r.err.find(c.expect), std::string::npos) << c.args << "\n" << r.err;
+    EXPECT_FALSE(fs::exists(out)) << c.args;
+  }
+  CliRun unknown = runShadowlab("tune grazing --max-error 0.002 --max penumbra=0.1 -o '" + out + "'", dir);
+  for (const char* name : {"penumbra_wide_rate", "penumbra_hard_rate", "lit_mae", "penumbra_mae", "penumbra_rmse",
+                           "umbra_rmse", "over_shadowing", "under_shadowing"})
+    EXPECT_NE(unknown.err.find(name), std::string::npos) << name << " missing from the list: " << unknown.err;
+
+  // Accepted: a one-configuration tune on grazing (a hard sun: no penumbra, penumbra_mae null on
+  // its row) meets --max penumbra_mae=0.02 vacuously, and the target is recorded.
+  CliRun r = runShadowlab(
+      "tune grazing --max-error 0.5 --max penumbra_mae=0.02 --max lit_mae=0.5"
+      " --fixed scene:/camera/width=64 --fixed scene:/camera/height=36 --range map.size=512:512"
+      " --range filter=none --range bias.slope=1,2 --no-report --cache '" +
+          (dir / "cache").string() + "' -o '" + out + "'",
+      dir);
+  if (r.code == 3) GTEST_SKIP() << "no Vulkan device (shadowlab exit 3): " << r.err;
+  ASSERT_EQ(r.code, 0) << r.err;
+  const auto tune = nlohmann::json::parse(readFile(out + "/tune.json"));
+  EXPECT_TRUE(tune.at("robust").at("met").get<bool>()) << tune.dump();
+  const auto rows = loadResultRows(out + "/results.json");
+  ASSERT_FALSE(rows.empty());
+  EXPECT_EQ(rows[0].metrics.at("penumbra_pixels"), 0);
+  EXPECT_TRUE(rows[0].metrics.at("penumbra_mae").is_null());
+  EXPECT_LE(rows[0].metrics.at("lit_mae").get<double>(), 0.5);
+  EXPECT_NE(tune.dump().find("penumbra_mae"), std::string::npos) << "the target in tune.json";
   fs::remove_all(dir);
 }

@@ -44,6 +44,16 @@ nlohmann::json Metrics::toJson() const {
   j["shadow_iou"] = ratio(shadowIou);
   j["mae"] = ratio(mae);
   j["rmse"] = ratio(rmse);
+  for (const VisRegionInfo& r : kVisRegions) {
+    const size_t k = size_t(r.region);
+    j[r.pixelsMetric] = regionPixels[k];
+    const bool empty = regionPixels[k] == 0;  // a mean over no pixel: null, as a rate of nothing compared
+    j[r.maeMetric] = empty ? nlohmann::json(nullptr) : nlohmann::json(regionMae[k]);
+    j[r.rmseMetric] = empty ? nlohmann::json(nullptr) : nlohmann::json(regionRmse[k]);
+  }
+  j["over_shadowing"] = ratio(overShadowing);
+  j["under_shadowing"] = ratio(underShadowing);
+  j["within_uncertainty"] = withinUncertainty;
   const bool noFootprint = footprintUndefined();
   j["m_median"] = noFootprint ? nlohmann::json(nullptr) : nlohmann::json(mMedian);
   j["m_p95"] = noFootprint ? nlohmann::json(nullptr) : nlohmann::json(mP95);
@@ -238,12 +248,53 @@ class Scratch {
   T* data_ = nullptr;
 };
 
+// The per-region and signed visibility sums of a block of rows (Metrics: regionMae, regionRmse,
+// overShadowing, underShadowing, withinUncertainty). Both paths add a pixel's terms in pixel order;
+// the context path skips the pixels whose clamped visibilities are equal, whose terms are +0.0.
+struct VisibilitySums {
+  std::array<uint64_t, kVisRegionCount> pixels{};
+  std::array<double, kVisRegionCount> sumAbs{}, sumSq{};
+  double over = 0, under = 0;
+  uint64_t withinUncertainty = 0;
+  // Pixel terms: d = R - S of the clamped visibilities (the same double as mae's).
+  void addDifference(float referenceVisClamped, double d) {
+    const size_t r = size_t(visRegion(referenceVisClamped));
+    sumAbs[r] += std::fabs(d);
+    sumSq[r] += d * d;
+    over += d > 0.0 ? d : 0.0;
+    under += d < 0.0 ? -d : 0.0;
+  }
+  void add(const VisibilitySums& o) {
+    for (size_t r = 0; r < kVisRegionCount; ++r) {
+      pixels[r] += o.pixels[r];
+      sumAbs[r] += o.sumAbs[r];
+      sumSq[r] += o.sumSq[r];
+    }
+    over += o.over;
+    under += o.under;
+    withinUncertainty += o.withinUncertainty;
+  }
+  // Into out (regionPixels given: the context keeps them), `compared` the pixels compared.
+  void setMetrics(Metrics& out, const std::array<uint64_t, kVisRegionCount>& regionPixels, uint64_t compared) const {
+    out.regionPixels = regionPixels;
+    for (size_t r = 0; r < kVisRegionCount; ++r) {
+      const double n = double(regionPixels[r]);
+      out.regionMae[r] = regionPixels[r] ? sumAbs[r] / n : 0.0;
+      out.regionRmse[r] = regionPixels[r] ? std::sqrt(sumSq[r] / n) : 0.0;
+    }
+    out.overShadowing = compared ? over / double(compared) : 0.0;
+    out.underShadowing = compared ? under / double(compared) : 0.0;
+    out.withinUncertainty = withinUncertainty;
+  }
+};
+
 // compareFrames' pass-1 sums over one block of rows.
 struct BlockSums {
   uint64_t compared = 0;
   PerPixelClass<uint64_t> counts{};  // final classes only: candidates are counted by pass 2
   uint64_t refShadow = 0, rasShadow = 0, bothShadow = 0;
   double sumAbs = 0, sumSq = 0;
+  VisibilitySums vis;
   float mMax = 0, mMin = std::numeric_limits<float>::max();  // over m below the cap
   uint64_t mCapped = 0;
   uint64_t candidates = 0;
@@ -257,6 +308,8 @@ struct BlockSums {
 // channel is missing. Plain pointers, so the pass-1 loop can hold a copy in registers.
 struct Channels {
   const float *refHit = nullptr, *refObj = nullptr, *refVis = nullptr;
+  // A sized light's truth: the standard error of refVis (soft mode, classify.h); nullptr: hard.
+  const float* refSigma = nullptr;
   const float *rasHit = nullptr, *rasObj = nullptr, *rasVis = nullptr;
   // Evidence (optional: a reference compared with itself has none; see METRICS.md).
   const float *refOccDist = nullptr, *inMap = nullptr, *occId = nullptr, *recvDepth = nullptr, *mapDepth = nullptr,
@@ -283,6 +336,8 @@ struct Channels {
     e.rasterObject = rasObj[i];
     e.referenceVis = refVis[i];
     e.rasterVis = rasVis[i];
+    e.softTruth = refSigma != nullptr;
+    if (refSigma) e.referenceSigma = refSigma[i];
     e.hasInMap = inMap != nullptr;
     if (inMap) e.inMap = inMap[i];
     e.hasOccluderId = occId != nullptr;
@@ -353,6 +408,7 @@ Channels readChannels(const Frame& reference, const Frame& raster, const Compare
     return p;
   };
   if (!light.empty()) {  // the light's evidence; a projector-only frame has none
+    ch.refSigma = optional(reference, lp + "vis_sigma");
     ch.refOccDist = optional(reference, lp + "occluder_dist");
     ch.inMap = optional(raster, lp + "in_map");
     ch.occId = optional(raster, lp + "occluder_id");
@@ -753,6 +809,7 @@ Metrics compareFrames(const Frame& reference, const Frame& raster, const Compare
     const float* const refVis_ = ch.refVis;
     const float* const rasVis_ = ch.rasVis;
     const float* const mPlane_ = ch.m;
+    const float* const refSigma_ = ch.refSigma;
     uint8_t* const klass_ = klass;
     uint8_t* const refLit_ = refLit;
     uint8_t* const decision_ = decision;
@@ -780,6 +837,8 @@ Metrics compareFrames(const Frame& reference, const Frame& raster, const Compare
       const double d = double(rv) - double(sv);
       s.sumAbs += std::fabs(d);
       s.sumSq += d * d;
+      ++s.vis.pixels[size_t(visRegion(rv))];
+      s.vis.addDifference(rv, d);
       s.refShadow += !rLit;
       s.rasShadow += !sLit;
       s.bothShadow += !rLit && !sLit;
@@ -814,7 +873,13 @@ Metrics compareFrames(const Frame& reference, const Frame& raster, const Compare
         }
       }
       PixelClass c = PixelClass::Correct;
-      if (rLit != sLit) {
+      bool disagreement = rLit != sLit;
+      if (refSigma_) {  // a sized light: soft mode (classify.h softDecision)
+        const SoftDecision sd = softDecision(rv, sv, sanitizeSigma(refSigma_[i]));
+        s.vis.withinUncertainty += sd == SoftDecision::WithinUncertainty;
+        disagreement = sd == SoftDecision::Error;
+      }
+      if (disagreement) {
         const DisagreementClass dc = classifyDisagreement(ch.evidence(i), leakFactor);
         if (dc.candidate) {
           // Aliasing or, beyond the boundary band, leak (with its evidence) or other: pass 2.
@@ -841,6 +906,7 @@ Metrics compareFrames(const Frame& reference, const Frame& raster, const Compare
     t.bothShadow += s.bothShadow;
     t.sumAbs += s.sumAbs;
     t.sumSq += s.sumSq;
+    t.vis.add(s.vis);
     t.mMax = std::max(t.mMax, s.mMax);
     t.mCapped += s.mCapped;
     t.candidates += s.candidates;
@@ -868,6 +934,7 @@ Metrics compareFrames(const Frame& reference, const Frame& raster, const Compare
   out.shadowIou = shadowUnion ? double(t.bothShadow) / double(shadowUnion) : 1.0;
   out.mae = t.compared ? t.sumAbs / denom : 0.0;
   out.rmse = t.compared ? std::sqrt(t.sumSq / denom) : 0.0;
+  t.vis.setMetrics(out, t.vis.pixels, t.compared);
   out.mCapped = t.mCapped;
   if (channels.m && t.compared > t.mCapped) {
     std::vector<uint64_t> high(65536, 0);
@@ -921,6 +988,8 @@ struct CompareContext::Data {
     uint64_t compared = 0, referenceShadow = 0;
   };
   std::shared_ptr<const Pixels> pixels;
+  // Compared pixels per region of the truth (they depend on the reference and the scored pixels).
+  std::array<uint64_t, kVisRegionCount> regionPixels{};
   // The group's own: m's statistics and the cascades.
   double mMedian = 0, mP95 = 0, mMax = 0;
   uint64_t mCapped = 0;
@@ -1012,6 +1081,7 @@ struct ContextBlockSums {
   PerPixelClass<uint64_t> counts{};  // the disagreeing pixels' final classes
   uint64_t disagreements = 0, rasShadow = 0, bothShadow = 0;
   double sumAbs = 0, sumSq = 0;
+  VisibilitySums vis;
   std::array<uint64_t, 8> cascadeErrors{};
 };
 
@@ -1098,6 +1168,7 @@ CompareContext::CompareContext(const Frame& reference, const Frame& raster, cons
   }
   if (d->pixels->compared != full.pixelsCompared)
     throw DriverError("compare: context counts differ from compareFrames");
+  d->regionPixels = full.regionPixels;
   d->mMedian = full.mMedian;
   d->mP95 = full.mP95;
   d->mMax = full.mMax;
@@ -1191,7 +1262,14 @@ Metrics compareFrames(const CompareContext& context, const Frame& reference, con
         const double diff = double(rv) - double(sv);
         s.sumAbs += std::fabs(diff);
         s.sumSq += diff * diff;
-        if (rLit == sLit) continue;
+        s.vis.addDifference(rv, diff);
+        bool disagreement = rLit != sLit;
+        if (ch.refSigma) {  // a sized light: soft mode, as pass 1
+          const SoftDecision sd = softDecision(rv, sv, sanitizeSigma(ch.refSigma[i]));
+          s.vis.withinUncertainty += sd == SoftDecision::WithinUncertainty;
+          disagreement = sd == SoftDecision::Error;
+        }
+        if (!disagreement) continue;
         // A disagreement: step 2 on its evidence, and pass 2's decision from the kept distances.
         ++s.disagreements;
         const DisagreementClass dc = classifyDisagreement(ch.evidence(i), leakFactor);
@@ -1221,6 +1299,7 @@ Metrics compareFrames(const CompareContext& context, const Frame& reference, con
     t.bothShadow += s.bothShadow;
     t.sumAbs += s.sumAbs;
     t.sumSq += s.sumSq;
+    t.vis.add(s.vis);
     for (size_t k = 0; k < t.cascadeErrors.size(); ++k) t.cascadeErrors[k] += s.cascadeErrors[k];
   }
   counts[classIndex(PixelClass::Correct)] += px.compared - t.disagreements;
@@ -1240,6 +1319,7 @@ Metrics compareFrames(const CompareContext& context, const Frame& reference, con
   out.shadowIou = shadowUnion ? double(t.bothShadow) / double(shadowUnion) : 1.0;
   out.mae = px.compared ? t.sumAbs / denom : 0.0;
   out.rmse = px.compared ? std::sqrt(t.sumSq / denom) : 0.0;
+  t.vis.setMetrics(out, d.regionPixels, px.compared);
   out.mMedian = d.mMedian;
   out.mP95 = d.mP95;
   out.mMax = d.mMax;

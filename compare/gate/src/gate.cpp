@@ -194,8 +194,14 @@ bool comparesNothing(const ResultRow& row) {
 }
 
 // A null the row itself explains: the m statistics when every compared pixel's footprint hit the
-// cap (m_capped == pixels_compared > 0). Any other null is a NaN, bad input.
+// cap (m_capped == pixels_compared > 0); a region's mae and rmse when the region has no pixel
+// (`<region>_pixels` == 0, e.g. the penumbra of a hard light). Any other null is a NaN, bad input.
 bool undefinedByRow(const nlohmann::json& metrics, const std::string& name) {
+  for (const VisRegionInfo& r : kVisRegions) {
+    if (name != r.maeMetric && name != r.rmseMetric) continue;
+    auto pixels = metrics.find(r.pixelsMetric);
+    return pixels != metrics.end() && pixels->is_number() && pixels->get<double>() == 0.0;
+  }
   if (name != "m_median" && name != "m_p95" && name != "m_max") return false;
   auto capped = metrics.find("m_capped"), compared = metrics.find("pixels_compared");
   return capped != metrics.end() && compared != metrics.end() && capped->is_number() && compared->is_number() &&
@@ -289,7 +295,18 @@ Direction builtinDirection(const std::string& metric, bool* known) {
         {"error_rate_max", Direction::LowerIsBetter},
         {"error_rate_std", Direction::LowerIsBetter},
         {"error_jump_max", Direction::LowerIsBetter},
+        // Soft shadows (compare/METRICS.md): the signed visibility errors only get better by going
+        // down; within_uncertainty says how much the truth's noise decided, neither better nor worse.
+        {"over_shadowing", Direction::LowerIsBetter},
+        {"under_shadowing", Direction::LowerIsBetter},
+        {"within_uncertainty", Direction::Ignore},
     };
+    // The regions of the truth (classes.h): their pixel counts depend on the reference alone.
+    for (const VisRegionInfo& r : kVisRegions) {
+      m[r.pixelsMetric] = Direction::Equal;
+      m[r.maeMetric] = Direction::LowerIsBetter;
+      m[r.rmseMetric] = Direction::LowerIsBetter;
+    }
     for (const PixelClassInfo& c : kPixelClasses) {
       const Direction d = c.better == MetricBetter::Lower ? Direction::LowerIsBetter : Direction::HigherIsBetter;
       if (c.countMetric) m[c.countMetric] = d;

@@ -5,6 +5,7 @@
 
 #include <cerrno>
 #include <chrono>
+#include <cmath>
 #include <cstdlib>
 #include <algorithm>
 #include <filesystem>
@@ -99,12 +100,41 @@ Frame ReferenceCache::get(const Scene& scene, const ReferenceOptions& requested,
   return frame;
 }
 
+namespace {
+
+// A sized light's truth (soft mode, classify.h): a pixel needs evidence where softDecision may say
+// Error, which may be where the decisions agree (a raster 1 over a truth of 0.5). The byte is the
+// raster's visibility to within 1.5 / 255 (resolve.frag), so every pixel whose byte lies farther
+// than the tolerance less 2 / 255 from the truth is listed: every evidence channel where the raster
+// may be too lit (leak and bleed read the depths), the map texel's alone elsewhere (coverage, acne).
+EvidenceSelector softSelector(const std::vector<float>& refVis, const std::vector<float>& refSigma) {
+  constexpr float kMargin = 2.0f / 255.0f;
+  auto truth = std::make_shared<std::vector<std::pair<float, float>>>(refVis.size());
+  for (size_t i = 0; i < refVis.size(); ++i)
+    (*truth)[i] = {clampVisibility(refVis[i]), kSoftTolerance + kSoftSigmaK * sanitizeSigma(refSigma[i]) - kMargin};
+  return [truth](const uint8_t* vis8, int width, int height, EvidenceRequest& request) {
+    const size_t n = truth->size();
+    if (size_t(width) * size_t(height) != n) return;
+    for (size_t i = 0; i < n; ++i) {
+      const auto [r, limit] = (*truth)[i];
+      const float s = float(vis8[i]) / 255.0f;
+      if (!(std::fabs(s - r) > limit)) continue;
+      (s > r - kMargin ? request.full : request.occluder).push_back(uint32_t(i));
+    }
+  };
+}
+
+}  // namespace
+
 EvidenceSelector disagreementSelector(const Frame& reference, const std::string& light) {
   const std::string name = "light." + light + ".vis";
   if (light.empty() || !reference.has(name) || reference.get(name).size() != reference.pixelCount()) return {};
   // The reference's decisions as bytes (1 lit, 0 shadowed), made once: a byte's decision is its
   // top bit, so 32 pixels at a time are checked for any disagreement before any is listed.
   const std::vector<float>& refVis = reference.get(name);
+  const std::string sigmaName = "light." + light + ".vis_sigma";
+  if (reference.has(sigmaName) && reference.get(sigmaName).size() == refVis.size())
+    return softSelector(refVis, reference.get(sigmaName));
   auto lit = std::make_shared<std::vector<uint8_t>>(refVis.size());
   for (size_t i = 0; i < refVis.size(); ++i) (*lit)[i] = litDecision(refVis[i]) ? 1 : 0;
   // Where the reference is lit the raster shadowed the pixel, and only the map texel decides its

@@ -263,7 +263,7 @@ class Engine {
         const nlohmann::json& m = ev.rows.at(sc).metrics;
         worst = std::max(worst, excess(num(m, "error_rate"), plan_.spec.maxError));
         for (const auto& [key, limit] : plan_.spec.maxRates)
-          worst = std::max(worst, excess(num(m, key.c_str()), limit));
+          if (!tuneTargetVacuous(m, key)) worst = std::max(worst, excess(num(m, key.c_str()), limit));
       }
       s.objective = worst;
       s.feasible = worst <= 0;
@@ -579,7 +579,8 @@ bool tuneMeetsTarget(const TunePlan& plan, const TuneEvaluation& e, const std::v
     if (!std::isnan(plan.spec.maxError)) {
       if (!(num(it->second.metrics, "error_rate") <= plan.spec.maxError)) return false;
       for (const auto& [key, limit] : plan.spec.maxRates)
-        if (!(num(it->second.metrics, key.c_str()) <= limit)) return false;
+        if (!tuneTargetVacuous(it->second.metrics, key) && !(num(it->second.metrics, key.c_str()) <= limit))
+          return false;
     } else if (!(tuneCost(e, scenes).first <= plan.spec.budgetMs)) {
       return false;
     }

@@ -184,20 +184,44 @@ double parseTuneNumber(const std::string& flag, const std::string& text) {
   return v;
 }
 
+std::vector<std::string> tuneMaxMetrics() {
+  std::vector<std::string> out;  // the error classes' rates (classes.h), then the visibility errors
+  for (const auto& c : kPixelClasses)
+    if (c.error && c.rateMetric) out.push_back(c.rateMetric);
+  out.push_back("mae");
+  out.push_back("rmse");
+  for (const auto& r : kVisRegions) {
+    out.push_back(r.maeMetric);
+    out.push_back(r.rmseMetric);
+  }
+  out.push_back("over_shadowing");
+  out.push_back("under_shadowing");
+  return out;
+}
+
+bool tuneTargetVacuous(const nlohmann::json& metrics, const std::string& key) {
+  for (const auto& r : kVisRegions) {
+    if (key != r.maeMetric && key != r.rmseMetric) continue;
+    auto pixels = metrics.find(r.pixelsMetric);
+    return pixels != metrics.end() && pixels->is_number() && pixels->get<double>() == 0.0;
+  }
+  return false;
+}
+
 std::pair<std::string, double> parseTuneMax(const std::string& text) {
   const std::string origin = "--max " + text;
   const size_t eq = text.find('=');
   if (eq == std::string::npos) throw InputError(formatError(origin, "", "no '=' found; expected metric=rate"));
   const std::string key = trim(text.substr(0, eq)), value = trim(text.substr(eq + 1));
-  std::vector<std::string> rates;  // the error classes' rates (classes.h)
-  for (const auto& c : kPixelClasses)
-    if (c.error && c.rateMetric) rates.push_back(c.rateMetric);
-  if (std::find(rates.begin(), rates.end(), key) == rates.end())
+  const std::vector<std::string> metrics = tuneMaxMetrics();
+  if (std::find(metrics.begin(), metrics.end(), key) == metrics.end())
     throw InputError(formatError(
-        origin, "", "unknown rate \"" + key + "\"; expected one of " + joined(rates) + " (error_rate is --max-error)"));
+        origin, "",
+        "unknown metric \"" + key + "\"; expected one of " + joined(metrics) + " (error_rate is --max-error)"));
   double v = 0;
   if (!parseNumber(value, v) || v < 0 || v > 1)
-    throw InputError(formatError(origin, "", "got \"" + value + "\"; expected a rate from 0 to 1"));
+    throw InputError(formatError(
+        origin, "", "got \"" + value + "\"; expected a number from 0 to 1 (a rate, or a visibility difference)"));
   return {key, v};
 }
 

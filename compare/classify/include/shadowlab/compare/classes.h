@@ -24,23 +24,27 @@
 #include <cstddef>
 #include <cstdint>
 
-#define SHADOWLAB_PIXEL_CLASSES(X)                                                                             \
-  X(Correct, 2, "correct", "correct", false, nullptr, nullptr, Lower, 0xBEBEBE, 0x555555,                      \
-    "both renderers decide the same (lit or shadowed)")                                                        \
-  X(Acne, 3, "acne", "acne", true, "acne", "acne_rate", Lower, 0xEB2323, 0xEB2323,                             \
-    "lit in truth, shadowed by the receiver's own texel in the map (bias too small)")                          \
-  X(Leak, 4, "leak", "leak", true, "leak", "leak_rate", Lower, 0x1E78FF, 0x1E78FF,                             \
-    "shadowed in truth, lit because the bias let the occluder through (peter panning)")                        \
-  X(Bleed, 8, "bleed", "bleed", true, "bleed", "bleed_rate", Lower, 0x00C8C8, 0x00C8C8,                        \
-    "shadowed in truth, lit by a filterable map's bound: a second occluder depth in the footprint (VSM/MSM)")  \
-  X(Aliasing, 5, "aliasing", "aliasing", true, "aliasing", "aliasing_rate", Lower, 0xFFD700, 0xFFD700,         \
-    "a disagreement within boundaryTexels map texels of a true shadow boundary (map too coarse)")              \
-  X(Coverage, 6, "coverage", "coverage", true, "coverage", "coverage_rate", Lower, 0x28C846, 0x28C846,         \
-    "the point lies outside the light's map: the renderer's policy decided, not a depth test")                 \
-  X(Other, 7, "other", "other", true, "other", "other_rate", Lower, 0xFF00FF, 0xFF00FF,                        \
-    "any other disagreement: rare; a large value is a finding to look at in errors.png")                       \
-  X(GeometryMismatch, 1, "geometry_mismatch", "geometry mismatch", false, "geometry_mismatch", nullptr, Lower, \
-    0x965F2D, 0x965F2D, "the renderers see different surfaces (or one sees none): counted, not scored")        \
+#define SHADOWLAB_PIXEL_CLASSES(X)                                                                              \
+  X(Correct, 2, "correct", "correct", false, nullptr, nullptr, Lower, 0xBEBEBE, 0x555555,                       \
+    "both renderers decide the same (lit or shadowed)")                                                         \
+  X(Acne, 3, "acne", "acne", true, "acne", "acne_rate", Lower, 0xEB2323, 0xEB2323,                              \
+    "lit in truth, shadowed by the receiver's own texel in the map (bias too small)")                           \
+  X(Leak, 4, "leak", "leak", true, "leak", "leak_rate", Lower, 0x1E78FF, 0x1E78FF,                              \
+    "shadowed in truth, lit because the bias let the occluder through (peter panning)")                         \
+  X(Bleed, 8, "bleed", "bleed", true, "bleed", "bleed_rate", Lower, 0x00C8C8, 0x00C8C8,                         \
+    "shadowed in truth, lit by a filterable map's bound: a second occluder depth in the footprint (VSM/MSM)")   \
+  X(Aliasing, 5, "aliasing", "aliasing", true, "aliasing", "aliasing_rate", Lower, 0xFFD700, 0xFFD700,          \
+    "a disagreement within boundaryTexels map texels of a true shadow boundary (map too coarse)")               \
+  X(Coverage, 6, "coverage", "coverage", true, "coverage", "coverage_rate", Lower, 0x28C846, 0x28C846,          \
+    "the point lies outside the light's map: the renderer's policy decided, not a depth test")                  \
+  X(PenumbraWide, 9, "penumbra_wide", "penumbra too wide", true, "penumbra_wide", "penumbra_wide_rate", Lower,  \
+    0xA05AFF, 0xA05AFF, "sized light: the raster is partial where the truth is fully lit or in umbra")          \
+  X(PenumbraHard, 10, "penumbra_hard", "penumbra too hard", true, "penumbra_hard", "penumbra_hard_rate", Lower, \
+    0xFF8C1E, 0xFF8C1E, "sized light: the truth is partial (penumbra), the raster 0 or 1")                      \
+  X(Other, 7, "other", "other", true, "other", "other_rate", Lower, 0xFF00FF, 0xFF00FF,                         \
+    "any other disagreement: rare; a large value is a finding to look at in errors.png")                        \
+  X(GeometryMismatch, 1, "geometry_mismatch", "geometry mismatch", false, "geometry_mismatch", nullptr, Lower,  \
+    0x965F2D, 0x965F2D, "the renderers see different surfaces (or one sees none): counted, not scored")         \
   X(NotCompared, 0, "not_compared", "", false, nullptr, nullptr, Lower, 0x121428, 0x121428, "background in both frames")
 
 namespace shadowlab {
@@ -72,6 +76,24 @@ inline constexpr PixelClassInfo kPixelClasses[] = {SHADOWLAB_PIXEL_CLASSES(SHADO
 #undef SHADOWLAB_PIXEL_CLASS_ROW
 
 inline constexpr size_t kPixelClassCount = sizeof(kPixelClasses) / sizeof(kPixelClasses[0]);
+
+// The regions of the truth that the visibility metrics are split by (compare/METRICS.md "Soft
+// shadows"): X(Enumerator, "key"), the key giving the metrics `<key>_pixels`, `<key>_mae`,
+// `<key>_rmse`. Which region a pixel is in: visRegion (classify.h), from the reference visibility.
+#define SHADOWLAB_VIS_REGIONS(X) X(Lit, "lit") X(Penumbra, "penumbra") X(Umbra, "umbra")
+#define SHADOWLAB_VIS_REGION_ENUMERATOR(name, key) name,
+enum class VisRegion : uint8_t { SHADOWLAB_VIS_REGIONS(SHADOWLAB_VIS_REGION_ENUMERATOR) };
+#undef SHADOWLAB_VIS_REGION_ENUMERATOR
+struct VisRegionInfo {
+  VisRegion region;
+  const char* pixelsMetric;  // compared pixels of the region (a count)
+  const char* maeMetric;     // mean |R - S| over them; null in JSON when the region is empty
+  const char* rmseMetric;    // sqrt(mean (R - S)^2) over them; null when empty
+};
+#define SHADOWLAB_VIS_REGION_ROW(name, key) VisRegionInfo{VisRegion::name, key "_pixels", key "_mae", key "_rmse"},
+inline constexpr VisRegionInfo kVisRegions[] = {SHADOWLAB_VIS_REGIONS(SHADOWLAB_VIS_REGION_ROW)};
+#undef SHADOWLAB_VIS_REGION_ROW
+inline constexpr size_t kVisRegionCount = sizeof(kVisRegions) / sizeof(kVisRegions[0]);
 
 namespace detail {
 // Arrays indexed by a class code (counts, colours) have kPixelClassCount entries: that is safe only

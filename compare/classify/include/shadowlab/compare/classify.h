@@ -7,6 +7,7 @@
 // the decisions disagree (the frames' evidence planes are most of the memory traffic). The class
 // functions are inline: the pass-1 loop calls them for every pixel.
 // compare/METRICS.md defines each class and why the precedence is what it is.
+#include <cmath>
 #include <vector>
 
 #include "shadowlab/compare/compare.h"
@@ -35,7 +36,60 @@ struct PixelEvidence {
   // The disagreement lies within boundaryTexels * m pixels of a reference shadow boundary. Known
   // only after the boundary distance transform (compareFrames' second pass).
   bool withinBoundaryBand = false;
+  // A sized light: the reference frame has `light.L.vis_sigma`, the standard error of its `vis` (the
+  // visible fraction of the light, estimated by stratified rays). Switches the pixel to soft mode
+  // (softError below); without it every test here is the hard light's.
+  bool softTruth = false;
+  float referenceSigma = 0;  // reference `vis_sigma`; NaN or negative read as 0
 };
+
+// ---- soft truth (sized lights; compare/METRICS.md "Soft shadows") ----------------------------
+// k: a difference within k standard errors of the truth's estimate is the truth's own noise.
+// Three (a normal variable lies within 3 sigma 99.7 % of the time) keeps the noise of a 64-ray
+// reference out of the errors without hiding a penumbra that is wrong by a fifth of the light.
+constexpr float kSoftSigmaK = 3.0f;
+// Tolerance of a soft-mode pixel against an exact truth: |R - S| <= kSoftTolerance is correct
+// (a tenth of the light: about what 8-bit shading makes visible in a grey penumbra).
+constexpr float kSoftTolerance = 0.1f;
+// "Fully": a visibility within kSoftEpsilon of 1 is fully lit, within it of 0 umbra; between the
+// two, partial. Used for the regions of the truth (visRegion, point estimate), for the truth's
+// side of the penumbra classes (widened by k sigma) and for the raster's side.
+constexpr float kSoftEpsilon = 0.05f;
+
+// clamp to [0, 1], NaN read as 0 (the visibilities every metric reads).
+inline float clampVisibility(float v) { return v >= 0.0f ? (v <= 1.0f ? v : 1.0f) : 0.0f; }
+inline float sanitizeSigma(float s) { return s >= 0.0f ? s : 0.0f; }  // NaN, negative -> 0
+
+// The region of the truth a compared pixel belongs to, from the clamped reference visibility R:
+// lit when R >= 1 - epsilon, umbra when R <= epsilon, penumbra between (every light: a hard light's
+// binary truth has no penumbra unless --spp makes its edges fractional).
+inline VisRegion visRegion(float referenceVisClamped) {
+  if (referenceVisClamped >= 1.0f - kSoftEpsilon) return VisRegion::Lit;
+  if (referenceVisClamped <= kSoftEpsilon) return VisRegion::Umbra;
+  return VisRegion::Penumbra;
+}
+
+// The soft-mode decision of one compared pixel, from R, S (clamped) and sigma (NaN, negative: 0):
+// an error when |R - S| > kSoftTolerance + k sigma, whatever the binary decisions say; within the
+// uncertainty (correct, counted in `within_uncertainty`) when kSoftTolerance < |R - S| <= that.
+enum class SoftDecision : uint8_t { Correct, WithinUncertainty, Error };
+inline SoftDecision softDecision(float referenceVisClamped, float rasterVisClamped, float sigma) {
+  const float diff = std::fabs(referenceVisClamped - rasterVisClamped);
+  if (!(diff > kSoftTolerance)) return SoftDecision::Correct;
+  return diff > kSoftTolerance + kSoftSigmaK * sanitizeSigma(sigma) ? SoftDecision::Error
+                                                                    : SoftDecision::WithinUncertainty;
+}
+// The truth's side of the penumbra classes, confident by k sigma: fully lit when R - k sigma >=
+// 1 - epsilon, umbra when R + k sigma <= epsilon, partial when epsilon < R - k sigma and
+// R + k sigma < 1 - epsilon; a pixel near a threshold (within k sigma of it) is none of the three.
+inline bool truthFully(float r, float sigma) {
+  return r - kSoftSigmaK * sigma >= 1.0f - kSoftEpsilon || r + kSoftSigmaK * sigma <= kSoftEpsilon;
+}
+inline bool truthPartial(float r, float sigma) {
+  return r - kSoftSigmaK * sigma > kSoftEpsilon && r + kSoftSigmaK * sigma < 1.0f - kSoftEpsilon;
+}
+// The raster's side (no uncertainty): hard when S <= epsilon or S >= 1 - epsilon, else partial.
+inline bool rasterPartial(float s) { return s > kSoftEpsilon && s < 1.0f - kSoftEpsilon; }
 
 // The binary decision: lit when visibility >= 0.5 (NaN read as 0).
 inline bool litDecision(float visibility) { return visibility >= 0.5f; }  // the same as clamping first
@@ -63,11 +117,23 @@ struct DisagreementClass {
 inline bool bleedEvidence(const PixelEvidence& e) {
   return e.hasMoments && e.hasDepths && e.momentBound >= 0.5f && e.receiverDepth - e.momentMean > e.biasDepth;
 }
+// Called for a disagreement (hard: the decisions differ; soft: softDecision is Error, the decisions
+// may agree). The evidence reads the direction of the error: acne needs the truth lit and the
+// raster shadowed (decisions), leak and bleed the raster too lit (hard: the truth shadowed, which in
+// a disagreement is the same; soft: S > R).
 inline DisagreementClass classifyDisagreement(const PixelEvidence& e, float leakBiasFactor) {
   const bool referenceLit = litDecision(e.referenceVis);
   // Outside the map no other evidence (occluder, depth) is meaningful.
   if (e.hasInMap && !(e.inMap >= 0.5f)) return {PixelClass::Coverage, false, false};
-  if (referenceLit && e.hasOccluderId && e.occluderId == e.rasterObject) return {PixelClass::Acne, false, false};
+  if (referenceLit && !litDecision(e.rasterVis) && e.hasOccluderId && e.occluderId == e.rasterObject)
+    return {PixelClass::Acne, false, false};
+  const float r = clampVisibility(e.referenceVis), s = clampVisibility(e.rasterVis);
+  if (e.softTruth) {
+    const float sigma = sanitizeSigma(e.referenceSigma);
+    if (truthPartial(r, sigma) && !rasterPartial(s)) return {PixelClass::PenumbraHard, false, false};
+    if (truthFully(r, sigma) && rasterPartial(s)) return {PixelClass::PenumbraWide, false, false};
+  }
+  const bool rasterTooLit = e.softTruth ? s > r : !referenceLit;
   // (a) another object in the map, let through by the bias; a texel the receiver wrote itself
   // proves no occluder.
   const bool throughMap = e.hasDepths && e.hasOccluderId && e.occluderId != 0.0f && e.occluderId != e.rasterObject &&
@@ -75,7 +141,7 @@ inline DisagreementClass classifyDisagreement(const PixelEvidence& e, float leak
   // (b) the true occluder within the bias distance (with the sampling slack).
   const bool withinBias = e.hasOccluderDistance && e.referenceOccluderDist >= 0.0f &&
                           e.referenceOccluderDist <= leakBiasFactor * e.biasWorld;
-  return {PixelClass::Other, true, !referenceLit && (throughMap || withinBias), !referenceLit && bleedEvidence(e)};
+  return {PixelClass::Other, true, rasterTooLit && (throughMap || withinBias), rasterTooLit && bleedEvidence(e)};
 }
 
 // A candidate's class once its boundary distance is known: aliasing within the band, beyond it
@@ -89,15 +155,27 @@ inline PixelClass resolveCandidate(bool leakEvidence, bool withinBoundaryBand, b
   return leakEvidence ? PixelClass::Leak : PixelClass::Other;
 }
 
+// Whether a compared pixel is a disagreement that needs a class: hard, the decisions differ; soft,
+// softDecision says Error (which may hold where the decisions agree, and not where they differ).
+inline bool isDisagreement(const PixelEvidence& e) {
+  if (!e.softTruth) return litDecision(e.referenceVis) != litDecision(e.rasterVis);
+  return softDecision(clampVisibility(e.referenceVis), clampVisibility(e.rasterVis), sanitizeSigma(e.referenceSigma)) ==
+         SoftDecision::Error;
+}
+
 // The class of one pixel; the first that holds, in this order (the precedence):
-//   not compared, geometry mismatch, correct (the decisions agree), then for a disagreement
-//   coverage (outside the map), acne (lit in truth, the receiver's own texel in the map),
-//   aliasing (within the boundary band), bleed (a filterable map's bound lit a pixel its moments
-//   put behind an occluder), leak (the bias let a real occluder through), other.
+//   not compared, geometry mismatch, correct (hard: the decisions agree; soft: |R - S| within
+//   kSoftTolerance + k sigma), then for a disagreement coverage (outside the map), acne (lit in
+//   truth, shadowed, the receiver's own texel in the map), for a sized light penumbra_hard (the
+//   truth partial, the raster 0 or 1) and penumbra_wide (the raster partial, the truth fully lit
+//   or umbra), then aliasing (within the boundary band), bleed (a filterable map's bound lit a
+//   pixel its moments put behind an occluder), leak (the bias let a real occluder through), other.
+//   Under a sized light the last four take what is left: a hard raster against a hard truth of
+//   the other decision, or a partial raster against a partial truth off by more than the tolerance.
 inline PixelClass classifyPixel(const PixelEvidence& e, float leakBiasFactor = CompareOptions{}.leakBiasFactor) {
   const PixelClass scored = scoredClass(e.referenceHit, e.rasterHit, e.referenceObject, e.rasterObject);
   if (scored != PixelClass::Correct) return scored;
-  if (litDecision(e.referenceVis) == litDecision(e.rasterVis)) return PixelClass::Correct;
+  if (!isDisagreement(e)) return PixelClass::Correct;
   const DisagreementClass d = classifyDisagreement(e, leakBiasFactor);
   return d.candidate ? resolveCandidate(d.leakEvidence, e.withinBoundaryBand, d.bleedEvidence) : d.cls;
 }

@@ -1,6 +1,7 @@
 #pragma once
 // Per-pixel classification of shadow errors and the metrics built on it. Documented in
 // compare/METRICS.md (numerator, denominator, exclusions, sources). compare reads only Frames.
+#include <array>
 #include <cstdint>
 #include <memory>
 #include <string>
@@ -59,6 +60,18 @@ struct Metrics {
   double rate(PixelClass c) const { return classRates[classIndex(c)]; }
   double shadowIou = 1;
   double mae = 0, rmse = 0;
+  // Visibility error per region of the truth (classes.h kVisRegions, visRegion in classify.h),
+  // every light: compared pixels of the region, mean |R - S| and sqrt(mean (R - S)^2) over them
+  // (0 in memory, null in JSON, when the region is empty).
+  std::array<uint64_t, kVisRegionCount> regionPixels{};
+  std::array<double, kVisRegionCount> regionMae{}, regionRmse{};
+  // Signed visibility error over the compared pixels: mean max(R - S, 0) (the raster darker than
+  // the truth) and mean max(S - R, 0) (lighter); they sum to mae up to rounding.
+  double overShadowing = 0, underShadowing = 0;
+  // Sized lights only (the reference has `vis_sigma`; 0 otherwise): compared pixels whose
+  // difference exceeds kSoftTolerance but lies within kSoftTolerance + k sigma (classify.h), so
+  // correct only because of the truth's own uncertainty.
+  uint64_t withinUncertainty = 0;
   // Over the compared pixels whose m is below kFootprintCapPx; 0 without an m channel.
   double mMedian = 0, mP95 = 0, mMax = 0;
   // Compared pixels whose m reached kFootprintCapPx (or is +inf): not in mMedian, mP95, mMax.

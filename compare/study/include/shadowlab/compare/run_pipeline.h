@@ -46,8 +46,10 @@ struct RunResult {
 // pixels where compareFrames reads the raster frame's evidence channels (classify.h; it reads hit,
 // object_id, vis, m and cascade everywhere, which the rasterizer fills everywhere). Those the
 // reference lights for the occluder's evidence alone (in_map and occluder_id decide them), the
-// others for every channel. An empty function when the reference has no such channel (then the
-// rasterizer renders the full frame).
+// others for every channel. A sized light's reference (`light.<light>.vis_sigma`, soft mode:
+// compare/METRICS.md "Soft shadows") lists instead the pixels whose byte may lie beyond the soft
+// tolerance from the truth, whatever the decisions. An empty function when the reference has no
+// such channel (then the rasterizer renders the full frame).
 EvidenceSelector disagreementSelector(const Frame& reference, const std::string& light);
 
 RunResult runPipeline(const Scene& scene, const Method& method, Rasterizer& rasterizer, ReferenceCache& cache,

@@ -62,8 +62,14 @@ struct TuneSpec {
 // "0.002" for --max-error / --budget-ms: InputError "FLAG: error: got ...; expected ..." unless a
 // finite number >= 0 (--budget-ms: > 0). --max-error is a rate, so also <= 1.
 double parseTuneNumber(const std::string& flag, const std::string& text);
-// "acne_rate=0.001" (--max): the metric must be a rate of Metrics::toJson.
+// "acne_rate=0.001" (--max): the metric must be one of tuneMaxMetrics(), its value in 0..1.
 std::pair<std::string, double> parseTuneMax(const std::string& text);
+// What --max accepts, in this order: the error classes' rates (classes.h), mae, rmse, each region's
+// mae and rmse (lit_mae, ...), over_shadowing, under_shadowing (compare/METRICS.md).
+std::vector<std::string> tuneMaxMetrics();
+// A --max target on a region's mae or rmse constrains no scene whose truth has no pixel of that
+// region (`<region>_pixels` 0, the metric null): nothing there can be wrong.
+bool tuneTargetVacuous(const nlohmann::json& metrics, const std::string& key);
 
 struct TuneKey {
   std::string key;
