@@ -221,7 +221,7 @@ TEST(RasterResolveParams, SpotAndNoLight) {
 
 // The kinds tables drive the enums, the keys and the shader codes: each row round-trips.
 TEST(RasterResolveParams, KindTablesAgreeWithTheShaderCodes) {
-  ASSERT_EQ(filterKinds().size(), 9u);
+  ASSERT_EQ(filterKinds().size(), 11u);
   for (const KindInfo<Filter>& k : filterKinds()) {
     EXPECT_EQ(toString(k.kind), k.key);
     Method m;

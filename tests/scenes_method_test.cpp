@@ -83,6 +83,14 @@ TEST(ScenesMethod, KeysInDocumentationOrder) {
                                                     "evsm.exponent_pos",
                                                     "evsm.exponent_neg",
                                                     "msm.moment_bias",
+                                                    "pcss.blocker_taps",
+                                                    "pcss.filter_taps",
+                                                    "pcss.min_filter",
+                                                    "pcss.max_penumbra",
+                                                    "pcss.rotate",
+                                                    "dpcf.taps",
+                                                    "dpcf.max_penumbra",
+                                                    "dpcf.rotate",
                                                     "projector.reverse_guard",
                                                     "technique"}));
 }
@@ -449,4 +457,75 @@ TEST(ScenesMethod, JsonNumbersAreTheShortestTextOfTheFloat) {
   EXPECT_EQ(back.biasSlope, odd.biasSlope);
   EXPECT_EQ(back.biasCompare, odd.biasCompare);
   EXPECT_EQ(back.tsmFocus, odd.tsmFocus);
+}
+
+// filter=pcss and filter=dpcf and their keys: defaults, text and JSON, the round trip, the ranges
+// (with the key named) and the cross-check of pcss.max_penumbra against pcss.min_filter.
+TEST(ScenesMethod, SoftFilterKeys) {
+  const Method d;
+  EXPECT_EQ(d.pcssBlockerTaps, 16);
+  EXPECT_EQ(d.pcssFilterTaps, 32);
+  EXPECT_FLOAT_EQ(d.pcssMinFilter, 1.5f);
+  EXPECT_FLOAT_EQ(d.pcssMaxPenumbra, 16.0f);
+  EXPECT_TRUE(d.pcssRotate);
+  EXPECT_EQ(d.dpcfTaps, 16);
+  EXPECT_FLOAT_EQ(d.dpcfMaxPenumbra, 8.0f);
+  EXPECT_TRUE(d.dpcfRotate);
+  ASSERT_NE(findKind(filterKinds(), "pcss"), nullptr);
+  ASSERT_NE(findKind(filterKinds(), "dpcf"), nullptr);
+  EXPECT_EQ(int(findKind(filterKinds(), "pcss")->kind), 9);
+  EXPECT_EQ(int(findKind(filterKinds(), "dpcf")->kind), 10);
+  Method m;
+  applyMethodSetting(m, "filter", "pcss", "--set");
+  applyMethodSetting(m, "pcss.blocker_taps", "24", "--set");
+  applyMethodSetting(m, "pcss.filter_taps", "48", "--set");
+  applyMethodSetting(m, "pcss.min_filter", "2", "--set");
+  applyMethodSetting(m, "pcss.max_penumbra", "40", "--set");
+  applyMethodSetting(m, "pcss.rotate", "false", "--set");
+  applyMethodSetting(m, "dpcf.taps", "12", "--set");
+  applyMethodSetting(m, "dpcf.max_penumbra", "6.5", "--set");
+  applyMethodSetting(m, "dpcf.rotate", "0", "--set");
+  validateMethod(m, "--set");
+  EXPECT_EQ(m.filter, Filter::Pcss);
+  nlohmann::json j = roundTripped(m);
+  EXPECT_EQ(j["filter"], "pcss");
+  EXPECT_EQ(j["pcss.blocker_taps"], 24);
+  EXPECT_EQ(j["pcss.filter_taps"], 48);
+  EXPECT_EQ(j["pcss.min_filter"], 2.0);
+  EXPECT_EQ(j["pcss.max_penumbra"], 40.0);
+  EXPECT_EQ(j["pcss.rotate"], false);
+  EXPECT_EQ(j["dpcf.taps"], 12);
+  EXPECT_EQ(j["dpcf.max_penumbra"], 6.5);
+  EXPECT_EQ(j["dpcf.rotate"], false);
+  EXPECT_EQ(setError("pcss.blocker_taps", "-1"),
+            "--set: pcss.blocker_taps: error: got \"-1\"; expected an integer 1..64 (the Poisson disc's 64 points, "
+            "resolve_abi.h kMaxTaps)");
+  EXPECT_EQ(setError("pcss.filter_taps", "65"),
+            "--set: pcss.filter_taps: error: got \"65\"; expected an integer 1..64 (the Poisson disc's 64 points, "
+            "resolve_abi.h kMaxTaps)");
+  EXPECT_EQ(setError("dpcf.taps", "0"),
+            "--set: dpcf.taps: error: got \"0\"; expected an integer 1..64 (the Poisson disc's 64 points, "
+            "resolve_abi.h kMaxTaps)");
+  EXPECT_EQ(setError("pcss.min_filter", "0"),
+            "--set: pcss.min_filter: error: got \"0\"; expected a number > 0 and <= 32 (map texels)");
+  EXPECT_EQ(setError("pcss.max_penumbra", "nan"),
+            "--set: pcss.max_penumbra: error: got \"nan\"; expected a number > 0 and <= 64 (map texels, at least "
+            "pcss.min_filter)");
+  EXPECT_EQ(setError("dpcf.max_penumbra", "0.5"),
+            "--set: dpcf.max_penumbra: error: got \"0.5\"; expected a number 1..64 (map texels)");
+  EXPECT_EQ(setError("pcss.rotate", "2"), "--set: pcss.rotate: error: got \"2\"; expected true, false, 1 or 0");
+  // The kernel's radius is clamped to [min_filter, max_penumbra]: an empty interval is refused.
+  Method bad;
+  bad.pcssMinFilter = 8.0f;
+  bad.pcssMaxPenumbra = 4.0f;
+  try {
+    validateMethod(bad, "m.json");
+    ADD_FAILURE() << "accepted max_penumbra < min_filter";
+  } catch (const InputError& e) {
+    EXPECT_EQ(std::string(e.what()),
+              "m.json: pcss.max_penumbra: error: got 4; expected a number >= pcss.min_filter (8)");
+  }
+  bad = Method();
+  bad.dpcfTaps = 0;
+  EXPECT_THROW(validateMethod(bad, "m.json"), InputError);
 }

@@ -1365,6 +1365,17 @@ const Light* Rasterizer::Impl::validate(const Scene& scene, const Method& method
   if (method.filter == Filter::Poisson && !(method.filterRadius > 0.0f && method.filterRadius <= 32.0f))
     throw InputError(formatError("method", "filter.radius",
                                  "got " + std::to_string(method.filterRadius) + "; expected > 0 and <= 32 texels"));
+  // The soft filters take the light's size in map units from a layer that is a plain crop (an
+  // orthographic one for a directional light): a warped map's texel and depth scales change
+  // across it, so no one size per layer holds (raster/METHODS.md "Soft filters").
+  const bool softFilter = method.filter == Filter::Pcss || method.filter == Filter::Dpcf;
+  if (softFilter && light && light->type == LightType::Directional &&
+      (method.fit == Fit::Lispsm || method.fit == Fit::Psm || method.fit == Fit::Tsm))
+    throw InputError(formatError("method", "fit",
+                                 "got " + toString(method.fit) + " with filter=" + toString(method.filter) +
+                                     " and the directional light \"" + light->name +
+                                     "\"; expected fit=sphere, tight, cascades or sdsm (a warped map has no one "
+                                     "light size in texels)"));
   if (scene.projectors.size() > size_t(abi::kMaxProjectors))
     throw InputError(formatError(where, "/projectors",
                                  "got " + std::to_string(scene.projectors.size()) +

@@ -72,6 +72,38 @@ float depthResolution(DepthFormat format) {
   return 0.0f;
 }
 
+glm::vec4 lightSizeInMap(const Light& light, const MapLayer& layer, int mapSize) {
+  const glm::mat4& m = layer.texFromWorld;  // glm: m[column][row]
+  auto row = [&](int i) { return glm::dvec3(m[0][i], m[1][i], m[2][i]); };
+  const bool affine = m[0][3] == 0.0f && m[1][3] == 0.0f && m[2][3] == 0.0f && m[3][3] == 1.0f;
+  const double size = double(mapSize);
+  if (affine) {
+    // Orthographic: a disc of angular diameter theta at infinity; a blocker dz (world, along the
+    // light) in front of the receiver casts a penumbra of radius dz tan(theta / 2). The map's depth
+    // is linear, dz = (d_r - d_b) / |depth row| (world per unit of depth), and one world unit
+    // across is size * |u row| texels (|v row| down).
+    if (light.type != LightType::Directional || !(light.angularDiameterDeg > 0.0f)) return glm::vec4(0.0f);
+    const double halfTan = std::tan(0.5 * double(light.angularDiameterDeg) * 3.14159265358979323846 / 180.0);
+    const double worldPerDepth = 1.0 / glm::length(row(2));
+    return glm::vec4(float(halfTan * worldPerDepth * size * glm::length(row(0))),
+                     float(halfTan * worldPerDepth * size * glm::length(row(1))), 0.0f, 0.0f);
+  }
+  // Perspective (spot, cube face; warped directional fits are refused with the soft filters): a
+  // sphere of radius R at the map's eye. A blocker at view distance z_b casts, on a receiver at z_r,
+  // a penumbra of radius R (z_r - z_b) / z_b (world), which the map shows at z_r as
+  // R (z_r - z_b) / (z_b z_r) times the texels per unit of x / w: size |u row's part across w|.
+  // The depth row is A * (w row) plus a constant, depth = A + B / w, so z_lin = w = B / (d - A).
+  if (light.type == LightType::Directional || !(light.radius > 0.0f)) return glm::vec4(0.0f);
+  const glm::dvec3 w = row(3);
+  const double ww = glm::dot(w, w);
+  if (!(ww > 0.0)) return glm::vec4(0.0f);
+  const double a = glm::dot(row(2), w) / ww;
+  const double b = double(m[3][2]) - a * double(m[3][3]);
+  auto across = [&](int i) { return glm::length(row(i) - w * (glm::dot(row(i), w) / ww)); };
+  const double r = double(light.radius) * size;
+  return glm::vec4(float(r * across(0)), float(r * across(1)), float(a), float(b));
+}
+
 uint32_t lightTypeCode(const Light* light) { return light ? uint32_t(light->type) : uint32_t(abi::kLightNone); }
 
 abi::Params packResolveParams(const Scene& scene, const Light* light, const Method& method, const Camera& fitCamera,
@@ -138,6 +170,12 @@ abi::Params packResolveParams(const Scene& scene, const Light* light, const Meth
                           std::min(method.evsmExponentPos, abi::kEvsmMaxExponent),
                           std::min(method.evsmExponentNeg, abi::kEvsmMaxExponent));
   prm.moments2 = glm::vec4(method.msmMomentBias, float(method.filterBlur), 0, 0);
+  prm.softTaps = glm::ivec4(method.pcssBlockerTaps, method.pcssFilterTaps, method.dpcfTaps,
+                            (method.filter == Filter::Dpcf ? method.dpcfRotate : method.pcssRotate) ? 1 : 0);
+  prm.softInfo = glm::vec4(method.pcssMinFilter, method.pcssMaxPenumbra, method.dpcfMaxPenumbra, 0.0f);
+  if (light)
+    for (int i = 0; i < frameLayers.lightLayers && i < abi::kMaxLightLayers; ++i)
+      prm.lightSize[i] = lightSizeInMap(*light, layers[size_t(i)], method.mapSize);
   const std::vector<glm::vec2>& poisson = poissonDisc();
   for (int i = 0; i < abi::kMaxTaps; ++i) prm.poisson[i] = glm::vec4(poisson[size_t(i)], 0, 0);
   return prm;

@@ -199,6 +199,12 @@ const char* const kTsmFocusDistanceExpected = "a number > 0 and <= 1 (share of t
 // EVSM's warp exponents: the 32F moments clamp them to 42 (raster/METHODS.md); beyond 100 is a typo.
 const char* const kExponentExpected = "a number > 0 and <= 100 (clamped to 42, what 32-bit moments hold)";
 
+// The soft filters' keys (pcss.*, dpcf.*): the Poisson disc has 64 points (resolve_abi.h kMaxTaps).
+constexpr const char* kTapsWhy = "the Poisson disc's 64 points, resolve_abi.h kMaxTaps";
+const char* const kMinFilterExpected = "a number > 0 and <= 32 (map texels)";
+const char* const kMaxPenumbraExpected = "a number > 0 and <= 64 (map texels, at least pcss.min_filter)";
+const char* const kDpcfMaxPenumbraExpected = "a number 1..64 (map texels)";
+
 // technique=path: a file the method names, read and checked at once (technique.h's errors name it).
 std::string techniqueOf(const Value& v, const Where& w) {
   std::string path;
@@ -377,6 +383,28 @@ const std::vector<SetterRow>& setters() {
        [](Method& m, const Value& v, const Where& w) {
          m.msmMomentBias = floatIn(v, w, 0.0, 1.0, false, "a number 0..1 (3e-5: 32-bit moments)");
        }},
+      {"pcss.blocker_taps", "filter=pcss: Poisson taps of the blocker search",
+       [](Method& m, const Value& v, const Where& w) { m.pcssBlockerTaps = intIn(v, w, 1, 64, kTapsWhy); }},
+      {"pcss.filter_taps", "filter=pcss: Poisson taps of the PCF over the penumbra",
+       [](Method& m, const Value& v, const Where& w) { m.pcssFilterTaps = intIn(v, w, 1, 64, kTapsWhy); }},
+      {"pcss.min_filter", "filter=pcss: the smallest kernel radius in map texels (a hard light's kernel)",
+       [](Method& m, const Value& v, const Where& w) {
+         m.pcssMinFilter = floatIn(v, w, 0.0, 32.0, true, kMinFilterExpected);
+       }},
+      {"pcss.max_penumbra", "filter=pcss: the largest blocker-search and kernel radius in map texels",
+       [](Method& m, const Value& v, const Where& w) {
+         m.pcssMaxPenumbra = floatIn(v, w, 0.0, 64.0, true, kMaxPenumbraExpected);
+       }},
+      {"pcss.rotate", "filter=pcss: rotate the Poisson taps per pixel (interleaved-gradient noise)",
+       [](Method& m, const Value& v, const Where& w) { m.pcssRotate = boolOf(v, w); }},
+      {"dpcf.taps", "filter=dpcf: Poisson taps of the one kernel (blocker search and filter)",
+       [](Method& m, const Value& v, const Where& w) { m.dpcfTaps = intIn(v, w, 1, 64, kTapsWhy); }},
+      {"dpcf.max_penumbra", "filter=dpcf: the largest kernel radius in map texels",
+       [](Method& m, const Value& v, const Where& w) {
+         m.dpcfMaxPenumbra = floatIn(v, w, 1.0, 64.0, false, kDpcfMaxPenumbraExpected);
+       }},
+      {"dpcf.rotate", "filter=dpcf: rotate the Poisson taps per pixel (interleaved-gradient noise)",
+       [](Method& m, const Value& v, const Where& w) { m.dpcfRotate = boolOf(v, w); }},
       {"projector.reverse_guard", "projectors project only where w >= 0 (not behind the projector)",
        [](Method& m, const Value& v, const Where& w) { m.projectorReverseGuard = boolOf(v, w); }},
       {"technique", "a GLSL file defining float shadowVisibility(ShadowQuery q) (filter=none; its keys: technique.*)",
@@ -455,6 +483,20 @@ void crossCheck(const Method& m, const std::string& file, const std::string& pre
     if (!(v > 0.0f && v <= 100.0f)) bad(key, jsonFloat(v).dump(), kExponentExpected);
   if (!(m.msmMomentBias >= 0.0f && m.msmMomentBias <= 1.0f))
     bad("msm.moment_bias", jsonFloat(m.msmMomentBias).dump(), "a number 0..1");
+  for (auto [key, v] : {std::pair<const char*, int>{"pcss.blocker_taps", m.pcssBlockerTaps},
+                        {"pcss.filter_taps", m.pcssFilterTaps},
+                        {"dpcf.taps", m.dpcfTaps}})
+    if (v < 1 || v > 64) bad(key, std::to_string(v), "an integer 1..64 (" + std::string(kTapsWhy) + ")");
+  if (!(m.pcssMinFilter > 0.0f && m.pcssMinFilter <= 32.0f))
+    bad("pcss.min_filter", jsonFloat(m.pcssMinFilter).dump(), kMinFilterExpected);
+  if (!(m.pcssMaxPenumbra > 0.0f && m.pcssMaxPenumbra <= 64.0f))
+    bad("pcss.max_penumbra", jsonFloat(m.pcssMaxPenumbra).dump(), kMaxPenumbraExpected);
+  // The kernel's radius is clamped to [min_filter, max_penumbra]: an empty interval has no kernel.
+  if (m.pcssMaxPenumbra < m.pcssMinFilter)
+    bad("pcss.max_penumbra", jsonFloat(m.pcssMaxPenumbra).dump(),
+        "a number >= pcss.min_filter (" + jsonFloat(m.pcssMinFilter).dump() + ")");
+  if (!(m.dpcfMaxPenumbra >= 1.0f && m.dpcfMaxPenumbra <= 64.0f))
+    bad("dpcf.max_penumbra", jsonFloat(m.dpcfMaxPenumbra).dump(), kDpcfMaxPenumbraExpected);
   if (m.name.empty()) bad("name", "\"\"", "a non-empty string");
   checkTechnique(m, file, prefix);
 }
@@ -573,6 +615,14 @@ nlohmann::json methodToJson(const Method& m) {
   j["evsm.exponent_pos"] = jsonFloat(m.evsmExponentPos);
   j["evsm.exponent_neg"] = jsonFloat(m.evsmExponentNeg);
   j["msm.moment_bias"] = jsonFloat(m.msmMomentBias);
+  j["pcss.blocker_taps"] = m.pcssBlockerTaps;
+  j["pcss.filter_taps"] = m.pcssFilterTaps;
+  j["pcss.min_filter"] = jsonFloat(m.pcssMinFilter);
+  j["pcss.max_penumbra"] = jsonFloat(m.pcssMaxPenumbra);
+  j["pcss.rotate"] = m.pcssRotate;
+  j["dpcf.taps"] = m.dpcfTaps;
+  j["dpcf.max_penumbra"] = jsonFloat(m.dpcfMaxPenumbra);
+  j["dpcf.rotate"] = m.dpcfRotate;
   j["projector.reverse_guard"] = m.projectorReverseGuard;
   if (!m.technique.empty()) {  // only then: other methods' results keep their columns
     const TechniqueFile& t = loadTechniqueFile(m.technique);

@@ -87,6 +87,16 @@ MethodCost estimateMethodCost(const Scene& scene, const Method& method, const st
       taps = method.filterTaps;
       extraNs = taps * kNsPerPoissonTap;
       break;
+    case Filter::Pcss:
+      // The blocker search and the PCF, one fetch per Poisson tap each (every pixel pays for the
+      // search; the PCF only where blockers were found, counted in full: the SIMD lanes run it).
+      taps = double(method.pcssBlockerTaps) + method.pcssFilterTaps;
+      extraNs = taps * kNsPerPoissonTap;
+      break;
+    case Filter::Dpcf:
+      taps = method.dpcfTaps;  // one kernel: the search's taps are the filter's
+      extraNs = taps * kNsPerPoissonTap;
+      break;
     case Filter::Vsm:
     case Filter::Evsm2:
     case Filter::Evsm4:

@@ -90,7 +90,8 @@ std::vector<std::string> expandRange(const TunableKey& info, const Method& base,
   auto fail = [&](const std::string& what) { throw InputError(formatError(origin, "", what)); };
   const std::string key = info.key;
   std::vector<std::string> raw;
-  const bool integerKey = key == "map.size" || key == "filter.size" || key == "filter.taps";
+  const bool integerKey = key == "map.size" || key == "filter.size" || key == "filter.taps" ||
+                          key == "pcss.blocker_taps" || key == "pcss.filter_taps" || key == "dpcf.taps";
   if (range.find(':') != std::string::npos) {
     if (info.role == TuneRole::Categorical && !integerKey)
       fail("\"" + key + "\" takes a list of values (v1,v2,...), not a range lo:hi");
@@ -162,12 +163,20 @@ const std::vector<TunableKey>& tunableKeys() {
       {"bias.constant", TuneRole::Bias, "0:200000:16", ""},
       {"bias.normal", TuneRole::Bias, "0:4:16", ""},
       {"bias.slope", TuneRole::Bias, "0:4:16", ""},
+      {"dpcf.max_penumbra", TuneRole::Categorical, "8,4,16", "filter=dpcf"},
+      {"dpcf.rotate", TuneRole::Categorical, "true,false", "filter=dpcf"},
+      {"dpcf.taps", TuneRole::Categorical, "8:32", "filter=dpcf"},
       {"filter", TuneRole::Categorical, "", ""},
       {"filter.size", TuneRole::Categorical, "3:7", "filter=pcf"},
       {"filter.taps", TuneRole::Categorical, "8:32", "filter=poisson"},
       {"fit", TuneRole::Categorical, "", ""},
       {"map.format", TuneRole::Categorical, "d16,d24,d32f", ""},
       {"map.size", TuneRole::Monotone, "256:4096", ""},
+      {"pcss.blocker_taps", TuneRole::Categorical, "8:32", "filter=pcss"},
+      {"pcss.filter_taps", TuneRole::Categorical, "16:64", "filter=pcss"},
+      {"pcss.max_penumbra", TuneRole::Categorical, "16,8,32", "filter=pcss"},
+      {"pcss.min_filter", TuneRole::Categorical, "1.5,1,2", "filter=pcss"},
+      {"pcss.rotate", TuneRole::Categorical, "true,false", "filter=pcss"},
   };
   return keys;
 }

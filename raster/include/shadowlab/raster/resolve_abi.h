@@ -148,6 +148,18 @@ SHADOWLAB_BLOCK(Params) {
   vec4 moments2;    // x msm.moment_bias, y filter.blur (radius, texels)
   vec4 adaptive;    // adaptive depth bias (on: kSpecAdaptive): x bias.adaptive_epsilon (world units)
   vec4 lightDepth;  // kSpecLightDepth: the light layers' depth = dot(lightDepth, (p, 1))
+  // The soft filters (filter=pcss, dpcf; raster/METHODS.md "Soft filters"). softTaps: x
+  // pcss.blocker_taps, y pcss.filter_taps, z dpcf.taps, w rotate the taps per pixel (0/1; the
+  // shader reads the counts through ParamsLoops). softInfo: x pcss.min_filter, y pcss.max_penumbra,
+  // z dpcf.max_penumbra (texels).
+  ivec4 softTaps;
+  vec4 softInfo;
+  // Per light layer, the light's size in that map's units (resolve_params.cpp, lightSizeInMap):
+  // xy the penumbra radius in texels (u, v) per unit of the depth term, zw the perspective map's
+  // depth linearization. Orthographic (zw = 0): radius = xy * (d_r - d_b), d the map depth (linear).
+  // Perspective: z_lin = w / (d - z) (the view distance along the map's axis), radius =
+  // xy * (z_r - z_b) / (z_b z_r). All zero for a hard light.
+  vec4 lightSize[kMaxLightLayers];
 }
 SHADOWLAB_BLOCK_END(P);
 
@@ -160,12 +172,14 @@ SHADOWLAB_BLOCK_END(P);
 SHADOWLAB_CONST(int, kParamsSizesOffset, 1408)        // Params::sizes (then sizes2)
 SHADOWLAB_CONST(int, kParamsCascadeViewOffset, 2720)  // Params::cascadeView
 SHADOWLAB_CONST(int, kParamsMoments2Offset, 2800)     // Params::moments2
+SHADOWLAB_CONST(int, kParamsSoftTapsOffset, 2848)     // Params::softTaps
 #ifndef __cplusplus
 layout(std140, set = 0, binding = kBindingParamsLoops) readonly buffer ParamsLoops {
   layout(offset = kParamsSizesOffset) ivec4 sizes;             // (w, the pcf size, is kSpecPcfSize)
   ivec4 sizes2;                                                // z: the Poisson taps
   layout(offset = kParamsCascadeViewOffset) vec4 cascadeView;  // w: the cascade count
   layout(offset = kParamsMoments2Offset) vec4 moments2;        // y: filter.blur (radius, texels)
+  layout(offset = kParamsSoftTapsOffset) ivec4 softTaps;       // the soft filters' tap counts
 }
 PLoops;
 #endif
@@ -219,9 +233,14 @@ static_assert(offsetof(Params, moments) == offsetof(Params, cascadeInfo) + 16);
 static_assert(offsetof(Params, moments2) == offsetof(Params, moments) + 16);
 static_assert(offsetof(Params, adaptive) == offsetof(Params, moments2) + 16);
 static_assert(offsetof(Params, lightDepth) == offsetof(Params, adaptive) + 16);
+static_assert(offsetof(Params, softTaps) == offsetof(Params, lightDepth) + 16);
+static_assert(offsetof(Params, softInfo) == offsetof(Params, softTaps) + 16);
+static_assert(offsetof(Params, lightSize) == offsetof(Params, softInfo) + 16);
 static_assert(offsetof(Params, sizes) == kParamsSizesOffset && offsetof(Params, moments2) == kParamsMoments2Offset &&
-              offsetof(Params, cascadeView) == kParamsCascadeViewOffset);
-static_assert(sizeof(Params) == 2848, "std140 size of resolve.frag's Params (glslangValidator -q reports it)");
+              offsetof(Params, cascadeView) == kParamsCascadeViewOffset &&
+              offsetof(Params, softTaps) == kParamsSoftTapsOffset);
+static_assert(sizeof(Params) == 2848 + 32 + 16 * kMaxLightLayers,
+              "std140 size of resolve.frag's Params (glslangValidator -q reports it)");
 static_assert(2 * 4 >= kMaxLightLayers, "cascadeFar holds one far split per light layer");
 static_assert(kMaxLightLayers + kMaxProjectors == kMaxLayers);
 }  // namespace shadowlab::raster::abi

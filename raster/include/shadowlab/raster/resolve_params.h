@@ -70,6 +70,12 @@ using ResolveSpecialization = std::array<uint32_t, abi::kSpecCount>;
 ResolveSpecialization resolveSpecialization(const Scene& scene, const Light* light, const Method& method,
                                             const FrameLayers& layers);
 
+// The light's size in a light layer's units (abi::Params::lightSize, raster/METHODS.md "Soft
+// filters"): xy the penumbra radius in texels (u, v) per unit of the depth term, zw a perspective
+// map's depth linearization (z_lin = w / (d - z)); orthographic layers (a directional light's
+// plain crops) have zw = 0. Zero for a hard light (radius and angular diameter 0).
+glm::vec4 lightSizeInMap(const Light& light, const MapLayer& layer, int mapSize);
+
 // The shader's light type code (abi::kLightNone without a light).
 uint32_t lightTypeCode(const Light* light);
 

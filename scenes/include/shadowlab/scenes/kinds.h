@@ -22,7 +22,9 @@
   X(Vsm, 5, "vsm", "variance shadow map: Chebyshev's bound from 2 blurred moments (vsm.*, filter.blur)") \
   X(Evsm2, 6, "evsm2", "exponential VSM, the positive warp's 2 moments (evsm.exponent_pos, vsm.*)")      \
   X(Evsm4, 7, "evsm4", "exponential VSM, positive and negative warps, 4 moments (evsm.*, vsm.*)")        \
-  X(Msm, 8, "msm", "moment shadow map: Hamburger 4-moment reconstruction (msm.moment_bias, filter.blur)")
+  X(Msm, 8, "msm", "moment shadow map: Hamburger 4-moment bound (msm.moment_bias, filter.blur)")         \
+  X(Pcss, 9, "pcss", "soft: blocker search, penumbra from the light size, PCF over it (pcss.*)")         \
+  X(Dpcf, 10, "dpcf", "soft: one kernel hardened towards contact (Filament's DPCF; dpcf.*)")
 
 // fit: how a directional light's orthographic map is fitted (spot and point lights ignore it).
 #define SHADOWLAB_FITS(X)                                                                        \

@@ -73,6 +73,19 @@ struct Method {
   float evsmExponentPos = 40.0f;   // evsm.exponent_pos: positive warp exponent, > 0 (clamped to 42, 32F)
   float evsmExponentNeg = 5.0f;    // evsm.exponent_neg: negative warp exponent, > 0 (clamped to 42, 32F)
   float msmMomentBias = 3e-5f;     // msm.moment_bias: moments pulled towards (0.5, ...) by this much, 0..1
+  // Soft shadows from the scene light's size (Light::radius, angularDiameterDeg; raster/METHODS.md
+  // "Soft filters"). filter=pcss: a blocker search, the penumbra width from the light's size and the
+  // blockers' mean depth, then PCF over that width. filter=dpcf: one kernel whose comparisons are
+  // blended from a hardened curve towards plain PCF by the penumbra ratio.
+  int pcssBlockerTaps = 16;    // pcss.blocker_taps: Poisson taps of the blocker search, 1..64
+  int pcssFilterTaps = 32;     // pcss.filter_taps: Poisson taps of the PCF over the penumbra, 1..64
+  float pcssMinFilter = 1.5f;  // pcss.min_filter: the smallest kernel radius, texels (> 0, <= 32; a hard light's)
+  float pcssMaxPenumbra =
+      16.0f;               // pcss.max_penumbra: the largest search and kernel radius, texels (>= min_filter, <= 64)
+  bool pcssRotate = true;  // pcss.rotate: rotate the taps per pixel by interleaved-gradient noise
+  int dpcfTaps = 16;       // dpcf.taps: Poisson taps of the one kernel, 1..64
+  float dpcfMaxPenumbra = 8.0f;       // dpcf.max_penumbra: the largest kernel radius, texels (1..64)
+  bool dpcfRotate = true;             // dpcf.rotate: rotate the taps per pixel by interleaved-gradient noise
   bool projectorReverseGuard = true;  // projector.reverse_guard: only project where w >= 0
   // technique: a GLSL file whose shadowVisibility() replaces the filter (filter stays none;
   // technique.h, raster/METHODS.md "Your own technique"); empty: the built-in filters. Its declared
