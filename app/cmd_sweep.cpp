@@ -16,6 +16,7 @@
 #include "command.h"
 #include "shadowlab/compare/sweep.h"
 #include "shadowlab/reference/reference.h"
+#include "shadowlab/raster/raster.h"
 #include "shadowlab/scenes/error.h"
 #include "shadowlab/scenes/io.h"
 
@@ -67,6 +68,7 @@ std::string sweepArguments(const Options& o, const std::string& cacheDir) {
   if (!o.light.empty()) add("--light", o.light);
   if (o.spp) add("--spp", std::to_string(*o.spp));
   if (!o.device.empty()) add("--device", o.device);
+  if (o.gpuTimeoutS) add("--gpu-timeout-s", std::to_string(*o.gpuTimeoutS));
   if (o.keepImages) a += " --keep-images";
   if (o.fullEvidence) a += " --full-evidence";
   if (!o.frontierMetric.empty()) add("--frontier-metric", o.frontierMetric);
@@ -253,6 +255,10 @@ int run(const Options& o) {
     checkSpp(*o.spp, "--spp");
     spec.spp = *o.spp;
   }
+  if (o.gpuTimeoutS) {
+    checkGpuTimeout(*o.gpuTimeoutS, "--gpu-timeout-s");
+    spec.gpuTimeoutS = *o.gpuTimeoutS;
+  }
   if (o.keepImages) spec.keepImages = true;
   if (!o.frontierMetric.empty()) spec.frontierMetric = o.frontierMetric;
   if (!o.frontierThreshold.empty()) {
@@ -273,7 +279,8 @@ int run(const Options& o) {
 
   // ---- work ------------------------------------------------------------------------------------
   // A shard writes no report, and neither does --no-report: nothing would draw the kept rows.
-  auto runner = makePipelineRunner(cacheDir, spec.spp, o.device, 1, o.fullEvidence, !o.noReport && !shard.active());
+  auto runner = makePipelineRunner(cacheDir, spec.spp, o.device, 1, o.fullEvidence, !o.noReport && !shard.active(),
+                                   spec.gpuTimeoutS);
   SweepOptions options;
   options.outDir = o.outDir;
   options.progress = stderr;

@@ -15,6 +15,7 @@
 #include "command.h"
 #include "shadowlab/compare/tune.h"
 #include "shadowlab/reference/reference.h"
+#include "shadowlab/raster/raster.h"
 #include "shadowlab/scenes/error.h"
 #include "shadowlab/scenes/io.h"
 
@@ -67,6 +68,7 @@ int run(const Options& o) {
   spec.light = o.light;
   spec.spp = o.spp.value_or(1);
   checkSpp(spec.spp, "--spp");
+  if (o.gpuTimeoutS) checkGpuTimeout(*o.gpuTimeoutS, "--gpu-timeout-s");
   TunePlan plan = planTune(spec);
   OutputFolder out(o.outDir);
   const std::string cacheDir = o.cacheDir.empty() ? defaultSweepCacheDir(o.outDir) : o.cacheDir;
@@ -75,7 +77,8 @@ int run(const Options& o) {
 
   // ---- work ------------------------------------------------------------------------------------
   // Its triptychs show the chosen configuration, not a scene's best or worst row: nothing kept.
-  auto runner = makePipelineRunner(cacheDir, spec.spp, o.device, plan.sweep.sceneNames.size(), false, false);
+  auto runner = makePipelineRunner(cacheDir, spec.spp, o.device, plan.sweep.sceneNames.size(), false, false,
+                                   o.gpuTimeoutS.value_or(0));
   TuneOptions options;
   options.outDir = o.outDir;
   options.progress = stderr;
