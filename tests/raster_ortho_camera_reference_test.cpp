@@ -112,6 +112,21 @@ TEST_F(OrthoCamera, RasterAgreesWithTheReference) {
     }
   EXPECT_EQ(interior, 0u) << sc.wrong << " mismatches";
   EXPECT_LT(sc.wrong, 80u);
+  // The texel footprint m on the ground (Lloyd's 1 / sMin of d(texel)/d(pixel)): the sphere fit's
+  // map spans the bounds' sphere, radius sqrt(20^2 + 0.5^2 + 20^2) = 28.288, so a texel is
+  // 56.577 / 2048 = 0.027625; a pixel's 0.1 of ground shrinks to 0.1 sin(50 deg) across the light,
+  // so sMin = 0.0766 / 0.027625 texels a pixel and m = 0.3606 everywhere on the ground (the same for
+  // every pixel: parallel rays). A perspective footprint (scaled by the ray's t) would be 10x off.
+  const auto& footprint = ras.get("light.sun.m");
+  const auto& py = ref.get("P.y");
+  const double expectedM = (2.0 * std::sqrt(800.25) / 2048.0) / (0.1 * std::sin(50.0 * 3.14159265358979 / 180.0));
+  size_t groundPixels = 0;
+  for (size_t i = 0; i < footprint.size(); ++i) {
+    if (std::fabs(py[i]) > 1e-4f) continue;
+    ++groundPixels;
+    EXPECT_NEAR(footprint[i], expectedM, 0.002 * expectedM) << i;
+  }
+  EXPECT_EQ(groundPixels, 80u * 60u - 400u);
   std::printf("orthographic box: %zu compared, %zu mismatches (error_rate %.4f)\n", sc.both, sc.wrong, sc.errorRate);
 }
 
