@@ -8,6 +8,7 @@
 
 #include "command.h"
 #include "shadowlab/compare/sweep.h"
+#include "shadowlab/raster/raster.h"
 #include "shadowlab/scenes/error.h"
 
 namespace {
@@ -19,17 +20,20 @@ struct Options {
   std::string outDir;
   std::string cacheDir;
   std::string device;
+  double gpuTimeoutS = 0;
   bool noReport = false;
 };
 
 int run(const Options& o) {
   // The sweep as the shards recorded it, planned again: scene or method files edited since the
   // shards ran change the fingerprint, and the merge refuses.
+  checkGpuTimeout(o.gpuTimeoutS, "--gpu-timeout-s");
   const SweepSpec spec = loadShardedSpec(o.outDir);
   const SweepPlan plan = planSweep(spec);
   const std::string cacheDir = o.cacheDir.empty() ? defaultSweepCacheDir(o.outDir) : o.cacheDir;
   // The runner renders only for the report's triptychs (created on first use).
-  auto runner = makePipelineRunner(cacheDir, spec.spp, o.device, 1, false, true, spec.lightSamples);
+  auto runner =
+      makePipelineRunner(cacheDir, spec.spp, o.device, 1, false, true, spec.lightSamples, o.gpuTimeoutS);
   SweepOptions options;
   options.outDir = o.outDir;
   options.progress = stderr;
@@ -54,6 +58,7 @@ app::Registrar reg{
           "--cache", opts->cacheDir,
           "Reference cache folder for the triptychs (default: $SHADOWLAB_CACHE, else .shadowlab-cache beside OUT_DIR)");
       sub->add_option("--device", opts->device, "Vulkan device name substring for the triptychs (default: lavapipe)");
+      app::addGpuTimeoutOption(sub, &opts->gpuTimeoutS);
       sub->add_flag("--no-report", opts->noReport, "Write results.json/csv only: no charts, triptychs or report.html");
       return std::function<int()>([opts] { return run(*opts); });
     }};

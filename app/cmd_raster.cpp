@@ -27,6 +27,7 @@ struct Options {
   std::string outDir;
   bool validation = false;
   double maxMemoryGiB = 0;
+  double gpuTimeoutS = 0;
 };
 
 int run(const Options& o) {
@@ -35,12 +36,15 @@ int run(const Options& o) {
   const SetArguments set = applySetArguments(o.methodFile, o.settings);
   const Method& method = set.method;
   const Scene scene = loadScene(resolveScenePath(o.scene), set.sceneOverrides);
+  checkGpuTimeout(o.gpuTimeoutS, "--gpu-timeout-s");
+  precompileTechnique(method);  // a technique that does not compile: exit 2 before any output
   app::checkMemory("raster", app::rasterJobMemory(scene, method), o.maxMemoryGiB);
   OutputFolder out(o.outDir);  // an unusable -o fails here, before the device starts
 
   RasterDeviceOptions deviceOptions;
   deviceOptions.device = o.device;
   deviceOptions.validation = o.validation;
+  deviceOptions.gpuTimeoutS = o.gpuTimeoutS;
   Rasterizer rasterizer(deviceOptions);
   app::checkDeviceMemory("raster", rasterizer, scene, method, o.light);
   RasterTimings t;
@@ -91,6 +95,7 @@ shadowlab::app::Registrar reg{
       sub->add_flag("--validation", opts->validation, "Enable the Khronos validation layer; fail on any message");
       sub->add_option("-o,--out", opts->outDir, "Output folder")->required();
       shadowlab::app::addMaxMemoryOption(sub, &opts->maxMemoryGiB);
+      shadowlab::app::addGpuTimeoutOption(sub, &opts->gpuTimeoutS);
       return std::function<int()>([opts] { return run(*opts); });
     }};
 

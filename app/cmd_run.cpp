@@ -60,8 +60,7 @@ int run(const Options& o) {
   // gate matches this row with theirs.
   const std::string& config = set.config;
 
-  if (o.gpuTimeoutS < 0 || o.gpuTimeoutS > 1e6)
-    throw InputError("--gpu-timeout-s: error: got " + std::to_string(o.gpuTimeoutS) + "; expected seconds, 0..1e6");
+  checkGpuTimeout(o.gpuTimeoutS, "--gpu-timeout-s");
   precompileTechnique(method);  // a technique that does not compile: exit 2 before any output
   app::checkMemory("run", app::compareJobMemory(scene, method), o.maxMemoryGiB);
   // Every output location, before any work: a bad -o or --cache must not cost a trace first.
@@ -164,9 +163,7 @@ app::Registrar reg{"run", [](CLI::App& app) {
                      sub->add_option("--cache", opts->cacheDir,
                                      "Reference cache folder (default: $SHADOWLAB_CACHE, else .shadowlab-cache)");
                      sub->add_option("--device", opts->device, "Vulkan device name substring (default: lavapipe)");
-                     sub->add_option("--gpu-timeout-s", opts->gpuTimeoutS,
-                                     "Seconds a GPU pass may take before the run ends with exit 3 (a technique "
-                                     "that never returns; default: $SHADOWLAB_GPU_TIMEOUT_S, else 120)");
+                     app::addGpuTimeoutOption(sub, &opts->gpuTimeoutS);
                      sub->add_flag("--keep-images", opts->keepImages,
                                    "Also write reference.exr (the cached reference: the Compare channel set; "
                                    "`shadowlab reference --all-channels` gives every channel) and raster.exr");

@@ -57,6 +57,7 @@ struct Options {
   std::string cacheDir;
   double maxMemoryGiB = 0;
   std::string device;
+  double gpuTimeoutS = 0;
   CLI::Option* distanceOpt = nullptr;
   CLI::Option* angleOpt = nullptr;
   CLI::Option* framesOpt = nullptr;
@@ -182,6 +183,7 @@ int run(const Options& o) {
 
   const std::string config = set.config + " @ " + pathConfig;
 
+  checkGpuTimeout(o.gpuTimeoutS, "--gpu-timeout-s");
   app::checkMemory("stability", app::compareJobMemory(scene, set.method), o.maxMemoryGiB);
   // Every output location, before any work: a bad -o or --cache must not cost a trace first.
   OutputFolder out(o.outDir);
@@ -192,6 +194,7 @@ int run(const Options& o) {
   // ---- work ------------------------------------------------------------------------------------
   RasterDeviceOptions deviceOptions;
   deviceOptions.device = o.device;
+  deviceOptions.gpuTimeoutS = o.gpuTimeoutS;
   Rasterizer rasterizer(deviceOptions);
   app::checkDeviceMemory("stability", rasterizer, scene, method, light);  // before any reference
   CompareOptions compareOptions;
@@ -291,6 +294,7 @@ app::Registrar reg{
       sub->add_option("--cache", opts->cacheDir,
                       "Reference cache folder (default: $SHADOWLAB_CACHE, else .shadowlab-cache)");
       sub->add_option("--device", opts->device, "Vulkan device name substring (default: lavapipe)");
+      app::addGpuTimeoutOption(sub, &opts->gpuTimeoutS);
       return std::function<int()>([opts] { return run(*opts); });
     }};
 

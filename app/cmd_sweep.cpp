@@ -16,6 +16,7 @@
 #include "command.h"
 #include "shadowlab/compare/sweep.h"
 #include "shadowlab/reference/reference.h"
+#include "shadowlab/raster/raster.h"
 #include "shadowlab/scenes/error.h"
 #include "shadowlab/scenes/io.h"
 
@@ -68,6 +69,7 @@ std::string sweepArguments(const Options& o, const std::string& cacheDir) {
   if (o.spp) add("--spp", std::to_string(*o.spp));
   if (o.lightSamples) add("--light-samples", std::to_string(*o.lightSamples));
   if (!o.device.empty()) add("--device", o.device);
+  if (o.gpuTimeoutS) add("--gpu-timeout-s", std::to_string(*o.gpuTimeoutS));
   if (o.keepImages) a += " --keep-images";
   if (o.fullEvidence) a += " --full-evidence";
   if (!o.frontierMetric.empty()) add("--frontier-metric", o.frontierMetric);
@@ -258,6 +260,10 @@ int run(const Options& o) {
     checkLightSamples(*o.lightSamples, "--light-samples");
     spec.lightSamples = *o.lightSamples;
   }
+  if (o.gpuTimeoutS) {
+    checkGpuTimeout(*o.gpuTimeoutS, "--gpu-timeout-s");
+    spec.gpuTimeoutS = *o.gpuTimeoutS;
+  }
   if (o.keepImages) spec.keepImages = true;
   if (!o.frontierMetric.empty()) spec.frontierMetric = o.frontierMetric;
   if (!o.frontierThreshold.empty()) {
@@ -279,7 +285,7 @@ int run(const Options& o) {
   // ---- work ------------------------------------------------------------------------------------
   // A shard writes no report, and neither does --no-report: nothing would draw the kept rows.
   auto runner = makePipelineRunner(cacheDir, spec.spp, o.device, 1, o.fullEvidence, !o.noReport && !shard.active(),
-                                   spec.lightSamples);
+                                   spec.lightSamples, spec.gpuTimeoutS);
   SweepOptions options;
   options.outDir = o.outDir;
   options.progress = stderr;

@@ -15,6 +15,7 @@
 #include "command.h"
 #include "shadowlab/compare/tune.h"
 #include "shadowlab/reference/reference.h"
+#include "shadowlab/raster/raster.h"
 #include "shadowlab/scenes/error.h"
 #include "shadowlab/scenes/io.h"
 
@@ -69,6 +70,7 @@ int run(const Options& o) {
   checkSpp(spec.spp, "--spp");
   spec.lightSamples = o.lightSamples.value_or(kDefaultLightSamples);
   checkLightSamples(spec.lightSamples, "--light-samples");
+  if (o.gpuTimeoutS) checkGpuTimeout(*o.gpuTimeoutS, "--gpu-timeout-s");
   TunePlan plan = planTune(spec);
   OutputFolder out(o.outDir);
   const std::string cacheDir = o.cacheDir.empty() ? defaultSweepCacheDir(o.outDir) : o.cacheDir;
@@ -77,8 +79,8 @@ int run(const Options& o) {
 
   // ---- work ------------------------------------------------------------------------------------
   // Its triptychs show the chosen configuration, not a scene's best or worst row: nothing kept.
-  auto runner =
-      makePipelineRunner(cacheDir, spec.spp, o.device, plan.sweep.sceneNames.size(), false, false, spec.lightSamples);
+  auto runner = makePipelineRunner(cacheDir, spec.spp, o.device, plan.sweep.sceneNames.size(), false, false,
+                                   spec.lightSamples, o.gpuTimeoutS.value_or(0));
   TuneOptions options;
   options.outDir = o.outDir;
   options.progress = stderr;

@@ -63,6 +63,14 @@ inline void installStopHandlers(void (*handler)(int)) {
 
 // What the commands that run many configurations through the pipeline (sweep, tune) share: the
 // base method, the output folder, the light, the reference's samples, its cache and the device.
+// --gpu-timeout-s, on every command that renders (the same help everywhere; checkGpuTimeout in
+// raster.h validates it before any output).
+inline CLI::Option* addGpuTimeoutOption(CLI::App* sub, double* seconds) {
+  return sub->add_option("--gpu-timeout-s", *seconds,
+                         "Seconds a GPU pass may take before the command ends with exit 3 (a technique that never "
+                         "returns; default: $SHADOWLAB_GPU_TIMEOUT_S, else 120)");
+}
+
 struct StudyOptions {
   std::string methodFile;
   std::string outDir;
@@ -71,6 +79,7 @@ struct StudyOptions {
   std::optional<int> lightSamples;  // not given: the sweep file's, else kDefaultLightSamples
   std::string cacheDir;
   std::string device;
+  std::optional<double> gpuTimeoutS;  // not given: the sweep file's, else 0 (the default)
 };
 
 // Registers them on `sub`; `what` names the command's run in the help ("sweep", "tune").
@@ -85,6 +94,9 @@ inline void addStudyOptions(CLI::App* sub, StudyOptions& o, const std::string& w
   sub->add_option("--cache", o.cacheDir,
                   "Reference cache folder (default: $SHADOWLAB_CACHE, else .shadowlab-cache beside the output folder)");
   sub->add_option("--device", o.device, "Vulkan device name substring (default: lavapipe)");
+  sub->add_option("--gpu-timeout-s", o.gpuTimeoutS,
+                  "Seconds a GPU pass may take before the command ends with exit 3 (a technique that never "
+                  "returns; default: the sweep file's gpu_timeout_s, $SHADOWLAB_GPU_TIMEOUT_S, else 120)");
 }
 
 }  // namespace shadowlab::app

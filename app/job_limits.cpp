@@ -26,7 +26,7 @@ double pixels(const Scene& scene) { return double(scene.camera.width) * double(s
 // The raster frame's channels (scenes/frame.h): hit, object and primitive ids, 11 per rendered
 // light (14 with a filterable map's moment channels), 5 per projector.
 double rasterFrameBytes(const Scene& scene, const Method& method) {
-  const double light = isMomentFilter(method.filter) ? 14.0 : 11.0;
+  const double light = isMomentFilter(effectiveFilter(method)) ? 14.0 : 11.0;
   return (3.0 + light + 5.0 * double(scene.projectors.size())) * 4.0 * pixels(scene);
 }
 
@@ -36,15 +36,16 @@ double rasterFrameBytes(const Scene& scene, const Method& method) {
 // cascade, six for a point light, one otherwise, plus one per projector; a filterable map adds two
 // moments images per light layer (2 or 4 floats a texel each).
 void addDeviceImages(MemoryEstimate& e, const Scene& scene, const Method& method) {
-  e.add((isMomentFilter(method.filter) ? 57.0 : 41.0) * pixels(scene), "camera targets");
+  e.add((isMomentFilter(effectiveFilter(method)) ? 57.0 : 41.0) * pixels(scene), "camera targets");
   int lightLayers = isCascadedFit(method.fit) ? method.cascadeCount : 1;
   for (const Light& light : scene.lights)
     if (light.type == LightType::Point) lightLayers = std::max(lightLayers, 6);
   const int layers = lightLayers + int(scene.projectors.size());
   e.add(8.0 * double(method.mapSize) * double(method.mapSize) * layers,
         "map " + std::to_string(method.mapSize) + "^2 x " + std::to_string(layers) + " layer(s)");
-  if (isMomentFilter(method.filter))
-    e.add(2.0 * 4.0 * momentCount(method.filter) * double(method.mapSize) * double(method.mapSize) * lightLayers,
+  if (isMomentFilter(effectiveFilter(method)))
+    e.add(2.0 * 4.0 * momentCount(effectiveFilter(method)) * double(method.mapSize) * double(method.mapSize) *
+              lightLayers,
           "moments " + std::to_string(method.mapSize) + "^2 x " + std::to_string(lightLayers) + " layer(s) x 2");
 }
 

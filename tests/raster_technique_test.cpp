@@ -240,3 +240,95 @@ TEST_F(RasterTechnique, LookupEqualsTheResolveWhenTheFileReadsThePlane) {
   EXPECT_EQ(mismatches, 0u);
   EXPECT_GT(fractional, 10u);
 }
+
+// vsm.glsl (a moments line: the harness renders and blurs the vsm moments for it) against the
+// built-in filter=vsm: the same bits in every channel, the moments' evidence included, for two blur
+// radii, a bleed cut and a point light (a cube map's faces), full and on demand; with fractional
+// pixels present, and a blur that changes the result (the keys reach the moments pass).
+TEST_F(RasterTechnique, VsmFileIsTheBuiltInVsmBitForBit) {
+  REQUIRE_DEVICE();
+  Scene point = quarterScene("sphere_on_plane");
+  point.name = "sphere_on_plane, a point light";
+  point.lights.front().type = LightType::Point;
+  point.lights.front().position = glm::vec3(1.5f, 4.0f, 1.0f);
+  std::vector<float> firstVis;
+  for (const Scene& s : {quarterScene("sphere_on_plane"), quarterScene("stacked_occluders"), point})
+    for (int blur : {0, 3})
+      for (float cut : {0.0f, 0.3f}) {
+        const bool pointLight = s.lights.front().type == LightType::Point;
+        if (pointLight && (blur == 0 || cut > 0)) continue;
+        Method builtIn;
+        builtIn.filter = Filter::Vsm;
+        builtIn.mapSize = 512;
+        builtIn.filterBlur = blur;
+        builtIn.vsmBleedReduction = cut;
+        builtIn.biasSlope = 0;
+        Method file = builtIn;
+        file.filter = Filter::None;
+        file.technique = kExamples + "vsm.glsl";
+        validateMethod(file, "test");
+        const std::string where = s.name + " blur " + std::to_string(blur) + " cut " + std::to_string(cut);
+        const Frame a = R->render(s, builtIn);
+        const std::vector<uint8_t> bytesA = R->lookupVisibility();
+        const Frame b = R->render(s, file);
+        const std::vector<uint8_t> bytesB = R->lookupVisibility();
+        EXPECT_EQ(firstDifference(a, b), "") << where;
+        EXPECT_EQ(bytesA, bytesB) << where;
+        const std::string L = "light." + s.lights.front().name + ".";
+        ASSERT_TRUE(b.has(L + "moment_bound")) << where;
+        size_t fractional = 0;
+        for (float v : a.get(L + "vis")) fractional += v > 0.0f && v < 1.0f;
+        EXPECT_GT(fractional, 50u) << where;
+        EXPECT_EQ(b.meta.at("method").at("technique"), file.technique) << where;
+        EXPECT_EQ(b.meta.at("method").at("filter"), "none") << where;
+        if (s.name == "sphere_on_plane" && cut == 0.0f) {
+          if (blur == 0) firstVis = b.get(L + "vis");
+          else EXPECT_NE(firstVis, b.get(L + "vis")) << "filter.blur does not reach the file's moments";
+        }
+      }
+}
+
+// A file that reads the moments without a moments line: an InputError at the read's file:line:column,
+// before anything is compiled; a bad moments line names its token.
+TEST(TechniqueFile, MomentsWithoutAskingNameTheLine) {
+  const auto dir = shadowlab::testing::freshTempDir("raster_technique_moments");
+  struct Case {
+    const char* name;
+    std::string text;
+    std::string expect;
+  };
+  const std::vector<Case> cases = {
+      {"field.glsl", "// no moments line\nfloat shadowVisibility(ShadowQuery q) {\n  return q.moments.x;\n}\n",
+       ":3:12: error: reads moments without asking for moments; expected a header line // shadowlab: moments"},
+      {"image.glsl",
+       "float shadowVisibility(ShadowQuery q) {\n  float d = q.depth;\n  return textureLod(mapMoments, vec3(q.uv, "
+       "q.layer), 0.0).x;\n}\n",
+       ":3:21: error: reads mapMoments without asking"},
+      {"kind.glsl", "// shadowlab: moments pcf\nfloat shadowVisibility(ShadowQuery q) {\n  return 1.0;\n}\n",
+       ":1:23: error: moments \"pcf\"; expected one of vsm, evsm2, evsm4, msm"},
+      {"twice.glsl",
+       "// shadowlab: moments vsm\n// shadowlab: moments msm\nfloat shadowVisibility(ShadowQuery q) {\n  return "
+       "1.0;\n}\n",
+       ":2:15: error: a second moments line (the first on line 1)"},
+  };
+  for (const Case& c : cases) {
+    const std::string path = writeFile(dir, c.name, c.text);
+    try {
+      loadTechniqueFile(path);
+      ADD_FAILURE() << c.name << ": no error";
+    } catch (const InputError& e) {
+      EXPECT_NE(std::string(e.what()).find(path + c.expect), std::string::npos) << c.name << ": " << e.what();
+    }
+  }
+  // Asked for: the kind is the file's, and the method's effective filter is it.
+  const std::string ok = writeFile(dir, "ok.glsl",
+                                   "  //  shadowlab:  moments   evsm4\nfloat shadowVisibility(ShadowQuery q) {\n  "
+                                   "return q.moments.x;\n}\n");
+  EXPECT_EQ(loadTechniqueFile(ok).moments, "evsm4");
+  EXPECT_EQ(loadTechniqueFile(ok).momentsLine, 1);
+  Method m;
+  m.technique = ok;
+  EXPECT_EQ(effectiveFilter(m), Filter::Evsm4);
+  m.technique = kExamples + "pcf.glsl";
+  EXPECT_EQ(effectiveFilter(m), Filter::None);
+}

@@ -251,6 +251,73 @@ TEST(ScenesCamera, ClipFromViewMatchesRayDirection) {
   EXPECT_NEAR(fa.z / fa.w, 1.0f, 1e-5f);
 }
 
+// An orthographic camera in JSON ("projection": "orthographic", "ortho_height"): parallel rays
+// along the view direction, each from its point of the view plane, which the rasterizer's matrix
+// puts at that very image position (any depth), with depth 0 at near and 1 at far; the errors
+// of its keys name the JSON pointer; a perspective camera's hash is unchanged by the new fields.
+TEST(ScenesCamera, OrthographicCameraFromJson) {
+  const std::string ortho = R"({
+    "camera": {"projection": "orthographic", "ortho_height": 4, "position": [1, 2, 5], "look_at": [0, 0, 0],
+               "width": 64, "height": 48, "near": 0.5, "far": 40},
+    "objects": [{"type": "plane", "size": [10, 10]}], "lights": [{"type": "directional", "elevation_deg": 45}]})";
+  const Scene s = loadText(ortho, "ortho.json", "ortho");
+  const Camera& cam = s.camera;
+  ASSERT_EQ(cam.projection, Projection::Orthographic);
+  EXPECT_EQ(cam.orthoHeight, 4.0f);
+  const glm::vec3 forward = glm::normalize(cam.lookAt - cam.position);
+  const glm::vec3 right = glm::normalize(glm::cross(forward, cam.up));
+  const glm::vec3 up = glm::cross(right, forward);
+  EXPECT_NEAR(glm::length(cam.rayDirection(3.5f, 40.5f) - forward), 0.0f, 1e-6f);
+  // The view's top edge lies 2 above the axis, its left edge 2 * 64 / 48 to the left.
+  EXPECT_NEAR(glm::length(cam.rayOrigin(32, 0) - (cam.position + 2.0f * up)), 0.0f, 1e-5f);
+  EXPECT_NEAR(glm::length(cam.rayOrigin(0, 24) - (cam.position - (2.0f * 64 / 48) * right)), 0.0f, 1e-5f);
+  glm::dmat4 clipFromWorld = glm::dmat4(cam.clipFromView()) * glm::dmat4(cam.viewFromWorld());
+  double worst = 0;
+  for (int j = 0; j < cam.height; j += 7)
+    for (int i = 0; i < cam.width; i += 9)
+      for (double t : {0.5, 3.0, 39.0}) {
+        const float x = i + 0.5f, y = j + 0.5f;
+        const glm::dvec3 p = glm::dvec3(cam.rayOrigin(x, y)) + t * glm::dvec3(cam.rayDirection(x, y));
+        const glm::dvec4 clip = clipFromWorld * glm::dvec4(p, 1.0);
+        EXPECT_NEAR(clip.w, 1.0, 1e-9);
+        worst = std::max({worst, std::fabs((clip.x + 1.0) * 0.5 * cam.width - x),
+                          std::fabs((clip.y + 1.0) * 0.5 * cam.height - y)});
+        EXPECT_NEAR(clip.z, (t - 0.5) / 39.5, 1e-5) << t;
+      }
+  EXPECT_LE(worst, 1e-4);
+  EXPECT_NE(cam.hash(), [&] {
+    Camera c = cam;
+    c.orthoHeight = 5;
+    return c.hash();
+  }());
+  // A perspective camera's hash: the bundled scene's, as before the orthographic fields existed.
+  Camera persp;
+  persp.orthoHeight = 7;  // not read by a perspective camera
+  EXPECT_EQ(persp.hash(), Camera().hash());
+
+  auto bad = [&](const std::string& from, const std::string& to) {
+    std::string text = ortho;
+    text.replace(text.find(from), from.size(), to);
+    return errorOf([&] { loadText(text, "bad.json", "ortho_bad"); });
+  };
+  EXPECT_NE(bad(R"("ortho_height": 4, )", "").find("bad.json: /camera: error: missing key \"ortho_height\""),
+            std::string::npos);
+  EXPECT_NE(bad(R"("ortho_height": 4)", R"("ortho_height": 4, "vfov_deg": 45)")
+                .find("bad.json: /camera/vfov_deg: error: given with \"projection\": \"orthographic\""),
+            std::string::npos);
+  EXPECT_NE(bad(R"("ortho_height": 4)", R"("ortho_height": -1)").find("bad.json: /camera/ortho_height: error:"),
+            std::string::npos);
+  EXPECT_NE(bad(R"("orthographic")", R"("fisheye")")
+                .find("bad.json: /camera/projection: error: got \"fisheye\"; expected perspective or orthographic"),
+            std::string::npos);
+  EXPECT_NE(errorOf([&] {
+              std::string text = mini(R"({"type": "plane"})");
+              text.replace(text.find(R"("vfov_deg": 45)"), 14, R"("vfov_deg": 45, "ortho_height": 3)");
+              loadText(text, "bad2.json", "ortho_bad2");
+            }).find("bad2.json: /camera/ortho_height: error: given with a perspective camera"),
+            std::string::npos);
+}
+
 TEST(ScenesProjector, TexFromWorldAxisEdgesAndReverse) {
   Scene s = loadScene(resolveScenePath("projector"));
   ASSERT_EQ(s.projectors.size(), 1u);

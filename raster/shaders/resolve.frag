@@ -157,10 +157,20 @@ struct LayerHit {
 
 Layer layerAt(int index) { return Layer(index, P.texFromWorld[index], float(P.sizes.x)); }
 
-vec3 rayThrough(vec2 pixel) { return P.rayX.xyz * pixel.x + P.rayY.xyz * pixel.y + P.rayC.xyz; }
-// Where the camera ray origin + d t meets a plane (n, dot(n, v0 - origin)): its t, and the point.
-float planeT(vec3 d, vec4 plane) { return plane.w / dot(d, plane.xyz); }
-vec3 rayPoint(vec3 d, float t) { return P.cameraOrigin.xyz + d * t; }
+// An orthographic camera (rayC.w = 1, resolve_params.cpp): parallel rays d = rayC from the points
+// cameraOrigin + rayX x + rayY y of the plane through the camera; else rays from cameraOrigin.
+bool orthoCamera() { return P.rayC.w > 0.5; }
+vec3 rayOffset(vec2 pixel) { return P.rayX.xyz * pixel.x + P.rayY.xyz * pixel.y; }
+vec3 rayThrough(vec2 pixel) {
+  return orthoCamera() ? P.rayC.xyz : P.rayX.xyz * pixel.x + P.rayY.xyz * pixel.y + P.rayC.xyz;
+}
+// Where the camera ray origin + d t meets a plane (n, dot(n, v0 - cameraOrigin)): its t, and the point.
+float planeT(vec3 d, vec4 plane, vec2 pixel) {
+  return orthoCamera() ? (plane.w - dot(plane.xyz, rayOffset(pixel))) / dot(d, plane.xyz) : plane.w / dot(d, plane.xyz);
+}
+vec3 rayPoint(vec3 d, float t, vec2 pixel) {
+  return orthoCamera() ? P.cameraOrigin.xyz + rayOffset(pixel) + d * t : P.cameraOrigin.xyz + d * t;
+}
 
 // The layer's homogeneous coordinates of a point (u w, v w, depth w, w); the first, second and
 // fourth move by dirMap(v) per unit of v, and so does the third unless kLightDepth:
@@ -300,6 +310,11 @@ float techniqueVisibility(Lookup L) {
   q.texelSize = 1.0 / L.layer.size;
   q.pixel = gPixel;
   q.lightType = kLightType;
+  // A file with a moments line (kFilter is then that filterable map's): its moments at the lookup,
+  // as the built-in filter reads them, and the keys its reconstruction takes.
+  q.moments = kMomentFilter ? textureLod(momentsMap, vec3(q.uv, float(L.layer.index)), 0.0) : vec4(0.0);
+  q.momentKeys = kMomentFilter ? P.moments : vec4(0.0);
+  q.momentBias = kMomentFilter ? P.moments2.x : 0.0;
   return clamp(shadowVisibility(q), 0.0, 1.0);
 }
 #endif
@@ -555,7 +570,7 @@ Surface visibleSurface(ivec2 px) {
     s.covered = surface.y != 0.0;
     s.dir = rayThrough(vec2(px) + 0.5);
     s.t = surface.x;
-    s.p = rayPoint(s.dir, s.t);
+    s.p = rayPoint(s.dir, s.t, vec2(px) + 0.5);
     s.plane = vec4(0.0);  // unread: nothing the lookup computes without a normal reads them
     s.normal = vec3(0.0, 0.0, 1.0);
     s.e1 = vec3(1.0, 0.0, 0.0);
@@ -567,8 +582,8 @@ Surface visibleSurface(ivec2 px) {
   s.plane = texelFetch(trianglePlanes, int(id));
   vec2 pixelCenter = vec2(px) + 0.5;
   s.dir = rayThrough(pixelCenter);
-  s.t = planeT(s.dir, s.plane);
-  s.p = rayPoint(s.dir, s.t);
+  s.t = planeT(s.dir, s.plane, pixelCenter);
+  s.p = rayPoint(s.dir, s.t, pixelCenter);
   s.normal = s.plane.xyz;
   if (dot(s.normal, s.dir) > 0.0) s.normal = -s.normal;  // face the camera, like the reference's N
   // A unit tangent (Duff et al. 2017's branchless basis), for the receiver plane's slope.
@@ -611,7 +626,7 @@ LightChannels shadeLight(Surface s) {
     // filter none is the center texel's comparison: no second fetch.
     if (kMomentFilter) {
       MomentLookup ml = momentLookup(L);
-      vis = ml.vis;
+      vis = kTechnique ? filterVisibility(L) : ml.vis;  // a technique with a moments line: its own vis
       momentEvidence = vec4(ml.mean, ml.variance, ml.bound, 0.0);
     } else {
       vis = kTechnique                ? filterVisibility(L)
@@ -652,7 +667,9 @@ LightChannels shadeLight(Surface s) {
   vec4 dMap = dirMap(layer, dir);
   vec4 gx = dirMap(layer, P.rayX.xyz) - (dot(nTri, P.rayX.xyz) * invNd) * dMap;
   vec4 gy = dirMap(layer, P.rayY.xyz) - (dot(nTri, P.rayY.xyz) * invNd) * dMap;
-  float scale = layer.size * s.plane.w * invNd / tP.w;  // size t / W
+  // Orthographic: p(x, y) = origin(x, y) + d t(x, y) moves by the same gx, gy per pixel without
+  // the factor t (the rays do not spread): size / W.
+  float scale = orthoCamera() ? layer.size / tP.w : layer.size * s.plane.w * invNd / tP.w;  // size t / W
   vec2 uvP = tP.xy / tP.w;
   vec2 jx = (kAffine ? gx.xy : gx.xy - uvP * gx.w) * scale, jy = (kAffine ? gy.xy : gy.xy - uvP * gy.w) * scale;
   float sumSq = dot(jx, jx) + dot(jy, jy);

@@ -1218,6 +1218,28 @@ Frame Rasterizer::Impl::readback(const Scene& sc, const Light* light, const Meth
   return frame;
 }
 
+namespace {
+// The method as the passes read it: a technique file's moments line (technique.h) makes its
+// filterable map the filter whose moments pass, attachments and evidence channels the frame gets
+// (the technique's shadowVisibility still gives vis: resolve.frag's kTechnique).
+// Every fit but sphere follows the camera's view frustum (tight's and the cascades' corners from
+// its field of view, lispsm's, psm's and tsm's eye point, sdsm's perspective samples): with an
+// orthographic camera they are refused (exit 2) rather than fitted to a frustum it does not have.
+void checkOrthographicFit(const Scene& scene, const Light* light, const Method& method, const Camera& camera) {
+  if (!camera.orthographic() || !light || light->type != LightType::Directional || method.fit == Fit::Sphere) return;
+  throw InputError(formatError("method", "fit",
+                               "got " + toString(method.fit) + " with the orthographic camera of " +
+                                   (scene.path.empty() ? scene.name : scene.path) + "; expected fit=sphere (fit=" +
+                                   toString(method.fit) + " follows a perspective camera's frustum)"));
+}
+
+Method withEffectiveFilter(const Method& requested) {
+  Method m = requested;
+  m.filter = effectiveFilter(requested);
+  return m;
+}
+}  // namespace
+
 Rasterizer::Rasterizer(const RasterDeviceOptions& options) : impl_(std::make_unique<Impl>(options)) {}
 Rasterizer::~Rasterizer() {
   // A device that stopped answering is still running what it was given: destroying what it reads
@@ -1229,6 +1251,15 @@ namespace {
 std::atomic<bool> gDeviceHung{false};
 }  // namespace
 bool rasterDeviceHung() { return gDeviceHung.load(); }
+
+void checkGpuTimeout(double seconds, const std::string& origin, const std::string& pointer) {
+  if (seconds >= 0 && seconds <= 1e6) return;
+  char got[32];
+  std::snprintf(got, sizeof got, "%g", seconds);
+  throw InputError(formatError(
+      origin, pointer,
+      std::string("got ") + got + "; expected seconds, a number 0..1e6 (0: $SHADOWLAB_GPU_TIMEOUT_S, else 120)"));
+}
 void markRasterDeviceHung() { gDeviceHung = true; }
 
 void precompileTechnique(const Method& method) {
@@ -1243,8 +1274,9 @@ int Rasterizer::maxMapSize() const { return impl_->maxMapSize(); }
 
 DeviceMemoryLimits Rasterizer::memoryLimits() const { return impl_->memoryLimits(); }
 
-std::vector<DeviceImage> Rasterizer::plannedImages(const Scene& scene, const Method& method,
+std::vector<DeviceImage> Rasterizer::plannedImages(const Scene& scene, const Method& requested,
                                                    const std::string& light) const {
+  const Method method = withEffectiveFilter(requested);
   const Light* l = impl_->validate(scene, method, light);
   return impl_->plannedImages(scene, method, raster::fitFrameLayers(scene, l, method, scene.camera));
 }
@@ -1351,6 +1383,7 @@ const Light* Rasterizer::Impl::validate(const Scene& scene, const Method& method
                                        (names.empty() ? "(the scene has no lights)" : names)));
     }
   }
+  checkOrthographicFit(scene, light, method, scene.camera);
   if (method.mapSize < 16 || method.mapSize > maxSize)
     throw InputError(formatError("method", "map.size",
                                  "got " + std::to_string(method.mapSize) + "; expected 16.." + std::to_string(maxSize) +
@@ -1540,7 +1573,7 @@ void Rasterizer::Impl::prepareTargets(const Scene& sc, const Method& method, con
   size_t outputBytes = std::max<size_t>(1, channelCount * size_t(camera.width) * size_t(camera.height)) * sizeof(float);
   if (output.size() != outputBytes) output = vk::Buffer(*context, outputBytes, VK_BUFFER_USAGE_STORAGE_BUFFER_BIT);
   ensureMoments(method.filter, method.mapSize, layers.lightLayers);
-  raster::updatePlanes(*scene, glm::dvec3(camera.position));
+  raster::updatePlanes(*scene, raster::cameraRaysOrigin(camera));
   writeDescriptors();
 }
 
@@ -2131,15 +2164,17 @@ nlohmann::json frameMeta(const Scene& scene, const Light* light, const Camera& f
 
 }  // namespace
 
-Frame Rasterizer::render(const Scene& scene, const Method& method, const std::string& lightName, RasterTimings* timings,
-                         const Camera* fitCamera, const EvidenceSelector* select) {
+Frame Rasterizer::render(const Scene& scene, const Method& requested, const std::string& lightName,
+                         RasterTimings* timings, const Camera* fitCamera, const EvidenceSelector* select) {
   auto t0 = std::chrono::steady_clock::now();
+  const Method method = withEffectiveFilter(requested);
   Impl& im = *impl_;
   // Planes lent to a frame not handed back before this render stay with it (its group's next
   // frame is a full one): recycle() only takes back what the last render lent.
   im.lent = Impl::Lent();
   const Light* light = im.validate(scene, method, lightName);
   const Camera& fit = fitCamera ? *fitCamera : scene.camera;  // what the light frustum follows
+  checkOrthographicFit(scene, light, method, fit);
   im.upload(scene);
   // Evidence on demand: with a selector, a light, no projectors (their planes are every pixel's)
   // and the group's planes kept from an earlier frame.
@@ -2201,7 +2236,7 @@ Frame Rasterizer::render(const Scene& scene, const Method& method, const std::st
     t.evidenceGpuMs = passes.resolveGpuMs;
     t.evidencePixels = frame.pixelCount();
   }
-  frame.meta = frameMeta(scene, light, fit, method, deviceName());
+  frame.meta = frameMeta(scene, light, fit, requested, deviceName());
   if (onDemand) frame.meta["evidence_group"] = group;  // CompareContext (compare.h): same hit, ids, m, cascade
   if (t.partialEvidence) {
     frame.meta["evidence"] = "partial";

@@ -9,6 +9,23 @@
 
 namespace shadowlab::raster {
 
+namespace {
+// An orthographic camera's point at image position (x, y) (pixels) and NDC depth zNdc (NaN: the
+// plane through the camera position, view z = 0), through the inverse of the float matrix that
+// rasterizes the visibility buffer (w = 1 for every point).
+glm::dvec3 orthoRayOrigin(const Camera& camera, double x, double y, double zNdc = std::nan("")) {
+  const glm::mat4 view = camera.viewFromWorld(), proj = camera.clipFromView();
+  const glm::dmat4 inv = glm::inverse(glm::dmat4(proj * view));
+  if (std::isnan(zNdc)) zNdc = double(proj[3][2]);  // z of view z = 0
+  return glm::dvec3(inv * glm::dvec4(2.0 * x / camera.width - 1.0, 2.0 * y / camera.height - 1.0, zNdc, 1.0));
+}
+}  // namespace
+
+glm::dvec3 cameraRaysOrigin(const Camera& camera) {
+  // Rounded to float as Params::cameraOrigin holds it, so the planes and the shader's rays agree.
+  return camera.orthographic() ? glm::dvec3(glm::vec3(orthoRayOrigin(camera, 0, 0))) : glm::dvec3(camera.position);
+}
+
 static_assert(abi::kLightDirectional == int(LightType::Directional) && abi::kLightSpot == int(LightType::Spot) &&
                   abi::kLightPoint == int(LightType::Point),
               "the shader's light codes are kinds.h's rows");
@@ -123,7 +140,16 @@ abi::Params packResolveParams(const Scene& scene, const Light* light, const Meth
   } else {
     prm.lightPosType = glm::vec4(0, 0, 0, -1.0f);
   }
-  {
+  if (camera.orthographic()) {
+    // Parallel rays (rayC.w = 1): dir = rayC, from origin(x, y) = cameraOrigin + rayX x + rayY y on
+    // the plane through the camera position, all from the inverse of the very matrix that
+    // rasterized the visibility buffer (w = 1 everywhere).
+    const glm::dvec3 o = cameraRaysOrigin(camera);
+    prm.cameraOrigin = glm::vec4(glm::vec3(o), 1);
+    prm.rayC = glm::vec4(glm::vec3(orthoRayOrigin(camera, 0, 0, 1.0) - orthoRayOrigin(camera, 0, 0, 0.0)), 1);
+    prm.rayX = glm::vec4(glm::vec3(orthoRayOrigin(camera, 1, 0) - o), 0);
+    prm.rayY = glm::vec4(glm::vec3(orthoRayOrigin(camera, 0, 1) - o), 0);
+  } else {
     // Rays through image points, from the inverse of the very matrix that rasterized the
     // visibility buffer: dir(x, y) = rayX x + rayY y + rayC (affine: w of an unprojected
     // far-plane point does not depend on x, y).

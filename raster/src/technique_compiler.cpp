@@ -47,6 +47,8 @@ std::string techniqueText(const TechniqueFile& t) {
     s << "layout(constant_id = " << abi::kSpecCount + int(i) << ") const " << type << " technique_" << p.name << " = "
       << value << ";\n";
   }
+  // A moments line: the moments image under its ABI name (resolve.frag's momentsMap).
+  if (!t.moments.empty()) s << "#define mapMoments momentsMap\n";
   s << "#line 1\n" << t.source << "\n";
   return s.str();
 }

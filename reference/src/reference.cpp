@@ -247,10 +247,13 @@ class Tracer {
                     HitPacket& hits) {
     RTCRayHit8 rayHit;
     alignas(kSimdAlign) int valid[kLanes];
-    const glm::vec3 org = scene_.camera.position;
+    const bool parallel = scene_.camera.orthographic();
+    const glm::vec3 position = scene_.camera.position;
     for (int lane = 0; lane < kLanes; ++lane) {
       valid[lane] = active[lane] ? -1 : 0;
       const glm::vec3 dir = active[lane] ? rays_.direction(px[lane] + dx, py[lane] + dy) : glm::vec3(0, 0, 1);
+      // Orthographic: parallel rays, each from its point of the image plane (Camera::rayOrigin).
+      const glm::vec3 org = parallel && active[lane] ? rays_.origin(px[lane] + dx, py[lane] + dy) : position;
       rayHit.ray.org_x[lane] = org.x;
       rayHit.ray.org_y[lane] = org.y;
       rayHit.ray.org_z[lane] = org.z;
@@ -620,7 +623,7 @@ class Tracer {
   TraceContext shadowContext_{RayKind::Shadow};
   const Scene& scene_;
   const EmbreeScene& embree_;
-  const CameraRays rays_;                      // Camera::rayDirection, bit for bit
+  const CameraRays rays_;                      // Camera::rayDirection and rayOrigin, bit for bit
   const float* objectIds_;                     // per geometry id: Object::id as a float
   const TriangleData* const* triangleTables_;  // per geometry id: its triangles (EmbreeScene::geometry)
 };

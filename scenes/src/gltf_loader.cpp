@@ -852,13 +852,43 @@ void Converter::checkNodes() {
   }
 }
 
+// The camera at its node: at the node's origin, looking down its -Z with its +Y up.
+void placeCamera(const std::string& file, const std::string& ptr, const glm::dmat4& world, Camera& cam);
+
 Camera cameraFromNode(const std::string& file, const tinygltf::Camera& c, size_t index, const glm::dmat4& world,
                       bool& infiniteFar) {
   const std::string ptr = ptrOf("cameras", index);
-  if (c.type != "perspective")
+  if (c.type != "perspective" && c.type != "orthographic")
     fail(file, ptr + "/type",
          "camera " + std::to_string(index) + (c.name.empty() ? "" : " (\"" + c.name + "\")") + " is \"" + c.type +
-             "\"; expected a perspective camera (shadowlab's cameras are perspective)");
+             "\"; expected perspective or orthographic");
+  Camera cam;
+  if (c.type == "orthographic") {
+    // glTF 2.0: xmag, ymag the half extents of the view (world units), znear >= 0, zfar > znear
+    // (required). The image is 640 wide and 640 ymag / xmag high, so its aspect is the view's.
+    const auto& o = c.orthographic;
+    if (!(o.xmag > 0) || !std::isfinite(o.xmag))
+      fail(file, ptr + "/orthographic/xmag", "got " + std::to_string(o.xmag) + "; expected a positive number");
+    if (!(o.ymag > 0) || !std::isfinite(o.ymag))
+      fail(file, ptr + "/orthographic/ymag", "got " + std::to_string(o.ymag) + "; expected a positive number");
+    if (!(o.znear >= 0))
+      fail(file, ptr + "/orthographic/znear", "got " + std::to_string(o.znear) + "; expected a number >= 0");
+    if (!(o.zfar > o.znear) || !std::isfinite(o.zfar))
+      fail(file, ptr + "/orthographic/zfar", "got " + std::to_string(o.zfar) + "; expected zfar > znear");
+    const double h = std::round(640.0 * o.ymag / o.xmag);
+    if (!(h >= 1 && h <= 16384))
+      fail(file, ptr + "/orthographic/ymag",
+           "gives a 640 x " + std::to_string(h) + " image (ymag / xmag); expected 1..16384 rows");
+    cam.projection = Projection::Orthographic;
+    cam.orthoHeight = float(2.0 * o.ymag);
+    cam.width = 640;
+    cam.height = int(h);
+    cam.nearPlane = float(o.znear);
+    cam.farPlane = float(o.zfar);
+    infiniteFar = false;
+    placeCamera(file, ptr, world, cam);
+    return cam;
+  }
   const auto& p = c.perspective;
   if (!(p.yfov > 0 && p.yfov < kPi))
     fail(file, ptr + "/perspective/yfov", "got " + std::to_string(p.yfov) + "; expected 0 < yfov < pi radians");
@@ -866,7 +896,6 @@ Camera cameraFromNode(const std::string& file, const tinygltf::Camera& c, size_t
     fail(file, ptr + "/perspective/znear", "got " + std::to_string(p.znear) + "; expected a positive number");
   if (p.zfar != 0 && !(p.zfar > p.znear))
     fail(file, ptr + "/perspective/zfar", "got " + std::to_string(p.zfar) + "; expected zfar > znear");
-  Camera cam;
   cam.vfovDeg = float(p.yfov * 180.0 / kPi);
   cam.width = 640;
   cam.height = 480;
@@ -880,6 +909,11 @@ Camera cameraFromNode(const std::string& file, const tinygltf::Camera& c, size_t
   cam.nearPlane = float(p.znear);
   infiniteFar = p.zfar == 0;
   cam.farPlane = infiniteFar ? float(p.znear) * 2 : float(p.zfar);
+  placeCamera(file, ptr, world, cam);
+  return cam;
+}
+
+void placeCamera(const std::string& file, const std::string& ptr, const glm::dmat4& world, Camera& cam) {
   const glm::dvec3 pos(world * glm::dvec4(0, 0, 0, 1));
   const glm::dvec3 fwd = glm::dmat3(world) * glm::dvec3(0, 0, -1), up = glm::dmat3(world) * glm::dvec3(0, 1, 0);
   if (!(glm::length(fwd) > 1e-12) || !(glm::length(up) > 1e-12) ||
@@ -888,7 +922,6 @@ Camera cameraFromNode(const std::string& file, const tinygltf::Camera& c, size_t
   cam.position = glm::vec3(pos);
   cam.lookAt = glm::vec3(pos + glm::normalize(fwd));
   cam.up = glm::vec3(glm::normalize(up));
-  return cam;
 }
 
 void Converter::chooseCamera(const std::vector<std::pair<size_t, glm::dmat4>>& cameraNodes, Content& out) const {
@@ -910,21 +943,23 @@ void Converter::chooseCamera(const std::vector<std::pair<size_t, glm::dmat4>>& c
                                  "camera " + std::to_string(want) + " is out of range; " + file_ + " has " +
                                      std::to_string(m_.cameras.size()) + " cameras"));
   }
-  for (const auto& [node, world] : cameraNodes) {
-    const int ci = m_.nodes[node].camera;
-    if (want >= 0 ? ci != want : m_.cameras[size_t(ci)].type != "perspective") continue;
-    out.camera = cameraFromNode(file_, m_.cameras[size_t(ci)], size_t(ci), world, out.infiniteFar);
-    out.hasCamera = true;
-    return;
-  }
+  // Without a choice: the first perspective camera a node places, else the first orthographic one.
+  for (const char* type : {"perspective", "orthographic"})
+    for (const auto& [node, world] : cameraNodes) {
+      const int ci = m_.nodes[node].camera;
+      if (want >= 0 ? ci != want : m_.cameras[size_t(ci)].type != type) continue;
+      out.camera = cameraFromNode(file_, m_.cameras[size_t(ci)], size_t(ci), world, out.infiniteFar);
+      out.hasCamera = true;
+      return;
+    }
   if (want >= 0)
     throw InputError(formatError(req_.requestFile, req_.requestPtr,
                                  "camera " + std::to_string(want) + " of " + file_ +
                                      " is not placed by any node of the glTF scene; expected a camera a node uses"));
   if (!cameraNodes.empty())
     out.warnings.push_back(warningLine(file_,
-                                       "no perspective camera (orthographic cameras are not supported); the scene "
-                                       "takes the JSON camera or a framing one"));
+                                       "no perspective or orthographic camera; the scene takes the JSON camera or a "
+                                       "framing one"));
 }
 
 void Converter::addLights(const std::vector<std::pair<size_t, glm::dmat4>>& lightNodes, Content& out) const {

@@ -589,13 +589,28 @@ glm::vec3 direction(const Reader& r, const Node& n) {
 
 void readCamera(const Reader& r, const Node& root, Camera& cam) {
   Node c = r.require(root, "camera", "an object with position, look_at, vfov_deg, width, height");
-  r.keys(c, {"position", "look_at", "up", "vfov_deg", "width", "height", "near", "far"});
+  r.keys(c, {"position", "look_at", "up", "projection", "vfov_deg", "ortho_height", "width", "height", "near", "far"});
   cam.position = r.vec3(r.require(c, "position", "3 numbers (x, y, z)"));
   Node lookAt = r.require(c, "look_at", "3 numbers (x, y, z)");
   cam.lookAt = r.vec3(lookAt);
   if (Node n = r.child(c, "up")) cam.up = direction(r, n);
-  cam.vfovDeg = float(r.range(r.require(c, "vfov_deg", "a number in (0, 180)"), 0, true, 180, true,
-                              "a field of view in degrees, 0 < vfov_deg < 180"));
+  if (Node n = r.child(c, "projection")) {
+    const std::string p = r.string(n, "perspective or orthographic");
+    if (p == "orthographic") cam.projection = Projection::Orthographic;
+    else if (p != "perspective") r.fail(n.ptr, "got \"" + p + "\"; expected perspective or orthographic");
+  }
+  if (cam.orthographic()) {
+    // The view's height in world units; vfov_deg would be a second, contradicting size.
+    if (Node n = r.child(c, "vfov_deg"))
+      r.fail(n.ptr, "given with \"projection\": \"orthographic\"; expected ortho_height (the view's height, world "
+                    "units) instead");
+    cam.orthoHeight = float(r.positive(r.require(c, "ortho_height", "the view's height in world units, > 0")));
+  } else {
+    if (Node n = r.child(c, "ortho_height"))
+      r.fail(n.ptr, "given with a perspective camera; expected \"projection\": \"orthographic\" beside it");
+    cam.vfovDeg = float(r.range(r.require(c, "vfov_deg", "a number in (0, 180)"), 0, true, 180, true,
+                                "a field of view in degrees, 0 < vfov_deg < 180"));
+  }
   // 16384: the largest 2D image every Vulkan device must support (maxImageDimension2D, lavapipe's
   // limit); memory is checked per command (--max-memory).
   cam.width = int(r.integer(r.require(c, "width", "an integer 1..16384"), 1, kMaxResolution, kResolutionWhy));

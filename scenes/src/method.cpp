@@ -646,6 +646,12 @@ bool isCascadedFit(Fit f) { return f == Fit::Cascades || f == Fit::Sdsm; }
 
 bool isMomentFilter(Filter f) { return momentCount(f) > 0; }
 
+Filter effectiveFilter(const Method& m) {
+  if (m.technique.empty()) return m.filter;
+  const KindInfo<Filter>* k = findKind(filterKinds(), loadTechniqueFile(m.technique).moments);
+  return k ? k->kind : m.filter;
+}
+
 int momentCount(Filter f) {
   switch (f) {
     case Filter::Vsm:

@@ -78,8 +78,18 @@ glm::mat4 Camera::viewFromWorld() const {
   return glm::mat4(glm::lookAt(glm::dvec3(position), glm::dvec3(lookAt), glm::dvec3(up)));
 }
 
+// Orthographic: x, y scaled by the half extents (y flipped: Vulkan's y down), depth 0 at near and
+// 1 at far, w = 1; the pixel centers match rayOrigin's.
 glm::mat4 Camera::clipFromView() const {
-  return vulkanPerspective(vfovDeg, float(width) / float(height), nearPlane, farPlane);
+  if (!orthographic()) return vulkanPerspective(vfovDeg, float(width) / float(height), nearPlane, farPlane);
+  const double halfH = 0.5 * double(orthoHeight), halfW = halfH * double(float(width) / float(height));
+  glm::dmat4 m(0.0);
+  m[0][0] = 1.0 / halfW;
+  m[1][1] = -1.0 / halfH;
+  m[2][2] = 1.0 / (double(nearPlane) - double(farPlane));
+  m[3][2] = double(nearPlane) / (double(nearPlane) - double(farPlane));
+  m[3][3] = 1.0;
+  return glm::mat4(m);
 }
 
 // The inverse of clipFromView for the point at image position (x, y) in pixels:
@@ -89,21 +99,34 @@ glm::mat4 Camera::clipFromView() const {
 // Double inside: the reference traces these rays and the rasterizer uses the float matrices;
 // both must land on the same pixel center.
 CameraRays::CameraRays(const Camera& camera)
-    : forward_(glm::normalize(glm::dvec3(camera.lookAt) - glm::dvec3(camera.position))),
+    : position_(camera.position),
+      forward_(glm::normalize(glm::dvec3(camera.lookAt) - glm::dvec3(camera.position))),
       right_(glm::normalize(glm::cross(forward_, glm::dvec3(camera.up)))),
       trueUp_(glm::cross(right_, forward_)),
       tanHalfFov_(std::tan(double(glm::radians(camera.vfovDeg)) * 0.5)),
       aspect_(double(float(camera.width) / float(camera.height))),
+      halfHeight_(camera.orthographic() ? 0.5 * double(camera.orthoHeight) : 0.0),
       width_(camera.width),
       height_(camera.height) {}
 
+// Orthographic: every ray is the view direction, from the image plane's point
+//   origin = position + ndc.x * aspect * h * s - ndc.y * h * u,  h = orthoHeight / 2.
 glm::vec3 CameraRays::direction(float x, float y) const {
+  if (halfHeight_ > 0) return glm::vec3(forward_);
   const double ndcX = 2.0 * x / width_ - 1.0;
   const double ndcY = 2.0 * y / height_ - 1.0;
   return glm::vec3(glm::normalize(forward_ + (ndcX * aspect_ * tanHalfFov_) * right_ - (ndcY * tanHalfFov_) * trueUp_));
 }
 
+glm::vec3 CameraRays::origin(float x, float y) const {
+  if (!(halfHeight_ > 0)) return glm::vec3(position_);
+  const double ndcX = 2.0 * x / width_ - 1.0;
+  const double ndcY = 2.0 * y / height_ - 1.0;
+  return glm::vec3(position_ + (ndcX * aspect_ * halfHeight_) * right_ - (ndcY * halfHeight_) * trueUp_);
+}
+
 glm::vec3 Camera::rayDirection(float x, float y) const { return CameraRays(*this).direction(x, y); }
+glm::vec3 Camera::rayOrigin(float x, float y) const { return CameraRays(*this).origin(x, y); }
 
 std::string Camera::hash() const {
   float floats[10] = {position.x, position.y, position.z, lookAt.x, lookAt.y, lookAt.z, up.x, up.y, up.z, vfovDeg};
@@ -111,7 +134,12 @@ std::string Camera::hash() const {
   unsigned char bytes[sizeof(floats) + sizeof(ints)];
   std::memcpy(bytes, floats, sizeof(floats));
   std::memcpy(bytes + sizeof(floats), ints, sizeof(ints));
-  return hashHex(fnv1a64(bytes, sizeof(bytes)));
+  const std::string h = hashHex(fnv1a64(bytes, sizeof(bytes)));
+  if (!orthographic()) return h;
+  // Orthographic: orthoHeight continues the hash (a perspective camera's hash is unchanged).
+  uint64_t seed = 0;
+  for (char c : h) seed = (seed << 4) | uint64_t(c <= '9' ? c - '0' : c - 'a' + 10);
+  return hashHex(fnv1a64(&orthoHeight, sizeof(orthoHeight), seed));
 }
 
 glm::vec3 Scene::boundsMin() const {

@@ -14,6 +14,7 @@
 #include "json_util.h"
 #include "shadowlab/scenes/error.h"
 #include "shadowlab/scenes/io.h"
+#include "shadowlab/scenes/method.h"
 
 namespace shadowlab {
 namespace {
@@ -21,6 +22,18 @@ namespace {
 // Without a declared range a number may be anything the shader's float holds comfortably.
 constexpr double kUnbounded = 1e30;
 const char* const kDeclarationSyntax = "// shadowlab: key <name> <float|int|bool> <default> [range <lo>..<hi>]";
+const char* const kMomentsSyntax = "// shadowlab: moments <vsm|evsm2|evsm4|msm>";
+// The names through which a file reads the moments (raster/METHODS.md "Your own technique"), and
+// resolve.frag's own name for the image, which a file without a moments line may not read either.
+const char* const kMomentNames = R"(\b(mapMoments|momentsMap|moments|momentKeys|momentBias)\b)";
+
+// "vsm, evsm2, evsm4, msm": the filters whose moments a file may ask for (kinds.h's rows).
+std::string momentFilterKeys() {
+  std::string s;
+  for (const auto& k : filterKinds())
+    if (isMomentFilter(k.kind)) s += (s.empty() ? "" : ", ") + std::string(k.key);
+  return s;
+}
 
 [[noreturn]] void failAt(const std::string& path, size_t line, size_t column, const std::string& what) {
   throw InputError(path + ":" + std::to_string(line) + ":" + std::to_string(column) + ": error: " + what);
@@ -126,7 +139,8 @@ TechniqueParam parseDeclaration(const TechniqueFile& f, const std::string& rest,
   };
   if (tokens.empty()) fail(offset, "an empty shadowlab: line; expected " + std::string(kDeclarationSyntax));
   if (tokens[0].text != "key")
-    fail(tokens[0].offset, "got \"" + tokens[0].text + "\"; expected key (" + kDeclarationSyntax + ")");
+    fail(tokens[0].offset, "got \"" + tokens[0].text + "\"; expected key (" + kDeclarationSyntax + ") or moments (" +
+                               kMomentsSyntax + ")");
   if (tokens.size() < 4)
     fail(tokens.back().offset, "an incomplete declaration; expected " + std::string(kDeclarationSyntax));
   TechniqueParam p;
@@ -198,7 +212,59 @@ void check(TechniqueFile& f) {
   static const std::regex declaration(R"(^[ \t]*//[ \t]*shadowlab:(.*)$)", std::regex::multiline);
   for (auto it = std::sregex_iterator(s.begin(), s.end(), declaration); it != std::sregex_iterator(); ++it) {
     const size_t restOffset = size_t(it->position(1));
-    f.params.push_back(parseDeclaration(f, (*it)[1], restOffset, f.params));
+    const std::string rest = (*it)[1];
+    // "moments <kind>": its tokens and their offsets in the file.
+    std::vector<std::pair<std::string, size_t>> tokens;
+    for (size_t i = 0; i < rest.size();) {
+      if (std::isspace(static_cast<unsigned char>(rest[i]))) {
+        ++i;
+        continue;
+      }
+      size_t j = i;
+      while (j < rest.size() && !std::isspace(static_cast<unsigned char>(rest[j]))) ++j;
+      tokens.emplace_back(rest.substr(i, j - i), restOffset + i);
+      i = j;
+    }
+    if (!tokens.empty() && tokens[0].first == "moments") {
+      place(s, tokens[0].second, line, column);
+      if (!f.moments.empty())
+        failAt(f.path, line, column,
+               "a second moments line (the first on line " + std::to_string(f.momentsLine) + "); expected one");
+      const int declaredOn = int(line);
+      const std::string kind = tokens.size() > 1 ? tokens[1].first : std::string();
+      const KindInfo<Filter>* k = findKind(filterKinds(), kind);
+      if (!k || !isMomentFilter(k->kind)) {
+        place(s, tokens.size() > 1 ? tokens[1].second : tokens[0].second, line, column);
+        failAt(f.path, line, column,
+               "moments \"" + kind + "\"; expected one of " + momentFilterKeys() + " (" + kMomentsSyntax + ")");
+      }
+      if (tokens.size() > 2) {
+        place(s, tokens[2].second, line, column);
+        failAt(f.path, line, column,
+               "got \"" + tokens[2].first + "\" after the moments kind; expected the end of the line");
+      }
+      f.moments = kind;
+      f.momentsLine = declaredOn;
+      continue;
+    }
+    f.params.push_back(parseDeclaration(f, rest, restOffset, f.params));
+  }
+  // The moments read without asking: no image is bound for them (raster/METHODS.md).
+  if (f.moments.empty()) {
+    static const std::regex reads(kMomentNames);
+    // ShadowQuery's fields only as q.<name>; the global image by its name alone.
+    for (auto it = std::sregex_iterator(code.begin(), code.end(), reads); it != std::sregex_iterator(); ++it) {
+      const std::string name = (*it)[1];
+      const size_t at = size_t(it->position(0));
+      const bool global = name == "mapMoments" || name == "momentsMap";
+      size_t before = at;
+      while (before > 0 && std::isspace(static_cast<unsigned char>(code[before - 1]))) --before;
+      if (!global && !(before > 0 && code[before - 1] == '.')) continue;
+      place(s, at, line, column);
+      failAt(f.path, line, column,
+             "reads " + name + " without asking for moments; expected a header line " + kMomentsSyntax +
+                 " (the harness renders and blurs that filter's moments for the file only then)");
+    }
   }
   // The function: a definition `<type> <name>(<params>) {`.
   static const std::regex definition(R"(\b([A-Za-z_]\w*)\s+([A-Za-z_]\w*)\s*\(([^()]*)\)\s*\{)");

@@ -56,7 +56,7 @@ MethodCost estimateMethodCost(const Scene& scene, const Method& method, const st
   c.mapBytes = c.texelsWritten * bytesPerTexel(method.mapFormat);
   c.shadowMs = layers * (texels * kNsPerTexel + triangles * kNsPerTriangle) * 1e-6;
   int moments = 0;
-  switch (method.filter) {
+  switch (effectiveFilter(method)) {  // a technique file's moments line: that map's moments pass
     case Filter::Vsm:
     case Filter::Evsm2: moments = 2; break;
     case Filter::Evsm4:

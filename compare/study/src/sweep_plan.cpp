@@ -300,6 +300,10 @@ void loadSweepFile(const std::string& path, SweepSpec& spec) {
                       std::to_string(kMaxLightSamples) + " (light samples per pixel sample of a sized light)");
       checkLightSamples(v.get<int64_t>(), path, ptr);
       spec.lightSamples = v.get<int>();
+    } else if (k == "gpu_timeout_s") {
+      if (!v.is_number()) fail(ptr, "got " + describeJson(v) + "; expected seconds, a number 0..1e6");
+      checkGpuTimeout(v.get<double>(), path, ptr);
+      spec.gpuTimeoutS = v.get<double>();
     } else if (k == "keep_images") {
       if (!v.is_boolean()) fail(ptr, "got " + jsonTypeName(v) + "; expected true or false");
       spec.keepImages = v.get<bool>();
@@ -307,7 +311,8 @@ void loadSweepFile(const std::string& path, SweepSpec& spec) {
       if (!v.is_string()) fail(ptr, "got " + jsonTypeName(v) + "; expected a string");
     } else {
       fail(ptr, "unknown key \"" + k +
-                    "\"; expected one of scenes, grid, set, method, light, spp, light_samples, keep_images, "
+                    "\"; expected one of scenes, grid, set, method, light, spp, light_samples, gpu_timeout_s, "
+                    "keep_images, "
                     "description");
     }
   }

@@ -36,6 +36,7 @@ double msSince(Clock::time_point t0) { return std::chrono::duration<double, std:
 
 class PipelineRunner final : public SweepRunner {
  public:
+  void setGpuTimeout(double seconds) { deviceOptions_.gpuTimeoutS = seconds; }
   PipelineRunner(const std::string& cacheDir, int spp, const std::string& device, size_t keepReferences,
                  bool fullEvidence, bool keepTriptychs, int lightSamples)
       : cache_(cacheDir),
@@ -452,9 +453,11 @@ class PipelineRunner final : public SweepRunner {
 
 std::unique_ptr<SweepRunner> makePipelineRunner(const std::string& cacheDir, int spp, const std::string& device,
                                                 size_t keepReferences, bool fullEvidence, bool keepTriptychs,
-                                                int lightSamples) {
-  return std::make_unique<PipelineRunner>(cacheDir, spp, device, keepReferences, fullEvidence, keepTriptychs,
-                                          lightSamples);
+                                                int lightSamples, double gpuTimeoutS) {
+  auto runner = std::make_unique<PipelineRunner>(cacheDir, spp, device, keepReferences, fullEvidence, keepTriptychs,
+                                                 lightSamples);
+  runner->setGpuTimeout(gpuTimeoutS);
+  return runner;
 }
 
 }  // namespace shadowlab

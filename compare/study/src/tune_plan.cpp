@@ -4,12 +4,14 @@
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <functional>
 #include <map>
 #include <set>
 
 #include "shadowlab/compare/classes.h"
 #include "shadowlab/compare/tune.h"
 #include "shadowlab/scenes/error.h"
+#include "shadowlab/scenes/technique.h"
 
 namespace shadowlab {
 namespace {
@@ -84,6 +86,44 @@ std::string numberText(double v) {
   return b;
 }
 
+// A technique file's key over lo:hi (float: lo:hi[:intervals], default 4 intervals; int: every
+// integer between, at most 64), inside the range the file declares for it.
+std::vector<std::string> techniqueRange(const Method& base, const std::string& key, const std::string& range,
+                                        const std::function<void(const std::string&)>& fail) {
+  if (base.technique.empty()) fail("\"" + key + "\" without a technique; expected --fixed technique=file.glsl");
+  const TechniqueFile& t = loadTechniqueFile(base.technique);
+  const TechniqueParam* p = t.find(key.substr(std::string("technique.").size()));
+  if (!p) fail("\"" + key + "\" is not declared by " + base.technique + "; expected one of its keys");
+  const std::string where = t.path + ":" + std::to_string(p->line);
+  if (p->type == TechniqueParam::Type::Bool)
+    fail("\"" + key + "\" is a bool (" + where + ") and takes a list of values (false,true), not a range lo:hi");
+  const bool integral = p->type == TechniqueParam::Type::Int;
+  const auto parts = splitList(range, ':');
+  double lo = 0, hi = 0, n = 4;
+  const bool counted = parts.size() == 3;
+  if (parts.size() < 2 || parts.size() > 3 || !parseNumber(parts[0], lo) || !parseNumber(parts[1], hi) ||
+      (counted && !parseNumber(parts[2], n)) || (counted && integral))
+    fail("got \"" + range + "\"; expected lo:hi" + std::string(integral ? "" : "[:intervals]") +
+         " with finite numbers");
+  if (!(lo < hi)) fail("empty range " + range + " (lo >= hi); expected lo < hi");
+  for (auto [name, v] : {std::pair<const char*, double>{"lo", lo}, {"hi", hi}})
+    if (v < p->lo || v > p->hi)
+      fail(std::string(name) + " " + numberText(v) + " is outside " + key + "'s declared range " + numberText(p->lo) +
+           ".." + numberText(p->hi) + " (" + where + "); expected lo:hi within it");
+  std::vector<std::string> raw;
+  if (integral) {
+    if (std::floor(hi) - std::ceil(lo) >= 64)
+      fail("range " + range + " holds more than 64 integers; expected at most 64");
+    for (double v = std::ceil(lo); v <= hi; ++v) raw.push_back(numberText(v));
+    if (raw.empty()) fail("empty range " + range + ": no integer between; expected at least one");
+  } else {
+    if (counted && (n != std::floor(n) || n < 1 || n > 64))
+      fail("got " + parts[2] + " intervals; expected an integer 1..64");
+    for (int i = 0; i <= int(n); ++i) raw.push_back(numberText(lo + (hi - lo) * i / n));
+  }
+  return raw;
+}
+
 // The candidate values of one key from its range text ("lo:hi[:n]" or "v1,v2,...").
 std::vector<std::string> expandRange(const TunableKey& info, const Method& base, const std::string& range,
                                      const std::string& origin) {
@@ -92,7 +132,9 @@ std::vector<std::string> expandRange(const TunableKey& info, const Method& base,
   std::vector<std::string> raw;
   const bool integerKey = key == "map.size" || key == "filter.size" || key == "filter.taps" ||
                           key == "pcss.blocker_taps" || key == "pcss.filter_taps" || key == "dpcf.taps";
-  if (range.find(':') != std::string::npos) {
+  if (range.find(':') != std::string::npos && key.rfind("technique.", 0) == 0) {
+    raw = techniqueRange(base, key, range, fail);
+  } else if (range.find(':') != std::string::npos) {
     if (info.role == TuneRole::Categorical && !integerKey)
       fail("\"" + key + "\" takes a list of values (v1,v2,...), not a range lo:hi");
     const auto parts = splitList(range, ':');
@@ -307,8 +349,9 @@ TunePlan planTune(const TuneSpec& spec) {
   for (const auto& k : keys)
     if (k.rfind("technique.", 0) == 0) {
       if (!ranges.count(k))
-        throw InputError(formatError("--keys " + k, "",
-                                     "a technique's key has no default range; expected --range " + k + "=v1,v2,..."));
+        throw InputError(formatError(
+            "--keys " + k, "",
+            "a technique's key has no default range; expected --range " + k + "=lo:hi or " + k + "=v1,v2,..."));
       candidates.push_back(*findTunable(k));
     }
   for (const auto& k : candidates) {

@@ -157,6 +157,11 @@ class Rasterizer {
 // it creates any output. Cached by content: render() does not compile it again.
 void precompileTechnique(const Method& method);
 
+// The GPU time limit as every command takes it (--gpu-timeout-s, a sweep file's gpu_timeout_s):
+// seconds 0..1e6, 0 for the default (RasterDeviceOptions::gpuTimeoutS). Throws InputError
+// "origin: pointer: error: got X; expected ..." otherwise (NaN included).
+void checkGpuTimeout(double seconds, const std::string& origin, const std::string& pointer = "");
+
 // Whether a device of this process stopped answering (a wait ran past gpuTimeoutS: a hung GPU, a
 // technique that never returns). Its threads may still run the shader: the Rasterizer then leaks
 // the device rather than wait for it, and the process must end with _exit (app/main.cpp), since

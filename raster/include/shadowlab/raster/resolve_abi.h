@@ -205,6 +205,12 @@ struct ShadowQuery {
   float texelSize;  // 1 / mapSize
   ivec2 pixel;      // the camera pixel (x right, y down): per-pixel noise
   int lightType;    // kLightDirectional, kLightSpot or kLightPoint
+  // With a header line "// shadowlab: moments vsm|evsm2|evsm4|msm" (else 0; reading them without
+  // one is an error): that filterable map's blurred moments (filter.blur) at uv, bilinear, as the
+  // built-in filter reads them (the whole image: the global mapMoments, sampler2DArray, LINEAR);
+  vec4 moments;
+  vec4 momentKeys;   // (vsm.min_variance, vsm.bleed_reduction, evsm.exponent_pos, evsm.exponent_neg), exponents <= 42
+  float momentBias;  // msm.moment_bias
 };
 #endif
 

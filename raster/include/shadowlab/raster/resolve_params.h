@@ -79,4 +79,10 @@ glm::vec4 lightSizeInMap(const Light& light, const MapLayer& layer, int mapSize)
 // The shader's light type code (abi::kLightNone without a light).
 uint32_t lightTypeCode(const Light* light);
 
+// The point the camera rays' parameters and the triangle planes (scene_gpu.h) are relative to:
+// the camera position (perspective), or for an orthographic camera the image plane's point at
+// image position (0, 0) (its rays start on that plane: origin(x, y) = it + rayX x + rayY y), both
+// from the inverse of the matrix that rasterizes the visibility buffer.
+glm::dvec3 cameraRaysOrigin(const Camera& camera);
+
 }  // namespace shadowlab::raster

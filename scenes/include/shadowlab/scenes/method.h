@@ -101,6 +101,9 @@ bool isCascadedFit(Fit f);
 
 // The filters that read a moments map rather than comparing depths (vsm, evsm2, evsm4, msm).
 bool isMomentFilter(Filter f);
+// The filter whose maps the rasterizer renders: the method's, or for a technique file with a
+// moments line (technique.h) that filterable map's (its moments pass, its evidence channels).
+Filter effectiveFilter(const Method& m);
 // The moments a filter stores per texel: 2 (vsm, evsm2) or 4 (evsm4, msm); 0 for the others.
 int momentCount(Filter f);
 

@@ -87,11 +87,17 @@ struct Projector {
   glm::mat4 texFromWorld() const;
 };
 
+// How a camera projects (scenes/FORMAT.md "camera"): rays from one point (perspective) or parallel
+// rays along the view direction from the points of a plane (orthographic).
+enum class Projection { Perspective, Orthographic };
+
 struct Camera {
   glm::vec3 position{0, 1, 5};
   glm::vec3 lookAt{0};
   glm::vec3 up{0, 1, 0};
-  float vfovDeg = 45.0f;
+  Projection projection = Projection::Perspective;
+  float vfovDeg = 45.0f;     // perspective: vertical field of view, degrees
+  float orthoHeight = 0.0f;  // orthographic: the view's height in world units (glTF: 2 ymag); width = height W / H
   int width = 640;
   int height = 480;
   float nearPlane = 0.01f;          // rasterizer only
@@ -103,9 +109,14 @@ struct Camera {
   // (x = i + 0.5, y = j + 0.5 is the center of pixel (i, j)). Computes the camera's basis on every
   // call; a loop over pixels uses CameraRays, which gives the same bits.
   glm::vec3 rayDirection(float x, float y) const;
+  // Where that ray starts: the camera position (perspective), or the point (x, y) of the image
+  // plane through the position (orthographic). CameraRays::origin gives the same bits.
+  glm::vec3 rayOrigin(float x, float y) const;
+  bool orthographic() const { return projection == Projection::Orthographic; }
   // The frames' "camera_hash": hashHex(fnv1a64) over the packed bytes of position.xyz, lookAt.xyz,
-  // up.xyz, vfovDeg (10 float32) then width, height (2 int32): exactly the fields that decide which
-  // ray each pixel casts. One definition, so compare can match a reference and a raster frame.
+  // up.xyz, vfovDeg (10 float32) then width, height (2 int32), and for an orthographic camera
+  // orthoHeight (1 float32) after them: exactly the fields that decide which ray each pixel casts.
+  // One definition, so compare can match a reference and a raster frame.
   std::string hash() const;
 };
 
@@ -116,10 +127,12 @@ class CameraRays {
  public:
   explicit CameraRays(const Camera& camera);
   glm::vec3 direction(float x, float y) const;
+  glm::vec3 origin(float x, float y) const;  // Camera::rayOrigin
 
  private:
-  glm::dvec3 forward_, right_, trueUp_;
+  glm::dvec3 position_, forward_, right_, trueUp_;
   double tanHalfFov_, aspect_;
+  double halfHeight_;  // orthographic: half the view's height, world units; 0: perspective
   int width_, height_;
 };
 

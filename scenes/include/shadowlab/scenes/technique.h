@@ -3,7 +3,11 @@
 // defines `float shadowVisibility(ShadowQuery q)`, the visibility of one pixel in [0, 1], and
 // declares its own method keys in header lines
 //   // shadowlab: key radius float 1.5 range 0.25..8
-// (`technique.radius` in method files, --set, --grid, tune). This part reads and checks the text
+// (`technique.radius` in method files, --set, --grid, tune), and may ask for a filterable map's
+// moments with a header line
+//   // shadowlab: moments vsm
+// (vsm, evsm2, evsm4 or msm: the harness renders and blurs that filter's moments and offers them as
+// `mapMoments` and ShadowQuery::moments). This part reads and checks the text
 // without a GPU: UTF-8, no #include, the function's signature, the declarations, the content hash.
 // raster/ compiles it (raster/src/technique_compiler.cpp).
 #include <cstdint>
@@ -27,6 +31,10 @@ struct TechniqueFile {
   std::string stem;                    // file name without folder and extension: "pcf" for examples/techniques/pcf.glsl
   std::string hash;                    // 16 hex digits, FNV-1a 64 of the bytes
   std::vector<TechniqueParam> params;  // in declaration order
+  // "// shadowlab: moments <filter>": the filterable map's key (vsm, evsm2, evsm4, msm) whose moments
+  // the harness renders for the file; empty: none (the file may not read them).
+  std::string moments;
+  int momentsLine = 0;  // 1-based line of that declaration
   // The code names ShadowQuery::planeSlope (or pastes tokens, ##): its lookup needs the normal.
   bool readsPlaneSlope = false;
   // "pcf@0123456789abcdef": how results name the technique (method key technique.hash).
@@ -40,8 +48,9 @@ constexpr const char* kTechniqueSignature = "float shadowVisibility(ShadowQuery 
 
 // Reads and checks `path`: throws InputError "path:line:column: error: ..." for a file that is
 // missing, not UTF-8 text, has an #include, a malformed or duplicate declaration, a default
-// outside its range, or no `float shadowVisibility(ShadowQuery q)` (misspelled names and wrong
-// signatures named at their line). Parsed once per content (a cache keyed by path and bytes).
+// outside its range, reads the moments (mapMoments, ShadowQuery::moments) without a moments line, or no `float
+// shadowVisibility(ShadowQuery q)` (misspelled names and wrong signatures named at their line). Parsed once per content
+// (a cache keyed by path and bytes).
 const TechniqueFile& loadTechniqueFile(const std::string& path);
 
 // A parameter's value as the method's JSON prints it (int, bool or float) and as the shader's

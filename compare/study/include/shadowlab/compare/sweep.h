@@ -71,6 +71,7 @@ struct SweepSpec {
   int spp = 1;                      // reference samples per pixel
   int lightSamples = 64;            // reference samples of a sized light per pixel sample (kDefaultLightSamples)
   bool keepImages = false;          // write raster.exr + errors.png per configuration
+  double gpuTimeoutS = 0;           // seconds a GPU pass may take (0: $SHADOWLAB_GPU_TIMEOUT_S, else 120)
   // Failure frontiers (sweep_frontier.h): the metric walked along swept scene: parameters and the
   // rate above which a configuration counts as broken. Checked by planSweep.
   std::string frontierMetric = "error_rate";
@@ -182,7 +183,8 @@ class SweepRunner {
 // `lightSamples`: the reference's ReferenceOptions::lightSamples (sized lights only).
 std::unique_ptr<SweepRunner> makePipelineRunner(const std::string& cacheDir, int spp, const std::string& device = "",
                                                 size_t keepReferences = 1, bool fullEvidence = false,
-                                                bool keepTriptychs = true, int lightSamples = 64);
+                                                bool keepTriptychs = true, int lightSamples = 64,
+                                                double gpuTimeoutS = 0);
 
 // The cache folder a sweep into `outDir` uses when none is given: $SHADOWLAB_CACHE, else
 // <parent of outDir>/.shadowlab-cache, so sweeps side by side share their references.
