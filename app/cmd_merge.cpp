@@ -32,8 +32,7 @@ int run(const Options& o) {
   const SweepPlan plan = planSweep(spec);
   const std::string cacheDir = o.cacheDir.empty() ? defaultSweepCacheDir(o.outDir) : o.cacheDir;
   // The runner renders only for the report's triptychs (created on first use).
-  auto runner =
-      makePipelineRunner(cacheDir, spec.spp, o.device, 1, false, true, spec.lightSamples, o.gpuTimeoutS);
+  auto runner = makePipelineRunner(cacheDir, spec.spp, o.device, 1, false, true, spec.lightSamples, o.gpuTimeoutS);
   SweepOptions options;
   options.outDir = o.outDir;
   options.progress = stderr;
