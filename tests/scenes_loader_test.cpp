@@ -75,8 +75,9 @@ glm::vec3 toLight(double elevationDeg, double azimuthDeg) {
 
 TEST(ScenesLoader, EveryBundledSceneLoads) {
   auto names = bundledSceneNames();
-  EXPECT_EQ(names, (std::vector<std::string>{"sphere_on_plane", "grazing", "contact", "thin_wall", "alpha_fence",
-                                             "projector", "bunny", "long_view", "stacked_occluders", "gltf_cards"}));
+  EXPECT_EQ(names,
+            (std::vector<std::string>{"sphere_on_plane", "grazing", "contact", "thin_wall", "alpha_fence", "projector",
+                                      "bunny", "long_view", "stacked_occluders", "gltf_cards", "soft_post"}));
   for (const auto& n : names) {
     SCOPED_TRACE(n);
     Scene s = loadScene(resolveScenePath(n));
