@@ -42,6 +42,17 @@
 //
 //   BM_Full/<scene>    renderReference on all hardware threads (wall clock, as the command runs it):
 //                      mrays_per_s, rays, build_ms.
+//
+//   BM_Soft/<scene>    a sized light's shadow rays against the hard light's, per ray, side by side:
+//                      the scene at 480 x 270 with its first light hard and then sized (a sun of 2
+//                      degrees; a sphere light of radius 0.4 where the light is a point or spot),
+//                      64 light samples, one thread, Compare set, 5 rounds alternating, best CPU
+//                      time of each (as BM_Ratios):
+//     hard_ms_per_mray, soft_ms_per_mray  (trace - camera-only trace) / shadow rays, in ms per
+//                      million shadow rays (the soft trace's rays: 64 per hit point facing the
+//                      light, plus the hard ray toward the center that gives occluder_dist)
+//     soft_ratio       soft_ms_per_mray / hard_ms_per_mray   (goal <= 1.1)
+//     soft_ratio_baseline  the same with the baseline (SSE2) compilation
 #include <benchmark/benchmark.h>
 
 #include <algorithm>
@@ -383,6 +394,69 @@ void BM_Full(benchmark::State& state, const std::string& name) {
   state.counters["build_ms"] = stats.buildSeconds * 1e3;
 }
 
+// The scene for BM_Soft: the bench scene (or a bundled one) at 480 x 270, its first light hard or
+// sized.
+Scene softBenchScene(const std::string& name, bool sized) {
+  Scene scene = benchSceneNamed(name);
+  scene.camera.width = 480;
+  scene.camera.height = 270;
+  Light& light = scene.lights.front();
+  light.angularDiameterDeg = 0.0f;
+  light.radius = 0.0f;
+  if (sized) {
+    if (light.type == LightType::Directional) {
+      light.angularDiameterDeg = 2.0f;
+    } else {
+      light.radius = 0.4f;
+    }
+  }
+  return scene;
+}
+
+void BM_Soft(benchmark::State& state, const std::string& name) {
+  const Scene hard = softBenchScene(name, false), soft = softBenchScene(name, true);
+  Scene cameraOnly = hard;
+  cameraOnly.lights.clear();
+  cameraOnly.projectors.clear();
+  ReferenceOptions options;
+  options.threads = 1;
+  options.channels = ReferenceChannels::Compare;
+  options.lightSamples = 64;
+  ReferenceOptions baselineOptions = options;
+  baselineOptions.simd = ReferenceSimd::Baseline;
+  double primary = 1e30, hardFull = 1e30, softFull = 1e30, basePrimary = 1e30, baseHard = 1e30, baseSoft = 1e30;
+  ReferenceStats hardStats, softStats;
+  for (auto _ : state) {
+    double total = 0;
+    for (int round = 0; round < 5; ++round) {
+      ReferenceStats stats;
+      benchmark::DoNotOptimize(renderReference(cameraOnly, options, &stats).data.data());
+      primary = std::min(primary, stats.traceCpuSeconds);
+      benchmark::DoNotOptimize(renderReference(hard, options, &hardStats).data.data());
+      hardFull = std::min(hardFull, hardStats.traceCpuSeconds);
+      benchmark::DoNotOptimize(renderReference(soft, options, &softStats).data.data());
+      softFull = std::min(softFull, softStats.traceCpuSeconds);
+      total += softStats.traceCpuSeconds;
+      benchmark::DoNotOptimize(renderReference(cameraOnly, baselineOptions, &stats).data.data());
+      basePrimary = std::min(basePrimary, stats.traceCpuSeconds);
+      benchmark::DoNotOptimize(renderReference(hard, baselineOptions, &stats).data.data());
+      baseHard = std::min(baseHard, stats.traceCpuSeconds);
+      benchmark::DoNotOptimize(renderReference(soft, baselineOptions, &stats).data.data());
+      baseSoft = std::min(baseSoft, stats.traceCpuSeconds);
+    }
+    state.SetIterationTime(total);
+  }
+  const double hardRays = double(hardStats.shadowRays), softRays = double(softStats.shadowRays);
+  const double hardPerRay = (hardFull - primary) / hardRays * 1e9, softPerRay = (softFull - primary) / softRays * 1e9;
+  state.counters["hard_shadow_rays"] = hardRays;
+  state.counters["soft_shadow_rays"] = softRays;
+  state.counters["hard_ms_per_mray"] = hardPerRay;
+  state.counters["soft_ms_per_mray"] = softPerRay;
+  state.counters["soft_ratio"] = softPerRay / hardPerRay;
+  state.counters["soft_ratio_baseline"] = ((baseSoft - basePrimary) / softRays) / ((baseHard - basePrimary) / hardRays);
+  state.counters["simd_avx2"] = referenceHasAvx2() ? 1.0 : 0.0;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -393,6 +467,13 @@ int main(int argc, char** argv) {
         ->UseManualTime()
         ->Unit(benchmark::kMillisecond);
     benchmark::RegisterBenchmark(("BM_Full/" + scene).c_str(), BM_Full, scene)
+        ->UseManualTime()
+        ->Unit(benchmark::kMillisecond);
+  }
+  for (const char* name : {"sphere_on_plane", "bunny4", "soft_post"}) {
+    const std::string scene = name;
+    benchmark::RegisterBenchmark(("BM_Soft/" + scene).c_str(), BM_Soft, scene)
+        ->Iterations(1)
         ->UseManualTime()
         ->Unit(benchmark::kMillisecond);
   }

@@ -232,8 +232,11 @@ TEST(ReferenceRobustness, CompareSetEqualsAllSetOnEveryBundledScene) {
     nlohmann::json meta = compareSet.meta;
     meta["channels"] = "all";
     EXPECT_EQ(meta, all.meta);
-    // Compare = hit, object_id, then per light vis and occluder_dist, per projector coverage, R, G, B.
-    const size_t expectedCount = 2 + 2 * scene.lights.size() + 4 * scene.projectors.size();
+    // Compare = hit, object_id, then per light vis and occluder_dist (and vis_sigma for a sized
+    // light), per projector coverage, R, G, B.
+    const size_t sizedLights = size_t(
+        std::count_if(scene.lights.begin(), scene.lights.end(), [](const Light& light) { return light.sized(); }));
+    const size_t expectedCount = 2 + 2 * scene.lights.size() + sizedLights + 4 * scene.projectors.size();
     ASSERT_EQ(compareSet.names.size(), expectedCount);
     EXPECT_EQ(all.names.size(), expectedCount + 7 + 2 * scene.projectors.size());
     size_t from = 0;

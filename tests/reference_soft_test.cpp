@@ -404,6 +404,49 @@ TEST(ReferenceSoft, SigmaIsPositiveWhereTheSamplesAllAgree) {
     }
 }
 
+// ---- the bundled soft_post -------------------------------------------------------------------
+
+// soft_post's shadow hardens toward the post's foot: the umbra (vis 0) lies only near it, and
+// farther away the shadow's darkest and mean visibility rise (the penumbra spreads the post's
+// shadow over a wider, lighter band).
+TEST(ReferenceSoft, SoftPostPenumbraWidensAwayFromTheContact) {
+  const Scene scene = loadScene(resolveScenePath("soft_post"));
+  ASSERT_TRUE(scene.lights.front().sized());
+  ReferenceOptions options;
+  const Frame frame = renderReference(scene, options);
+  const auto& objectId = frame.get("object_id");
+  const auto& vis = frame.get("light.bulb.vis");
+  const auto& px = frame.get("P.x");
+  const auto& pz = frame.get("P.z");
+  const uint32_t ground = scene.objects.front().id;
+  constexpr int kBins = 4;  // distance from the post's axis: [0.1, 0.9), [0.9, 1.7), [1.7, 2.5), [2.5, 3.3)
+  size_t shadowed[kBins] = {}, umbra[kBins] = {};
+  double sum[kBins] = {}, darkest[kBins] = {1, 1, 1, 1};
+  for (size_t i = 0; i < vis.size(); ++i) {
+    if (uint32_t(objectId[i]) != ground || vis[i] == 1.0f) continue;
+    const double distance = std::hypot(double(px[i]), double(pz[i]));
+    const int bin = int(std::floor((distance - 0.1) / 0.8));
+    if (bin < 0 || bin >= kBins) continue;
+    ++shadowed[bin];
+    sum[bin] += vis[i];
+    darkest[bin] = std::min(darkest[bin], double(vis[i]));
+    if (vis[i] == 0.0f) ++umbra[bin];
+  }
+  double previousMean = -1.0, previousDarkest = -1.0;
+  for (int b = 0; b < kBins; ++b) {
+    ASSERT_GT(shadowed[b], 100u) << "bin " << b;
+    const double mean = sum[b] / double(shadowed[b]);
+    std::printf("soft_post, %.1f..%.1f from the post: %zu shadowed pixels, mean vis %.3f, darkest %.3f, umbra %zu\n",
+                0.1 + 0.8 * b, 0.9 + 0.8 * b, shadowed[b], mean, darkest[b], umbra[b]);
+    EXPECT_GT(mean, previousMean) << "bin " << b;
+    EXPECT_GT(darkest[b], previousDarkest) << "bin " << b;
+    previousMean = mean;
+    previousDarkest = darkest[b];
+  }
+  EXPECT_GT(umbra[0], 50u);
+  for (int b = 1; b < kBins; ++b) EXPECT_EQ(umbra[b], 0u) << "bin " << b;
+}
+
 // ---- bad values through the real binary -------------------------------------------------------
 
 TEST(ReferenceSoft, BadLightSamplesExitTwoNamingTheOptionOrTheFile) {

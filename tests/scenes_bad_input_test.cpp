@@ -129,7 +129,7 @@ TEST(ScenesCli, BundledScenesCheckAndList) {
   EXPECT_EQ(names.out, expected);
   EXPECT_EQ(names.out,
             "sphere_on_plane\ngrazing\ncontact\nthin_wall\nalpha_fence\nprojector\nbunny\nlong_view\n"
-            "stacked_occluders\ngltf_cards\n");
+            "stacked_occluders\ngltf_cards\nsoft_post\n");
 
   RunResult list = run("scenes");
   EXPECT_EQ(list.exitCode, 0);

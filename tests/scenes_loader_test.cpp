@@ -75,8 +75,9 @@ glm::vec3 toLight(double elevationDeg, double azimuthDeg) {
 
 TEST(ScenesLoader, EveryBundledSceneLoads) {
   auto names = bundledSceneNames();
-  EXPECT_EQ(names, (std::vector<std::string>{"sphere_on_plane", "grazing", "contact", "thin_wall", "alpha_fence",
-                                             "projector", "bunny", "long_view", "stacked_occluders", "gltf_cards"}));
+  EXPECT_EQ(names,
+            (std::vector<std::string>{"sphere_on_plane", "grazing", "contact", "thin_wall", "alpha_fence", "projector",
+                                      "bunny", "long_view", "stacked_occluders", "gltf_cards", "soft_post"}));
   for (const auto& n : names) {
     SCOPED_TRACE(n);
     Scene s = loadScene(resolveScenePath(n));
@@ -86,8 +87,9 @@ TEST(ScenesLoader, EveryBundledSceneLoads) {
     EXPECT_EQ(s.hash.find_first_not_of("0123456789abcdef"), std::string::npos);
     EXPECT_GT(s.triangleCount(), 0u);
     EXPECT_FALSE(s.lights.empty());
-    // gltf_cards is lit by its glTF file's KHR_lights_punctual spot only.
+    // gltf_cards is lit by its glTF file's KHR_lights_punctual spot only, soft_post by a sphere light.
     if (n == "gltf_cards") EXPECT_TRUE(s.findLight("spot") != nullptr && s.lights.size() == 1);
+    else if (n == "soft_post") EXPECT_TRUE(s.findLight("bulb") != nullptr && s.lights.front().sized());
     else EXPECT_TRUE(s.findLight("sun") != nullptr) << "every other bundled scene has a light named sun";
     EXPECT_FALSE(s.failurePointer.empty());
     EXPECT_GE(s.failureValues.size(), 3u);
