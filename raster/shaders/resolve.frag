@@ -329,7 +329,7 @@ vec2 softPenumbraTexels(vec4 lightSize, float dR, float dB) {
   return lightSize.xy * (max(zR - zB, 0.0) / (zB * zR));
 }
 
-// The stored depth of the texel under st + offset (clamped to the map, like tap()), and that texel.
+// The stored depth of texel t, clamped to the map like tap()'s.
 float softStoredDepth(Layer l, ivec2 t) {
   return texelFetch(mapDepth, ivec3(clamp(t, ivec2(0), ivec2(int(l.size) - 1)), l.index), 0).r;
 }
