@@ -16,6 +16,7 @@
 #include <cstdio>
 #include <cstring>
 #include <filesystem>
+#include <functional>
 #include <fstream>
 #include <string>
 #include <vector>
@@ -388,5 +389,133 @@ TEST(RasterPcssCli, BadKeysExit2NamingTheKey) {
     EXPECT_EQ(r.code, 2) << c.set << ": " << r.err;
     EXPECT_NE(r.err.find(c.key), std::string::npos) << c.set << ": " << r.err;
     EXPECT_FALSE(fs::exists(out)) << c.set;
+  }
+}
+
+namespace {
+
+// The contact scene's own soft truth, ray cast in the test: a ground point's visibility is the
+// share of the light's samples whose ray from the point misses the plank (the only caster above
+// the ground). The plank: center (0, 0.5, 0), long axis a = (cos alpha, sin alpha, 0) of half-length
+// sqrt(17) / 2, short axis (0, 0, 1) of half-width 1. Samples: a fixed stratified 16 x 16 grid
+// (uniform in solid angle over the sun's cone; uniform over the disc of radius R facing the point
+// for a sphere light, whose silhouette it is to R^2 / d^2 < 0.3 %).
+struct Plank {
+  glm::dvec3 c{0, 0.5, 0}, a, n, b{0, 0, 1};
+  double halfLength = 0.5 * std::sqrt(17.0);
+  Plank() {
+    const double alpha = std::atan(0.25);
+    a = glm::dvec3(std::cos(alpha), std::sin(alpha), 0);
+    n = glm::dvec3(-std::sin(alpha), std::cos(alpha), 0);
+  }
+  // Whether the segment from p towards `to` (t in (0, 1]) crosses the plank.
+  bool blocks(glm::dvec3 p, glm::dvec3 to) const {
+    const glm::dvec3 d = to - p;
+    const double dn = glm::dot(d, n);
+    if (dn == 0.0) return false;
+    const double t = glm::dot(c - p, n) / dn;
+    if (!(t > 1e-9 && t <= 1.0)) return false;
+    const glm::dvec3 q = p + t * d - c;
+    return std::abs(glm::dot(q, a)) <= halfLength && std::abs(glm::dot(q, b)) <= 1.0;
+  }
+};
+
+// A unit vector's orthonormal partners.
+void basisOf(glm::dvec3 w, glm::dvec3& u, glm::dvec3& v) {
+  u = glm::normalize(glm::cross(std::abs(w.x) < 0.9 ? glm::dvec3(1, 0, 0) : glm::dvec3(0, 1, 0), w));
+  v = glm::cross(w, u);
+}
+
+constexpr int kStrata = 16;
+
+double sunTruth(glm::dvec3 p, glm::dvec3 toLight, double diameterDeg) {
+  const Plank plank;
+  glm::dvec3 u, v;
+  basisOf(toLight, u, v);
+  const double cosMax = std::cos(0.5 * diameterDeg * 3.14159265358979323846 / 180.0);
+  int lit = 0;
+  for (int i = 0; i < kStrata; ++i)
+    for (int j = 0; j < kStrata; ++j) {
+      const double cosT = 1.0 - (i + 0.5) / kStrata * (1.0 - cosMax), sinT = std::sqrt(1.0 - cosT * cosT);
+      const double phi = 2.0 * 3.14159265358979323846 * (j + 0.5) / kStrata;
+      const glm::dvec3 w = cosT * toLight + sinT * (std::cos(phi) * u + std::sin(phi) * v);
+      lit += !plank.blocks(p, p + 100.0 * w);
+    }
+  return double(lit) / (kStrata * kStrata);
+}
+
+double sphereTruth(glm::dvec3 p, glm::dvec3 center, double radius) {
+  const Plank plank;
+  glm::dvec3 u, v;
+  basisOf(glm::normalize(center - p), u, v);
+  int lit = 0;
+  for (int i = 0; i < kStrata; ++i)
+    for (int j = 0; j < kStrata; ++j) {
+      const double r = radius * std::sqrt((i + 0.5) / kStrata),
+                   phi = 2.0 * 3.14159265358979323846 * (j + 0.5) / kStrata;
+      lit += !plank.blocks(p, center + r * (std::cos(phi) * u + std::sin(phi) * v));
+    }
+  return double(lit) / (kStrata * kStrata);
+}
+
+// The mean absolute difference between the raster's vis and the truth over the ground pixels
+// (z in [1.01, 2.9], x in [-2.4, 2.4]: ground the plank does not hide) where the truth is strictly
+// between 0 and 1; `count` gets how many.
+double penumbraError(const std::vector<float>& vis, const std::vector<double>& truth, size_t& count) {
+  double sum = 0;
+  count = 0;
+  for (size_t i = 0; i < truth.size(); ++i)
+    if (truth[i] > 0.0 && truth[i] < 1.0) {
+      sum += std::abs(double(vis[i]) - truth[i]);
+      ++count;
+    }
+  return count ? sum / double(count) : 0.0;
+}
+
+std::vector<double> truthFrame(const std::function<double(glm::dvec3)>& truthAt) {
+  std::vector<double> t(size_t(kSize) * kSize, -1.0);
+  for (int row = 0; row < kSize; ++row) {
+    const double z = groundZ(row);
+    if (z < 1.01 || z > 2.9) continue;
+    for (int col = 0; col < kSize; ++col) {
+      const double x = ((col + 0.5) / (0.5 * kSize) - 1.0) * 2.5;
+      if (std::abs(x) > 2.4) continue;
+      t[size_t(row) * kSize + size_t(col)] = truthAt(glm::dvec3(x, 0, z));
+    }
+  }
+  return t;
+}
+
+}  // namespace
+
+// Against the scene's soft truth (ray cast above): over the truth's penumbra, PCSS's mean absolute
+// visibility error is below a fixed Poisson PCF's with as many filter taps (32), both at the
+// kernel PCSS uses at a contact (pcss.min_filter, 1.5 texels) and at a wide one (8 texels): a fixed
+// kernel is too narrow far from the contact or too wide near it.
+TEST_F(RasterPcss, PenumbraErrorAgainstTheTruthIsBelowFixedKernels) {
+  REQUIRE_DEVICE();
+  struct Case {
+    std::string name, light;
+    std::function<double(glm::dvec3)> truth;
+  };
+  const glm::dvec3 toSun(0.0, std::sin(3.14159265358979323846 / 3.0), -std::cos(3.14159265358979323846 / 3.0));
+  const std::vector<Case> cases = {
+      {"sun", sunLight(8.0), [&](glm::dvec3 p) { return sunTruth(p, toSun, 8.0); }},
+      {"spot", spotLight(0.4), [](glm::dvec3 p) { return sphereTruth(p, glm::dvec3(0, 4, -1), 0.4); }}};
+  for (const Case& c : cases) {
+    const Scene s = inlineScene(contactSceneJson(c.light), "truth_" + c.name);
+    const std::vector<double> truth = truthFrame(c.truth);
+    size_t count = 0;
+    const double pcss = penumbraError(R->render(s, softMethod(Filter::Pcss), "").get("light.bulb.vis"), truth, count);
+    EXPECT_GT(count, 2000u) << c.name << ": the truth's penumbra pixels";
+    for (float radius : {1.5f, 8.0f}) {
+      Method fixed = softMethod(Filter::Poisson);
+      fixed.filterTaps = 32;
+      fixed.filterRadius = radius;
+      const double poisson = penumbraError(R->render(s, fixed, "").get("light.bulb.vis"), truth, count);
+      std::printf("  %s: penumbra MAE pcss %.4f, poisson 32 taps radius %.1f %.4f (%zu pixels)\n", c.name.c_str(), pcss,
+                  double(radius), poisson, count);
+      EXPECT_LT(pcss, poisson) << c.name << ", poisson radius " << radius;
+    }
   }
 }

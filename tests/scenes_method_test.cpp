@@ -176,7 +176,7 @@ TEST(ScenesMethod, TextErrorsAreExact) {
             "Vulkan device must support, lavapipe's limit)");
   EXPECT_EQ(setError("filter", "pcff"),
             "--set: filter: error: got \"pcff\"; expected one of none, hw2x2, bilinear4, pcf, poisson, vsm, evsm2, "
-            "evsm4, msm");
+            "evsm4, msm, pcss, dpcf");
   EXPECT_EQ(setError("map.format", "d8"), "--set: map.format: error: got \"d8\"; expected one of d16, d24, d32f");
   EXPECT_EQ(setError("bias.receiver_plane", "yes"),
             "--set: bias.receiver_plane: error: got \"yes\"; expected true, false, 1 or 0");
@@ -523,7 +523,7 @@ TEST(ScenesMethod, SoftFilterKeys) {
     ADD_FAILURE() << "accepted max_penumbra < min_filter";
   } catch (const InputError& e) {
     EXPECT_EQ(std::string(e.what()),
-              "m.json: pcss.max_penumbra: error: got 4; expected a number >= pcss.min_filter (8)");
+              "m.json: pcss.max_penumbra: error: got 4.0; expected a number >= pcss.min_filter (8.0)");
   }
   bad = Method();
   bad.dpcfTaps = 0;

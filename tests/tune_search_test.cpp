@@ -49,6 +49,8 @@ double filterFactor(const Method& m) {
     case Filter::Evsm2:
     case Filter::Evsm4:
     case Filter::Msm: return 0.9;  // dearer (the moments pass) and no better here
+    case Filter::Pcss:
+    case Filter::Dpcf: return 0.95;  // soft filters: dearer, and these scenes' lights are hard
   }
   return 1.0;
 }

@@ -322,12 +322,12 @@ float techniqueVisibility(Lookup L) {
 // ---- Soft filters (raster/METHODS.md "Soft filters"): pcss and dpcf, from the light's size ----
 // Interleaved gradient noise (Jimenez 2014): an angle per pixel that differs between neighbours,
 // the pixel alone deciding it (the same bits in every pass and in the evidence pass).
-float interleavedGradientNoise(vec2 pixel) { return fract(52.9829189 * fract(dot(pixel, vec2(0.06711056, 0.00583715)))); }
+float softFilterNoise(vec2 pixel) { return fract(52.9829189 * fract(dot(pixel, vec2(0.06711056, 0.00583715)))); }
 
 // The Poisson taps' rotation: per pixel with pcss.rotate / dpcf.rotate (P.softTaps.w), else none.
 mat2 softRotation() {
   if (P.softTaps.w == 0) return mat2(1.0);
-  float a = 6.28318531 * interleavedGradientNoise(vec2(gPixel));
+  float a = 6.28318531 * softFilterNoise(vec2(gPixel));
   float c = cos(a), s = sin(a);
   return mat2(c, s, -s, c);
 }
@@ -338,25 +338,25 @@ mat2 softRotation() {
 // size * (dR - dB). A spot's or point's map is perspective: the depths linearized to view
 // distances z = B / (d - A), radius = size * (zR - zB) / (zB zR). dB = 0 is the map's near plane:
 // the blocker-search region (the widest penumbra any blocker in front of the receiver casts).
-vec2 penumbraTexels(vec4 lightSize, float dR, float dB) {
+vec2 softPenumbraTexels(vec4 lightSize, float dR, float dB) {
   if (kLightType == kLightDirectional) return lightSize.xy * max(dR - dB, 0.0);
   float zR = lightSize.w / (dR - lightSize.z), zB = lightSize.w / (dB - lightSize.z);
   return lightSize.xy * (max(zR - zB, 0.0) / (zB * zR));
 }
 
-// The stored depth of the texel under st + offset (clamped to the map, like tap()), and that texel.
-float storedDepth(Layer l, ivec2 t) {
+// The stored depth of texel t, clamped to the map like tap()'s.
+float softStoredDepth(Layer l, ivec2 t) {
   return texelFetch(mapDepth, ivec3(clamp(t, ivec2(0), ivec2(int(l.size) - 1)), l.index), 0).r;
 }
 
 // One blocker search over `taps` Poisson taps of radius `radius` texels: the taps whose stored depth
 // lies in front of their reference (receiver-plane slope per tap as refAt applies it), their count
 // and the sum of their depths.
-vec2 blockerSearch(Lookup L, mat2 rotation, vec2 radius, int taps) {
+vec2 softBlockerSearch(Lookup L, mat2 rotation, vec2 radius, int taps) {
   float blockers = 0.0, depthSum = 0.0;
   for (int i = 0; i < taps; ++i) {
     ivec2 t = ivec2(floor(L.st + rotation * (P.poisson[i].xy * radius)));
-    float z = storedDepth(L.layer, t);
+    float z = softStoredDepth(L.layer, t);
     if (z < refAt(L, t)) {
       blockers += 1.0;
       depthSum += z;
@@ -372,9 +372,9 @@ float pcssVisibility(Lookup L) {
   vec4 lightSize = P.lightSize[L.layer.index];
   mat2 rotation = softRotation();
   vec2 lo = vec2(P.softInfo.x), hi = vec2(P.softInfo.y);
-  vec2 found = blockerSearch(L, rotation, clamp(penumbraTexels(lightSize, L.ref, 0.0), lo, hi), PLoops.softTaps.x);
+  vec2 found = softBlockerSearch(L, rotation, clamp(softPenumbraTexels(lightSize, L.ref, 0.0), lo, hi), PLoops.softTaps.x);
   if (found.x == 0.0) return 1.0;
-  vec2 radius = clamp(penumbraTexels(lightSize, L.ref, found.y / found.x), lo, hi);
+  vec2 radius = clamp(softPenumbraTexels(lightSize, L.ref, found.y / found.x), lo, hi);
   int taps = PLoops.softTaps.y;
   float sum = 0.0;
   for (int i = 0; i < taps; ++i) {
@@ -386,7 +386,7 @@ float pcssVisibility(Lookup L) {
 
 // DPCF's hardened kernel: the occluded fraction pushed towards 0 or 1 by a cubic,
 // 1/2 + 1/2 sign(y) (1 - (1 - |y|)^3) with y = 2 p - 1 (0, 1/2 and 1 stay where they are).
-float hardenedKernel(float p) {
+float dpcfHardenedKernel(float p) {
   float y = 2.0 * p - 1.0, a = 1.0 - abs(y);
   return 0.5 + 0.5 * sign(y) * (1.0 - a * a * a);
 }
@@ -403,13 +403,13 @@ float dpcfVisibility(Lookup L) {
   vec2 kernel = kLightType == kLightDirectional ? lightSize.xy * (0.5 * L.ref) : lightSize.xy / zR;
   vec2 radius = clamp(kernel, vec2(1.0), vec2(P.softInfo.z));
   int taps = PLoops.softTaps.z;
-  vec2 found = blockerSearch(L, softRotation(), radius, taps);
+  vec2 found = softBlockerSearch(L, softRotation(), radius, taps);
   if (found.x == 0.0) return 1.0;
   float dB = found.y / found.x;
   float zB = kLightType == kLightDirectional ? dB : lightSize.w / (dB - lightSize.z);
   float ratio = clamp((zR - zB) / max(zB, 1e-30), 0.0, 1.0);
   float occluded = found.x / float(taps);
-  return 1.0 - mix(hardenedKernel(occluded), occluded, ratio);
+  return 1.0 - mix(dpcfHardenedKernel(occluded), occluded, ratio);
 }
 
 // The filters other than none (whose one comparison the caller makes with its own fetch).
