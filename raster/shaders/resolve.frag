@@ -30,6 +30,7 @@ layout(constant_id = kSpecLightType) const int kLightType = kLightDirectional;
 // Every light layer is affine (orthographic: texFromWorld's last row is (0, 0, 0, 1)), so w = 1
 // and the divisions by it fold away; the results are the same bits.
 layout(constant_id = kSpecAffine) const bool kAffine = false;
+layout(constant_id = kSpecOrthoCamera) const bool kOrthoCamera = false;
 // The light layers' depth is the light's own (fit=tsm): depth = dot(P.lightDepth, (p, 1)), not
 // texFromWorld's z / w; u, v and w still come from texFromWorld.
 layout(constant_id = kSpecLightDepth) const bool kLightDepth = false;
@@ -157,9 +158,9 @@ struct LayerHit {
 
 Layer layerAt(int index) { return Layer(index, P.texFromWorld[index], float(P.sizes.x)); }
 
-// An orthographic camera (rayC.w = 1, resolve_params.cpp): parallel rays d = rayC from the points
+// An orthographic camera (kSpecOrthoCamera; rayC.w = 1, resolve_params.cpp): parallel rays d = rayC from the points
 // cameraOrigin + rayX x + rayY y of the plane through the camera; else rays from cameraOrigin.
-bool orthoCamera() { return P.rayC.w > 0.5; }
+bool orthoCamera() { return kOrthoCamera; }
 vec3 rayOffset(vec2 pixel) { return P.rayX.xyz * pixel.x + P.rayY.xyz * pixel.y; }
 vec3 rayThrough(vec2 pixel) {
   return orthoCamera() ? P.rayC.xyz : P.rayX.xyz * pixel.x + P.rayY.xyz * pixel.y + P.rayC.xyz;

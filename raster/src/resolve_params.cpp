@@ -223,6 +223,7 @@ ResolveSpecialization resolveSpecialization(const Scene& scene, const Light* lig
   spec[abi::kSpecFloatDepth] = depthResolution(method.mapFormat) > 0.0f ? 0u : 1u;
   spec[abi::kSpecLightType] = lightTypeCode(light);
   spec[abi::kSpecAffine] = affine ? 1u : 0u;
+  spec[abi::kSpecOrthoCamera] = scene.camera.orthographic() ? 1u : 0u;
   spec[abi::kSpecAdaptive] = method.biasAdaptive ? 1u : 0u;
   // One light depth row for every light layer: only fit=tsm's single layer has one.
   spec[abi::kSpecLightDepth] = frameLayers.lightLayers > 0 && frameLayers.layers[0].lightDepth ? 1u : 0u;

@@ -85,8 +85,11 @@ SHADOWLAB_CONST(int, kSpecSurface, 15)
 // its lookup pass then reads the visibility buffer, not the surface image (rasterizer.cpp,
 // lookupReadsSurface). resolve.frag does not declare it; it keys the pipelines.
 SHADOWLAB_CONST(int, kSpecTechniqueNormal, 16)
+// 0/1: the camera is orthographic (parallel rays, Params::rayC.w = 1): a constant, so a
+// perspective camera's shader is the one it was before orthographic cameras.
+SHADOWLAB_CONST(int, kSpecOrthoCamera, 17)
 // A technique file's declared keys follow, kSpecCount + i (raster/src/technique_compiler.cpp).
-SHADOWLAB_CONST(int, kSpecCount, 17)
+SHADOWLAB_CONST(int, kSpecCount, 18)
 
 // The descriptor set (set 0), one row per binding: X(Name, binding, kind). The kinds name
 // Vulkan descriptor types (rasterizer.cpp maps them); the set layout, the pool and the writes
