@@ -118,6 +118,22 @@ TEST(CompareEndToEnd, TinyMapOnSphereOnPlaneIsAliasing) {
   EXPECT_GT(s.m.mMedian, 10.0) << "a 32x32 map must have a large texel footprint: " << s.text;
 }
 
+// The sized light's scene against its soft truth (the reference's light samples): PCSS follows
+// the penumbra, so its error over the truth's penumbra is below a fixed Poisson kernel with the same
+// 32 taps and below a 5x5 PCF; the fixed kernels' errors are mostly "penumbra too hard".
+TEST(CompareEndToEnd, PcssFollowsTheSoftTruthBetterThanFixedKernels) {
+  REQUIRE_RASTERIZER(r);
+  auto penumbraMae = [](const Shares& s) { return s.m.toJson().at("penumbra_mae").get<double>(); };
+  const Shares pcss = run(*r, "soft_post", {{"filter", "pcss"}, {"map.size", "512"}});
+  const Shares poisson = run(*r, "soft_post", {{"filter", "poisson"}, {"filter.taps", "32"}, {"map.size", "512"}});
+  const Shares pcf = run(*r, "soft_post", {{"filter", "pcf"}, {"filter.size", "5"}, {"map.size", "512"}});
+  ASSERT_GT(pcss.m.toJson().at("penumbra_pixels").get<double>(), 1000) << pcss.text;
+  EXPECT_LT(penumbraMae(pcss), 0.7 * penumbraMae(poisson)) << pcss.text << "\n" << poisson.text;
+  EXPECT_LT(penumbraMae(pcss), 0.7 * penumbraMae(pcf)) << pcss.text << "\n" << pcf.text;
+  expectDominated(pcf, pcf.m.count(PixelClass::PenumbraHard), "penumbra_hard", 0.005);
+  EXPECT_LT(pcss.m.count(PixelClass::PenumbraHard), pcf.m.count(PixelClass::PenumbraHard) / 4) << pcss.text;
+}
+
 TEST(CompareEndToEnd, ErrorFallsAsTheMapGrows) {
   REQUIRE_RASTERIZER(r);
   double previous = 2.0;

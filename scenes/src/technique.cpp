@@ -114,13 +114,13 @@ const char* typeName(TechniqueParam::Type t) {
   return t == TechniqueParam::Type::Float ? "float" : t == TechniqueParam::Type::Int ? "int" : "bool";
 }
 
-// One "// shadowlab: ..." line (`rest` starts at byte `offset` of the file).
-TechniqueParam parseDeclaration(const TechniqueFile& f, const std::string& rest, size_t offset,
-                                const std::vector<TechniqueParam>& seen) {
-  struct Token {
-    std::string text;
-    size_t offset;
-  };
+// The whitespace-separated words of a "// shadowlab: ..." line and their offsets in the file
+// (`rest` starts at byte `offset`).
+struct Token {
+  std::string text;
+  size_t offset;
+};
+std::vector<Token> declarationTokens(const std::string& rest, size_t offset) {
   std::vector<Token> tokens;
   for (size_t i = 0; i < rest.size();) {
     if (std::isspace(static_cast<unsigned char>(rest[i]))) {
@@ -132,6 +132,13 @@ TechniqueParam parseDeclaration(const TechniqueFile& f, const std::string& rest,
     tokens.push_back({rest.substr(i, j - i), offset + i});
     i = j;
   }
+  return tokens;
+}
+
+// One "// shadowlab: ..." line (`rest` starts at byte `offset` of the file).
+TechniqueParam parseDeclaration(const TechniqueFile& f, const std::string& rest, size_t offset,
+                                const std::vector<TechniqueParam>& seen) {
+  const std::vector<Token> tokens = declarationTokens(rest, offset);
   size_t line = 0, column = 0;
   auto fail = [&](size_t at, const std::string& what) {
     place(f.source, at, line, column);
@@ -214,34 +221,24 @@ void check(TechniqueFile& f) {
     const size_t restOffset = size_t(it->position(1));
     const std::string rest = (*it)[1];
     // "moments <kind>": its tokens and their offsets in the file.
-    std::vector<std::pair<std::string, size_t>> tokens;
-    for (size_t i = 0; i < rest.size();) {
-      if (std::isspace(static_cast<unsigned char>(rest[i]))) {
-        ++i;
-        continue;
-      }
-      size_t j = i;
-      while (j < rest.size() && !std::isspace(static_cast<unsigned char>(rest[j]))) ++j;
-      tokens.emplace_back(rest.substr(i, j - i), restOffset + i);
-      i = j;
-    }
-    if (!tokens.empty() && tokens[0].first == "moments") {
-      place(s, tokens[0].second, line, column);
+    const std::vector<Token> tokens = declarationTokens(rest, restOffset);
+    if (!tokens.empty() && tokens[0].text == "moments") {
+      place(s, tokens[0].offset, line, column);
       if (!f.moments.empty())
         failAt(f.path, line, column,
                "a second moments line (the first on line " + std::to_string(f.momentsLine) + "); expected one");
       const int declaredOn = int(line);
-      const std::string kind = tokens.size() > 1 ? tokens[1].first : std::string();
+      const std::string kind = tokens.size() > 1 ? tokens[1].text : std::string();
       const KindInfo<Filter>* k = findKind(filterKinds(), kind);
       if (!k || !isMomentFilter(k->kind)) {
-        place(s, tokens.size() > 1 ? tokens[1].second : tokens[0].second, line, column);
+        place(s, tokens.size() > 1 ? tokens[1].offset : tokens[0].offset, line, column);
         failAt(f.path, line, column,
                "moments \"" + kind + "\"; expected one of " + momentFilterKeys() + " (" + kMomentsSyntax + ")");
       }
       if (tokens.size() > 2) {
-        place(s, tokens[2].second, line, column);
+        place(s, tokens[2].offset, line, column);
         failAt(f.path, line, column,
-               "got \"" + tokens[2].first + "\" after the moments kind; expected the end of the line");
+               "got \"" + tokens[2].text + "\" after the moments kind; expected the end of the line");
       }
       f.moments = kind;
       f.momentsLine = declaredOn;
