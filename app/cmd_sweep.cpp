@@ -292,6 +292,7 @@ int run(const Options& o) {
   options.progressBar = ::isatty(STDERR_FILENO) == 1 && !app::verbose();  // -v: a line per row
   options.stop = &gStop;
   options.writeReport = !o.noReport;
+  if (o.timingRepetitions) options.timingRepetitions = *o.timingRepetitions;
   options.shard = shard;
   // $SHADOWLAB_HOME (an unpacked bundle, like scenes/data) holds compare/report/charts.py too.
   const char* home = std::getenv("SHADOWLAB_HOME");

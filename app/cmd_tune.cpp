@@ -87,6 +87,7 @@ int run(const Options& o) {
   options.stop = &gStop;
   options.writeReport = !o.noReport;
   options.checkGrid = o.checkGrid;
+  if (o.timingRepetitions) options.timingRepetitions = *o.timingRepetitions;
   const char* home = std::getenv("SHADOWLAB_HOME");
   options.reportScript = defaultReportScript(home && *home ? home : SHADOWLAB_SOURCE_DIR);
   std::fprintf(stderr, "tune: %zu scene(s), keys", plan.sweep.sceneNames.size());

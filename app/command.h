@@ -80,6 +80,7 @@ struct StudyOptions {
   std::string cacheDir;
   std::string device;
   std::optional<double> gpuTimeoutS;  // not given: the sweep file's, else 0 (the default)
+  std::optional<int> timingRepetitions;  // not given: kDefaultTimingRepetitions (sweep.h)
 };
 
 // Registers them on `sub`; `what` names the command's run in the help ("sweep", "tune").
@@ -97,6 +98,11 @@ inline void addStudyOptions(CLI::App* sub, StudyOptions& o, const std::string& w
   sub->add_option("--gpu-timeout-s", o.gpuTimeoutS,
                   "Seconds a GPU pass may take before the command ends with exit 3 (a technique that never "
                   "returns; default: the sweep file's gpu_timeout_s, $SHADOWLAB_GPU_TIMEOUT_S, else 120)");
+  sub->add_option("--timing-repetitions", o.timingRepetitions,
+                  "Timed runs of the method for the rows whose time decides a ranking (near a scene's Pareto "
+                  "front, or quoted by tune), reported as their median and range; 0: every row keeps its render's "
+                  "own single timing (default 3; compare/TIMINGS.md)")
+      ->check(CLI::Range(0, 99));
 }
 
 }  // namespace shadowlab::app

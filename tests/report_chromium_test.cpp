@@ -338,10 +338,13 @@ TEST(ReportChromium, ChartsWhoseKeyIsNotSweptAreSkippedWithANote) {
   EXPECT_FALSE(fs::exists(o.outDir + "/figures/error_by_size.svg"));
   // Pareto table by the method's time (method_gpu_ms), not shadow + camera (15 and 16 ms): hw2x2
   // (7 ms, 1%) beats none (6 ms, 2%) only at the larger budget: both listed, numbered as on the chart.
-  EXPECT_NE(html.find("<td>1</td><td>&le; 6</td><td class=\"t\"><a href=\"#row-0\">default</a>"),
+  // The fake runner cannot time a row again: each time is marked as its row's single sample.
+  const std::string single = "<sup class=\"spread\" title=\"one sample: the render's own timing\">1</sup>";
+  EXPECT_NE(html.find("<td>1</td><td>&le; 6" + single + "</td><td class=\"t\"><a href=\"#row-0\">default</a>"),
             std::string::npos);
-  EXPECT_NE(html.find("<td>2</td><td>&le; 7</td><td class=\"t\"><a href=\"#row-1\">filter=<wbr>hw2x2</a>"),
-            std::string::npos);
+  EXPECT_NE(
+      html.find("<td>2</td><td>&le; 7" + single + "</td><td class=\"t\"><a href=\"#row-1\">filter=<wbr>hw2x2</a>"),
+      std::string::npos);
   // Two families (none and hw2x2, fit sphere), each in its own colour and marker.
   const nlohmann::json results = nlohmann::json::parse(slurp(o.outDir + "/results.json"));
   ASSERT_EQ(results["families"].size(), 2u);
@@ -534,8 +537,10 @@ TEST(ReportChromium, ChartsRunWhileTriptychsRenderAndEitherFailureIsANote) {
 // configuration) gives the same Pareto front of method_gpu_ms against error_rate within the
 // spread of the timed repetitions. The errors are the same bits in both orders; a configuration
 // on one order's front must not be beaten in the other order by one whose slowest run is faster
-// than its fastest (the ranges of both orders taken together). Every row carries its median and
-// range (method_gpu_ms_min <= method_gpu_ms <= method_gpu_ms_max), and the report's table shows them.
+// than its fastest (the ranges of both orders taken together; a row with one sample is its own
+// range). Every row on either order's front carries its median and range (method_gpu_ms_min <=
+// method_gpu_ms <= method_gpu_ms_max), and so does every row within the noise band of its front;
+// the others carry their render's single sample (sweep.h, rowsWhoseTimeDecides).
 TEST(ReportTimings, ReversedGridFindsTheSameParetoFrontsWithinTheSpread) {
   const std::string dir = tempDir("order");
   auto sweep = [&](const std::string& name, const std::string& sizes, const std::string& filters) {
@@ -551,18 +556,24 @@ TEST(ReportTimings, ReversedGridFindsTheSameParetoFrontsWithinTheSpread) {
   ASSERT_EQ(sweep("backward", "2048,1024,512,256", "vsm,pcf,none"), 0) << slurp(dir + "/backward.err");
   struct Timing {
     double error, median, lo, hi;
+    bool repeated;
   };
   auto load = [&](const std::string& name) {
     std::map<std::string, Timing> out;
     const nlohmann::json results = nlohmann::json::parse(slurp(dir + "/" + name + "/results.json"));
     for (const auto& r : results["rows"]) {
       const auto& t = r["timings"];
-      Timing v{r["metrics"]["error_rate"].get<double>(), t["method_gpu_ms"].get<double>(),
-               t["method_gpu_ms_min"].get<double>(), t["method_gpu_ms_max"].get<double>()};
+      const double median = t["method_gpu_ms"].get<double>();
+      const bool repeated = t.contains("method_gpu_ms_min");
+      EXPECT_EQ(repeated, t.contains("method_gpu_ms_max")) << r["config"];
+      Timing v{r["metrics"]["error_rate"].get<double>(), median,
+               repeated ? t["method_gpu_ms_min"].get<double>() : median,
+               repeated ? t["method_gpu_ms_max"].get<double>() : median, repeated};
       EXPECT_LE(v.lo, v.median) << r["config"];
       EXPECT_LE(v.median, v.hi) << r["config"];
       out[r["config"].get<std::string>()] = v;
     }
+    EXPECT_EQ(results["timing"]["repetitions"], 3);
     return out;
   };
   const auto forward = load("forward"), backward = load("backward");
@@ -584,6 +595,7 @@ TEST(ReportTimings, ReversedGridFindsTheSameParetoFrontsWithinTheSpread) {
   auto hi = [&](const std::string& c) { return std::max(forward.at(c).hi, backward.at(c).hi); };
   for (const auto* fr : {&forward, &backward}) {
     for (const std::string& c : front(*fr)) {
+      EXPECT_TRUE(fr->at(c).repeated) << c << " is on a front but carries a single sample";
       for (const auto& [d, t] : forward)
         EXPECT_FALSE(t.error < forward.at(c).error && hi(d) < lo(c))
             << c << " is on one order's front, yet " << d << " is both more accurate and faster beyond the spread ("

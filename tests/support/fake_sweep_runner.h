@@ -4,6 +4,7 @@
 // configuration, and it counts what it ran.
 #include <atomic>
 #include <map>
+#include <optional>
 #include <string>
 
 #include "shadowlab/compare/sweep.h"
@@ -41,6 +42,18 @@ class FakeSweepRunner : public SweepRunner {
     out.timings = {
         {"shadow_gpu_ms", m.mapSize / 100.0}, {"camera_gpu_ms", 1.0}, {"readback_ms", 0.5}, {"compare_ms", 0.25}};
     return out;
+  }
+  // When set: retime() answers as a renderer would (the method's time 0.9 of the row's, range
+  // +-0.1 ms) and counts its calls per configuration, as `runs` does.
+  bool timesAgain = false;
+  std::map<std::string, int> retimes;
+  std::optional<nlohmann::json> retime(const Scene& scene, const Method& m, const std::string& light,
+                                       int repetitions) override {
+    if (!timesAgain || repetitions < 1) return std::nullopt;
+    ++retimes[scene.name + "|" + std::to_string(m.mapSize) + "|" + std::to_string(m.biasSlope) + "|" + light];
+    const double ms = 0.9 * m.mapSize / 100.0;
+    return nlohmann::json{
+        {"shadow_gpu_ms", ms}, {"method_gpu_ms", ms}, {"method_gpu_ms_min", ms - 0.1}, {"method_gpu_ms_max", ms + 0.1}};
   }
   bool writeTriptych(const Scene&, const Method&, const std::string&, const std::string&) override { return false; }
   std::string deviceName() override { return device; }

@@ -22,6 +22,7 @@
 #include <mutex>
 #include <thread>
 
+#include "shadowlab/compare/method_cost.h"
 #include "shadowlab/compare/sweep.h"
 #include "shadowlab/compare/sweep_frontier.h"
 #include "shadowlab/compare/timings.h"
@@ -371,6 +372,15 @@ void writeSweepOutputs(const SweepPlan& plan, const std::vector<const StoredRow*
   results["families"] = methodFamilies(rows);
   results["configurations"] = rows.size();
   results["rows_run"] = summary.ran;
+  // Which rows carry a median of timed repetitions (method_gpu_ms_min and _max beside it) and which
+  // their render's single sample (compare/TIMINGS.md, "Timed repetitions").
+  size_t medians = 0;
+  for (const ResultRow& r : rows) medians += r.timings.contains(timing::kMethodGpuMsMin) ? 1 : 0;
+  results["timing"] = {{"repetitions", options.timingRepetitions},
+                       {"noise_factor", kTimingNoiseFactor},
+                       {"rows_with_median", medians},
+                       {"rows_single_sample", rows.size() - medians},
+                       {"rows_timed_again", summary.retimed}};
   results["rows_resumed"] = summary.resumed;
   results["loop_wall_seconds"] = loopSeconds;  // the configuration loop of this invocation
   results["config_wall_seconds"] = configSeconds;
@@ -583,6 +593,79 @@ SweepSummary runSweep(const SweepPlan& plan, SweepRunner& runner, const SweepOpt
     progress.finish(what, errorRate, seconds);
   }
   progress.end();
+  // Timing where it decides something (sweep.h, rowsWhoseTimeDecides): the rows near each scene's
+  // Pareto front, and those the caller names, timed again to a median unless they already carry
+  // one (a resumed row). Their journal line is written again with the new timings: a later line
+  // for the same key wins, so a resumed sweep keeps the median.
+  if (!summary.interrupted && !shard.active() && options.timingRepetitions > 0) {
+    std::vector<const ResultRow*> rows;
+    std::vector<double> modelMs;
+    std::vector<size_t> jobOf;
+    for (size_t i = 0; i < plan.jobs.size(); ++i)
+      if (have[i]) {
+        const SweepJob& job = plan.jobs[i];
+        rows.push_back(&have[i]->row), jobOf.push_back(i);
+        modelMs.push_back(
+            estimateMethodCost(plan.variants[job.variantIndex], plan.configs[job.configIndex].method, job.light)
+                .estimatedMs);
+      }
+    std::vector<char> wanted(plan.jobs.size(), 0);
+    if (options.retimeFront && options.writeResults)
+      for (size_t k : rowsWhoseTimeDecides(rows, modelMs)) wanted[jobOf[k]] = 1;
+    for (size_t i = 0; i < plan.jobs.size(); ++i)
+      if (have[i] && std::find(options.retimeKeys.begin(), options.retimeKeys.end(), plan.jobs[i].key()) !=
+                         options.retimeKeys.end())
+        wanted[i] = 1;
+    const auto r0 = Clock::now();
+    // Then the front itself (factor 1, no model) with the medians in: a row the first pass left with
+    // its single sample that is on a front now is timed too, until every front row carries a median
+    // (a few rounds at most: each round only adds rows).
+    for (int round = 0; round < 4 && !summary.interrupted; ++round) {
+      if (round > 0) {
+        if (!(options.retimeFront && options.writeResults)) break;
+        bool more = false;
+        for (size_t k : rowsWhoseTimeDecides(rows, {}, 1.0))
+          if (!rows[k]->timings.contains(timing::kMethodGpuMsMin) && !wanted[jobOf[k]])
+            wanted[jobOf[k]] = 1, more = true;
+        if (!more) break;
+      }
+      for (size_t i = 0; i < plan.jobs.size(); ++i) {
+        if (!wanted[i] || have[i]->device != device) continue;
+        if (have[i]->row.timings.contains(timing::kMethodGpuMsMin)) continue;  // a median already
+        if (options.stop && options.stop->load()) {
+          summary.interrupted = true;
+          break;
+        }
+        const SweepJob& job = plan.jobs[i];
+        std::optional<nlohmann::json> timings =
+            runner.retime(plan.variants[job.variantIndex], plan.configs[job.configIndex].method, job.light,
+                          options.timingRepetitions);
+        if (!timings) continue;
+        if (&fresh[i] != have[i]) fresh[i] = *have[i];
+        for (auto it = timings->begin(); it != timings->end(); ++it) fresh[i].row.timings[it.key()] = it.value();
+        have[i] = &fresh[i];
+        nlohmann::json line = {{"scene_hash", fresh[i].sceneHash},
+                               {"config_wall_seconds", fresh[i].configWallSeconds},
+                               {"pid", pid},
+                               {"device", device},
+                               {"timed_again", true},
+                               {"row", fresh[i].row.toJson()}};
+        journal.append(line.dump());
+        summary.retimedTimings[job.key()] = fresh[i].row.timings;
+        ++summary.retimed;
+        for (size_t k = 0; k < jobOf.size(); ++k)
+          if (jobOf[k] == i) rows[k] = &fresh[i].row;
+      }
+    }
+    if (summary.retimed > 0) {
+      if (log) log << "pid " << pid << " timed " << summary.retimed << " rows again\n";
+      if (options.progress && options.writeResults)
+        std::fprintf(
+            options.progress,
+            "sweep: timed %zu of %zu rows again (%d runs each, %.1f s): the rows near each scene's Pareto front\n",
+            summary.retimed, rows.size(), options.timingRepetitions, secondsSince(r0));
+    }
+  }
   journal.close();  // every row run is synced before anything is read from or written about them
   const double loopSeconds = secondsSince(loop0);
   if (!options.writeResults && !shard.active()) {

@@ -377,6 +377,21 @@ std::string timeWithSpread(const ResultRow& r) {
   const double lo = num(r.timings, timing::kMethodGpuMsMin), hi = num(r.timings, timing::kMethodGpuMsMax);
   if (std::isfinite(lo) && std::isfinite(hi))
     out += " <span class=\"spread\">(" + sig3(lo) + "&ndash;" + sig3(hi) + ")</span>";
+  else out += "<sup class=\"spread\" title=\"one sample: the render's own timing\">1</sup>";
+  return out;
+}
+// Which rows carry a median and which one sample (results.json "timing", written by runSweep).
+std::string timingSentence(const nlohmann::json& results) {
+  const auto t = results.find("timing");
+  if (t == results.end() || !t->is_object()) return "";
+  const long medians = t->value("rows_with_median", 0L), single = t->value("rows_single_sample", 0L);
+  const int reps = t->value("repetitions", 0);
+  std::string out = std::to_string(medians) + (medians == 1 ? " row carries" : " rows carry") + " the median of " +
+                    std::to_string(reps) + " timed runs of its method, its range after it: the rows near each " +
+                    "scene's Pareto front, whose time decides a ranking; ";
+  out += std::to_string(single) + (single == 1 ? " row carries" : " rows carry") +
+         " one sample, its render's own timing (marked <sup>1</sup>).";
+  if (reps == 0) out = "Every row carries one sample, its render's own timing (--timing-repetitions 0).";
   return out;
 }
 }  // namespace
@@ -641,8 +656,8 @@ std::vector<std::string> writeSweepReport(const SweepPlan& plan, const std::vect
     << (rows.size() == plan.sceneNames.size() * plan.configs.size() ? "" : " (some grids run on named scenes only)")
     << ". Generated " << stamp
     << ". Rates are fractions of the compared pixels; times are <code>method_gpu_ms</code> (shadow pass + lookup "
-       "pass, what an engine pays; the median of the timed repetitions). Each link goes to the chart, triptych or "
-       "row that shows it.</p>\n";
+       "pass, what an engine pays). "
+    << timingSentence(results) << " Each link goes to the chart, triptych or row that shows it.</p>\n";
 
   // Findings (from figures/charts.json: the chart script computes them from results.json).
   const nlohmann::json findings =
@@ -707,7 +722,8 @@ std::vector<std::string> writeSweepReport(const SweepPlan& plan, const std::vect
        "shadow pass and a lookup pass that computes only the method's visibility, what an engine would pay) against "
        "<code>error_rate</code>: each row is the lowest error reachable within its time budget; every configuration "
        "not listed is slower, less accurate, or both. # is the point's number on the accuracy chart; the time is "
-       "the median of the timed repetitions, their range after it. Rows that compared no pixel are not ranked.</p>\n";
+       "the median of the timed repetitions, their range after it (<sup>1</sup>: one sample). Rows that compared "
+       "no pixel are not ranked.</p>\n";
   for (const auto& name : plan.sceneNames) {
     auto front = paretoFront(rows, name);
     h << "<h3>" << escapeMarkup(name) << "</h3>\n";

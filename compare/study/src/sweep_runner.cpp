@@ -28,10 +28,6 @@ namespace {
 
 using Clock = std::chrono::steady_clock;
 
-// Timed runs of each row's method passes after its render (the warm-up): method_gpu_ms is their
-// median, method_gpu_ms_min and _max their range (compare/TIMINGS.md). Odd, so the median is a run.
-constexpr int kTimedRepetitions = 3;
-
 double msSince(Clock::time_point t0) { return std::chrono::duration<double, std::milli>(Clock::now() - t0).count(); }
 
 class PipelineRunner final : public SweepRunner {
@@ -91,14 +87,11 @@ class PipelineRunner final : public SweepRunner {
     const EvidenceSelector* select = !evidenceOnDemand ? nullptr
                                      : held            ? onDemand(referenceKey, *held, options.light)
                                                        : &waiting;
+    // The row's method time is this render's single sample (a pipeline's first use compiles in an
+    // untimed run of its own inside render); runSweep times again the rows where it decides
+    // something (retime below; compare/TIMINGS.md, "Timed repetitions").
     Frame raster = rasterizer().render(scene, method, light, &t, nullptr, select);
     if (readFailed) std::rethrow_exception(readFailed);
-    // The method's time, free of the grid's order: the render above is the warm-up (a pipeline's
-    // first use compiles in its own untimed run; a map size's first frame touches fresh memory
-    // inside its shadow pass), then kTimedRepetitions runs of the method's passes alone, each
-    // submitted and timed on its own; the row reports the median run and the range.
-    std::vector<Rasterizer::MethodTiming> runs = rasterizer().retimeMethod(kTimedRepetitions);
-    std::sort(runs.begin(), runs.end(), [](const auto& a, const auto& b) { return a.methodGpuMs() < b.methodGpuMs(); });
     if (!held) held = &adoptReference(referenceKey, loading);
     const Frame& reference = *held;
     Classification classification;
@@ -114,20 +107,38 @@ class PipelineRunner final : public SweepRunner {
       writeErrorsPng(imagesDir + "/errors.png", classification);
     }
     rasterizer().recycle(std::move(raster));  // the next row's planes, without fresh memory
-    Rasterizer::MethodTiming median{t.shadowGpuMs, t.lookupGpuMs, t.momentsGpuMs};
-    if (!runs.empty()) median = runs[runs.size() / 2];  // an odd count: the middle run, its parts summing up
     out.timings = {
-        {timing::kShadowGpuMs, median.shadowGpuMs},    {timing::kCameraGpuMs, t.cameraGpuMs},
-        {timing::kVisibilityGpuMs, t.visibilityGpuMs}, {timing::kLookupGpuMs, median.lookupGpuMs},
-        {timing::kMethodGpuMs, median.methodGpuMs()},  {timing::kMomentsGpuMs, median.momentsGpuMs},
+        {timing::kShadowGpuMs, t.shadowGpuMs},         {timing::kCameraGpuMs, t.cameraGpuMs},
+        {timing::kVisibilityGpuMs, t.visibilityGpuMs}, {timing::kLookupGpuMs, t.lookupGpuMs},
+        {timing::kMethodGpuMs, t.methodGpuMs()},       {timing::kMomentsGpuMs, t.momentsGpuMs},
         {timing::kEvidenceGpuMs, t.evidenceGpuMs},     {timing::kReadbackMs, t.readbackMs},
         {timing::kRenderWallMs, t.renderWallMs},       {timing::kCompareMs, compareMs},
     };
-    if (!runs.empty()) {
-      out.timings[timing::kMethodGpuMsMin] = runs.front().methodGpuMs();
-      out.timings[timing::kMethodGpuMsMax] = runs.back().methodGpuMs();
-    }
     return out;
+  }
+
+  // The method's time free of the grid's order: the render is the warm-up (its pipelines are the
+  // loop's, compiled; the map of this configuration drawn, so a map size's first touch of fresh
+  // memory is behind it), then `repetitions` runs of the method's passes alone, each submitted and
+  // timed on its own: the median run (its parts summing up) and the range. The render resolves no
+  // evidence (a selector that lists no pixel): only the passes retimeMethod runs are timed.
+  std::optional<nlohmann::json> retime(const Scene& scene, const Method& method, const std::string& light,
+                                       int repetitions) override {
+    if (repetitions < 1) return std::nullopt;
+    const EvidenceSelector none = [](const uint8_t*, int, int, EvidenceRequest&) {};
+    RasterTimings t;
+    Frame raster = rasterizer().render(scene, method, light, &t, nullptr, fullEvidence_ ? nullptr : &none);
+    std::vector<Rasterizer::MethodTiming> runs = rasterizer().retimeMethod(repetitions);
+    rasterizer().recycle(std::move(raster));
+    if (runs.empty()) return std::nullopt;
+    std::sort(runs.begin(), runs.end(), [](const auto& a, const auto& b) { return a.methodGpuMs() < b.methodGpuMs(); });
+    const Rasterizer::MethodTiming& median = runs[runs.size() / 2];  // an odd count: the middle run
+    return nlohmann::json{{timing::kShadowGpuMs, median.shadowGpuMs},
+                          {timing::kLookupGpuMs, median.lookupGpuMs},
+                          {timing::kMomentsGpuMs, median.momentsGpuMs},
+                          {timing::kMethodGpuMs, median.methodGpuMs()},
+                          {timing::kMethodGpuMsMin, runs.front().methodGpuMs()},
+                          {timing::kMethodGpuMsMax, runs.back().methodGpuMs()}};
   }
 
   bool writeTriptych(const Scene& scene, const Method& method, const std::string& light,

@@ -411,42 +411,8 @@ std::string tuneHtml(const TunePlan& plan, const TuneResult& r,
 
 void writeTuneOutputs(TunePlan& plan, SweepRunner& runner, const TuneOptions& options, TuneResult& result) {
   const std::string out = options.outDir;
-  // Sentences and the verdict.
-  result.robust.sentence = choiceSentence(plan, result, result.robust);
-  for (auto& c : result.perScene) c.sentence = choiceSentence(plan, result, c);
-  result.verdict = result.robust.sentence;
-  if (!result.perScene.empty()) {
-    result.verdict += ". Each scene alone: ";
-    for (size_t i = 0; i < result.perScene.size(); ++i) {
-      const TuneChoice& c = result.perScene[i];
-      result.verdict += (i ? "; " : "") + c.scope + " " +
-                        (c.evaluation >= 0 ? result.evaluations[size_t(c.evaluation)].config : std::string("-")) +
-                        (c.met ? "" : " (not met)") + " (" + fmt("%.3g", c.costMs) + " ms)";
-    }
-  }
-  result.verdict += ". " + std::to_string(result.rowsTotal) + " rows evaluated, " +
-                    fmt("%.1f", result.gridRows ? 100.0 * double(result.rowsTotal) / double(result.gridRows) : 0.0) +
-                    " % of the dense grid's " + std::to_string(result.gridRows) + ".";
-
-  if (result.grid.checked) {
-    const TuneResult::Grid& g = result.grid;
-    const double fraction = g.rows ? double(result.rowsTotal) / double(g.rows) : 0.0;
-    if (!g.met) {
-      result.verdict += " The dense grid (" + std::to_string(g.rows) + " rows) has no configuration that " +
-                        (std::isnan(plan.spec.maxError) ? "fits the budget" : "meets the target") + " either.";
-    } else {
-      const bool target = !std::isnan(plan.spec.maxError);
-      const double mine = target ? result.robust.costMs : result.robust.worstError;
-      const double theirs = target ? g.costMs : g.worstError;
-      result.verdict += " The dense grid (" + std::to_string(g.rows) + " rows) finds " + g.config + " (" +
-                        (target ? fmt("%.3g ms", g.costMs) : fmt("error %.4g", g.worstError)) + "): the search's " +
-                        (target ? "cost" : "error") + " is " +
-                        (result.robust.met && theirs > 0 ? fmt("%+.1f %%", 100.0 * (mine / theirs - 1.0))
-                                                         : std::string(result.robust.met ? "equal" : "not found")) +
-                        " of it, with " + fmt("%.1f", 100.0 * fraction) + " % of its rows.";
-    }
-  }
-
+  std::vector<TuneChoice*> choices{&result.robust};
+  for (auto& c : result.perScene) choices.push_back(&c);
   // results.json / results.csv / report.html: every evaluated row, through the sweep's writer.
   SweepPlan rows = plan.sweep;
   rows.configs.clear();
@@ -486,10 +452,66 @@ void writeTuneOutputs(TunePlan& plan, SweepRunner& runner, const TuneOptions& op
   o.triptychs = options.triptychs;
   o.reportScript = options.reportScript;
   o.python = options.python;
+  o.timingRepetitions = options.timingRepetitions;
+  // The rows the verdict quotes (each choice's configuration on each scene of its scope) carry a
+  // median of timed runs, besides the rows near each scene's front that every sweep times again.
+  for (const TuneChoice* c : choices)
+    if (c->evaluation >= 0)
+      for (size_t sc : c->scenes)
+        if (result.evaluations[size_t(c->evaluation)].rows.count(sc))
+          o.retimeKeys.push_back(result.evaluations[size_t(c->evaluation)].rows.at(sc).key());
   const SweepSummary summary = runSweep(rows, runner, o);
+  for (auto& e : result.evaluations)
+    for (auto& [sc, row] : e.rows) {
+      auto t = summary.retimedTimings.find(row.key());
+      if (t != summary.retimedTimings.end()) row.timings = t->second;
+    }
+  for (TuneChoice* c : choices) {
+    if (c->evaluation < 0) continue;
+    c->measuredMs = 0;
+    for (size_t sc : c->scenes)
+      if (result.evaluations[size_t(c->evaluation)].rows.count(sc))
+        c->measuredMs = std::max(c->measuredMs, methodMs(result.evaluations[size_t(c->evaluation)].rows.at(sc)));
+  }
   result.resultsJson = summary.resultsJson;
   result.reportHtml = summary.reportHtml;
   result.notes = summary.notes;
+
+  // Sentences and the verdict.
+  result.robust.sentence = choiceSentence(plan, result, result.robust);
+  for (auto& c : result.perScene) c.sentence = choiceSentence(plan, result, c);
+  result.verdict = result.robust.sentence;
+  if (!result.perScene.empty()) {
+    result.verdict += ". Each scene alone: ";
+    for (size_t i = 0; i < result.perScene.size(); ++i) {
+      const TuneChoice& c = result.perScene[i];
+      result.verdict += (i ? "; " : "") + c.scope + " " +
+                        (c.evaluation >= 0 ? result.evaluations[size_t(c.evaluation)].config : std::string("-")) +
+                        (c.met ? "" : " (not met)") + " (" + fmt("%.3g", c.costMs) + " ms)";
+    }
+  }
+  result.verdict += ". " + std::to_string(result.rowsTotal) + " rows evaluated, " +
+                    fmt("%.1f", result.gridRows ? 100.0 * double(result.rowsTotal) / double(result.gridRows) : 0.0) +
+                    " % of the dense grid's " + std::to_string(result.gridRows) + ".";
+
+  if (result.grid.checked) {
+    const TuneResult::Grid& g = result.grid;
+    const double fraction = g.rows ? double(result.rowsTotal) / double(g.rows) : 0.0;
+    if (!g.met) {
+      result.verdict += " The dense grid (" + std::to_string(g.rows) + " rows) has no configuration that " +
+                        (std::isnan(plan.spec.maxError) ? "fits the budget" : "meets the target") + " either.";
+    } else {
+      const bool target = !std::isnan(plan.spec.maxError);
+      const double mine = target ? result.robust.costMs : result.robust.worstError;
+      const double theirs = target ? g.costMs : g.worstError;
+      result.verdict += " The dense grid (" + std::to_string(g.rows) + " rows) finds " + g.config + " (" +
+                        (target ? fmt("%.3g ms", g.costMs) : fmt("error %.4g", g.worstError)) + "): the search's " +
+                        (target ? "cost" : "error") + " is " +
+                        (result.robust.met && theirs > 0 ? fmt("%+.1f %%", 100.0 * (mine / theirs - 1.0))
+                                                         : std::string(result.robust.met ? "equal" : "not found")) +
+                        " of it, with " + fmt("%.1f", 100.0 * fraction) + " % of its rows.";
+    }
+  }
 
   // tuned.json: the robust choice (the best found when the target is not met) as a method file.
   if (result.robust.evaluation >= 0) {

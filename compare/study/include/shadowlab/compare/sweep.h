@@ -162,6 +162,16 @@ class SweepRunner {
     (void)method;
     (void)origin;
   }
+  // Times one configuration's method again (compare/TIMINGS.md, "Timed repetitions"): renders it
+  // (the warm-up) and runs the method's passes `repetitions` times, each submitted and timed on its
+  // own. Returns the timings that replace the row's single sample (shadow_gpu_ms, lookup_gpu_ms,
+  // moments_gpu_ms and method_gpu_ms of the median run, method_gpu_ms_min and _max), or nothing
+  // where this runner cannot time a method (a fake runner).
+  virtual std::optional<nlohmann::json> retime(const Scene& scene, const Method& method, const std::string& light,
+                                               int repetitions) {
+    (void)scene, (void)method, (void)light, (void)repetitions;
+    return std::nullopt;
+  }
   // Device and cache facts for results.json ("device", "reference_cache", ...).
   virtual nlohmann::json info() const { return nlohmann::json::object(); }
   // The device whose clock the timings come from ("" when there is none, e.g. a fake runner).
@@ -218,8 +228,38 @@ SweepSpec sweepSpecFromJson(const nlohmann::json& j, const std::string& origin);
 // InputError when outDir/shards holds no shard.
 SweepSpec loadShardedSpec(const std::string& outDir);
 
+// Timing where it decides something (compare/TIMINGS.md, "Timed repetitions"). Every row is timed
+// once, by its render after the warm-up; the rows whose time can change a conclusion are timed
+// again, `repetitions` runs of the method's passes, and carry their median and range:
+//   - rows within the noise band of their scene's Pareto front of error_rate against
+//     method_gpu_ms: every row that no other row of the scene beats at an equal or lower error,
+//     where beating means being faster by more than kTimingNoiseFactor, or having the same cost by
+//     the model (method_cost.h) and not being slower by more than the factor (configurations of one
+//     cost, such as a bias axis, differ in time by noise alone, which a median would not settle).
+//     The report's front, its findings' best, cheapest and best-within-a-budget rows all are such
+//     rows, and runSweep times again any row that is on a front once the others are timed;
+//   - rows a caller names (shadowlab tune: the configurations its verdict quotes).
+// A single sample on lavapipe moves by up to about 20 % on a shared machine: two rows whose
+// single samples differ by less than this factor may swap places when timed again.
+inline constexpr double kTimingNoiseFactor = 1.5;
+inline constexpr int kDefaultTimingRepetitions = 3;  // odd, so the median is a run
+// The indices of `rows` (one sweep's rows, any order) whose time decides a Pareto front, as above,
+// ascending. `modelMs`: each row's estimated cost (MethodCost::estimatedMs), NaN or absent where
+// unknown (then only the measured times decide). Rows that compared nothing or have no finite
+// error_rate are never among them.
+std::vector<size_t> rowsWhoseTimeDecides(const std::vector<const ResultRow*>& rows,
+                                         const std::vector<double>& modelMs = {},
+                                         double noiseFactor = kTimingNoiseFactor);
+
 struct SweepOptions {
   std::string outDir;
+  // Timed repetitions of the rows whose time decides something (above); 0: every row keeps its
+  // render's own single sample. Shards time none again (their rows keep single samples).
+  int timingRepetitions = kDefaultTimingRepetitions;
+  // With writeResults: time again the rows on or near each scene's Pareto front. Off: only the
+  // rows of retimeKeys (shadowlab tune, which calls runSweep a few rows at a time).
+  bool retimeFront = true;
+  std::vector<std::string> retimeKeys;  // ResultRow::key() of rows to time again as well
   // Active: run only this shard's jobs into shardDir(outDir, shard) and write no results or
   // report (mergeSweepShards does).
   SweepShard shard;
@@ -245,6 +285,8 @@ struct SweepSummary {
   double commandWallSeconds = 0;                    // command_wall_seconds: this runSweep call, report included
   std::string resultsJson, resultsCsv, reportHtml;  // empty when not written
   std::vector<std::string> notes;                   // e.g. charts skipped or failed
+  size_t retimed = 0;                               // rows timed again by this call (SweepOptions::timingRepetitions)
+  std::map<std::string, nlohmann::json> retimedTimings;  // their key -> the row's timings after it
   // With SweepOptions::writeResults off (and no shard): each job's row, run or resumed, in plan
   // order; a job left unrun by an interruption has an empty `scene`.
   std::vector<ResultRow> rows;

@@ -103,6 +103,8 @@ struct TuneOptions {
   // compare/TUNE.md, "How good is the search".
   bool checkGrid = false;
   std::string reportScript, python;
+  // Timed runs of the rows the verdict quotes and of those near each scene's front (SweepOptions).
+  int timingRepetitions = kDefaultTimingRepetitions;
 };
 
 // One configuration (a point of the tuned keys) and its rows on the scenes it was run on.

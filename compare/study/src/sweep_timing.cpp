@@ -1,0 +1,48 @@
+// Which rows' time decides something (sweep.h, rowsWhoseTimeDecides; compare/TIMINGS.md, "Timed
+// repetitions").
+#include <algorithm>
+#include <cmath>
+#include <map>
+
+#include "shadowlab/compare/sweep.h"
+
+namespace shadowlab {
+
+std::vector<size_t> rowsWhoseTimeDecides(const std::vector<const ResultRow*>& rows, const std::vector<double>& modelMs,
+                                         double noiseFactor) {
+  auto errorOf = [&](size_t i) {
+    const auto e = rows[i]->metrics.find("error_rate");
+    return e != rows[i]->metrics.end() && e->is_number() ? e->get<double>() : NAN;
+  };
+  std::map<std::string, std::vector<size_t>> byScene;  // the rankable rows of each scene
+  for (size_t i = 0; i < rows.size(); ++i)
+    if (comparedSomething(*rows[i]) && std::isfinite(errorOf(i)) && std::isfinite(methodMs(*rows[i])))
+      byScene[rows[i]->scene].push_back(i);
+  auto model = [&](size_t i) { return i < modelMs.size() ? modelMs[i] : NAN; };
+  std::vector<size_t> out;
+  for (const auto& [scene, idx] : byScene)
+    for (size_t r : idx) {
+      const double er = errorOf(r), tr = methodMs(*rows[r]);
+      bool beaten = false;
+      for (size_t s : idx) {
+        if (s == r) continue;
+        const double es = errorOf(s), ts = methodMs(*rows[s]);
+        // Of two rows of one error, the first stands for both where neither is faster beyond the noise.
+        if (es > er || (es == er && s > r && !(ts * noiseFactor < tr))) continue;
+        // Faster beyond the noise, or of the same modelled cost and not slower beyond the noise:
+        // configurations the cost model cannot tell apart (a bias axis: the same passes) measure
+        // alike but for noise, and a median would not order them either. Where the model tells
+        // two apart it decides nothing: the measurement does.
+        const bool sameCost = std::isfinite(model(s)) && model(s) == model(r);
+        if (ts * noiseFactor < tr || (sameCost && !(tr * noiseFactor < ts))) {
+          beaten = true;
+          break;
+        }
+      }
+      if (!beaten) out.push_back(r);
+    }
+  std::sort(out.begin(), out.end());
+  return out;
+}
+
+}  // namespace shadowlab
