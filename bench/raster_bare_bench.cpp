@@ -757,10 +757,10 @@ ShadowlabSweepPass shadowlabSweepPass(SweepRunner& runner, const SweepPlan& plan
   const auto retime0 = std::chrono::steady_clock::now();
   std::vector<const ResultRow*> ptrs;
   for (const ResultRow& r : rows) ptrs.push_back(&r);
-  for (size_t i : rowsWhoseTimeDecides(ptrs)) {
+  for (size_t i : jobsWhoseTimeDecides(plan, ptrs)) {
     const SweepJob& job = plan.jobs[i];
-    runner.retime(plan.variants[job.variantIndex], plan.configs[job.configIndex].method, job.light,
-                  kDefaultTimingRepetitions);
+    runner.timeAgain(plan.variants[job.variantIndex], plan.configs[job.configIndex].method, job.light,
+                     kDefaultTimingRepetitions - 1);
     ++out.retimedRows;
   }
   out.retimeS = msSince(retime0) * 1e-3;

@@ -111,6 +111,7 @@ TEST(SweepTiming, RunSweepTimesTheDecidingRowsOnceAndKeepsThemOnResume) {
   }
   const std::vector<size_t> deciding = rowsWhoseTimeDecides(ptrs, model);
   ASSERT_EQ(deciding, (std::vector<size_t>{0, 3, 6}));  // slope 0 at 256, 1024 and 4096 (plan order)
+  EXPECT_EQ(jobsWhoseTimeDecides(plan, ptrs), deciding);
   EXPECT_EQ(s.retimed, deciding.size());
   EXPECT_EQ(runner.retimes.size(), deciding.size());
   for (const auto& [what, n] : runner.retimes) EXPECT_EQ(n, 1) << what;
@@ -120,8 +121,13 @@ TEST(SweepTiming, RunSweepTimesTheDecidingRowsOnceAndKeepsThemOnResume) {
     EXPECT_EQ(median, want.count(i) == 1) << rows[i].config;
     EXPECT_EQ(median, rows[i].timings.contains("method_gpu_ms_max")) << rows[i].config;
     if (median) {
-      EXPECT_DOUBLE_EQ(rows[i].timings.at("method_gpu_ms").get<double>(),
-                       0.9 * rows[i].method.at("map.size").get<int>() / 100.0);
+      // The row's own sample (size/100 ms) and the fake's two more (0.9 of it, +0.1 ms for the first):
+      // the median is the middle run, the range the other two.
+      const double own = rows[i].method.at("map.size").get<int>() / 100.0;
+      EXPECT_DOUBLE_EQ(rows[i].timings.at("method_gpu_ms").get<double>(), 0.9 * own + 0.1);
+      EXPECT_DOUBLE_EQ(rows[i].timings.at("shadow_gpu_ms").get<double>(), 0.9 * own + 0.1);
+      EXPECT_DOUBLE_EQ(rows[i].timings.at("method_gpu_ms_min").get<double>(), 0.9 * own);
+      EXPECT_DOUBLE_EQ(rows[i].timings.at("method_gpu_ms_max").get<double>(), own);
     }
   }
   const nlohmann::json results = nlohmann::json::parse(readFile(dir + "/results.json"));
@@ -140,15 +146,18 @@ TEST(SweepTiming, RunSweepTimesTheDecidingRowsOnceAndKeepsThemOnResume) {
   for (size_t i = 0; i < rows.size(); ++i) EXPECT_EQ(resumed[i].timings, rows[i].timings) << rows[i].config;
   fs::remove_all(dir);
 
-  // --timing-repetitions 0: every row keeps its single sample.
-  FakeRunner none;
-  none.timesAgain = true;
-  o.timingRepetitions = 0;
-  runSweep(plan, none, o);
-  EXPECT_TRUE(none.retimes.empty());
-  for (const auto& row : loadResultRows(dir + "/results.json"))
-    EXPECT_FALSE(row.timings.contains("method_gpu_ms_min")) << row.config;
-  fs::remove_all(dir);
+  // --timing-repetitions 0 (or 1: the render's own run): every row keeps its single sample.
+  for (int reps : {0, 1}) {
+    FakeRunner none;
+    none.timesAgain = true;
+    o.timingRepetitions = reps;
+    runSweep(plan, none, o);
+    EXPECT_TRUE(none.retimes.empty()) << reps;
+    for (const auto& row : loadResultRows(dir + "/results.json"))
+      EXPECT_FALSE(row.timings.contains("method_gpu_ms_min")) << row.config;
+    EXPECT_EQ(nlohmann::json::parse(readFile(dir + "/results.json"))["timing"]["repetitions"], 1);
+    fs::remove_all(dir);
+  }
 }
 
 // Rows a caller names (shadowlab tune's quoted configurations) are timed again even with the

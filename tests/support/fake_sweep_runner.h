@@ -4,7 +4,6 @@
 // configuration, and it counts what it ran.
 #include <atomic>
 #include <map>
-#include <optional>
 #include <string>
 
 #include "shadowlab/compare/sweep.h"
@@ -43,17 +42,17 @@ class FakeSweepRunner : public SweepRunner {
         {"shadow_gpu_ms", m.mapSize / 100.0}, {"camera_gpu_ms", 1.0}, {"readback_ms", 0.5}, {"compare_ms", 0.25}};
     return out;
   }
-  // When set: retime() answers as a renderer would (the method's time 0.9 of the row's, range
-  // +-0.1 ms) and counts its calls per configuration, as `runs` does.
+  // When set: timeAgain() answers as a renderer would (each run 0.9 of the row's time, and its
+  // first 0.1 ms more) and counts its calls per configuration, as `runs` does.
   bool timesAgain = false;
   std::map<std::string, int> retimes;
-  std::optional<nlohmann::json> retime(const Scene& scene, const Method& m, const std::string& light,
-                                       int repetitions) override {
-    if (!timesAgain || repetitions < 1) return std::nullopt;
+  std::vector<MethodSample> timeAgain(const Scene& scene, const Method& m, const std::string& light,
+                                      int runs) override {
+    if (!timesAgain || runs < 1) return {};
     ++retimes[scene.name + "|" + std::to_string(m.mapSize) + "|" + std::to_string(m.biasSlope) + "|" + light];
-    const double ms = 0.9 * m.mapSize / 100.0;
-    return nlohmann::json{
-        {"shadow_gpu_ms", ms}, {"method_gpu_ms", ms}, {"method_gpu_ms_min", ms - 0.1}, {"method_gpu_ms_max", ms + 0.1}};
+    std::vector<MethodSample> out(size_t(runs), MethodSample{0.9 * m.mapSize / 100.0, 0, 0});
+    out[0].shadowGpuMs += 0.1;
+    return out;
   }
   bool writeTriptych(const Scene&, const Method&, const std::string&, const std::string&) override { return false; }
   std::string deviceName() override { return device; }

@@ -22,7 +22,6 @@
 #include <mutex>
 #include <thread>
 
-#include "shadowlab/compare/method_cost.h"
 #include "shadowlab/compare/sweep.h"
 #include "shadowlab/compare/sweep_frontier.h"
 #include "shadowlab/compare/timings.h"
@@ -376,7 +375,7 @@ void writeSweepOutputs(const SweepPlan& plan, const std::vector<const StoredRow*
   // their render's single sample (compare/TIMINGS.md, "Timed repetitions").
   size_t medians = 0;
   for (const ResultRow& r : rows) medians += r.timings.contains(timing::kMethodGpuMsMin) ? 1 : 0;
-  results["timing"] = {{"repetitions", options.timingRepetitions},
+  results["timing"] = {{"repetitions", options.timingRepetitions > 1 ? options.timingRepetitions : 1},
                        {"noise_factor", kTimingNoiseFactor},
                        {"rows_with_median", medians},
                        {"rows_single_sample", rows.size() - medians},
@@ -597,21 +596,14 @@ SweepSummary runSweep(const SweepPlan& plan, SweepRunner& runner, const SweepOpt
   // Pareto front, and those the caller names, timed again to a median unless they already carry
   // one (a resumed row). Their journal line is written again with the new timings: a later line
   // for the same key wins, so a resumed sweep keeps the median.
-  if (!summary.interrupted && !shard.active() && options.timingRepetitions > 0) {
-    std::vector<const ResultRow*> rows;
-    std::vector<double> modelMs;
-    std::vector<size_t> jobOf;
+  if (!summary.interrupted && !shard.active() && options.timingRepetitions > 1) {
+    // One row per job (null: not run, another shard's); the pointers follow the rows timed again.
+    std::vector<const ResultRow*> rows(plan.jobs.size(), nullptr);
     for (size_t i = 0; i < plan.jobs.size(); ++i)
-      if (have[i]) {
-        const SweepJob& job = plan.jobs[i];
-        rows.push_back(&have[i]->row), jobOf.push_back(i);
-        modelMs.push_back(
-            estimateMethodCost(plan.variants[job.variantIndex], plan.configs[job.configIndex].method, job.light)
-                .estimatedMs);
-      }
+      if (have[i]) rows[i] = &have[i]->row;
     std::vector<char> wanted(plan.jobs.size(), 0);
     if (options.retimeFront && options.writeResults)
-      for (size_t k : rowsWhoseTimeDecides(rows, modelMs)) wanted[jobOf[k]] = 1;
+      for (size_t i : jobsWhoseTimeDecides(plan, rows)) wanted[i] = 1;
     for (size_t i = 0; i < plan.jobs.size(); ++i)
       if (have[i] && std::find(options.retimeKeys.begin(), options.retimeKeys.end(), plan.jobs[i].key()) !=
                          options.retimeKeys.end())
@@ -623,9 +615,13 @@ SweepSummary runSweep(const SweepPlan& plan, SweepRunner& runner, const SweepOpt
     for (int round = 0; round < 4 && !summary.interrupted; ++round) {
       if (round > 0) {
         if (!(options.retimeFront && options.writeResults)) break;
+        std::vector<const ResultRow*> present;
+        std::vector<size_t> jobOf;
+        for (size_t i = 0; i < rows.size(); ++i)
+          if (rows[i]) present.push_back(rows[i]), jobOf.push_back(i);
         bool more = false;
-        for (size_t k : rowsWhoseTimeDecides(rows, {}, 1.0))
-          if (!rows[k]->timings.contains(timing::kMethodGpuMsMin) && !wanted[jobOf[k]])
+        for (size_t k : rowsWhoseTimeDecides(present, {}, 1.0))
+          if (!present[k]->timings.contains(timing::kMethodGpuMsMin) && !wanted[jobOf[k]])
             wanted[jobOf[k]] = 1, more = true;
         if (!more) break;
       }
@@ -637,13 +633,14 @@ SweepSummary runSweep(const SweepPlan& plan, SweepRunner& runner, const SweepOpt
           break;
         }
         const SweepJob& job = plan.jobs[i];
-        std::optional<nlohmann::json> timings =
-            runner.retime(plan.variants[job.variantIndex], plan.configs[job.configIndex].method, job.light,
-                          options.timingRepetitions);
-        if (!timings) continue;
+        const std::vector<MethodSample> more =
+            runner.timeAgain(plan.variants[job.variantIndex], plan.configs[job.configIndex].method, job.light,
+                             options.timingRepetitions - 1);
+        if (more.empty()) continue;
         if (&fresh[i] != have[i]) fresh[i] = *have[i];
-        for (auto it = timings->begin(); it != timings->end(); ++it) fresh[i].row.timings[it.key()] = it.value();
+        fresh[i].row.timings = withMedianTiming(fresh[i].row.timings, more);
         have[i] = &fresh[i];
+        rows[i] = &fresh[i].row;
         nlohmann::json line = {{"scene_hash", fresh[i].sceneHash},
                                {"config_wall_seconds", fresh[i].configWallSeconds},
                                {"pid", pid},
@@ -653,17 +650,15 @@ SweepSummary runSweep(const SweepPlan& plan, SweepRunner& runner, const SweepOpt
         journal.append(line.dump());
         summary.retimedTimings[job.key()] = fresh[i].row.timings;
         ++summary.retimed;
-        for (size_t k = 0; k < jobOf.size(); ++k)
-          if (jobOf[k] == i) rows[k] = &fresh[i].row;
       }
     }
     if (summary.retimed > 0) {
       if (log) log << "pid " << pid << " timed " << summary.retimed << " rows again\n";
       if (options.progress && options.writeResults)
-        std::fprintf(
-            options.progress,
-            "sweep: timed %zu of %zu rows again (%d runs each, %.1f s): the rows near each scene's Pareto front\n",
-            summary.retimed, rows.size(), options.timingRepetitions, secondsSince(r0));
+        std::fprintf(options.progress,
+                     "sweep: timed %zu of %zu rows again (%d runs each, %.1f s): the rows near each scene's "
+                     "Pareto front\n",
+                     summary.retimed, summary.resumed + summary.ran, options.timingRepetitions, secondsSince(r0));
     }
   }
   journal.close();  // every row run is synced before anything is read from or written about them

@@ -117,28 +117,24 @@ class PipelineRunner final : public SweepRunner {
     return out;
   }
 
-  // The method's time free of the grid's order: the render is the warm-up (its pipelines are the
-  // loop's, compiled; the map of this configuration drawn, so a map size's first touch of fresh
-  // memory is behind it), then `repetitions` runs of the method's passes alone, each submitted and
-  // timed on its own: the median run (its parts summing up) and the range. The render resolves no
-  // evidence (a selector that lists no pixel): only the passes retimeMethod runs are timed.
-  std::optional<nlohmann::json> retime(const Scene& scene, const Method& method, const std::string& light,
-                                       int repetitions) override {
-    if (repetitions < 1) return std::nullopt;
+  // More samples of the method's time (the row's own render in the loop is the first): the
+  // configuration rendered again, its method's timestamps a sample (its pipelines are the loop's,
+  // compiled; the maps of its size touched before), then `runs - 1` runs of the method's passes
+  // alone (Rasterizer::retimeMethod), each submitted and timed on its own. The render resolves no
+  // evidence (a selector that lists no pixel): only the method's passes matter here.
+  std::vector<MethodSample> timeAgain(const Scene& scene, const Method& method, const std::string& light,
+                                      int runs) override {
+    std::vector<MethodSample> out;
+    if (runs < 1) return out;
     const EvidenceSelector none = [](const uint8_t*, int, int, EvidenceRequest&) {};
     RasterTimings t;
     Frame raster = rasterizer().render(scene, method, light, &t, nullptr, fullEvidence_ ? nullptr : &none);
-    std::vector<Rasterizer::MethodTiming> runs = rasterizer().retimeMethod(repetitions);
+    out.push_back({t.shadowGpuMs, t.lookupGpuMs, t.momentsGpuMs});
+    if (runs > 1)
+      for (const Rasterizer::MethodTiming& m : rasterizer().retimeMethod(runs - 1))
+        out.push_back({m.shadowGpuMs, m.lookupGpuMs, m.momentsGpuMs});
     rasterizer().recycle(std::move(raster));
-    if (runs.empty()) return std::nullopt;
-    std::sort(runs.begin(), runs.end(), [](const auto& a, const auto& b) { return a.methodGpuMs() < b.methodGpuMs(); });
-    const Rasterizer::MethodTiming& median = runs[runs.size() / 2];  // an odd count: the middle run
-    return nlohmann::json{{timing::kShadowGpuMs, median.shadowGpuMs},
-                          {timing::kLookupGpuMs, median.lookupGpuMs},
-                          {timing::kMomentsGpuMs, median.momentsGpuMs},
-                          {timing::kMethodGpuMs, median.methodGpuMs()},
-                          {timing::kMethodGpuMsMin, runs.front().methodGpuMs()},
-                          {timing::kMethodGpuMsMax, runs.back().methodGpuMs()}};
+    return out;
   }
 
   bool writeTriptych(const Scene& scene, const Method& method, const std::string& light,

@@ -4,7 +4,9 @@
 #include <cmath>
 #include <map>
 
+#include "shadowlab/compare/method_cost.h"
 #include "shadowlab/compare/sweep.h"
+#include "shadowlab/compare/timings.h"
 
 namespace shadowlab {
 
@@ -42,6 +44,46 @@ std::vector<size_t> rowsWhoseTimeDecides(const std::vector<const ResultRow*>& ro
       if (!beaten) out.push_back(r);
     }
   std::sort(out.begin(), out.end());
+  return out;
+}
+
+nlohmann::json withMedianTiming(const nlohmann::json& timings, const std::vector<MethodSample>& more) {
+  if (more.empty()) return timings;
+  auto ms = [&](const char* key) {
+    const auto it = timings.find(key);
+    return it != timings.end() && it->is_number() ? it->get<double>() : 0.0;
+  };
+  std::vector<MethodSample> runs = more;
+  runs.push_back({ms(timing::kShadowGpuMs), ms(timing::kLookupGpuMs), ms(timing::kMomentsGpuMs)});
+  std::stable_sort(runs.begin(), runs.end(),
+                   [](const MethodSample& a, const MethodSample& b) { return a.methodGpuMs() < b.methodGpuMs(); });
+  // The lower middle of an even count: a run, never an average of two, so its parts sum up.
+  const MethodSample& median = runs[(runs.size() - 1) / 2];
+  nlohmann::json out = timings;
+  out[timing::kShadowGpuMs] = median.shadowGpuMs;
+  out[timing::kLookupGpuMs] = median.lookupGpuMs;
+  out[timing::kMomentsGpuMs] = median.momentsGpuMs;
+  out[timing::kMethodGpuMs] = median.methodGpuMs();
+  out[timing::kMethodGpuMsMin] = runs.front().methodGpuMs();
+  out[timing::kMethodGpuMsMax] = runs.back().methodGpuMs();
+  return out;
+}
+
+std::vector<size_t> jobsWhoseTimeDecides(const SweepPlan& plan, const std::vector<const ResultRow*>& rows) {
+  std::vector<const ResultRow*> present;
+  std::vector<double> modelMs;
+  std::vector<size_t> jobOf;
+  for (size_t i = 0; i < plan.jobs.size() && i < rows.size(); ++i) {
+    if (!rows[i]) continue;
+    const SweepJob& job = plan.jobs[i];
+    present.push_back(rows[i]);
+    jobOf.push_back(i);
+    modelMs.push_back(
+        estimateMethodCost(plan.variants[job.variantIndex], plan.configs[job.configIndex].method, job.light)
+            .estimatedMs);
+  }
+  std::vector<size_t> out;
+  for (size_t k : rowsWhoseTimeDecides(present, modelMs)) out.push_back(jobOf[k]);
   return out;
 }
 

@@ -140,6 +140,12 @@ SweepPlan planSweep(const SweepSpec& spec);
 std::vector<SweepAxis> sweptAxes(const SweepPlan& plan);
 
 // What one configuration produced (the renderer-independent part of a ResultRow).
+// One timed run of a configuration's method passes, GPU milliseconds (compare/TIMINGS.md).
+struct MethodSample {
+  double shadowGpuMs = 0, lookupGpuMs = 0, momentsGpuMs = 0;
+  double methodGpuMs() const { return shadowGpuMs + lookupGpuMs; }
+};
+
 struct SweepRunOutput {
   nlohmann::json metrics = nlohmann::json::object();  // Metrics::toJson()
   nlohmann::json timings =
@@ -162,15 +168,13 @@ class SweepRunner {
     (void)method;
     (void)origin;
   }
-  // Times one configuration's method again (compare/TIMINGS.md, "Timed repetitions"): renders it
-  // (the warm-up) and runs the method's passes `repetitions` times, each submitted and timed on its
-  // own. Returns the timings that replace the row's single sample (shadow_gpu_ms, lookup_gpu_ms,
-  // moments_gpu_ms and method_gpu_ms of the median run, method_gpu_ms_min and _max), or nothing
-  // where this runner cannot time a method (a fake runner).
-  virtual std::optional<nlohmann::json> retime(const Scene& scene, const Method& method, const std::string& light,
-                                               int repetitions) {
-    (void)scene, (void)method, (void)light, (void)repetitions;
-    return std::nullopt;
+  // Times one configuration's method again (compare/TIMINGS.md, "Timed repetitions"): `runs`
+  // more runs of its method's passes, each submitted and timed on its own, after the row's own
+  // render (the loop's). Empty where this runner cannot time a method (a fake runner).
+  virtual std::vector<MethodSample> timeAgain(const Scene& scene, const Method& method, const std::string& light,
+                                              int runs) {
+    (void)scene, (void)method, (void)light, (void)runs;
+    return {};
   }
   // Device and cache facts for results.json ("device", "reference_cache", ...).
   virtual nlohmann::json info() const { return nlohmann::json::object(); }
@@ -243,6 +247,13 @@ SweepSpec loadShardedSpec(const std::string& outDir);
 // single samples differ by less than this factor may swap places when timed again.
 inline constexpr double kTimingNoiseFactor = 1.5;
 inline constexpr int kDefaultTimingRepetitions = 3;  // odd, so the median is a run
+// `timings` (a row's) with its method's time the median of its own sample and `more` runs:
+// shadow_gpu_ms, lookup_gpu_ms, moments_gpu_ms and method_gpu_ms of the median run (the parts sum
+// up), method_gpu_ms_min and _max the range. With no more runs, `timings` unchanged.
+nlohmann::json withMedianTiming(const nlohmann::json& timings, const std::vector<MethodSample>& more);
+// The jobs of `plan` whose row's time decides something (rowsWhoseTimeDecides below, with each
+// job's modelled cost); `rows` holds one row per job, null for a job without one.
+std::vector<size_t> jobsWhoseTimeDecides(const SweepPlan& plan, const std::vector<const ResultRow*>& rows);
 // The indices of `rows` (one sweep's rows, any order) whose time decides a Pareto front, as above,
 // ascending. `modelMs`: each row's estimated cost (MethodCost::estimatedMs), NaN or absent where
 // unknown (then only the measured times decide). Rows that compared nothing or have no finite
@@ -253,8 +264,9 @@ std::vector<size_t> rowsWhoseTimeDecides(const std::vector<const ResultRow*>& ro
 
 struct SweepOptions {
   std::string outDir;
-  // Timed repetitions of the rows whose time decides something (above); 0: every row keeps its
-  // render's own single sample. Shards time none again (their rows keep single samples).
+  // Timed runs of the rows whose time decides something (above), the row's own render one of
+  // them (so 3 is 2 more); 0 or 1: every row keeps its render's own single sample. Shards time
+  // none again (their rows keep single samples).
   int timingRepetitions = kDefaultTimingRepetitions;
   // With writeResults: time again the rows on or near each scene's Pareto front. Off: only the
   // rows of retimeKeys (shadowlab tune, which calls runSweep a few rows at a time).
