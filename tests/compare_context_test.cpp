@@ -71,7 +71,9 @@ TEST_F(ContextOnFrames, SameMetricsAsCompareFramesForEveryFrameOfAGroup) {
   REQUIRE_DEVICE();
   int checked = 0;
   uint64_t errors = 0;
-  for (const std::string name : {"sphere_on_plane", "grazing", "bunny"}) {
+  // Two scenes: a sphere's curved edge and the bunny's many triangles; the grazing scene's acne
+  // is OnDemand's (compare_on_demand_test.cpp) and adds nothing the context treats differently.
+  for (const std::string name : {"sphere_on_plane", "bunny"}) {
     const Scene base = tinyScene(name);
     ASSERT_FALSE(base.lights.empty()) << name;
     ASSERT_TRUE(base.projectors.empty()) << name;
@@ -100,7 +102,7 @@ TEST_F(ContextOnFrames, SameMetricsAsCompareFramesForEveryFrameOfAGroup) {
       }
     }
   }
-  EXPECT_EQ(checked, 3 * 13);
+  EXPECT_EQ(checked, 2 * 13);
   EXPECT_GT(errors, 1000u);  // the frames had errors to classify
 }
 
