@@ -69,6 +69,7 @@ struct PageCheck {
   int figures = -1;      // body data-figures: inline SVG charts laid out
   int tooltips = -1;     // body data-tooltips: <title>s in them
   int overflow = -1;     // body data-overflow: px the page is wider than the window
+  int wrappedNumbers = -1;  // body data-wrapped-numbers: number cells laid out on more than one line
   std::vector<std::string> consoleLines;
   std::string dom, log;
 };
@@ -111,6 +112,8 @@ PageCheck openInChromium(const std::string& html, const std::string& work,
   if (std::regex_search(c.dom, m, figures)) c.figures = std::stoi(m[1]);
   if (std::regex_search(c.dom, m, tooltips)) c.tooltips = std::stoi(m[1]);
   if (std::regex_search(c.dom, m, overflow)) c.overflow = std::stoi(m[1]);
+  static const std::regex wrapped(R"re(<body[^>]*data-wrapped-numbers="([0-9]+)")re");
+  if (std::regex_search(c.dom, m, wrapped)) c.wrappedNumbers = std::stoi(m[1]);
   // Console messages (console.error, uncaught exceptions, failed loads reported by the page)
   // appear as "...:INFO:CONSOLE..." lines; the report itself logs nothing when all is well.
   std::istringstream lines(c.log);
@@ -247,7 +250,24 @@ TEST(ReportChromium, RealSweepReportLoadsEveryPictureWithoutConsoleErrors) {
     EXPECT_EQ(page.figures, 6) << width;
     EXPECT_GT(page.tooltips, 8) << width;
     EXPECT_EQ(page.overflow, 0) << width << " px: the page is wider than the window";
+    EXPECT_EQ(page.wrappedNumbers, 0) << width << " px: a number broke across lines";
     EXPECT_TRUE(page.consoleLines.empty()) << "console messages:\n" << page.consoleLines.front();
+  }
+  // Class columns that are 0 % in every row of a table are left out, named once above it.
+  {
+    const size_t best = html.find("Best configurations per scene");
+    const size_t note = html.find("0 % in every row, not shown: ", best);
+    ASSERT_NE(note, std::string::npos) << "filter none on sphere_on_plane has no leak, bleed or penumbra error";
+    const std::string names = html.substr(note, html.find("</p>", note) - note);
+    const size_t tableEnd = html.find("</table>", note);
+    const std::string table = html.substr(note, tableEnd - note);
+    for (const char* k : {"bleed_rate", "coverage_rate"}) {
+      EXPECT_NE(names.find(std::string("<code>") + k + "</code>"), std::string::npos) << k << " in " << names;
+      std::string header = "<th>";
+      for (char ch : std::string(k)) header += ch == '_' ? std::string("_<wbr>") : std::string(1, ch);
+      EXPECT_EQ(table.find(header + "</th>"), std::string::npos) << k << " is all 0 % yet shown";
+    }
+    EXPECT_NE(table.find("<th>acne_<wbr>rate</th>"), std::string::npos) << "a column with errors is shown";
   }
 
   // A screenshot renders (proof the page lays out, and an artifact to look at when it fails).
@@ -274,6 +294,12 @@ TEST(ReportChromium, RealSweepReportLoadsEveryPictureWithoutConsoleErrors) {
   std::ofstream(out + "/wide.html") << wide;
   PageCheck overflowing = openInChromium(out + "/wide.html", dir + "/chromium_wide", "900,1000");
   EXPECT_GT(overflowing.overflow, 0) << "a table wider than the window must be detected";
+  std::string narrow = html;
+  narrow.replace(narrow.find("<h2 id=\"findings\">"), 0,
+                 "<table><tr><td style=\"white-space:normal;width:2em;max-width:2em\">0.048 / 5%</td></tr></table>");
+  std::ofstream(out + "/narrow.html") << narrow;
+  PageCheck wrapping = openInChromium(out + "/narrow.html", dir + "/chromium_narrow", "1400,1000");
+  EXPECT_GT(wrapping.wrappedNumbers, 0) << "a number broken across lines must be detected";
   fs::remove_all(dir);
 }
 

@@ -117,6 +117,30 @@ std::vector<const char*> errorRateMetrics() {
   return names;
 }
 
+// The class columns a table shows: those with a nonzero rate in one of its rows. A column that is
+// 0 (or absent) in every row says nothing a reader needs (leak, bleed, coverage and the penumbra
+// classes on most scenes); `hidden` gets its names, which the table's caption lists once.
+std::vector<const char*> classColumns(const std::vector<const ResultRow*>& rows, std::vector<const char*>* hidden) {
+  std::vector<const char*> shown;
+  for (const char* k : errorRateMetrics()) {
+    bool any = false;
+    for (const ResultRow* r : rows) {
+      const double v = num(r->metrics, k);
+      any = any || (std::isfinite(v) && v != 0.0);
+    }
+    (any ? shown : *hidden).push_back(k);
+  }
+  return shown;
+}
+
+// "0 % in every row, not shown: leak_rate, bleed_rate." (empty when every column is shown).
+std::string hiddenColumnsNote(const std::vector<const char*>& hidden) {
+  if (hidden.empty()) return "";
+  std::string out = "<p class=\"muted hidden-columns\">0 % in every row, not shown: ";
+  for (size_t i = 0; i < hidden.size(); ++i) out += std::string(i ? ", " : "") + "<code>" + hidden[i] + "</code>";
+  return out + ".</p>\n";
+}
+
 std::string headerCells(const std::vector<const char*>& names) {
   std::string h;
   for (const char* n : names) h += "<th>" + breakable(n) + "</th>";
@@ -241,6 +265,7 @@ h3 { margin-bottom: 0.3em; }
 table { border-collapse: collapse; margin: 0.6em 0 1.2em; font-size: 0.8em; max-width: 100%; }
 th, td { border: 1px solid #d0d0d0; padding: 0.2em 0.4em; text-align: right; vertical-align: top;
          overflow-wrap: anywhere; }
+td:not(.t) { white-space: nowrap; overflow-wrap: normal; }
 th { background: #f3f3f3; font-weight: 600; } td.t, th.t { text-align: left; }
 table.findings { width: 100%; font-size: 0.85em; } table.findings td { min-width: 5em; }
 table.glance { width: 100%; font-size: 0.8em; line-height: 1.25; } table.glance td { padding: 0.1em 0.4em; }
@@ -286,6 +311,16 @@ window.addEventListener('load', function () {
   d.figures = String(laid);
   d.tooltips = String(document.querySelectorAll('figure.chart svg title').length);
   d.overflow = String(Math.max(0, document.documentElement.scrollWidth - document.documentElement.clientWidth));
+  // Numbers never wrap: a number cell (every td but the text ones) laid out on more than one line.
+  var cells = document.querySelectorAll('td:not(.t)'), wrapped = 0;
+  for (var c = 0; c < cells.length; c++) {
+    var range = document.createRange(), tops = {};
+    range.selectNodeContents(cells[c]);
+    var rects = range.getClientRects();
+    for (var q = 0; q < rects.length; q++) if (rects[q].height > 0) tops[Math.round(rects[q].bottom)] = 1;
+    if (Object.keys(tops).length > 1) wrapped++;
+  }
+  d.wrappedNumbers = String(wrapped);
   var glance = document.getElementById('glance');
   if (glance) {
     d.glanceBottom = String(Math.ceil(glance.getBoundingClientRect().bottom + window.scrollY));
@@ -731,16 +766,21 @@ std::vector<std::string> writeSweepReport(const SweepPlan& plan, const std::vect
       h << "<p class=\"note\">No row with an error rate.</p>\n";
       continue;
     }
+    std::vector<const ResultRow*> frontRows;
+    for (size_t i : front) frontRows.push_back(&rows[i]);
+    std::vector<const char*> hidden;
+    const std::vector<const char*> columns = classColumns(frontRows, &hidden);
+    h << hiddenColumnsNote(hidden);
     h << "<table>\n<tr><th>#</th><th>time budget (method_gpu_ms)</th><th "
          "class=\"t\">configuration</th><th>error_rate</th>"
-      << headerCells(errorRateMetrics()) << "<th>m_p95 (px)</th><th>harness: camera_gpu_ms</th>"
+      << headerCells(columns) << "<th>m_p95 (px)</th><th>harness: camera_gpu_ms</th>"
       << headerCells({timing::kReadbackMs, timing::kCompareMs}) << "</tr>\n";
     int n = 0;
     for (size_t i : front) {
       const ResultRow& r = rows[i];
       h << "<tr><td>" << ++n << "</td><td>&le; " << timeWithSpread(r) << "</td><td class=\"t\"><a href=\"#row-" << i
         << "\">" << breakable(r.config) << "</a></td><td>" << pct(num(r.metrics, "error_rate")) << "</td>";
-      for (const char* k : errorRateMetrics()) h << "<td>" << pct(num(r.metrics, k)) << "</td>";
+      for (const char* k : columns) h << "<td>" << pct(num(r.metrics, k)) << "</td>";
       h << "<td>" << sig3(num(r.metrics, "m_p95")) << "</td>";
       for (const char* k : {timing::kCameraGpuMs, timing::kReadbackMs, timing::kCompareMs})
         h << "<td>" << sig3(num(r.timings, k)) << "</td>";
@@ -916,10 +956,15 @@ std::vector<std::string> writeSweepReport(const SweepPlan& plan, const std::vect
        "results.json.</p>\n";
 
   // Every row (its anchor row-<index in results.json>: the charts' points and the findings link here).
+  std::vector<const ResultRow*> allRows;
+  for (const ResultRow& r : rows) allRows.push_back(&r);
+  std::vector<const char*> hiddenAll;
+  const std::vector<const char*> allColumns = classColumns(allRows, &hiddenAll);
   h << "<h2>All rows</h2>\n<details id=\"all-rows\">\n<summary>" << rows.size()
-    << " rows (every column in results.csv)</summary>\n<table class=\"rows\">\n"
+    << " rows (every column in results.csv)</summary>\n"
+    << hiddenColumnsNote(hiddenAll) << "<table class=\"rows\">\n"
     << "<tr><th class=\"t\">scene</th><th class=\"t\">configuration</th><th class=\"t\">family</th><th>error_rate</th>"
-    << headerCells(errorRateMetrics()) << "<th>m_p95</th><th>method_gpu_ms</th>"
+    << headerCells(allColumns) << "<th>m_p95</th><th>method_gpu_ms</th>"
     << headerCells({timing::kCameraGpuMs, timing::kReadbackMs, timing::kCompareMs, timing::kConfigWallMs}) << "</tr>\n";
   for (size_t i = 0; i < rows.size(); ++i) {
     const ResultRow& r = rows[i];
@@ -927,7 +972,7 @@ std::vector<std::string> writeSweepReport(const SweepPlan& plan, const std::vect
       << breakable(r.scene) << "</td><td class=\"t\">" << breakable(r.config) << "</td><td class=\"t\">"
       << breakable(methodFamily(r.method)) << "</td>";
     h << "<td>" << pct(num(r.metrics, "error_rate")) << "</td>";
-    for (const char* k : errorRateMetrics()) h << "<td>" << pct(num(r.metrics, k)) << "</td>";
+    for (const char* k : allColumns) h << "<td>" << pct(num(r.metrics, k)) << "</td>";
     h << "<td>" << sig3(num(r.metrics, "m_p95")) << "</td><td>" << timeWithSpread(r) << "</td>";
     for (const char* k : {timing::kCameraGpuMs, timing::kReadbackMs, timing::kCompareMs, timing::kConfigWallMs})
       h << "<td>" << sig3(num(r.timings, k)) << "</td>";
