@@ -1,11 +1,13 @@
 #!/usr/bin/env bash
 # Installs the Debian 12 packages shadowlab builds and tests with, only those missing.
-# Usage: scripts/install-deps.sh [--with-report]   (--with-report adds matplotlib and chromium)
+# Usage: scripts/install-deps.sh   (python3 runs the report's charts, which need no package of their own;
+# scenes/data/make_assets.py, which regenerates bundled assets and is never run by the build or the
+# tests, also needs python3-numpy and python3-pil)
 set -euo pipefail
 pkgs=(build-essential cmake pkg-config libembree-dev libglm-dev libopenimageio-dev libopenexr-dev libpng-dev libtinyobjloader-dev libtinygltf-dev
       mesa-vulkan-drivers libvulkan-dev glslang-dev glslang-tools spirv-tools vulkan-validationlayers
       nlohmann-json3-dev libcli11-dev libtbb-dev libgtest-dev libbenchmark-dev
-      python3-matplotlib chromium
+      python3 chromium
       clang libclang-rt-14-dev
       slurm-wlm munge     # the loopback Slurm test (tests/slurm_loopback_test.sh, scripts/slurm-local.sh)
       assimp-testmodels)  # test data only: real OBJ and glTF files, good and malformed, that nobody here wrote

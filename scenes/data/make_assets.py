@@ -1,6 +1,7 @@
 #!/usr/bin/python3
 """Regenerates the bundled scenes' small generated files: fence_alpha.png, projector_image.png,
-long_view.json, gltf_checker_alpha.png and assets/gltf_cards.glb (with gltf_cards.json). Run with Debian's /usr/bin/python3 (numpy + PIL from python3-matplotlib)."""
+long_view.json, gltf_checker_alpha.png and assets/gltf_cards.glb (with gltf_cards.json). Run with Debian's /usr/bin/python3 and python3-numpy + python3-pil (not installed by
+scripts/install-deps.sh: the build and the tests never run this)."""
 import json
 import os
 

@@ -461,8 +461,9 @@ SweepSummary runSweep(const SweepPlan& plan, SweepRunner& runner, const SweepOpt
   if (shard.active() && shard.index >= shard.count) throw InputError("--shard: error: I >= N; expected 0 <= I < N");
   for (size_t i = 0; i < plan.jobs.size(); ++i) summary.configurations += shard.owns(i) ? 1 : 0;
   if (options.outDir.empty()) throw InputError("shadowlab sweep: error: no output folder; expected -o DIR");
-  // The report's Python starts now and imports matplotlib while the device starts and the rows run
-  // (a core is mostly free then); it writes nothing unless the report hands it the chart script.
+  // The report's Python starts now (the interpreter and the chart script's modules load) while the
+  // device starts and the rows run (a core is mostly free then); it writes nothing unless the report
+  // hands it the chart script.
   const std::unique_ptr<PrestartedCharts> charts = prestartCharts(options);
   // Device limits are input errors too: found before the output folder exists.
   for (const auto& c : plan.configs) runner.checkMethod(c.method, "shadowlab sweep: configuration " + c.config);

@@ -1,4 +1,4 @@
-// The sweep's readable outputs: results.csv, the charts (a matplotlib script, run as a child
+// The sweep's readable outputs: results.csv, the charts (compare/report/charts.py, run as a child
 // process so that the C++ side needs no Python), the triptychs and report.html.
 //
 // report.html must open from disk with no network: no external scripts, fonts or styles; every
