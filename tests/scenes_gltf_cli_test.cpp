@@ -97,13 +97,16 @@ TEST(GltfCli, AGltfPathRunsSweepsWithOverridesAndRefusesALightPath) {
   ASSERT_EQ(r.code, 0) << r.err;
   const nlohmann::json results = nlohmann::json::parse(std::ifstream(dir / "out" / "results.json"));
   ASSERT_EQ(results["rows"].size(), 2u) << results.dump();
-  // The pointer is resolved in the glTF document: one it lacks is an error naming it.
+  // The pointer is resolved in the glTF document: one it lacks is an error naming the --grid
+  // argument first, then the file and the pointer.
   const CliRun bad =
       runShadowlab("sweep --sweep '" + (dir / "sweep.json").string() +
                        "' --grid scene:/nodes/9/matrix/13=0.5 --no-report -o '" + (dir / "bad").string() + "'",
                    dir);
   EXPECT_EQ(bad.code, 2) << bad.err;
-  EXPECT_NE(bad.err.find(asset + ": override /nodes/9/matrix/13: error: no such value in the glTF document"),
+  EXPECT_NE(bad.err.find("--grid scene:/nodes/9/matrix/13=0.5: error: no such value in the glTF document; expected a "
+                         "pointer to an existing value (" +
+                         asset + ": override /nodes/9/matrix/13)"),
             std::string::npos)
       << bad.err;
   EXPECT_FALSE(fs::exists(dir / "bad"));
