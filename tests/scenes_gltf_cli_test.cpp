@@ -9,11 +9,13 @@
 #include <nlohmann/json.hpp>
 
 #include "support/cli.h"
+#include "support/gltf_builder.h"
 #include "support/test_models.h"
 
 namespace fs = std::filesystem;
 using shadowlab::testing::CliRun;
 using shadowlab::testing::freshTempDir;
+using shadowlab::testing::GltfBuilder;
 using shadowlab::testing::runShadowlab;
 
 namespace {
@@ -30,7 +32,51 @@ std::string wrap(const fs::path& dir, const std::string& asset, const std::strin
   return p.string();
 }
 
+// The width and height of a PNG (its IHDR chunk, big-endian at bytes 16..23).
+std::pair<uint32_t, uint32_t> pngSize(const fs::path& png) {
+  std::ifstream in(png, std::ios::binary);
+  unsigned char b[24] = {};
+  in.read(reinterpret_cast<char*>(b), sizeof b);
+  auto be = [&](int at) {
+    return uint32_t(b[at]) << 24 | uint32_t(b[at + 1]) << 16 | uint32_t(b[at + 2]) << 8 | b[at + 3];
+  };
+  return {be(16), be(20)};
+}
+
 }  // namespace
+
+TEST(GltfCli, SetCameraWidthAndHeightSizeTheImageOfAGltfScene) {
+  const fs::path dir = freshTempDir("gltf_cli_size");
+  GltfBuilder b;
+  b.mesh(b.positions({{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 0, 0}, {1, 1, 0}, {0, 1, 0}}));
+  b.node({{"mesh", 0}});
+  b.scene({0});
+  const std::string glb = b.write(dir.string(), "square", GltfBuilder::Form::Binary);
+  const CliRun r =
+      runShadowlab("reference '" + glb + "' --set scene:/camera/width=320 --set scene:/camera/height=240 -o '" +
+                       (dir / "out").string() + "'",
+                   dir);
+  ASSERT_EQ(r.code, 0) << r.err;
+  const nlohmann::json meta = nlohmann::json::parse(std::ifstream(dir / "out" / "reference.json"));
+  EXPECT_EQ(meta["width"], 320);
+  EXPECT_EQ(meta["height"], 240);
+  EXPECT_EQ(pngSize(dir / "out" / "reference.png"), std::make_pair(320u, 240u));
+  // A JSON scene without a camera around the glTF: its camera is the glTF's, sized the same way.
+  std::ofstream(dir / "wrapper.json") << R"({"objects": [{"type": "gltf", "name": "square", "path": "square.glb"}],
+    "lights": [{"type": "directional", "elevation_deg": 45}]})";
+  const CliRun w = runShadowlab("reference '" + (dir / "wrapper.json").string() +
+                                    "' --set scene:/camera/width=64 -o '" + (dir / "wrapped").string() + "'",
+                                dir);
+  ASSERT_EQ(w.code, 0) << w.err;
+  EXPECT_EQ(pngSize(dir / "wrapped" / "reference.png"), std::make_pair(64u, 480u));
+  // A bad size names the argument, and nothing is written.
+  const CliRun bad =
+      runShadowlab("reference '" + glb + "' --set scene:/camera/width=0 -o '" + (dir / "bad").string() + "'", dir);
+  EXPECT_EQ(bad.code, 2) << bad.err;
+  EXPECT_EQ(bad.err.rfind("--set scene:/camera/width=0: error: got 0; expected an integer 1..16384", 0), 0u) << bad.err;
+  EXPECT_FALSE(fs::exists(dir / "bad"));
+  fs::remove_all(dir);
+}
 
 TEST(GltfCli, TwoCylinderEngineRunsEndToEndInsideAJsonScene) {
   SHADOWLAB_REQUIRE_TEST_MODEL(asset, "glTF2/2CylinderEngine-glTF-Binary/2CylinderEngine.glb");

@@ -1290,6 +1290,10 @@ Scene loadScene(const std::string& path, const std::vector<SceneOverride>& overr
     (cameraFromGltf && isImageSizePointer(o.pointer) ? sizes : rest).push_back(o);
   if (!gltfScene) applyOverrides(r, doc, rest);
   r.blame(gltfScene ? sizes : overrides);
+  {
+    Camera check;  // a bad size is refused before any file is read
+    applyImageSize(r, sizes, check);
+  }
   r.keys(root, {"description", "camera", "materials", "objects", "lights", "projectors", "failure", "paths"});
   if (Node d = r.child(root, "description")) r.string(d);
 
