@@ -362,3 +362,27 @@ TEST_F(GltfHostile, CameraWidthAndHeightSetTheImageSizeOfAGltfCamera) {
                                "lights": [{"type": "directional", "elevation_deg": 45}]})";
   EXPECT_EQ(loadScene(wrapper, {{"/camera/height", 100, "--set scene:/camera/height=100"}}).camera.height, 100);
 }
+
+// The fuzz target's regression inputs (tests/fuzz/regressions/gltf/), replayed the way fuzz_gltf.cpp
+// does (the input as m.gltf, or m.glb after the GLB magic, beside a 96-byte m.bin): each loads or is
+// an InputError, and none quotes a file it reached for.
+TEST_F(GltfHostile, FuzzRegressionInputsAreInputErrorsOrScenes) {
+  const fs::path regressions = fs::path(SHADOWLAB_SOURCE_DIR) / "tests/fuzz/regressions/gltf";
+  std::ofstream(dir_ / "m.bin", std::ios::binary) << std::string(96, '\0');
+  size_t replayed = 0;
+  for (const auto& entry : fs::directory_iterator(regressions)) {
+    SCOPED_TRACE(entry.path().filename().string());
+    std::ifstream in(entry.path(), std::ios::binary);
+    const std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    const fs::path input = dir_ / (bytes.rfind("glTF", 0) == 0 ? "m.glb" : "m.gltf");
+    std::ofstream(input, std::ios::binary) << bytes;
+    try {
+      loadScene(input.string());
+    } catch (const InputError& e) {
+      EXPECT_EQ(std::string(e.what()).find("root:"), std::string::npos) << e.what();
+    }
+    fs::remove(input);
+    ++replayed;
+  }
+  EXPECT_GE(replayed, 15u);
+}
