@@ -747,7 +747,8 @@ uint32_t Converter::materialFor(int gm, const std::string& use) {
   const std::string alphaMode = mj.value("alphaMode", std::string("OPAQUE"));
   const bool doubleSided = mj.value("doubleSided", false);
   if (alphaMode != "OPAQUE" && alphaMode != "MASK" && alphaMode != "BLEND")
-    fail(file_, mPtr + "/alphaMode", "got \"" + alphaMode + "\"; expected one of OPAQUE, MASK, BLEND");
+    fail(file_, mPtr + "/alphaMode",
+         "got " + detail::describe(mj["alphaMode"]) + "; expected one of OPAQUE, MASK, BLEND");
   if (alphaMode == "BLEND") blendMaterials_.insert(gm);
   glm::dvec4 factor(1.0);
   const json* pbr = mj.contains("pbrMetallicRoughness") ? &mj["pbrMetallicRoughness"] : nullptr;
@@ -1144,7 +1145,8 @@ void Converter::addLights(const std::vector<std::pair<size_t, glm::dmat4>>& ligh
     if (type == "directional") light.type = LightType::Directional;
     else if (type == "spot") light.type = LightType::Spot;
     else if (type == "point") light.type = LightType::Point;
-    else fail(file_, ptr + "/type", "got \"" + type + "\"; expected one of directional, point, spot");
+    else
+      fail(file_, ptr + "/type", "got " + detail::describe(lj["type"]) + "; expected one of directional, point, spot");
     const glm::dvec3 dir = glm::dmat3(world) * glm::dvec3(0, 0, -1);
     const glm::dvec3 pos(world * glm::dvec4(0, 0, 0, 1));
     if (!(glm::length(dir) > 1e-12) || !std::isfinite(glm::length(dir)) || !std::isfinite(glm::length(pos)))
