@@ -386,3 +386,11 @@ TEST_F(GltfHostile, FuzzRegressionInputsAreInputErrorsOrScenes) {
   }
   EXPECT_GE(replayed, 15u);
 }
+
+TEST_F(GltfHostile, ASceneFileThatIsADeviceIsNotRead) {
+  // Reading /dev/zero as a scene never ends: refused by what it is.
+  EXPECT_HAS(inputErrorOf([&] { loadScene("/dev/zero"); }),
+             "/dev/zero: error: cannot read the scene file: a character device, not a regular file");
+  fs::create_symlink("/dev/zero", dir_ / "zero.gltf");
+  EXPECT_HAS(inputErrorOf([&] { loadScene(dir() + "/zero.gltf"); }), "a character device, not a regular file");
+}

@@ -1274,6 +1274,10 @@ Scene loadScene(const std::string& path, const std::vector<SceneOverride>& overr
     }
     throw InputError(formatError(path, "", "cannot open scene file: no such file" + hint));
   }
+  // A device (/dev/zero) or a FIFO would be read until it ends, which may be never.
+  if (const std::string problem = gltf::notARegularFile(path); !problem.empty() && !fs::is_directory(path, ec))
+    throw InputError(formatError(
+        path, "", "cannot read the scene file: " + problem + "; expected a JSON scene, .gltf or .glb file"));
   // A .gltf/.glb path is the scene of one glTF object (its overrides address the glTF document).
   const bool gltfScene = gltf::isGltfPath(path);
   json doc = gltfScene ? json{{"objects",
