@@ -167,6 +167,30 @@ std::string percentDecode(const std::string& s) {
   return out;
 }
 
+// tinygltf's own decoding of a buffer URI (its copy of dlib's urldecode: '+' is a space, '%' takes
+// the next two characters, a non-hex digit counting as 0), so that the file checked is the file it
+// opens.
+std::string tinygltfDecode(const std::string& s) {
+  auto hex = [](unsigned char c) -> int {
+    if (c >= '0' && c <= '9') return c - '0';
+    if (c >= 'a' && c <= 'f') return c - 'a' + 10;
+    if (c >= 'A' && c <= 'F') return c - 'A' + 10;
+    return 0;
+  };
+  std::string out;
+  for (size_t i = 0; i < s.size(); ++i) {
+    if (s[i] == '+') {
+      out += ' ';
+    } else if (s[i] == '%' && s.size() > i + 2) {
+      out += char(hex(static_cast<unsigned char>(s[i + 1])) << 4 | hex(static_cast<unsigned char>(s[i + 2])));
+      i += 2;
+    } else {
+      out += s[i];
+    }
+  }
+  return out;
+}
+
 bool isDataUri(const std::string& uri) { return uri.rfind("data:", 0) == 0; }
 
 // "http:", "file:", ... : a scheme other than data: (nothing but local files and data URIs is read).
@@ -265,7 +289,11 @@ void checkUris(const std::string& file, const json& doc, const fs::path& dir) {
         fail(file, ptr,
              "got the URI \"" + uriPrefix(uri) +
                  "\"; expected a data: URI or a relative file path (nothing is fetched from a network or by file:)");
-      const fs::path p = (dir / percentDecode(uri)).lexically_normal();
+      const std::string decoded = buffer ? tinygltfDecode(uri) : percentDecode(uri);
+      // A NUL would end the path where the C library opens it, not where it was checked.
+      if (decoded.find('\0') != std::string::npos)
+        fail(file, ptr, "the URI decodes to a path holding a NUL character; expected a file path");
+      const fs::path p = (dir / decoded).lexically_normal();
       if (!insideFolder(p, dir) && (root.empty() || !insideFolder(p, root)))
         fail(file, ptr,
              "the URI names " + p.string() + ", outside the glTF file's folder" +
@@ -340,16 +368,25 @@ void applyOverrides(const std::string& file, json& doc, const std::vector<SceneO
 
 // tinygltf's callbacks: files are read as they are named (no shell expansion of paths), images are
 // kept as their encoded bytes and decoded later, only for a MASK material that reads them.
-bool fileExists(const std::string& path, void*) {
+// The folders tinygltf may read from (the callbacks' user data): checkUris has checked every URI,
+// and the callbacks check the path tinygltf actually opens again.
+struct ReadableFolders {
+  fs::path dir, root;
+  bool allows(const std::string& path) const {
+    return path.find('\0') == std::string::npos &&
+           (insideFolder(path, dir) || (!root.empty() && insideFolder(path, root)));
+  }
+};
+bool fileExists(const std::string& path, void* folders) {
   std::error_code ec;
-  return fs::is_regular_file(path, ec);
+  return static_cast<const ReadableFolders*>(folders)->allows(path) && fs::is_regular_file(path, ec);
 }
 std::string expandFilePath(const std::string& path, void*) { return path; }
-bool readWholeFile(std::vector<unsigned char>* out, std::string* err, const std::string& path, void*) {
-  // checkUris has checked every file tinygltf reads; this guards the reading itself.
+bool readWholeFile(std::vector<unsigned char>* out, std::string* err, const std::string& path, void* folders) {
   std::error_code ec;
-  if (!fs::is_regular_file(path, ec) || fs::file_size(path, ec) > kMaxGltfBytes) {
-    if (err) *err += "not a regular file of at most 4 GiB\n";
+  if (!static_cast<const ReadableFolders*>(folders)->allows(path) || !fs::is_regular_file(path, ec) ||
+      fs::file_size(path, ec) > kMaxGltfBytes) {
+    if (err) *err += "not a regular file of at most 4 GiB inside the glTF file's folder\n";
     return false;
   }
   std::ifstream in(path, std::ios::binary);
@@ -1336,7 +1373,9 @@ Content loadFile(const Request& req, std::vector<Material>& materials) {
 
   tinygltf::TinyGLTF loader;
   loader.SetImageLoader(&keepImageBytes, nullptr);
-  tinygltf::FsCallbacks callbacks{&fileExists, &expandFilePath, &readWholeFile, &writeWholeFile, nullptr};
+  const ReadableFolders folders{dir.empty() ? fs::path(".") : dir, assetRoot()};
+  tinygltf::FsCallbacks callbacks{&fileExists, &expandFilePath, &readWholeFile, &writeWholeFile,
+                                  const_cast<ReadableFolders*>(&folders)};
   loader.SetFsCallbacks(callbacks);
   tinygltf::Model model;
   std::string err, warn;
