@@ -78,6 +78,29 @@ TEST(GltfCli, SetCameraWidthAndHeightSizeTheImageOfAGltfScene) {
   fs::remove_all(dir);
 }
 
+TEST(GltfCli, ABufferOutsideTheFolderExitsTwoWithoutQuotingItAndWritesNothing) {
+  const fs::path dir = freshTempDir("gltf_cli_escape");
+  GltfBuilder b;
+  b.mesh(b.positions({{0, 0, 0}, {1, 0, 0}, {1, 1, 0}}));
+  b.node({{"mesh", 0}});
+  b.scene({0});
+  const std::string path = b.write(dir.string(), "escape");
+  nlohmann::json doc = nlohmann::json::parse(std::ifstream(path));
+  for (const std::string uri :
+       {"../../../../../../../../etc/passwd", "..%2F..%2F..%2F..%2F..%2F..%2F..%2Fetc%2Fpasswd"}) {
+    doc["buffers"][0]["uri"] = uri;
+    std::ofstream(path) << doc.dump();
+    const CliRun r = runShadowlab("reference '" + path + "' -o '" + (dir / "out").string() + "'", dir);
+    EXPECT_EQ(r.code, 2) << r.err;
+    EXPECT_EQ(
+        r.err.rfind(path + ": /buffers/0/uri: error: the URI names /etc/passwd, outside the glTF file's folder", 0), 0u)
+        << r.err;
+    EXPECT_EQ(r.err.find("root:"), std::string::npos) << r.err;
+    EXPECT_FALSE(fs::exists(dir / "out"));
+  }
+  fs::remove_all(dir);
+}
+
 TEST(GltfCli, TwoCylinderEngineRunsEndToEndInsideAJsonScene) {
   SHADOWLAB_REQUIRE_TEST_MODEL(asset, "glTF2/2CylinderEngine-glTF-Binary/2CylinderEngine.glb");
   const fs::path dir = freshTempDir("gltf_cli_engine");
@@ -110,7 +133,8 @@ TEST(GltfCli, GltfOneCesiumMilkTruckExitsTwoAndWritesNothing) {
 TEST(GltfCli, MalformedFilesExitTwoNamingTheFileAndWriteNothing) {
   const fs::path dir = freshTempDir("gltf_cli_bad");
   for (const char* rel : {"glTF2/RecursiveNodes/RecursiveNodes.gltf", "glTF2/IndexOutOfRange/IndexOutOfRange.gltf",
-                          "glTF2/MissingBin/BoxTextured.gltf", "glTF2/draco/2CylinderEngine.gltf"}) {
+                          "glTF2/MissingBin/BoxTextured.gltf", "glTF2/draco/2CylinderEngine.gltf",
+                          "glTF2/IncorrectVertexArrays/Cube.gltf"}) {
     SCOPED_TRACE(rel);
     SHADOWLAB_REQUIRE_TEST_MODEL(asset, rel);
     const CliRun r = runShadowlab("reference '" + asset + "' -o '" + (dir / "out").string() + "'", dir);
