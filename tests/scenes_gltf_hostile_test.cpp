@@ -363,7 +363,9 @@ TEST_F(GltfHostile, CameraWidthAndHeightSetTheImageSizeOfAGltfCamera) {
   EXPECT_HAS(inputErrorOf([&] {
                loadScene(path, {{"/camera/width", 0, "--set scene:/camera/width=0"}});
              }),
-             "--set scene:/camera/width=0: error: got 0; expected an integer 1..16384");
+             "--set scene:/camera/width=0: error: got 0; expected an integer 1..16384 (the largest image every Vulkan "
+             "device must support) (the image size of " +
+                 path + ")");
   // A JSON scene without a camera around the glTF: the same.
   const std::string wrapper = dir() + "/wrapper.json";
   std::ofstream(wrapper) << R"({"objects": [{"type": "gltf", "name": "asset", "path": "sized.gltf"}],

@@ -1257,8 +1257,19 @@ bool isImageSizePointer(const std::string& pointer) {
 
 void applyImageSize(const Reader& r, const std::vector<SceneOverride>& sizes, Camera& cam) {
   for (const SceneOverride& o : sizes) {
-    const int v = int(r.integer(Node{&o.value, o.pointer}, 1, kMaxResolution, kResolutionWhy));
-    (o.pointer == "/camera/width" ? cam.width : cam.height) = v;
+    const json& v = o.value;
+    const bool ok = v.is_number_integer() &&
+                    !(v.is_number_unsigned() && v.get<uint64_t>() > uint64_t(kMaxResolution)) &&
+                    v.get<int64_t>() >= 1 && v.get<int64_t>() <= kMaxResolution;
+    if (!ok) {
+      const std::string what = "got " + detail::describe(v) + "; expected an integer 1.." +
+                               std::to_string(kMaxResolution) + " (" + kResolutionWhy + ")";
+      // The pointer names a value in neither the scene file nor the glTF file: cite the setting.
+      if (!o.origin.empty())
+        throw InputError(formatError(o.origin, "", what + " (the image size of " + r.file() + ")"));
+      throw InputError(formatError(r.file(), "override " + o.pointer, what));
+    }
+    (o.pointer == "/camera/width" ? cam.width : cam.height) = int(v.get<int64_t>());
   }
 }
 
@@ -1293,7 +1304,7 @@ Scene loadScene(const std::string& path, const std::vector<SceneOverride>& overr
   for (const SceneOverride& o : overrides)
     (cameraFromGltf && isImageSizePointer(o.pointer) ? sizes : rest).push_back(o);
   if (!gltfScene) applyOverrides(r, doc, rest);
-  r.blame(gltfScene ? sizes : overrides);
+  if (!gltfScene) r.blame(rest);
   {
     Camera check;  // a bad size is refused before any file is read
     applyImageSize(r, sizes, check);
