@@ -153,6 +153,23 @@ TEST_F(GltfHostile, TinygltfsChecksAreMadeFirstAtTheirPointers) {
   EXPECT_HAS(inputErrorOf([&] { loadScene(b.write(dir(), "ortho")); }),
              "ortho.gltf: /cameras/0/orthographic: error: missing key \"zfar\"; expected xmag, ymag, zfar and znear");
   b.doc.erase("cameras");
+  b.doc["accessors"][0].erase("count");
+  EXPECT_HAS(inputErrorOf([&] { loadScene(b.write(dir(), "count")); }),
+             "count.gltf: /accessors/0: error: missing key \"count\"; expected the number of elements");
+  b.doc["accessors"][0]["count"] = 4;
+  b.doc["accessors"][0]["type"] = "VEC7";
+  EXPECT_HAS(inputErrorOf([&] { loadScene(b.write(dir(), "type")); }),
+             "type.gltf: /accessors/0/type: error: got \"VEC7\"; expected SCALAR, VEC2");
+  b.doc["accessors"][0]["type"] = "VEC3";
+  b.doc["accessors"][0]["sparse"] = {{"count", 1}};
+  EXPECT_HAS(inputErrorOf([&] { loadScene(b.write(dir(), "sparse")); }),
+             "sparse.gltf: /accessors/0/sparse: error: missing key \"indices\"");
+  b.doc["accessors"][0].erase("sparse");
+  const nlohmann::json attributes = b.doc["meshes"][0]["primitives"][0]["attributes"];
+  b.doc["meshes"][0]["primitives"][0].erase("attributes");
+  EXPECT_HAS(inputErrorOf([&] { loadScene(b.write(dir(), "attributes")); }),
+             "attributes.gltf: /meshes/0/primitives/0: error: missing key \"attributes\"");
+  b.doc["meshes"][0]["primitives"][0]["attributes"] = attributes;
   b.doc["bufferViews"][0]["byteStride"] = 256;
   EXPECT_HAS(inputErrorOf([&] { loadScene(b.write(dir(), "stride")); }),
              "stride.gltf: /bufferViews/0/byteStride: error: got 256; expected a multiple of 4 in 4..252");

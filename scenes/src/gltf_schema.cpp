@@ -318,6 +318,36 @@ void checkRules(const std::string& file, const nlohmann::json& doc) {
       }
     }
 
+  if (doc.contains("accessors"))
+    for (size_t i = 0; i < doc["accessors"].size(); ++i) {
+      const json& a = doc["accessors"][i];
+      const std::string ptr = "/accessors/" + std::to_string(i);
+      required(file, a, ptr, "componentType", "5120, 5121, 5122, 5123, 5125 or 5126");
+      required(file, a, ptr, "count", "the number of elements");
+      const json& type = required(file, a, ptr, "type", "SCALAR, VEC2, VEC3, VEC4, MAT2, MAT3 or MAT4");
+      static const std::vector<std::string> kTypes = {"SCALAR", "VEC2", "VEC3", "VEC4", "MAT2", "MAT3", "MAT4"};
+      if (std::find(kTypes.begin(), kTypes.end(), type.get<std::string>()) == kTypes.end())
+        fail(file, ptr + "/type",
+             "got " + detail::describe(type) + "; expected SCALAR, VEC2, VEC3, VEC4, MAT2, MAT3 or MAT4");
+      if (!a.contains("sparse")) continue;
+      const json& sparse = a["sparse"];
+      required(file, sparse, ptr + "/sparse", "count", "the number of substituted elements");
+      const json& indices = required(file, sparse, ptr + "/sparse", "indices", "an object (bufferView, componentType)");
+      required(file, indices, ptr + "/sparse/indices", "bufferView", "a buffer view index");
+      required(file, indices, ptr + "/sparse/indices", "componentType", "5121, 5123 or 5125");
+      const json& values = required(file, sparse, ptr + "/sparse", "values", "an object (bufferView)");
+      required(file, values, ptr + "/sparse/values", "bufferView", "a buffer view index");
+    }
+
+  if (doc.contains("meshes"))
+    for (size_t m = 0; m < doc["meshes"].size(); ++m) {
+      const std::string ptr = "/meshes/" + std::to_string(m);
+      const json& prims = required(file, doc["meshes"][m], ptr, "primitives", "an array of primitives");
+      for (size_t p = 0; p < prims.size(); ++p)
+        required(file, prims[p], ptr + "/primitives/" + std::to_string(p), "attributes",
+                 "an object of attributes (POSITION at least)");
+    }
+
   if (doc.contains("nodes"))
     for (size_t i = 0; i < doc["nodes"].size(); ++i) {
       const json& n = doc["nodes"][i];
