@@ -229,6 +229,10 @@ TEST_F(GltfHostile, AnImageSaysWhatItsBytesAreAndWhatItsMimeTypeSays) {
   EXPECT_HAS(inputErrorOf([&] { loadScene(b.write(dir(), "gif")); }),
              "gif.gltf: /images/0: error: the image's 14 bytes are GIF (the mimeType \"image/png\"); expected PNG or "
              "JPEG bytes");
+  b.doc["images"][0].erase("mimeType");
+  EXPECT_HAS(inputErrorOf([&] { loadScene(b.write(dir(), "nomime")); }),
+             "nomime.gltf: /images/0: error: missing key \"mimeType\"; expected \"image/png\" or \"image/jpeg\" beside "
+             "a bufferView");
   b.doc["images"][0]["mimeType"] = "image/png";
   b.doc["images"][0]["bufferView"] = b.view(bytes.data(), bytes.size());
   EXPECT_TRUE(loadScene(b.write(dir(), "good")).materials.back().hasAlpha);

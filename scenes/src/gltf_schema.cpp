@@ -339,6 +339,19 @@ void checkRules(const std::string& file, const nlohmann::json& doc) {
       required(file, values, ptr + "/sparse/values", "bufferView", "a buffer view index");
     }
 
+  if (doc.contains("images"))
+    for (size_t i = 0; i < doc["images"].size(); ++i) {
+      const json& im = doc["images"][i];
+      const std::string ptr = "/images/" + std::to_string(i);
+      if (im.contains("uri") == im.contains("bufferView"))
+        fail(
+            file, ptr,
+            std::string(im.contains("uri") ? "both \"uri\" and \"bufferView\"" : "neither \"uri\" nor \"bufferView\"") +
+                "; expected exactly one of them");
+      if (im.contains("bufferView") && !im.contains("mimeType"))
+        fail(file, ptr, "missing key \"mimeType\"; expected \"image/png\" or \"image/jpeg\" beside a bufferView");
+    }
+
   if (doc.contains("meshes"))
     for (size_t m = 0; m < doc["meshes"].size(); ++m) {
       const std::string ptr = "/meshes/" + std::to_string(m);
