@@ -26,6 +26,7 @@ namespace {
 class GltfHostile : public ::testing::Test {
  protected:
   void SetUp() override {
+    ::unsetenv("SHADOWLAB_ASSET_ROOT");  // the tests set it where they mean to
     dir_ = fs::temp_directory_path() / ("shadowlab_gltf_hostile_" + std::to_string(::getpid()) + "_" +
                                         ::testing::UnitTest::GetInstance()->current_test_info()->name());
     fs::remove_all(dir_);

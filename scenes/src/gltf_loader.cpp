@@ -214,9 +214,10 @@ bool insideFolder(const fs::path& path, const fs::path& root) {
   const fs::path r = fs::weakly_canonical(fs::absolute(root, ec), ec);
   if (ec) return false;
   auto pi = p.begin();
-  for (auto ri = r.begin(); ri != r.end(); ++ri, ++pi) {
-    if (ri->empty()) continue;  // the trailing "" of "/a/b/"
-    if (pi == p.end() || *pi != *ri) return false;
+  for (const fs::path& part : r) {
+    if (part.empty()) continue;  // the trailing "" of "/a/b/"
+    if (pi == p.end() || *pi != part) return false;
+    ++pi;
   }
   return true;
 }
