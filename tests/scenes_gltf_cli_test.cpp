@@ -9,11 +9,13 @@
 #include <nlohmann/json.hpp>
 
 #include "support/cli.h"
+#include "support/gltf_builder.h"
 #include "support/test_models.h"
 
 namespace fs = std::filesystem;
 using shadowlab::testing::CliRun;
 using shadowlab::testing::freshTempDir;
+using shadowlab::testing::GltfBuilder;
 using shadowlab::testing::runShadowlab;
 
 namespace {
@@ -30,7 +32,74 @@ std::string wrap(const fs::path& dir, const std::string& asset, const std::strin
   return p.string();
 }
 
+// The width and height of a PNG (its IHDR chunk, big-endian at bytes 16..23).
+std::pair<uint32_t, uint32_t> pngSize(const fs::path& png) {
+  std::ifstream in(png, std::ios::binary);
+  unsigned char b[24] = {};
+  in.read(reinterpret_cast<char*>(b), sizeof b);
+  auto be = [&](int at) {
+    return uint32_t(b[at]) << 24 | uint32_t(b[at + 1]) << 16 | uint32_t(b[at + 2]) << 8 | b[at + 3];
+  };
+  return {be(16), be(20)};
+}
+
 }  // namespace
+
+TEST(GltfCli, SetCameraWidthAndHeightSizeTheImageOfAGltfScene) {
+  const fs::path dir = freshTempDir("gltf_cli_size");
+  GltfBuilder b;
+  b.mesh(b.positions({{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 0, 0}, {1, 1, 0}, {0, 1, 0}}));
+  b.node({{"mesh", 0}});
+  b.scene({0});
+  const std::string glb = b.write(dir.string(), "square", GltfBuilder::Form::Binary);
+  const CliRun r =
+      runShadowlab("reference '" + glb + "' --set scene:/camera/width=320 --set scene:/camera/height=240 -o '" +
+                       (dir / "out").string() + "'",
+                   dir);
+  ASSERT_EQ(r.code, 0) << r.err;
+  const nlohmann::json meta = nlohmann::json::parse(std::ifstream(dir / "out" / "reference.json"));
+  EXPECT_EQ(meta["width"], 320);
+  EXPECT_EQ(meta["height"], 240);
+  EXPECT_EQ(pngSize(dir / "out" / "reference.png"), std::make_pair(320u, 240u));
+  // A JSON scene without a camera around the glTF: its camera is the glTF's, sized the same way.
+  std::ofstream(dir / "wrapper.json") << R"({"objects": [{"type": "gltf", "name": "square", "path": "square.glb"}],
+    "lights": [{"type": "directional", "elevation_deg": 45}]})";
+  const CliRun w = runShadowlab("reference '" + (dir / "wrapper.json").string() +
+                                    "' --set scene:/camera/width=64 -o '" + (dir / "wrapped").string() + "'",
+                                dir);
+  ASSERT_EQ(w.code, 0) << w.err;
+  EXPECT_EQ(pngSize(dir / "wrapped" / "reference.png"), std::make_pair(64u, 480u));
+  // A bad size names the argument, and nothing is written.
+  const CliRun bad =
+      runShadowlab("reference '" + glb + "' --set scene:/camera/width=0 -o '" + (dir / "bad").string() + "'", dir);
+  EXPECT_EQ(bad.code, 2) << bad.err;
+  EXPECT_EQ(bad.err.rfind("--set scene:/camera/width=0: error: got 0; expected an integer 1..16384", 0), 0u) << bad.err;
+  EXPECT_FALSE(fs::exists(dir / "bad"));
+  fs::remove_all(dir);
+}
+
+TEST(GltfCli, ABufferOutsideTheFolderExitsTwoWithoutQuotingItAndWritesNothing) {
+  const fs::path dir = freshTempDir("gltf_cli_escape");
+  GltfBuilder b;
+  b.mesh(b.positions({{0, 0, 0}, {1, 0, 0}, {1, 1, 0}}));
+  b.node({{"mesh", 0}});
+  b.scene({0});
+  const std::string path = b.write(dir.string(), "escape");
+  nlohmann::json doc = nlohmann::json::parse(std::ifstream(path));
+  for (const std::string uri :
+       {"../../../../../../../../etc/passwd", "..%2F..%2F..%2F..%2F..%2F..%2F..%2Fetc%2Fpasswd"}) {
+    doc["buffers"][0]["uri"] = uri;
+    std::ofstream(path) << doc.dump();
+    const CliRun r = runShadowlab("reference '" + path + "' -o '" + (dir / "out").string() + "'", dir);
+    EXPECT_EQ(r.code, 2) << r.err;
+    EXPECT_EQ(
+        r.err.rfind(path + ": /buffers/0/uri: error: the URI names /etc/passwd, outside the glTF file's folder", 0), 0u)
+        << r.err;
+    EXPECT_EQ(r.err.find("root:"), std::string::npos) << r.err;
+    EXPECT_FALSE(fs::exists(dir / "out"));
+  }
+  fs::remove_all(dir);
+}
 
 TEST(GltfCli, TwoCylinderEngineRunsEndToEndInsideAJsonScene) {
   SHADOWLAB_REQUIRE_TEST_MODEL(asset, "glTF2/2CylinderEngine-glTF-Binary/2CylinderEngine.glb");
@@ -64,7 +133,8 @@ TEST(GltfCli, GltfOneCesiumMilkTruckExitsTwoAndWritesNothing) {
 TEST(GltfCli, MalformedFilesExitTwoNamingTheFileAndWriteNothing) {
   const fs::path dir = freshTempDir("gltf_cli_bad");
   for (const char* rel : {"glTF2/RecursiveNodes/RecursiveNodes.gltf", "glTF2/IndexOutOfRange/IndexOutOfRange.gltf",
-                          "glTF2/MissingBin/BoxTextured.gltf", "glTF2/draco/2CylinderEngine.gltf"}) {
+                          "glTF2/MissingBin/BoxTextured.gltf", "glTF2/draco/2CylinderEngine.gltf",
+                          "glTF2/IncorrectVertexArrays/Cube.gltf"}) {
     SCOPED_TRACE(rel);
     SHADOWLAB_REQUIRE_TEST_MODEL(asset, rel);
     const CliRun r = runShadowlab("reference '" + asset + "' -o '" + (dir / "out").string() + "'", dir);
@@ -97,13 +167,16 @@ TEST(GltfCli, AGltfPathRunsSweepsWithOverridesAndRefusesALightPath) {
   ASSERT_EQ(r.code, 0) << r.err;
   const nlohmann::json results = nlohmann::json::parse(std::ifstream(dir / "out" / "results.json"));
   ASSERT_EQ(results["rows"].size(), 2u) << results.dump();
-  // The pointer is resolved in the glTF document: one it lacks is an error naming it.
+  // The pointer is resolved in the glTF document: one it lacks is an error naming the --grid
+  // argument first, then the file and the pointer.
   const CliRun bad =
       runShadowlab("sweep --sweep '" + (dir / "sweep.json").string() +
                        "' --grid scene:/nodes/9/matrix/13=0.5 --no-report -o '" + (dir / "bad").string() + "'",
                    dir);
   EXPECT_EQ(bad.code, 2) << bad.err;
-  EXPECT_NE(bad.err.find(asset + ": override /nodes/9/matrix/13: error: no such value in the glTF document"),
+  EXPECT_NE(bad.err.find("--grid scene:/nodes/9/matrix/13=0.5: error: no such value in the glTF document; expected a "
+                         "pointer to an existing value (" +
+                         asset + ": override /nodes/9/matrix/13)"),
             std::string::npos)
       << bad.err;
   EXPECT_FALSE(fs::exists(dir / "bad"));

@@ -248,7 +248,9 @@ TEST_F(Gltf, NormalizedStridedAndSparseAttributesAreRead) {
   const float base[] = {0, 0, 0, 9, 1, 0, 0, 9, 0, 1, 0, 9, 0.5f, 0.5f, 1, 9};
   b.doc["accessors"][pos]["bufferView"] = b.view(base, sizeof base, 16);
   b.doc["accessors"][pos].erase("normalized");
-  // A second mesh with the normalized u16 positions of `v` (stride 8).
+  // A second mesh with the normalized u16 positions of `v` (stride 8): integer positions are
+  // KHR_mesh_quantization's.
+  b.doc["extensionsUsed"] = {"KHR_mesh_quantization"};
   const int npos = b.accessor(v, 5123, 4, "VEC3", true);
   b.node({{"mesh", b.mesh(pos, b.indices8({0, 1, 3, 0, 3, 2}))}});
   b.node({{"mesh", b.mesh(npos, b.indices8({0, 1, 3}))}});

@@ -54,15 +54,26 @@ std::string warningLine(const std::string& file, const std::string& what) { retu
 
 std::string ptrOf(const char* array, size_t i) { return std::string("/") + array + "/" + std::to_string(i); }
 
+// tinygltf takes a document's length as a 32-bit unsigned, and a GLB header holds its length in 32
+// bits: nothing larger is a glTF file.
+constexpr uint64_t kMaxGltfBytes = 0xFFFFFFFFull;
+
 std::vector<uint8_t> readBytes(const std::string& path) {
+  const std::string problem = notARegularFile(path);
+  if (!problem.empty()) fail(path, "", "cannot read the glTF file: " + problem + "; expected a .gltf or .glb file");
+  std::error_code ec;
+  const uint64_t size = fs::file_size(path, ec);
+  if (ec) fail(path, "", "cannot read the glTF file: " + ec.message());
+  if (size > kMaxGltfBytes)
+    fail(path, "",
+         "the file holds " + std::to_string(size) +
+             " bytes; expected at most 4 GiB (the largest glTF a GLB header "
+             "can describe)");
   std::ifstream in(path, std::ios::binary);
-  if (!in) fail(path, "", "cannot open glTF file: no such file or not readable");
-  in.seekg(0, std::ios::end);
-  const std::streamoff size = in.tellg();
-  in.seekg(0);
-  std::vector<uint8_t> bytes(size_t(std::max<std::streamoff>(size, 0)));
+  if (!in) fail(path, "", "cannot open the glTF file: not readable");
+  std::vector<uint8_t> bytes(size);
   if (!bytes.empty()) in.read(reinterpret_cast<char*>(bytes.data()), std::streamsize(bytes.size()));
-  if (!in) fail(path, "", "cannot read glTF file");
+  if (!in) fail(path, "", "cannot read the glTF file");
   return bytes;
 }
 
@@ -156,6 +167,30 @@ std::string percentDecode(const std::string& s) {
   return out;
 }
 
+// tinygltf's own decoding of a buffer URI (its copy of dlib's urldecode: '+' is a space, '%' takes
+// the next two characters, a non-hex digit counting as 0), so that the file checked is the file it
+// opens.
+std::string tinygltfDecode(const std::string& s) {
+  auto hex = [](unsigned char c) -> int {
+    if (c >= '0' && c <= '9') return c - '0';
+    if (c >= 'a' && c <= 'f') return c - 'a' + 10;
+    if (c >= 'A' && c <= 'F') return c - 'A' + 10;
+    return 0;
+  };
+  std::string out;
+  for (size_t i = 0; i < s.size(); ++i) {
+    if (s[i] == '+') {
+      out += ' ';
+    } else if (s[i] == '%' && s.size() > i + 2) {
+      out += char(hex(static_cast<unsigned char>(s[i + 1])) << 4 | hex(static_cast<unsigned char>(s[i + 2])));
+      i += 2;
+    } else {
+      out += s[i];
+    }
+  }
+  return out;
+}
+
 bool isDataUri(const std::string& uri) { return uri.rfind("data:", 0) == 0; }
 
 // "http:", "file:", ... : a scheme other than data: (nothing but local files and data URIs is read).
@@ -169,31 +204,140 @@ bool hasScheme(const std::string& uri) {
   return false;
 }
 
-// Every "uri" of buffers and images: data: or a relative/absolute local path; buffers' files must
-// exist (images are read only when a MASK material needs one, and checked then).
+// `path` (absolute, or relative to the working folder) lies inside folder `root`: compared component by
+// component after both are made canonical (symbolic links and ".." resolved), so "/a/bc" is not inside
+// "/a/b" and a link inside the folder that points out of it is outside.
+bool insideFolder(const fs::path& path, const fs::path& root) {
+  std::error_code ec;
+  const fs::path p = fs::weakly_canonical(fs::absolute(path, ec), ec);
+  if (ec) return false;
+  const fs::path r = fs::weakly_canonical(fs::absolute(root, ec), ec);
+  if (ec) return false;
+  auto pi = p.begin();
+  for (const fs::path& part : r) {
+    if (part.empty()) continue;  // the trailing "" of "/a/b/"
+    if (pi == p.end() || *pi != part) return false;
+    ++pi;
+  }
+  return true;
+}
+
+// The folder SHADOWLAB_ASSET_ROOT names (buffers and images may lie anywhere inside it), or "".
+fs::path assetRoot() {
+  const char* root = std::getenv("SHADOWLAB_ASSET_ROOT");
+  return root && *root ? fs::path(root) : fs::path();
+}
+
+// At most `n` characters of a URI for a message: a data: URI can be megabytes long.
+std::string uriPrefix(const std::string& uri, size_t n = 48) {
+  return uri.size() <= n ? uri : uri.substr(0, n) + "... (" + std::to_string(uri.size()) + " characters)";
+}
+
+// The size of what tinygltf's base64 decoder makes of `text`, or -1 when `text` is not base64
+// (RFC 4648 alphabet, '=' padding only at the end).
+int64_t base64Size(const std::string& text) {
+  size_t n = text.size(), pad = 0;
+  while (n > 0 && text[n - 1] == '=' && pad < 2) --n, ++pad;
+  for (size_t i = 0; i < n; ++i) {
+    const unsigned char c = static_cast<unsigned char>(text[i]);
+    if (!(std::isalnum(c) || c == '+' || c == '/')) return -1;
+  }
+  if (n % 4 == 1) return -1;
+  return int64_t(n / 4 * 3 + (n % 4 ? n % 4 - 1 : 0));
+}
+
+// Every "uri" of buffers and images, before tinygltf reads any: a data: URI that decodes, or a
+// local file inside the glTF file's folder (or SHADOWLAB_ASSET_ROOT), after percent-decoding and
+// symbolic links. A buffer's file must be a regular file of exactly its byteLength (tinygltf's own
+// rule), so a device (/dev/zero) is never read; images are read only when a MASK material needs
+// one (alphaImage checks the file then).
 void checkUris(const std::string& file, const json& doc, const fs::path& dir) {
+  const fs::path root = assetRoot();
   for (const char* array : {"buffers", "images"}) {
     auto it = doc.find(array);
     if (it == doc.end() || !it->is_array()) continue;
+    const bool buffer = std::string(array) == "buffers";
     for (size_t i = 0; i < it->size(); ++i) {
       const json& item = (*it)[i];
       if (!item.is_object() || !item.contains("uri") || !item["uri"].is_string()) continue;
       const std::string uri = item["uri"].get<std::string>();
       const std::string ptr = ptrOf(array, i) + "/uri";
-      if (isDataUri(uri)) continue;
+      if (isDataUri(uri)) {
+        const size_t comma = uri.find(',');
+        const std::string header = comma == std::string::npos ? uri : uri.substr(0, comma + 1);
+        const std::vector<std::string> headers =
+            buffer ? std::vector<std::string>{"data:application/octet-stream;base64,",
+                                              "data:application/gltf-buffer;base64,"}
+                   : std::vector<std::string>{"data:image/png;base64,", "data:image/jpeg;base64,"};
+        if (std::find(headers.begin(), headers.end(), header) == headers.end())
+          fail(file, ptr,
+               "got a data: URI starting \"" + uriPrefix(header) + "\"; expected one starting " + headers[0] + " or " +
+                   headers[1]);
+        const int64_t size = base64Size(uri.substr(comma + 1));
+        if (size < 0)
+          fail(file, ptr,
+               "the data: URI \"" + uriPrefix(uri) +
+                   "\" is not valid base64; expected the characters A-Z a-z 0-9 + / "
+                   "and at most two '=' at the end");
+        if (buffer && item.contains("byteLength") && item["byteLength"].is_number_integer() &&
+            size != item["byteLength"].get<int64_t>())
+          fail(file, ptr,
+               "the data: URI decodes to " + std::to_string(size) + " bytes; expected byteLength " +
+                   item["byteLength"].dump() + " bytes");
+        continue;
+      }
       if (hasScheme(uri))
         fail(file, ptr,
-             "got the URI \"" + uri.substr(0, 64) +
-                 "\"; expected a data: URI or a local file path (nothing is fetched from a network)");
-      if (std::string(array) == "buffers") {
-        const fs::path p = dir / percentDecode(uri);
-        std::error_code ec;
-        if (!fs::is_regular_file(p, ec))
-          fail(file, ptr,
-               "buffer file " + p.lexically_normal().string() + " not found; expected the file beside " +
-                   fs::path(file).filename().string());
-      }
+             "got the URI \"" + uriPrefix(uri) +
+                 "\"; expected a data: URI or a relative file path (nothing is fetched from a network or by file:)");
+      const std::string decoded = buffer ? tinygltfDecode(uri) : percentDecode(uri);
+      // A NUL would end the path where the C library opens it, not where it was checked.
+      if (decoded.find('\0') != std::string::npos)
+        fail(file, ptr, "the URI decodes to a path holding a NUL character; expected a file path");
+      const fs::path p = (dir / decoded).lexically_normal();
+      if (!insideFolder(p, dir) && (root.empty() || !insideFolder(p, root)))
+        fail(file, ptr,
+             "the URI names " + p.string() + ", outside the glTF file's folder" +
+                 (root.empty() ? "" : " and outside SHADOWLAB_ASSET_ROOT (" + root.string() + ")") +
+                 "; expected a file inside " + (root.empty() ? "that folder" : "one of them") +
+                 " (SHADOWLAB_ASSET_ROOT names another folder to allow)");
+      if (!buffer) continue;
+      const std::string problem = notARegularFile(p);
+      if (!problem.empty())
+        fail(file, ptr,
+             "buffer file " + p.string() + ": " + problem + "; expected a regular file beside " +
+                 fs::path(file).filename().string());
+      std::error_code ec;
+      const uint64_t size = fs::file_size(p, ec);
+      if (!ec && item.contains("byteLength") && item["byteLength"].is_number_integer() &&
+          size != item["byteLength"].get<uint64_t>())
+        fail(file, ptr,
+             "buffer file " + p.string() + " holds " + std::to_string(size) + " bytes; expected byteLength " +
+                 item["byteLength"].dump() + " bytes");
     }
+  }
+}
+
+// A buffer without "uri" is the GLB's BIN chunk (glTF 2.0, "GLB-stored Buffer"): only in a .glb,
+// and only when the chunk is there and long enough.
+void checkBinChunk(const std::string& file, const json& doc, const Container& c) {
+  if (!doc.contains("buffers")) return;
+  for (size_t i = 0; i < doc["buffers"].size(); ++i) {
+    const json& b = doc["buffers"][i];
+    if (b.contains("uri")) continue;
+    const std::string ptr = ptrOf("buffers", i);
+    if (!c.binary)
+      fail(file, ptr,
+           "missing key \"uri\"; expected a file path or a data: URI (only a .glb holds a buffer without one, in its "
+           "BIN chunk)");
+    if (!c.bin || c.binSize == 0)
+      fail(file, ptr,
+           "the buffer has no uri and the GLB file has no BIN chunk; expected a BIN chunk after the JSON chunk");
+    const uint64_t length = b["byteLength"].get<uint64_t>();
+    if (length > c.binSize)
+      fail(file, ptr + "/byteLength",
+           "got " + std::to_string(length) + "; expected at most " + std::to_string(c.binSize) +
+               " bytes (the GLB BIN chunk's length)");
   }
 }
 
@@ -225,12 +369,27 @@ void applyOverrides(const std::string& file, json& doc, const std::vector<SceneO
 
 // tinygltf's callbacks: files are read as they are named (no shell expansion of paths), images are
 // kept as their encoded bytes and decoded later, only for a MASK material that reads them.
-bool fileExists(const std::string& path, void*) {
+// The folders tinygltf may read from (the callbacks' user data): checkUris has checked every URI,
+// and the callbacks check the path tinygltf actually opens again.
+struct ReadableFolders {
+  fs::path dir, root;
+  bool allows(const std::string& path) const {
+    return path.find('\0') == std::string::npos &&
+           (insideFolder(path, dir) || (!root.empty() && insideFolder(path, root)));
+  }
+};
+bool fileExists(const std::string& path, void* folders) {
   std::error_code ec;
-  return fs::is_regular_file(path, ec);
+  return static_cast<const ReadableFolders*>(folders)->allows(path) && fs::is_regular_file(path, ec);
 }
 std::string expandFilePath(const std::string& path, void*) { return path; }
-bool readWholeFile(std::vector<unsigned char>* out, std::string* err, const std::string& path, void*) {
+bool readWholeFile(std::vector<unsigned char>* out, std::string* err, const std::string& path, void* folders) {
+  std::error_code ec;
+  if (!static_cast<const ReadableFolders*>(folders)->allows(path) || !fs::is_regular_file(path, ec) ||
+      fs::file_size(path, ec) > kMaxGltfBytes) {
+    if (err) *err += "not a regular file of at most 4 GiB inside the glTF file's folder\n";
+    return false;
+  }
   std::ifstream in(path, std::ios::binary);
   if (!in) {
     if (err) *err += "cannot open " + path + "\n";
@@ -254,6 +413,9 @@ bool keepImageBytes(tinygltf::Image* image, const int, std::string*, std::string
 std::string oneLine(std::string s) {
   while (!s.empty() && (s.back() == '\n' || s.back() == '\r' || s.back() == ' ')) s.pop_back();
   for (size_t p; (p = s.find('\n')) != std::string::npos;) s.replace(p, 1, "; ");
+  // tinygltf quotes whole URIs (a data: URI can be megabytes).
+  constexpr size_t kMaxText = 240;
+  if (s.size() > kMaxText) s = s.substr(0, kMaxText) + "...";
   return s;
 }
 
@@ -474,8 +636,9 @@ std::vector<double> Converter::readAccessor(int index, const std::string& use, c
       const double target = component(idx + i * size_t(isize), ict, false);
       if (target >= double(a.count) || target <= previous)
         accessorFail(index, use,
-                     "sparse index " + std::to_string(uint64_t(target)) + " at element " + std::to_string(i) +
-                         "; expected strictly increasing indices below the count " + std::to_string(a.count));
+                     "the sparse index at element " + std::to_string(i) +
+                         " is out of order or out of range; expected strictly increasing indices below the count " +
+                         std::to_string(a.count));
       previous = target;
       for (int c = 0; c < n; ++c)
         out[size_t(target) * size_t(n) + size_t(c)] =
@@ -519,10 +682,26 @@ std::pair<int, glm::dmat3> textureTransform(const std::string& file, const json&
 // temporary file named for its format.
 image_io::FloatImage decodeBytes(const std::string& file, const std::string& ptr,
                                  const std::vector<unsigned char>& bytes, const std::string& mime) {
-  std::string ext;
-  if (bytes.size() >= 8 && std::memcmp(bytes.data(), "\x89PNG", 4) == 0) ext = ".png";
-  else if (bytes.size() >= 3 && bytes[0] == 0xFF && bytes[1] == 0xD8 && bytes[2] == 0xFF) ext = ".jpg";
-  else fail(file, ptr, "image of type \"" + mime + "\" is neither PNG nor JPEG; expected image/png or image/jpeg");
+  std::string ext, kind;
+  if (bytes.size() >= 8 && std::memcmp(bytes.data(), "\x89PNG", 4) == 0) ext = ".png", kind = "image/png";
+  else if (bytes.size() >= 3 && bytes[0] == 0xFF && bytes[1] == 0xD8 && bytes[2] == 0xFF)
+    ext = ".jpg", kind = "image/jpeg";
+  const std::string says = mime.empty() ? "no mimeType" : "the mimeType \"" + mime + "\"";
+  if (ext.empty()) {
+    std::string what = "neither PNG nor JPEG";
+    if (bytes.size() >= 6 && (std::memcmp(bytes.data(), "GIF8", 4) == 0)) what = "GIF";
+    else if (bytes.size() >= 2 && bytes[0] == 'B' && bytes[1] == 'M') what = "BMP";
+    else if (bytes.size() >= 12 && std::memcmp(bytes.data(), "RIFF", 4) == 0 &&
+             std::memcmp(bytes.data() + 8, "WEBP", 4) == 0)
+      what = "WebP";
+    else if (bytes.size() >= 12 && std::memcmp(bytes.data(), "\xABKTX 20\xBB", 8) == 0) what = "KTX2";
+    fail(file, ptr,
+         "the image's " + std::to_string(bytes.size()) + " bytes are " + what + " (" + says +
+             "); expected PNG or JPEG bytes");
+  }
+  if (!mime.empty() && mime != kind)
+    fail(file, ptr + "/mimeType",
+         "got \"" + mime + "\" for an image whose bytes are " + kind + "; expected \"" + kind + "\"");
   std::string tmpl = (fs::temp_directory_path() / ("shadowlab-gltf-XXXXXX" + ext)).string();
   std::vector<char> name(tmpl.begin(), tmpl.end());
   name.push_back('\0');
@@ -560,8 +739,9 @@ Image Converter::alphaImage(int texture, const std::string& ptr, double factorAl
     if (hasScheme(im.uri) && !isDataUri(im.uri))
       fail(file_, imPtr + "/uri", "got a URI with a scheme; expected a data: URI or a local file");
     const fs::path p = (dir_ / percentDecode(im.uri)).lexically_normal();
-    std::error_code ec;
-    if (!fs::is_regular_file(p, ec)) fail(file_, imPtr + "/uri", "image file " + p.string() + " not found");
+    const std::string problem = notARegularFile(p);
+    if (!problem.empty())
+      fail(file_, imPtr + "/uri", "image file " + p.string() + ": " + problem + "; expected a PNG or JPEG file");
     const std::string err = image_io::readTexture(p.string(), read, kMaxTextureSide);
     if (!err.empty()) fail(file_, imPtr + "/uri", "cannot read image " + p.string() + ": " + err);
   } else {
@@ -605,7 +785,8 @@ uint32_t Converter::materialFor(int gm, const std::string& use) {
   const std::string alphaMode = mj.value("alphaMode", std::string("OPAQUE"));
   const bool doubleSided = mj.value("doubleSided", false);
   if (alphaMode != "OPAQUE" && alphaMode != "MASK" && alphaMode != "BLEND")
-    fail(file_, mPtr + "/alphaMode", "got \"" + alphaMode + "\"; expected one of OPAQUE, MASK, BLEND");
+    fail(file_, mPtr + "/alphaMode",
+         "got " + detail::describe(mj["alphaMode"]) + "; expected one of OPAQUE, MASK, BLEND");
   if (alphaMode == "BLEND") blendMaterials_.insert(gm);
   glm::dvec4 factor(1.0);
   const json* pbr = mj.contains("pbrMetallicRoughness") ? &mj["pbrMetallicRoughness"] : nullptr;
@@ -676,8 +857,7 @@ const Converter::Decoded* Converter::decode(size_t mesh, size_t prim) {
     const glm::vec3 f(v);
     if (!std::isfinite(f.x) || !std::isfinite(f.y) || !std::isfinite(f.z))
       accessorFail(pos->second, "POSITION of " + pPtr,
-                   "vertex " + std::to_string(i) + " is (" + std::to_string(v.x) + ", " + std::to_string(v.y) + ", " +
-                       std::to_string(v.z) + "); expected finite positions");
+                   "vertex " + std::to_string(i) + " is not finite as a float; expected finite positions");
     d.positions[i] = f;
   }
   std::vector<uint32_t> idx;
@@ -687,8 +867,9 @@ const Converter::Decoded* Converter::decode(size_t mesh, size_t prim) {
     for (size_t i = 0; i < raw.size(); ++i) {
       if (raw[i] >= double(vertexCount))
         accessorFail(p.indices, "indices of " + pPtr,
-                     "index " + std::to_string(uint64_t(raw[i])) + " at element " + std::to_string(i) +
-                         " is out of range; the POSITION accessor has " + std::to_string(vertexCount) + " vertices");
+                     "the index at element " + std::to_string(i) + " is out of range; the POSITION accessor has " +
+                         std::to_string(vertexCount) + " vertices (expected indices below " +
+                         std::to_string(vertexCount) + ")");
       idx[i] = uint32_t(raw[i]);
     }
   } else {
@@ -697,6 +878,17 @@ const Converter::Decoded* Converter::decode(size_t mesh, size_t prim) {
   }
   const int mode = p.mode < 0 ? TINYGLTF_MODE_TRIANGLES : p.mode;
   const size_t n = idx.size();
+  // glTF 2.0 ("Meshes"): a TRIANGLES primitive's count is a multiple of 3; a remainder means a
+  // truncated or misdeclared accessor, not a mesh to draw part of.
+  if (mode == TINYGLTF_MODE_TRIANGLES && n % 3 != 0) {
+    if (p.indices >= 0)
+      fail(file_, pPtr + "/indices",
+           "accessor " + std::to_string(p.indices) + " holds " + std::to_string(n) +
+               " indices for TRIANGLES; expected a multiple of 3");
+    fail(file_, pPtr + "/attributes/POSITION",
+         "accessor " + std::to_string(pos->second) + " holds " + std::to_string(n) +
+             " vertices for TRIANGLES without indices; expected a multiple of 3");
+  }
   if (mode == TINYGLTF_MODE_TRIANGLES) {
     for (size_t i = 0; i + 2 < n; i += 3) d.triangles.emplace_back(idx[i], idx[i + 1], idx[i + 2]);
   } else if (mode == TINYGLTF_MODE_TRIANGLE_STRIP) {
@@ -773,7 +965,12 @@ void Converter::emitMesh(size_t mesh, const glm::dmat4& world, size_t node, Cont
       if (d->uvs.empty()) out.uvs.resize(out.positions.size(), glm::vec2(0));
       else out.uvs.insert(out.uvs.end(), d->uvs.begin(), d->uvs.end());
     }
-    for (const glm::uvec3& t : d->triangles) out.triangles.push_back(t + glm::uvec3(base));
+    // glTF 2.0 ("Transformations"): a world transform with a negative determinant mirrors the mesh,
+    // which turns its counter-clockwise front faces clockwise; reversing the winding keeps them front
+    // faces for both renderers' culling.
+    const bool mirrored = glm::determinant(glm::dmat3(world)) < 0;
+    for (const glm::uvec3& t : d->triangles)
+      out.triangles.push_back((mirrored ? glm::uvec3(t.x, t.z, t.y) : t) + glm::uvec3(base));
     out.triangleMaterial.insert(out.triangleMaterial.end(), d->triangles.size(), d->material);
   }
 }
@@ -950,6 +1147,7 @@ void Converter::chooseCamera(const std::vector<std::pair<size_t, glm::dmat4>>& c
       if (want >= 0 ? ci != want : m_.cameras[size_t(ci)].type != type) continue;
       out.camera = cameraFromNode(file_, m_.cameras[size_t(ci)], size_t(ci), world, out.infiniteFar);
       out.hasCamera = true;
+      out.cameraIndex = ci;
       return;
     }
   if (want >= 0)
@@ -985,7 +1183,8 @@ void Converter::addLights(const std::vector<std::pair<size_t, glm::dmat4>>& ligh
     if (type == "directional") light.type = LightType::Directional;
     else if (type == "spot") light.type = LightType::Spot;
     else if (type == "point") light.type = LightType::Point;
-    else fail(file_, ptr + "/type", "got \"" + type + "\"; expected one of directional, point, spot");
+    else
+      fail(file_, ptr + "/type", "got " + detail::describe(lj["type"]) + "; expected one of directional, point, spot");
     const glm::dvec3 dir = glm::dmat3(world) * glm::dvec3(0, 0, -1);
     const glm::dvec3 pos(world * glm::dvec4(0, 0, 0, 1));
     if (!(glm::length(dir) > 1e-12) || !std::isfinite(glm::length(dir)) || !std::isfinite(glm::length(pos)))
@@ -1111,10 +1310,25 @@ Camera framingCamera(glm::vec3 boundsMin, glm::vec3 boundsMax) {
   return cam;
 }
 
-Content load(const Request& req, std::vector<Material>& materials) {
-  const std::string& file = req.path;
+std::string notARegularFile(const fs::path& path) {
   std::error_code ec;
-  if (!fs::is_regular_file(file, ec)) fail(file, "", "cannot open glTF file: no such file");
+  const fs::file_status st = fs::status(path, ec);
+  switch (st.type()) {
+    case fs::file_type::regular: return "";
+    case fs::file_type::not_found: return "not found";
+    case fs::file_type::directory: return "a directory, not a file";
+    case fs::file_type::character: return "a character device, not a regular file";
+    case fs::file_type::block: return "a block device, not a regular file";
+    case fs::file_type::fifo: return "a FIFO, not a regular file";
+    case fs::file_type::socket: return "a socket, not a regular file";
+    default: return ec ? "not accessible (" + ec.message() + ")" : "not a regular file";
+  }
+}
+
+namespace {
+
+Content loadFile(const Request& req, std::vector<Material>& materials) {
+  const std::string& file = req.path;
   const std::vector<uint8_t> bytes = readBytes(file);
   Container c = splitContainer(file, bytes);
   json doc;
@@ -1123,7 +1337,11 @@ Content load(const Request& req, std::vector<Material>& materials) {
   } catch (const json::parse_error& e) {
     std::string what = e.what();
     const auto at = what.find("syntax error");
-    fail(file, "", "invalid JSON: " + (at == std::string::npos ? what : what.substr(at)));
+    if (at != std::string::npos) what = what.substr(at);
+    // nlohmann quotes the text it last read: never echo a file's bytes (it may not be glTF at all).
+    const auto quote = what.find("; last read");
+    if (quote != std::string::npos) what = what.substr(0, quote);
+    fail(file, "", "not a glTF file: invalid JSON (" + what + "); expected a glTF 2.0 .gltf (JSON) or .glb file");
   }
   if (!doc.is_object()) fail(file, "", "got " + detail::describe(doc) + "; expected a glTF JSON object");
   // glTF 1.0: asset.version "1.x", or objects where 2.0 has arrays.
@@ -1138,6 +1356,7 @@ Content load(const Request& req, std::vector<Material>& materials) {
   }
   applyOverrides(file, doc, req.overrides);
   checkSchema(file, doc);
+  checkRules(file, doc);
   if (doc.contains("extensionsRequired"))
     for (size_t i = 0; i < doc["extensionsRequired"].size(); ++i) {
       const std::string e = doc["extensionsRequired"][i].get<std::string>();
@@ -1150,11 +1369,14 @@ Content load(const Request& req, std::vector<Material>& materials) {
     }
   const fs::path dir = fs::path(file).parent_path();
   checkUris(file, doc, dir.empty() ? fs::path(".") : dir);
+  checkBinChunk(file, doc, c);
   const std::string jsonText = req.overrides.empty() ? c.jsonText : doc.dump();
 
   tinygltf::TinyGLTF loader;
   loader.SetImageLoader(&keepImageBytes, nullptr);
-  tinygltf::FsCallbacks callbacks{&fileExists, &expandFilePath, &readWholeFile, &writeWholeFile, nullptr};
+  const ReadableFolders folders{dir.empty() ? fs::path(".") : dir, assetRoot()};
+  tinygltf::FsCallbacks callbacks{&fileExists, &expandFilePath, &readWholeFile, &writeWholeFile,
+                                  const_cast<ReadableFolders*>(&folders)};
   loader.SetFsCallbacks(callbacks);
   tinygltf::Model model;
   std::string err, warn;
@@ -1182,6 +1404,29 @@ Content load(const Request& req, std::vector<Material>& materials) {
   const std::string canonical = doc.dump();
   out.hash = fnv1a64(canonical.data(), canonical.size());
   return out;
+}
+
+}  // namespace
+
+Content load(const Request& req, std::vector<Material>& materials) {
+  try {
+    return loadFile(req, materials);
+  } catch (const InputError& e) {
+    // An error at or below a value an override put into the document is the override's fault:
+    // name where it came from first (as loader.cpp does for JSON scenes), the file and place after.
+    const std::string msg = e.what(), prefix = printableText(req.path) + ": ";
+    const size_t sep = msg.find(": error: ", prefix.size());
+    if (msg.rfind(prefix, 0) != 0 || sep == std::string::npos) throw;
+    const std::string place = msg.substr(prefix.size(), sep - prefix.size());
+    const std::string what = msg.substr(sep + 9);
+    for (const SceneOverride& o : req.overrides) {
+      if (o.origin.empty()) continue;
+      const bool blamed =
+          place == "override " + o.pointer || place == o.pointer || place.rfind(o.pointer + "/", 0) == 0;
+      if (blamed) throw InputError(formatError(o.origin, "", what + " (" + req.path + ": " + place + ")"));
+    }
+    throw;
+  }
 }
 
 }  // namespace shadowlab::gltf

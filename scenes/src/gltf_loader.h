@@ -7,6 +7,7 @@
 // code checks what tinygltf lets through (types, ranges, cycles, non-finite values) and names the
 // file and the JSON pointer or accessor of every problem. Internal to shadowlab_scenes.
 #include <cstdint>
+#include <filesystem>
 #include <string>
 #include <vector>
 
@@ -20,6 +21,10 @@ namespace shadowlab::gltf {
 
 // True for a path ending in .gltf or .glb (any case): such a path is a scene by itself.
 bool isGltfPath(const std::string& path);
+
+// "" for a regular file (after symbolic links); else what `path` is, for a message: "not found",
+// "a directory, not a file", "a character device, not a regular file", ...
+std::string notARegularFile(const std::filesystem::path& path);
 
 struct Request {
   std::string path;                      // the .gltf / .glb file
@@ -45,6 +50,7 @@ struct Content {
   std::vector<uint32_t> triangleMaterial;  // indices into the scene's materials (appended by load)
   std::vector<Light> lights;               // KHR_lights_punctual instances, world space
   bool hasCamera = false;                  // a camera was found (or chosen)
+  int cameraIndex = -1;                    // which one (into the file's "cameras")
   Camera camera;                           // width 640, height from aspectRatio (480 without)
   bool infiniteFar = false;                // no zfar: the caller sets farPlane from the scene's bounds
   std::vector<std::string> warnings;       // GCC-style "file: warning: ..." lines

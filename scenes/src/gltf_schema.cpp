@@ -3,6 +3,7 @@
 // KHR_texture_transform extensions' schemas.
 #include "gltf_schema.h"
 
+#include <algorithm>
 #include <cmath>
 #include <map>
 #include <vector>
@@ -15,6 +16,8 @@ namespace shadowlab::gltf {
 namespace {
 
 using nlohmann::json;
+
+constexpr double kUnitQuaternionTolerance = 1e-3;
 
 enum class Ty { Object, Array, String, Number, Index, Bool };
 
@@ -220,5 +223,180 @@ void check(const std::string& file, const json& j, const std::string& ptr, const
 }  // namespace
 
 void checkSchema(const std::string& file, const nlohmann::json& doc) { check(file, doc, "", "glTF"); }
+
+namespace {
+
+[[noreturn]] void fail(const std::string& file, const std::string& ptr, const std::string& what) {
+  throw InputError(formatError(file, ptr, what));
+}
+
+// The value at `key` of object `o` (at `ptr`), which glTF 2.0 requires.
+const json& required(const std::string& file, const json& o, const std::string& ptr, const char* key,
+                     const std::string& expected) {
+  auto it = o.find(key);
+  if (it == o.end()) fail(file, ptr, std::string("missing key \"") + key + "\"; expected " + expected);
+  return *it;
+}
+
+bool listsExtension(const json& doc, const char* name) {
+  for (const char* list : {"extensionsUsed", "extensionsRequired"}) {
+    auto it = doc.find(list);
+    if (it == doc.end()) continue;
+    for (const json& e : *it)
+      if (e == name) return true;
+  }
+  return false;
+}
+
+const char* componentTypeName(int64_t t) {
+  switch (t) {
+    case 5120: return "byte";
+    case 5121: return "unsigned byte";
+    case 5122: return "short";
+    case 5123: return "unsigned short";
+    case 5125: return "unsigned int";
+    case 5126: return "float";
+    default: return "unknown";
+  }
+}
+
+void checkCamera(const std::string& file, const json& c, const std::string& ptr) {
+  const json& type = required(file, c, ptr, "type", "\"perspective\" or \"orthographic\"");
+  if (type != "perspective" && type != "orthographic")
+    fail(file, ptr + "/type", "got " + detail::describe(type) + "; expected \"perspective\" or \"orthographic\"");
+  const std::string kind = type.get<std::string>();
+  const std::string at = ptr + "/" + kind;
+  const json& p = required(file, c, ptr, kind.c_str(), "the " + kind + " object its type names");
+  if (kind == "perspective") {
+    required(file, p, at, "yfov", "the vertical field of view in radians");
+    required(file, p, at, "znear", "the near plane's distance");
+    // glTF 2.0: aspectRatio is exclusiveMinimum 0; tinygltf reads 0 as "absent".
+    if (p.contains("aspectRatio") && !(p["aspectRatio"].get<double>() > 0))
+      fail(file, at + "/aspectRatio",
+           "got " + detail::describe(p["aspectRatio"]) + "; expected a positive width / height ratio");
+  } else {
+    for (const char* key : {"xmag", "ymag", "zfar", "znear"})
+      required(file, p, at, key, "xmag, ymag, zfar and znear (glTF 2.0 requires all four for an orthographic camera)");
+  }
+}
+
+}  // namespace
+
+void checkRules(const std::string& file, const nlohmann::json& doc) {
+  const json& asset = required(file, doc, "", "asset", "a glTF 2.0 \"asset\" object (is this a glTF file?)");
+  const json& version = required(file, asset, "/asset", "version", "\"2.0\"");
+  const std::string v = version.get<std::string>();
+  const bool twoX = v.size() > 2 && v.compare(0, 2, "2.") == 0 &&
+                    std::all_of(v.begin() + 2, v.end(), [](char c) { return c >= '0' && c <= '9'; });
+  if (!twoX)
+    fail(file, "/asset/version",
+         "got " + detail::describe(version) + "; expected \"2.x\" (shadowlab reads glTF 2.0 and its minor versions)");
+  if (asset.contains("minVersion") && asset["minVersion"] != "2.0")
+    fail(file, "/asset/minVersion", "got " + detail::describe(asset["minVersion"]) + "; expected \"2.0\"");
+
+  if (doc.contains("cameras"))
+    for (size_t i = 0; i < doc["cameras"].size(); ++i)
+      checkCamera(file, doc["cameras"][i], "/cameras/" + std::to_string(i));
+
+  if (doc.contains("buffers"))
+    for (size_t i = 0; i < doc["buffers"].size(); ++i) {
+      const std::string ptr = "/buffers/" + std::to_string(i);
+      const json& n = required(file, doc["buffers"][i], ptr, "byteLength", "the buffer's length in bytes");
+      if (n.get<int64_t>() < 1) fail(file, ptr + "/byteLength", "got " + detail::describe(n) + "; expected at least 1");
+    }
+
+  if (doc.contains("bufferViews"))
+    for (size_t i = 0; i < doc["bufferViews"].size(); ++i) {
+      const json& bv = doc["bufferViews"][i];
+      const std::string ptr = "/bufferViews/" + std::to_string(i);
+      required(file, bv, ptr, "buffer", "a buffer index");
+      required(file, bv, ptr, "byteLength", "the view's length in bytes");
+      if (bv.contains("byteStride")) {
+        const int64_t stride = bv["byteStride"].get<int64_t>();
+        if (stride < 4 || stride > 252 || stride % 4)
+          fail(file, ptr + "/byteStride", "got " + std::to_string(stride) + "; expected a multiple of 4 in 4..252");
+      }
+    }
+
+  if (doc.contains("accessors"))
+    for (size_t i = 0; i < doc["accessors"].size(); ++i) {
+      const json& a = doc["accessors"][i];
+      const std::string ptr = "/accessors/" + std::to_string(i);
+      required(file, a, ptr, "componentType", "5120, 5121, 5122, 5123, 5125 or 5126");
+      required(file, a, ptr, "count", "the number of elements");
+      const json& type = required(file, a, ptr, "type", "SCALAR, VEC2, VEC3, VEC4, MAT2, MAT3 or MAT4");
+      static const std::vector<std::string> kTypes = {"SCALAR", "VEC2", "VEC3", "VEC4", "MAT2", "MAT3", "MAT4"};
+      if (std::find(kTypes.begin(), kTypes.end(), type.get<std::string>()) == kTypes.end())
+        fail(file, ptr + "/type",
+             "got " + detail::describe(type) + "; expected SCALAR, VEC2, VEC3, VEC4, MAT2, MAT3 or MAT4");
+      if (!a.contains("sparse")) continue;
+      const json& sparse = a["sparse"];
+      required(file, sparse, ptr + "/sparse", "count", "the number of substituted elements");
+      const json& indices = required(file, sparse, ptr + "/sparse", "indices", "an object (bufferView, componentType)");
+      required(file, indices, ptr + "/sparse/indices", "bufferView", "a buffer view index");
+      required(file, indices, ptr + "/sparse/indices", "componentType", "5121, 5123 or 5125");
+      const json& values = required(file, sparse, ptr + "/sparse", "values", "an object (bufferView)");
+      required(file, values, ptr + "/sparse/values", "bufferView", "a buffer view index");
+    }
+
+  if (doc.contains("images"))
+    for (size_t i = 0; i < doc["images"].size(); ++i) {
+      const json& im = doc["images"][i];
+      const std::string ptr = "/images/" + std::to_string(i);
+      if (im.contains("uri") == im.contains("bufferView"))
+        fail(
+            file, ptr,
+            std::string(im.contains("uri") ? "both \"uri\" and \"bufferView\"" : "neither \"uri\" nor \"bufferView\"") +
+                "; expected exactly one of them");
+      if (im.contains("bufferView") && !im.contains("mimeType"))
+        fail(file, ptr, "missing key \"mimeType\"; expected \"image/png\" or \"image/jpeg\" beside a bufferView");
+    }
+
+  if (doc.contains("meshes"))
+    for (size_t m = 0; m < doc["meshes"].size(); ++m) {
+      const std::string ptr = "/meshes/" + std::to_string(m);
+      const json& prims = required(file, doc["meshes"][m], ptr, "primitives", "an array of primitives");
+      for (size_t p = 0; p < prims.size(); ++p)
+        required(file, prims[p], ptr + "/primitives/" + std::to_string(p), "attributes",
+                 "an object of attributes (POSITION at least)");
+    }
+
+  if (doc.contains("nodes"))
+    for (size_t i = 0; i < doc["nodes"].size(); ++i) {
+      const json& n = doc["nodes"][i];
+      if (!n.contains("rotation")) continue;
+      double sq = 0;
+      for (const json& c : n["rotation"]) sq += c.get<double>() * c.get<double>();
+      const double length = std::sqrt(sq);
+      // Exporters write quaternions as floats, normalized in float: 1e-3 passes their rounding
+      // with a wide margin and still refuses a zero or a plainly unnormalized quaternion (which
+      // a renderer would either refuse or silently normalize).
+      if (!(std::fabs(length - 1.0) <= kUnitQuaternionTolerance))
+        fail(file, "/nodes/" + std::to_string(i) + "/rotation",
+             "got a quaternion of length " + std::to_string(length) + "; expected a unit quaternion (length 1 within " +
+                 std::to_string(kUnitQuaternionTolerance).substr(0, 5) + ")");
+    }
+
+  // glTF 2.0 ("Meshes"): POSITION is float; integer positions are KHR_mesh_quantization's.
+  if (doc.contains("meshes") && !listsExtension(doc, "KHR_mesh_quantization"))
+    for (size_t m = 0; m < doc["meshes"].size(); ++m) {
+      const json& mesh = doc["meshes"][m];
+      if (!mesh.contains("primitives")) continue;
+      for (size_t p = 0; p < mesh["primitives"].size(); ++p) {
+        const json& prim = mesh["primitives"][p];
+        if (!prim.contains("attributes") || !prim["attributes"].contains("POSITION")) continue;
+        const size_t a = prim["attributes"]["POSITION"].get<size_t>();
+        if (!doc.contains("accessors") || a >= doc["accessors"].size() ||
+            !doc["accessors"][a].contains("componentType"))
+          continue;  // the converter names a missing accessor
+        const int64_t type = doc["accessors"][a]["componentType"].get<int64_t>();
+        if (type != 5126)
+          fail(file, "/accessors/" + std::to_string(a) + "/componentType",
+               "got " + std::to_string(type) + " (" + componentTypeName(type) + ") for the POSITION of /meshes/" +
+                   std::to_string(m) + "/primitives/" + std::to_string(p) +
+                   "; expected 5126 (float), or KHR_mesh_quantization in extensionsUsed for integer positions");
+      }
+    }
+}
 
 }  // namespace shadowlab::gltf

@@ -14,4 +14,11 @@ namespace shadowlab::gltf {
 // properties and extensions are not read and not checked).
 void checkSchema(const std::string& file, const nlohmann::json& doc);
 
+// The glTF 2.0 rules on values (after checkSchema) that tinygltf either lets through or reports
+// without a JSON pointer: asset.version 2.x, the required properties of cameras, buffers, buffer
+// views, accessors (and their sparse parts) and mesh primitives, aspectRatio > 0, byteStride 4..252
+// in steps of 4, unit rotation quaternions, and integer POSITION components only under
+// KHR_mesh_quantization. Throws InputError at the first value that breaks one.
+void checkRules(const std::string& file, const nlohmann::json& doc);
+
 }  // namespace shadowlab::gltf

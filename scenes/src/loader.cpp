@@ -672,6 +672,8 @@ struct GltfState {
   bool any = false;
   bool hasCamera = false, explicitCamera = false, infiniteFar = false;
   Camera camera;
+  std::string cameraFile;  // the glTF file the camera came from, and its index in "cameras"
+  int cameraIndex = -1;
   std::vector<Light> lights;
   uint64_t hash = 0;
 };
@@ -683,9 +685,8 @@ Mesh readGltfObject(const Reader& r, const Node& o, const fs::path& dir, const s
   Node p = r.require(o, "path", "a path to a .gltf or .glb file");
   gltf::Request q;
   q.path = resolvePath(r.string(p, "a path to a .gltf or .glb file"), dir);
-  std::error_code ec;
-  if (!fs::is_regular_file(q.path, ec))
-    r.fail(p.ptr, "glTF file " + q.path + " not found; expected a .gltf or .glb file");
+  const std::string problem = gltf::notARegularFile(q.path);
+  if (!problem.empty()) r.fail(p.ptr, "glTF file " + q.path + ": " + problem + "; expected a .gltf or .glb file");
   q.objectName = name;
   q.fallbackMaterial = material;
   q.overrides = st.overrides;
@@ -720,6 +721,8 @@ Mesh readGltfObject(const Reader& r, const Node& o, const fs::path& dir, const s
     st.infiniteFar = c.infiniteFar;
     st.hasCamera = true;
     st.explicitCamera = bool(cam);
+    st.cameraFile = q.path;
+    st.cameraIndex = c.cameraIndex;
   }
   st.any = true;
   st.hash = fnv1a64(&c.hash, sizeof c.hash, st.hash ^ 0x9e3779b97f4a7c15ull);
@@ -1163,13 +1166,20 @@ bool finiteMatrix(const glm::mat4& m) {
 
 // Inputs are finite one by one, yet their combination can overflow float (a camera 1e38 away
 // from its target): check what the renderers will compute before handing the scene over.
-void checkComputed(const Reader& r, const Scene& s) {
+// `cameraFrom`: where the camera came from when the scene has no JSON "camera" (a glTF file's
+// camera, or the framing camera), for the message.
+void checkComputed(const Reader& r, const Scene& s, const GltfState* cameraFrom) {
   const Camera& c = s.camera;
   bool ok = finiteMatrix(c.viewFromWorld()) && finiteMatrix(c.clipFromView());
   for (glm::vec2 px : {glm::vec2(0), glm::vec2(float(c.width), float(c.height)), glm::vec2(0, float(c.height))})
     ok = ok && finite(c.rayDirection(px.x, px.y));
-  if (!ok)
-    r.fail("/camera", "the camera's matrices or rays are not finite; expected a camera with moderate coordinates");
+  const std::string what = "the camera's matrices or rays are not finite; expected a camera with moderate coordinates";
+  if (!ok && cameraFrom && cameraFrom->hasCamera)
+    throw InputError(formatError(cameraFrom->cameraFile, "/cameras/" + std::to_string(cameraFrom->cameraIndex),
+                                 what + " (the glTF camera, placed by its node)"));
+  if (!ok && cameraFrom)
+    throw InputError(formatError(r.file(), "", what + " (the framing camera, from the scene's bounds)"));
+  if (!ok) r.fail("/camera", what);
   for (size_t i = 0; i < s.lights.size(); ++i)
     if (!finite(s.lights[i].direction) || !finite(s.lights[i].position))
       r.fail("/lights/" + std::to_string(i), "the light's direction or position is not finite; expected finite values");
@@ -1238,6 +1248,31 @@ std::string envOr(const char* name, const std::string& fallback) {
   return v && *v ? std::string(v) : fallback;
 }
 
+// The image size is a harness setting on any scene: when the camera comes from a glTF object (a
+// glTF path, or a JSON scene without "camera"), /camera/width and /camera/height, which address
+// no value in either document, set the size of the camera the scene ends up with.
+bool isImageSizePointer(const std::string& pointer) {
+  return pointer == "/camera/width" || pointer == "/camera/height";
+}
+
+void applyImageSize(const Reader& r, const std::vector<SceneOverride>& sizes, Camera& cam) {
+  for (const SceneOverride& o : sizes) {
+    const json& v = o.value;
+    const bool ok = v.is_number_integer() &&
+                    !(v.is_number_unsigned() && v.get<uint64_t>() > uint64_t(kMaxResolution)) &&
+                    v.get<int64_t>() >= 1 && v.get<int64_t>() <= kMaxResolution;
+    if (!ok) {
+      const std::string what = "got " + detail::describe(v) + "; expected an integer 1.." +
+                               std::to_string(kMaxResolution) + " (" + kResolutionWhy + ")";
+      // The pointer names a value in neither the scene file nor the glTF file: cite the setting.
+      if (!o.origin.empty())
+        throw InputError(formatError(o.origin, "", what + " (the image size of " + r.file() + ")"));
+      throw InputError(formatError(r.file(), "override " + o.pointer, what));
+    }
+    (o.pointer == "/camera/width" ? cam.width : cam.height) = int(v.get<int64_t>());
+  }
+}
+
 }  // namespace
 
 Scene loadScene(const std::string& path, const std::vector<SceneOverride>& overrides) {
@@ -1250,6 +1285,10 @@ Scene loadScene(const std::string& path, const std::vector<SceneOverride>& overr
     }
     throw InputError(formatError(path, "", "cannot open scene file: no such file" + hint));
   }
+  // A device (/dev/zero) or a FIFO would be read until it ends, which may be never.
+  if (const std::string problem = gltf::notARegularFile(path); !problem.empty() && !fs::is_directory(path, ec))
+    throw InputError(formatError(
+        path, "", "cannot read the scene file: " + problem + "; expected a JSON scene, .gltf or .glb file"));
   // A .gltf/.glb path is the scene of one glTF object (its overrides address the glTF document).
   const bool gltfScene = gltf::isGltfPath(path);
   json doc = gltfScene ? json{{"objects",
@@ -1260,9 +1299,15 @@ Scene loadScene(const std::string& path, const std::vector<SceneOverride>& overr
   Reader r(path);
   Node root{&doc, ""};
   if (!doc.is_object()) r.expected(root, "a JSON object with camera, objects and lights");
-  if (!gltfScene) {
-    applyOverrides(r, doc, overrides);
-    r.blame(overrides);
+  std::vector<SceneOverride> sizes, rest;
+  const bool cameraFromGltf = gltfScene || (!doc.contains("camera") && hasGltfObject(doc));
+  for (const SceneOverride& o : overrides)
+    (cameraFromGltf && isImageSizePointer(o.pointer) ? sizes : rest).push_back(o);
+  if (!gltfScene) applyOverrides(r, doc, rest);
+  if (!gltfScene) r.blame(rest);
+  {
+    Camera check;  // a bad size is refused before any file is read
+    applyImageSize(r, sizes, check);
   }
   r.keys(root, {"description", "camera", "materials", "objects", "lights", "projectors", "failure", "paths"});
   if (Node d = r.child(root, "description")) r.string(d);
@@ -1272,7 +1317,7 @@ Scene loadScene(const std::string& path, const std::vector<SceneOverride>& overr
   scene.path = path;
   scene.name = fs::path(path).stem().string();
   GltfState gltfState;
-  if (gltfScene) gltfState.overrides = overrides;
+  if (gltfScene) gltfState.overrides = rest;
   // With a glTF object the camera may come from the glTF file (finishGltf).
   if (r.child(root, "camera") || !hasGltfObject(doc)) readCamera(r, root, scene.camera);
   readMaterials(r, root, dir, scene.materials);
@@ -1280,13 +1325,19 @@ Scene loadScene(const std::string& path, const std::vector<SceneOverride>& overr
   readLights(r, root, scene);
   readProjectors(r, root, dir, scene);
   if (gltfState.any) finishGltf(r, root, scene, gltfState, gltfScene);
+  applyImageSize(r, sizes, scene.camera);
   if (scene.lights.empty() && scene.projectors.empty())
     r.fail("/lights", "the scene has no light and no projector; expected at least one of them");
   readFailure(r, root, scene);
   readPaths(r, root, scene);
-  checkComputed(r, scene);
+  checkComputed(r, scene, cameraFromGltf ? &gltfState : nullptr);
   scene.hash = sceneHash(doc, scene);
   if (gltfState.any) scene.hash = hashHex(fnv1a64(scene.hash.data(), scene.hash.size(), gltfState.hash));
+  // The size is in neither document: hash it (a reference of another size is another result).
+  if (!sizes.empty()) {
+    const int size[2] = {scene.camera.width, scene.camera.height};
+    scene.hash = hashHex(fnv1a64(size, sizeof size, fnv1a64(scene.hash.data(), scene.hash.size())));
+  }
   return scene;
 }
 
