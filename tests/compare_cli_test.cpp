@@ -6,6 +6,7 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <limits>
 #include <sstream>
 
 #include <gtest/gtest.h>
@@ -160,6 +161,59 @@ TEST_F(CompareCli, SizeOrSceneMismatchExits2AndWritesNothing) {
   EXPECT_EQ(l.code, 2) << l.err;
   EXPECT_NE(l.err.find("moon"), std::string::npos) << l.err;
   EXPECT_FALSE(fs::exists(path("out")));
+}
+
+// Frames from files meet the value rules before a pixel is classified (frame_check.h): a NaN,
+// an infinity or a value outside its channel's range, in either frame, is exit 2 naming the file,
+// the channel and the first such pixel (x, y), and nothing is written. Without the check a raster
+// vis of NaN or -1 counts as acne, one of 2 or Inf as lit.
+TEST_F(CompareCli, NonFiniteOrOutOfRangeValuesExit2NamingChannelAndPixel) {
+  fs::create_directories(path("ref"));
+  fs::create_directories(path("ras"));
+  const int w = 32, h = 16;
+  writeFrameExr(syntheticFrame(w, h, false, 0), path("ref/reference.exr"));
+  writeFrameExr(syntheticFrame(w, h, true, 0), path("ras/raster.exr"));
+  ASSERT_EQ(shadowlab("compare ref ras -o good").code, 0);
+  struct Case {
+    bool inRaster;
+    std::string channel;
+    float value;
+    std::string got, expected;
+  };
+  const float nan = std::numeric_limits<float>::quiet_NaN(), inf = std::numeric_limits<float>::infinity();
+  const std::vector<Case> cases = {
+      {true, "light.sun.vis", nan, "nan", "a number in [0, 1]"},
+      {true, "light.sun.vis", -1.0f, "-1", "a number in [0, 1]"},
+      {true, "light.sun.vis", 2.0f, "2", "a number in [0, 1]"},
+      {true, "light.sun.vis", inf, "inf", "a number in [0, 1]"},
+      {true, "light.sun.m", -inf, "-inf", "a finite number >= 0"},
+      {true, "light.sun.occluder_id", 1.5f, "1.5", "an integer in [0, 16777216]"},
+      {false, "light.sun.vis", nan, "nan", "a number in [0, 1]"},
+      {false, "hit", nan, "nan", "a number in [0, 1]"},
+      {false, "object_id", -2.0f, "-2", "an integer in [0, 16777216]"},
+      {false, "light.sun.vis", 1e-7f - 1e-7f * 2, "-1e-07", "a number in [0, 1]"},
+  };
+  for (const Case& c : cases) {
+    Frame f = syntheticFrame(w, h, c.inRaster, 0);
+    // Two bad pixels: the message names the first in row order, (7, 3), and counts both.
+    f.get(c.channel)[size_t(3) * w + 7] = c.value;
+    f.get(c.channel)[size_t(9) * w + 2] = c.value;
+    const std::string file = c.inRaster ? "ras/raster.exr" : "ref/reference.exr";
+    fs::remove_all(path("bad"));
+    fs::create_directories(path("bad"));
+    writeFrameExr(f, path("bad/" + fs::path(file).filename().string()));
+    const Result r = c.inRaster ? shadowlab("compare ref bad -o out") : shadowlab("compare bad ras -o out");
+    EXPECT_EQ(r.code, 2) << c.channel << " " << c.got << "\n" << r.out << r.err;
+    EXPECT_EQ(r.err, "bad/" + fs::path(file).filename().string() + ": " + c.channel + " pixel (7, 3): error: got " +
+                         c.got + "; expected " + c.expected + " (first of 2 such pixels)\n");
+    EXPECT_FALSE(fs::exists(path("out"))) << c.channel;
+  }
+  // occluder_dist's "unoccluded" -1 and every value of a renderer's own channel that is finite pass.
+  Frame ref = syntheticFrame(w, h, false, 0);
+  ref.add("light.sun.occluder_dist", -1.0f);
+  ref.add("my_renderer.depth", -5.0f);
+  writeFrameExr(ref, path("ref/reference.exr"));
+  EXPECT_EQ(shadowlab("compare ref ras -o out").code, 0);
 }
 
 TEST_F(CompareCli, RunRefusesBadInputBeforeWriting) {

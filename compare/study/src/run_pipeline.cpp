@@ -14,6 +14,7 @@
 
 #include "shadowlab/compare/run_pipeline.h"
 #include "shadowlab/compare/classify.h"
+#include "shadowlab/compare/frame_check.h"
 #include "shadowlab/scenes/error.h"
 #include "shadowlab/scenes/io.h"
 
@@ -35,7 +36,9 @@ std::optional<Frame> loadEntry(const std::string& path, const Scene& scene) {
   std::error_code ec;
   if (!std::filesystem::is_regular_file(path, ec)) return std::nullopt;
   try {
-    Frame cached = readFrameExr(path);
+    // A cached frame is read through compare's door like any other (a NaN in a damaged entry is
+    // traced again, never compared).
+    Frame cached = readFrameToCompare(path);
     auto it = cached.meta.find("scene_hash");
     if (it == cached.meta.end() || !it->is_string() || it->get<std::string>() != scene.hash) return std::nullopt;
     for (const std::string& name : referenceChannelNames(scene, ReferenceChannels::Compare))
