@@ -294,7 +294,10 @@ bool haveRasterizer() {
   }
 }
 
-TEST_F(CompareCli, RunOfACameraThatSeesOnlySkyExits2AndTheGateFailsIt) {
+// A camera that sees no surface is one rule for every command that compares a scene (the reference
+// cache's check, run_pipeline.h): exit 2 with the same message naming the scene, before any raster
+// work and without an output. Before, run exited 2, tune 1 ("nothing fits nan ms") and sweep 0.
+TEST_F(CompareCli, CameraThatSeesOnlySkyExits2WithOneMessageFromRunSweepAndTune) {
   if (!haveRasterizer()) GTEST_SKIP() << "no Vulkan device";
   // The camera looks up, 35 to 75 degrees above the horizon: every ray misses the ground.
   writeFileAtomic(path("sky.json"), R"({
@@ -302,36 +305,20 @@ TEST_F(CompareCli, RunOfACameraThatSeesOnlySkyExits2AndTheGateFailsIt) {
     "objects": [{"type": "plane", "name": "ground", "size": [20, 20]}],
     "lights": [{"type": "directional", "name": "sun", "elevation_deg": 40, "azimuth_deg": 30}]
   })");
-  const Result r = shadowlab("run sky.json -o out");
-  EXPECT_EQ(r.code, 2) << r.out << r.err;
-  EXPECT_NE(r.err.find("sky.json: /camera: error: nothing to compare: the camera sees no surface (all 2304 pixels are "
-                       "background in both frames"),
-            std::string::npos)
-      << r.err;
-  ASSERT_TRUE(fs::exists(path("out/metrics.json"))) << r.out;
-  const nlohmann::json doc = nlohmann::json::parse(slurp(path("out/metrics.json")));
-  const nlohmann::json& m = doc.at("metrics");
-  EXPECT_EQ(m.at("pixels_compared"), 0);
-  EXPECT_EQ(m.at("nothing_compared"), true);
-  for (const char* k : {"error_rate", "acne_rate", "shadow_iou", "mae", "rmse", "m_median", "m_p95", "m_max"})
-    EXPECT_TRUE(m.at(k).is_null()) << k << " = " << m.at(k).dump();
-
-  // A baseline of the same row that did compare pixels: the gate fails the run (exit 1) naming the
-  // file; the other way round the baseline compares nothing (exit 2); and it never becomes one.
-  nlohmann::json base = doc;
-  base["metrics"] = {{"pixels_compared", 2000}, {"errors", 0}, {"error_rate", 0.0}, {"shadow_iou", 1.0}};
-  writeFileAtomic(path("base.json"), base.dump());
-  const Result g = shadowlab("gate out/metrics.json --baseline base.json");
-  EXPECT_EQ(g.code, 1) << g.out << g.err;
-  EXPECT_NE(g.err.find("nothing was compared in out/metrics.json"), std::string::npos) << g.err;
-  const Result b = shadowlab("gate base.json --baseline out/metrics.json");
-  EXPECT_EQ(b.code, 2) << b.out << b.err;
-  EXPECT_NE(
-      b.err.find("out/metrics.json: /metrics/pixels_compared: error: row \"sky | default | sun\" compares nothing"),
-      std::string::npos)
-      << b.err;
-  EXPECT_EQ(shadowlab("gate out/metrics.json --baseline new/metrics.json --update-baseline").code, 2);
-  EXPECT_FALSE(fs::exists(path("new")));
+  const std::string message =
+      "sky.json: /camera: error: scene \"sky\": the camera sees no surface (all 2304 pixels of the reference miss "
+      "the geometry: sky, or only zero-area triangles); expected a camera that sees part of the scene\n";
+  for (const char* command : {"run sky.json -o out", "sweep sky.json --grid map.size=256,512 -o out",
+                              "tune sky.json --max-error 0.01 -o out", "tune sky.json --budget-ms 5 -o out"}) {
+    const Result r = shadowlab(command);
+    EXPECT_EQ(r.code, 2) << command << "\n" << r.out << r.err;
+    ASSERT_GE(r.err.size(), message.size()) << command << "\n" << r.err;
+    EXPECT_EQ(r.err.substr(r.err.size() - message.size()), message) << command << "\n" << r.err;
+    EXPECT_FALSE(fs::exists(path("out/metrics.json"))) << command;
+    EXPECT_FALSE(fs::exists(path("out/results.json"))) << command;
+    EXPECT_EQ(r.out.find("nothing fits"), std::string::npos) << command << "\n" << r.out;
+    fs::remove_all(path("out"));
+  }
 }
 
 TEST_F(CompareCli, RunCountsFootprintsAtTheCap) {

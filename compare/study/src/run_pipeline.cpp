@@ -83,7 +83,33 @@ class EntryLock {
 
 }  // namespace
 
+namespace {
+
+// A camera whose every pixel misses the geometry has nothing to compare, whatever the method: bad
+// input, the same exit 2 and message from every command that compares a scene through the cache
+// (run, sweep, tune, stability), before any raster work. (A comparison that scores no pixel because
+// the renderers disagree on every surface is a result, not this: the row says nothing_compared.)
+void checkCameraSeesSurface(const Scene& scene, const Frame& reference) {
+  if (!reference.has("hit")) return;
+  for (float hit : reference.get("hit"))
+    if (hit > 0.0f) return;
+  throw InputError(formatError(scene.path, "/camera",
+                               "scene \"" + scene.name + "\": the camera sees no surface (all " +
+                                   std::to_string(reference.pixelCount()) +
+                                   " pixels of the reference miss the geometry: sky, or only zero-area triangles); "
+                                   "expected a camera that sees part of the scene"));
+}
+
+}  // namespace
+
 Frame ReferenceCache::get(const Scene& scene, const ReferenceOptions& requested, bool* traced, ReferenceStats* stats) {
+  Frame frame = getUnchecked(scene, requested, traced, stats);
+  checkCameraSeesSurface(scene, frame);
+  return frame;
+}
+
+Frame ReferenceCache::getUnchecked(const Scene& scene, const ReferenceOptions& requested, bool* traced,
+                                   ReferenceStats* stats) {
   ReferenceOptions options = requested;
   options.channels = ReferenceChannels::Compare;  // what compare and stability read (reference/README.md)
   const std::string path = dir_ + "/" + referenceHash(scene, options) + ".exr";

@@ -152,6 +152,8 @@ std::string biasNeighbours(const TunePlan& plan, const TuneResult& r, const Tune
 std::string choiceSentence(const TunePlan& plan, const TuneResult& r, const TuneChoice& c) {
   const bool target = !std::isnan(plan.spec.maxError);
   const std::string where = c.scope == "all" ? "" : c.scope + ": ";
+  if (c.evaluation < 0 && target)  // no configuration has a row on every scene: nothing to rank
+    return where + "no configuration was measured on every scene; nothing meets the target";
   if (c.evaluation < 0) {
     // --budget-ms with nothing inside it.
     double cheapest = std::numeric_limits<double>::infinity();
@@ -489,7 +491,7 @@ void writeTuneOutputs(TunePlan& plan, SweepRunner& runner, const TuneOptions& op
   const SweepSummary summary = runSweep(rows, runner, o);
   result.resultsJson = summary.resultsJson;
   result.reportHtml = summary.reportHtml;
-  result.notes = summary.notes;
+  result.notes.insert(result.notes.end(), summary.notes.begin(), summary.notes.end());
 
   // tuned.json: the robust choice (the best found when the target is not met) as a method file.
   if (result.robust.evaluation >= 0) {
