@@ -11,7 +11,9 @@
 #include <vector>
 
 #include "command.h"
+#include "interrupt.h"
 #include "job_limits.h"
+#include "shadowlab/compare/interrupt_cleanup.h"
 #include "shadowlab/compare/set_arguments.h"
 #include "shadowlab/reference/reference.h"
 #include "shadowlab/scenes/error.h"
@@ -32,6 +34,7 @@ struct Options {
 };
 
 int run(const Options& options) {
+  shadowlab::app::cleanUpOnSignal("reference");
   using Clock = std::chrono::steady_clock;
   const auto start = Clock::now();
   // Every argument is checked before anything is traced or written.
@@ -52,7 +55,9 @@ int run(const Options& options) {
   const shadowlab::ReferenceChannels channelSet =
       options.allChannels ? shadowlab::ReferenceChannels::All : shadowlab::ReferenceChannels::Compare;
   shadowlab::app::checkMemory("reference", shadowlab::app::referenceJobMemory(scene, channelSet), options.maxMemoryGiB);
+  const std::string created = shadowlab::app::firstMissingFolder(options.outDir);
   shadowlab::OutputFolder out(options.outDir);  // an unusable -o fails here, before the trace
+  if (!created.empty()) shadowlab::registerInterruptPath(created);  // until out.keep()
   const auto loaded = Clock::now();
 
   shadowlab::ReferenceOptions referenceOptions;
@@ -121,6 +126,7 @@ int run(const Options& options) {
   };
   shadowlab::writeJsonAtomic(jsonPath, report);
   out.keep();
+  if (!created.empty()) shadowlab::unregisterInterruptPath(created);
   std::printf("reference: %s %dx%d spp %d: %.3f Mrays in %.3f s (%.1f Mrays/s), build %.3f s, total %.3f s -> %s\n",
               scene.name.c_str(), frame.width, frame.height, options.spp,
               double(stats.primaryRays + stats.shadowRays) * 1e-6, stats.traceSeconds, stats.mraysPerS(),

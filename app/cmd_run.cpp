@@ -8,7 +8,9 @@
 #include <memory>
 
 #include "command.h"
+#include "interrupt.h"
 #include "job_limits.h"
+#include "shadowlab/compare/interrupt_cleanup.h"
 #include "shadowlab/compare/run_pipeline.h"
 #include "shadowlab/compare/results.h"
 #include "shadowlab/compare/set_arguments.h"
@@ -38,6 +40,7 @@ struct Options {
 };
 
 int run(const Options& o) {
+  app::cleanUpOnSignal("run");
   // ---- inputs: every error surfaces before anything is traced or written -------------------
   const SetArguments set = applySetArguments(o.methodFile, o.sets);  // method keys and scene: values
   const Method& method = set.method;
@@ -64,7 +67,9 @@ int run(const Options& o) {
   precompileTechnique(method);  // a technique that does not compile: exit 2 before any output
   app::checkMemory("run", app::compareJobMemory(scene, method), o.maxMemoryGiB);
   // Every output location, before any work: a bad -o or --cache must not cost a trace first.
+  const std::string created = app::firstMissingFolder(o.outDir);
   OutputFolder out(o.outDir);
+  if (!created.empty()) registerInterruptPath(created);  // until out.keep()
   ReferenceCache cache(o.cacheDir);
   OutputFolder cacheFolder(cache.dir(), "--cache");
   cacheFolder.keep();  // a cache outlives the command
@@ -123,6 +128,7 @@ int run(const Options& o) {
   // metrics.json last: its presence means the run finished.
   writeMetricsJson((dir / "metrics.json").string(), row);
   out.keep();
+  if (!created.empty()) unregisterInterruptPath(created);
   const Metrics& m = r.metrics;
   const char* written = o.keepImages ? ", reference.exr, raster.exr" : "";
   if (m.nothingCompared()) {

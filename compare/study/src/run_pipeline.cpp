@@ -15,6 +15,7 @@
 #include "shadowlab/compare/run_pipeline.h"
 #include "shadowlab/compare/classify.h"
 #include "shadowlab/compare/frame_check.h"
+#include "shadowlab/compare/interrupt_cleanup.h"
 #include "shadowlab/scenes/error.h"
 #include "shadowlab/scenes/io.h"
 
@@ -66,11 +67,17 @@ class EntryLock {
     if (rc != 0) {
       ::close(fd_);
       fd_ = -1;
+      return;
     }
+    // Held: this process's file to remove if a signal ends it mid-trace (interrupt_cleanup.h). A
+    // process killed outright (SIGKILL) leaves the file, but not the lock: the kernel releases a
+    // dead process's flock, so the next run takes it at once, traces and removes the file.
+    registerInterruptPath(path_);
   }
   ~EntryLock() {
     if (fd_ < 0) return;
     ::unlink(path_.c_str());  // before the unlock: a newcomer then makes a fresh file, and finds the entry
+    unregisterInterruptPath(path_);
     ::close(fd_);
   }
   EntryLock(const EntryLock&) = delete;
