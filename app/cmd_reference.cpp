@@ -146,9 +146,12 @@ shadowlab::app::Registrar reg{
       sub->add_option("--set", options->sets, "scene:/json/pointer=value: override one scene value (repeatable)")
           ->allow_extra_args(false);
       sub->add_option("--spp", options->spp, "stratified samples per pixel, 1..1024 (fractional visibility)")
+          ->check(shadowlab::app::integerRange(shadowlab::kMinSpp, shadowlab::kMaxSpp, "reference samples per pixel"))
           ->capture_default_str();
       sub->add_option("--light-samples", options->lightSamples,
                       "samples of a sized light per pixel sample, 1..4096 (soft shadows; hard lights take none)")
+          ->check(shadowlab::app::integerRange(shadowlab::kMinLightSamples, shadowlab::kMaxLightSamples,
+                                               "samples of a sized light per pixel sample"))
           ->capture_default_str();
       sub->add_option("--threads", options->threads, "worker threads, 0 = all; results are identical for any value")
           ->capture_default_str();

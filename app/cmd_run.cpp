@@ -160,9 +160,13 @@ app::Registrar reg{"run", [](CLI::App& app) {
                                      "--set scene:/lights/0/elevation_deg=10)");
                      sub->add_option("--light", opts->light,
                                      "Light to render and compare (default: the scene's first)");
-                     sub->add_option("--spp", opts->spp, "Reference samples per pixel, 1..1024")->capture_default_str();
+                     sub->add_option("--spp", opts->spp, "Reference samples per pixel, 1..1024")
+                         ->check(app::integerRange(kMinSpp, kMaxSpp, "reference samples per pixel"))
+                         ->capture_default_str();
                      sub->add_option("--light-samples", opts->lightSamples,
                                      "Reference samples of a sized light per pixel sample, 1..4096")
+                         ->check(app::integerRange(kMinLightSamples, kMaxLightSamples,
+                                                   "samples of a sized light per pixel sample"))
                          ->capture_default_str();
                      sub->add_option("-o,--out", opts->outDir, "Output folder")->required();
                      app::addMaxMemoryOption(sub, &opts->maxMemoryGiB);

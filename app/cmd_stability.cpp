@@ -94,9 +94,9 @@ int run(const Options& o) {
     throw bad("--distance", "given with " + (lightPath ? std::string("--light-path") : "--path " + o.path) +
                                 "; expected it only with --path dolly");
   if (!std::isfinite(o.distanceWorld))
-    throw bad("--distance", "got " + std::to_string(o.distanceWorld) + "; expected a finite distance (world units)");
+    throw bad("--distance", "got " + numberText(o.distanceWorld) + "; expected a finite distance (world units)");
   if (!(std::isfinite(o.angleDeg) && std::abs(o.angleDeg) <= 360.0))
-    throw bad("--angle-deg", "got " + std::to_string(o.angleDeg) + "; expected a finite angle in -360..360 degrees");
+    throw bad("--angle-deg", "got " + numberText(o.angleDeg) + "; expected a finite angle in -360..360 degrees");
   std::vector<LightPathAxis> axes;
   for (const auto& text : o.lightPaths) axes.push_back(parseLightPath(text));
 
