@@ -8,6 +8,7 @@
 #include "command.h"
 #include "shadowlab/compare/config_name.h"
 #include "shadowlab/compare/compare.h"
+#include "shadowlab/compare/frame_check.h"
 #include "shadowlab/compare/results.h"
 #include "shadowlab/compare/timings.h"
 #include "shadowlab/scenes/error.h"
@@ -73,8 +74,8 @@ int run(const Options& o) {
     }
   }
   OutputFolder out(o.outDir);  // an unusable -o fails before the frames are read and compared
-  const Frame reference = readFrameExr(refPath);
-  const Frame raster = readFrameExr(rasPath);
+  const Frame reference = readFrameToCompare(refPath);
+  const Frame raster = readFrameToCompare(rasPath);
   CompareOptions options;
   options.light = o.light;
   options.boundaryTexels = o.boundaryTexels;

@@ -11,7 +11,9 @@
 #include <vector>
 
 #include "command.h"
+#include "interrupt.h"
 #include "job_limits.h"
+#include "shadowlab/compare/interrupt_cleanup.h"
 #include "shadowlab/compare/set_arguments.h"
 #include "shadowlab/reference/reference.h"
 #include "shadowlab/scenes/error.h"
@@ -32,6 +34,7 @@ struct Options {
 };
 
 int run(const Options& options) {
+  shadowlab::app::cleanUpOnSignal("reference");
   using Clock = std::chrono::steady_clock;
   const auto start = Clock::now();
   // Every argument is checked before anything is traced or written.
@@ -52,7 +55,9 @@ int run(const Options& options) {
   const shadowlab::ReferenceChannels channelSet =
       options.allChannels ? shadowlab::ReferenceChannels::All : shadowlab::ReferenceChannels::Compare;
   shadowlab::app::checkMemory("reference", shadowlab::app::referenceJobMemory(scene, channelSet), options.maxMemoryGiB);
+  const std::string created = shadowlab::app::firstMissingFolder(options.outDir);
   shadowlab::OutputFolder out(options.outDir);  // an unusable -o fails here, before the trace
+  if (!created.empty()) shadowlab::registerInterruptPath(created);  // until out.keep()
   const auto loaded = Clock::now();
 
   shadowlab::ReferenceOptions referenceOptions;
@@ -121,6 +126,7 @@ int run(const Options& options) {
   };
   shadowlab::writeJsonAtomic(jsonPath, report);
   out.keep();
+  if (!created.empty()) shadowlab::unregisterInterruptPath(created);
   std::printf("reference: %s %dx%d spp %d: %.3f Mrays in %.3f s (%.1f Mrays/s), build %.3f s, total %.3f s -> %s\n",
               scene.name.c_str(), frame.width, frame.height, options.spp,
               double(stats.primaryRays + stats.shadowRays) * 1e-6, stats.traceSeconds, stats.mraysPerS(),
@@ -140,9 +146,12 @@ shadowlab::app::Registrar reg{
       sub->add_option("--set", options->sets, "scene:/json/pointer=value: override one scene value (repeatable)")
           ->allow_extra_args(false);
       sub->add_option("--spp", options->spp, "stratified samples per pixel, 1..1024 (fractional visibility)")
+          ->check(shadowlab::app::integerRange(shadowlab::kMinSpp, shadowlab::kMaxSpp, "reference samples per pixel"))
           ->capture_default_str();
       sub->add_option("--light-samples", options->lightSamples,
                       "samples of a sized light per pixel sample, 1..4096 (soft shadows; hard lights take none)")
+          ->check(shadowlab::app::integerRange(shadowlab::kMinLightSamples, shadowlab::kMaxLightSamples,
+                                               "samples of a sized light per pixel sample"))
           ->capture_default_str();
       sub->add_option("--threads", options->threads, "worker threads, 0 = all; results are identical for any value")
           ->capture_default_str();

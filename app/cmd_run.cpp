@@ -8,7 +8,9 @@
 #include <memory>
 
 #include "command.h"
+#include "interrupt.h"
 #include "job_limits.h"
+#include "shadowlab/compare/interrupt_cleanup.h"
 #include "shadowlab/compare/run_pipeline.h"
 #include "shadowlab/compare/results.h"
 #include "shadowlab/compare/set_arguments.h"
@@ -38,6 +40,7 @@ struct Options {
 };
 
 int run(const Options& o) {
+  app::cleanUpOnSignal("run");
   // ---- inputs: every error surfaces before anything is traced or written -------------------
   const SetArguments set = applySetArguments(o.methodFile, o.sets);  // method keys and scene: values
   const Method& method = set.method;
@@ -64,7 +67,9 @@ int run(const Options& o) {
   precompileTechnique(method);  // a technique that does not compile: exit 2 before any output
   app::checkMemory("run", app::compareJobMemory(scene, method), o.maxMemoryGiB);
   // Every output location, before any work: a bad -o or --cache must not cost a trace first.
+  const std::string created = app::firstMissingFolder(o.outDir);
   OutputFolder out(o.outDir);
+  if (!created.empty()) registerInterruptPath(created);  // until out.keep()
   ReferenceCache cache(o.cacheDir);
   OutputFolder cacheFolder(cache.dir(), "--cache");
   cacheFolder.keep();  // a cache outlives the command
@@ -123,6 +128,7 @@ int run(const Options& o) {
   // metrics.json last: its presence means the run finished.
   writeMetricsJson((dir / "metrics.json").string(), row);
   out.keep();
+  if (!created.empty()) unregisterInterruptPath(created);
   const Metrics& m = r.metrics;
   const char* written = o.keepImages ? ", reference.exr, raster.exr" : "";
   if (m.nothingCompared()) {
@@ -154,9 +160,13 @@ app::Registrar reg{"run", [](CLI::App& app) {
                                      "--set scene:/lights/0/elevation_deg=10)");
                      sub->add_option("--light", opts->light,
                                      "Light to render and compare (default: the scene's first)");
-                     sub->add_option("--spp", opts->spp, "Reference samples per pixel, 1..1024")->capture_default_str();
+                     sub->add_option("--spp", opts->spp, "Reference samples per pixel, 1..1024")
+                         ->check(app::integerRange(kMinSpp, kMaxSpp, "reference samples per pixel"))
+                         ->capture_default_str();
                      sub->add_option("--light-samples", opts->lightSamples,
                                      "Reference samples of a sized light per pixel sample, 1..4096")
+                         ->check(app::integerRange(kMinLightSamples, kMaxLightSamples,
+                                                   "samples of a sized light per pixel sample"))
                          ->capture_default_str();
                      sub->add_option("-o,--out", opts->outDir, "Output folder")->required();
                      app::addMaxMemoryOption(sub, &opts->maxMemoryGiB);

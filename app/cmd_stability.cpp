@@ -31,6 +31,7 @@
 #include "shadowlab/scenes/io.h"
 #include "shadowlab/scenes/json_reader.h"
 #include "shadowlab/scenes/loader.h"
+#include "shadowlab/scenes/number_text.h"
 
 namespace {
 
@@ -94,9 +95,11 @@ int run(const Options& o) {
     throw bad("--distance", "given with " + (lightPath ? std::string("--light-path") : "--path " + o.path) +
                                 "; expected it only with --path dolly");
   if (!std::isfinite(o.distanceWorld))
-    throw bad("--distance", "got " + std::to_string(o.distanceWorld) + "; expected a finite distance (world units)");
+    throw bad("--distance",
+              "got " + shadowlab::numberText(o.distanceWorld) + "; expected a finite distance (world units)");
   if (!(std::isfinite(o.angleDeg) && std::abs(o.angleDeg) <= 360.0))
-    throw bad("--angle-deg", "got " + std::to_string(o.angleDeg) + "; expected a finite angle in -360..360 degrees");
+    throw bad("--angle-deg",
+              "got " + shadowlab::numberText(o.angleDeg) + "; expected a finite angle in -360..360 degrees");
   std::vector<LightPathAxis> axes;
   for (const auto& text : o.lightPaths) axes.push_back(parseLightPath(text));
 

@@ -45,8 +45,9 @@ int run(const Options& o) {
   if (!o.maxError.empty()) spec.maxError = parseTuneNumber("--max-error", o.maxError);
   if (!o.budgetMs.empty()) spec.budgetMs = parseTuneNumber("--budget-ms", o.budgetMs);
   for (const auto& m : o.maxRates) spec.maxRates.push_back(parseTuneMax(m));
-  if (!o.maxRates.empty() && o.maxError.empty())
-    throw InputError("--max: error: given without --max-error; expected --max-error E with it");
+  // --max alone is a target on those metrics; error_rate is then free: --max-error 1, a rate every
+  // row meets. (With --budget-ms, planTune refuses --max: a budget has no target.)
+  if (!o.maxRates.empty() && o.maxError.empty() && o.budgetMs.empty()) spec.maxError = 1.0;
   if (!o.keys.empty()) {
     size_t start = 0;
     while (true) {
@@ -122,8 +123,8 @@ app::Registrar reg{
                       "Target: error_rate <= E on every scene; the least estimated cost wins (exit 1 when no "
                       "configuration meets it)");
       sub->add_option("--max", opts->maxRates,
-                      "With --max-error: also METRIC <= V, e.g. acne_rate=0.0005 or penumbra_mae=0.02 (repeatable; "
-                      "compare/TUNE.md)")
+                      "Target: METRIC <= V on every scene, e.g. acne_rate=0.0005 or penumbra_mae=0.02 (repeatable; "
+                      "alone, or beside --max-error; compare/TUNE.md)")
           ->allow_extra_args(false);
       sub->add_option("--budget-ms", opts->budgetMs,
                       "Instead: the lowest worst-case error_rate whose ESTIMATED cost (the cost model of "

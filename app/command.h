@@ -13,12 +13,18 @@
 // Exit codes: 0 ok, 1 gate failed, 2 bad input or usage, 3 internal/driver failure.
 #include <signal.h>
 
+#include <cerrno>
+#include <climits>
+#include <cstdlib>
+
 #include <functional>
 #include <optional>
 #include <string>
 #include <vector>
 
 #include <CLI/CLI.hpp>
+
+#include "shadowlab/reference/reference.h"
 
 namespace shadowlab::app {
 
@@ -61,6 +67,24 @@ inline void installStopHandlers(void (*handler)(int)) {
   sigaction(SIGTERM, &sa, nullptr);
 }
 
+// A count option (--spp, --light-samples): text that is no int names the range ("--light-samples:
+// got 1e9; expected an integer 1..4096 (...)") where CLI11 alone says "Could not convert". A
+// validator runs on the text, before the conversion; an int outside lo..hi passes on to the
+// command's own check (checkSpp, checkLightSamples), whose message is the same.
+inline CLI::Validator integerRange(long long lo, long long hi, const std::string& what) {
+  return CLI::Validator(
+      [lo, hi, what](std::string& text) -> std::string {
+        errno = 0;
+        char* end = nullptr;
+        const long long v = std::strtoll(text.c_str(), &end, 10);
+        if (text.empty() || *end != '\0' || errno != 0 || v < INT_MIN || v > INT_MAX)
+          return "got " + text + "; expected an integer " + std::to_string(lo) + ".." + std::to_string(hi) + " (" +
+                 what + ")";
+        return "";
+      },
+      "");
+}
+
 // What the commands that run many configurations through the pipeline (sweep, tune) share: the
 // base method, the output folder, the light, the reference's samples, its cache and the device.
 // --gpu-timeout-s, on every command that renders (the same help everywhere; checkGpuTimeout in
@@ -89,9 +113,11 @@ inline void addStudyOptions(CLI::App* sub, StudyOptions& o, const std::string& w
   sub->add_option("-o,--out", o.outDir, "Output folder (running again continues an interrupted " + what + ")")
       ->required();
   sub->add_option("--light", o.light, "Light to render and compare (default: each scene's first)");
-  sub->add_option("--spp", o.spp, "Reference samples per pixel, 1..1024 (default 1)");
+  sub->add_option("--spp", o.spp, "Reference samples per pixel, 1..1024 (default 1)")
+      ->check(integerRange(kMinSpp, kMaxSpp, "reference samples per pixel"));
   sub->add_option("--light-samples", o.lightSamples,
-                  "Reference samples of a sized light per pixel sample, 1..4096 (default 64)");
+                  "Reference samples of a sized light per pixel sample, 1..4096 (default 64)")
+      ->check(integerRange(kMinLightSamples, kMaxLightSamples, "samples of a sized light per pixel sample"));
   sub->add_option("--cache", o.cacheDir,
                   "Reference cache folder (default: $SHADOWLAB_CACHE, else .shadowlab-cache beside the output folder)");
   sub->add_option("--device", o.device, "Vulkan device name substring (default: lavapipe)");

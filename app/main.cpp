@@ -3,12 +3,16 @@
 //   shadowlab <subcommand>: error: what was found; expected what
 //   file: place: error: ...      (a file, or an option such as --spp, and the place in it)
 #include <fcntl.h>
+#include <pthread.h>
+#include <signal.h>
 #include <unistd.h>
 
 #include <algorithm>
 #include <cstdio>
 #include <cstring>
 #include <exception>
+#include <filesystem>
+#include <thread>
 #include <map>
 
 #include <malloc.h>
@@ -16,6 +20,8 @@
 #include <unistd.h>
 
 #include "command.h"
+#include "interrupt.h"
+#include "shadowlab/compare/interrupt_cleanup.h"
 #include "shadowlab/raster/raster.h"
 #include "shadowlab/scenes/error.h"
 #include "shadowlab_version.h"
@@ -36,6 +42,36 @@ Verbosity verbosity() { return gVerbosity; }
 std::string versionString() {
   const std::string describe = kGitDescribe;
   return std::string("shadowlab ") + kProjectVersion + (describe.empty() ? "" : " (git " + describe + ")");
+}
+
+void cleanUpOnSignal(const std::string& command) {
+  sigset_t set;
+  sigemptyset(&set);
+  sigaddset(&set, SIGINT);
+  sigaddset(&set, SIGTERM);
+  if (pthread_sigmask(SIG_BLOCK, &set, nullptr) != 0) return;
+  std::thread([set, command] {
+    int signo = 0;
+    if (sigwait(&set, &signo) != 0) return;
+    const int removed = removeInterruptPaths();
+    const std::string line = "shadowlab " + command + ": interrupted (" + (signo == SIGINT ? "SIGINT" : "SIGTERM") +
+                             "): removed " + std::to_string(removed) +
+                             (removed == 1 ? " unfinished output" : " unfinished outputs") + "\n";
+    if (::write(STDERR_FILENO, line.data(), line.size()) < 0) _exit(128 + signo);
+    _exit(128 + signo);  // no exit handlers: the other threads may be mid-trace
+  }).detach();
+}
+
+std::string firstMissingFolder(const std::string& dir) {
+  std::error_code ec;
+  std::filesystem::path p = std::filesystem::absolute(dir, ec), missing;
+  if (ec) return "";
+  while (!p.empty() && !std::filesystem::exists(p, ec)) {
+    missing = p;
+    if (p == p.parent_path()) break;
+    p = p.parent_path();
+  }
+  return missing.string();
 }
 
 namespace {

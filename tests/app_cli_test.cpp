@@ -256,3 +256,41 @@ TEST(AppCli, AllocationFailureIsAPlainMessage) {
   }
   fs::remove_all(dir);
 }
+
+// A count that is no integer names the range, as an integer out of it does ("Could not convert"
+// said neither), on every command that takes it.
+TEST(AppCli, SampleCountsThatAreNoIntegerNameTheRange) {
+  const fs::path dir = freshTempDir("app_cli_counts");
+  for (const std::string& command : {std::string("reference grazing"), std::string("run grazing"),
+                                     std::string("sweep grazing"), std::string("tune grazing --max-error 0.1")}) {
+    for (const char* value : {"1e9", "abc", "99999999999"}) {
+      const CliRun r =
+          runShadowlab(command + " --light-samples " + value + " -o out", dir, "cd '" + dir.string() + "' && ");
+      EXPECT_EQ(r.code, 2) << command << " " << value << "\n" << r.err;
+      EXPECT_NE(r.err.find(std::string("--light-samples: got ") + value + "; expected an integer 1..4096"),
+                std::string::npos)
+          << command << "\n"
+          << r.err;
+      EXPECT_EQ(r.err.find("Could not convert"), std::string::npos) << r.err;
+    }
+    const CliRun spp = runShadowlab(command + " --spp 2.5 -o out", dir, "cd '" + dir.string() + "' && ");
+    EXPECT_EQ(spp.code, 2) << spp.err;
+    EXPECT_NE(spp.err.find("--spp: got 2.5; expected an integer 1..1024"), std::string::npos) << spp.err;
+    EXPECT_FALSE(fs::exists(dir / "out"));
+  }
+  fs::remove_all(dir);
+}
+
+// A sweep file that names a scene that does not exist: the message names the sweep file and the
+// JSON pointer of the name, where it named only the resolved path.
+TEST(AppCli, SweepFileNamingAMissingSceneNamesFileAndPointer) {
+  const fs::path dir = freshTempDir("app_cli_sweep_scene");
+  std::ofstream(dir / "s.sweep.json") << R"({"scenes": ["grazing", "nope"], "grid": {"map.size": [256]}})";
+  const CliRun r = runShadowlab("sweep --sweep s.sweep.json -o out", dir, "cd '" + dir.string() + "' && ");
+  EXPECT_EQ(r.code, 2) << r.err;
+  EXPECT_EQ(r.err.rfind("s.sweep.json: /scenes/1: error: scene \"nope\" not found (", 0), 0u) << r.err;
+  EXPECT_NE(r.err.find("expected a scene file or a bundled scene name: sphere_on_plane, grazing"), std::string::npos)
+      << r.err;
+  EXPECT_FALSE(fs::exists(dir / "out"));
+  fs::remove_all(dir);
+}

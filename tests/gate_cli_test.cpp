@@ -466,6 +466,23 @@ TEST_F(GateCli, BaselineThatComparesNothingExits2) {
   EXPECT_FALSE(fs::exists(dir_ / "new_base.json"));
 }
 
+TEST_F(GateCli, BaselineRowWithNoMetricsExits2) {
+  // A baseline row with "metrics": {} compares nothing: every current metric would be "new" and the
+  // gate would pass whatever the current run measured.
+  const std::string empty =
+      current("empty.json", [](nlohmann::json& d) { d["rows"][1]["metrics"] = nlohmann::json::object(); });
+  CliRun r = gate(path("base.json") + " --baseline " + empty);
+  EXPECT_EQ(r.code, 2) << r.out << r.err;
+  EXPECT_EQ(r.err, empty +
+                       ": /rows/1/metrics: error: row \"grazing | default | sun\" has no metrics (got {}); expected "
+                       "the metrics of a run to gate against\n");
+  EXPECT_EQ(r.out.find("PASS"), std::string::npos) << r.out;
+  // Nor does such a file become a baseline.
+  CliRun update = gate(empty + " --baseline " + path("new_base.json") + " --update-baseline");
+  EXPECT_EQ(update.code, 2) << update.out << update.err;
+  EXPECT_FALSE(fs::exists(dir_ / "new_base.json"));
+}
+
 TEST_F(GateCli, AllFootprintsCappedLeavesTheStatisticsUndefinedNotNan) {
   // Every compared pixel's m at the cap: m_median/m_p95/m_max are null by definition, which is
   // no NaN; null in both passes, m_capped gates the change.

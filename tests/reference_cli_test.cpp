@@ -127,6 +127,47 @@ TEST_F(ReferenceCli, MalformedSceneExitsTwoAndLeavesExistingOutputsAlone) {
   EXPECT_FALSE(fs::exists(out / "reference.png"));
 }
 
+// A sphere light whose sphere cuts or encloses geometry has no truth to give (soft_post at radius
+// 5: a bright disc on the ground, the post's shadow gone; at 1e9 every pixel lit): refused at load,
+// naming the light's radius and the first object the growing sphere reaches, and nothing written.
+TEST_F(ReferenceCli, SphereLightThatReachesGeometryExitsTwoNamingTheObject) {
+  const fs::path out = dir_ / "out";
+  for (const char* radius : {"5", "1e9"}) {
+    SCOPED_TRACE(radius);
+    const RunResult r = runShadowlab("reference soft_post --set scene:/lights/0/radius=" + std::string(radius) +
+                                     " -o '" + out.string() + "'");
+    EXPECT_EQ(r.exitCode, 2) << r.output;
+    // The post's top corner (0.075, 2.5, 0.075) is 2.6098 from the light's centre (2, 4, 1).
+    EXPECT_NE(r.output.find("/lights/0/radius"), std::string::npos) << r.output;
+    EXPECT_NE(r.output.find("; expected a radius below 2.6098"), std::string::npos) << r.output;
+    EXPECT_NE(r.output.find("its sphere reaches object \"post\" at distance 2.6098"), std::string::npos) << r.output;
+    EXPECT_FALSE(fs::exists(out));
+  }
+  // A light 3 above a ground plane: the ground at exactly 3; 2.99 passes.
+  const fs::path scene = dir_ / "bulb.json";
+  std::ofstream(scene) << R"({
+    "camera": {"position": [0, 5, 9], "look_at": [0, 0, 0], "vfov_deg": 45, "width": 32, "height": 18},
+    "objects": [{"type": "plane", "name": "ground", "size": [40, 40]}],
+    "lights": [{"type": "point", "name": "bulb", "position": [0, 3, 0], "radius": 3}]
+  })";
+  const RunResult ground = runShadowlab("reference '" + scene.string() + "' -o '" + out.string() + "'");
+  EXPECT_EQ(ground.exitCode, 2) << ground.output;
+  EXPECT_NE(ground.output.find(scene.string() +
+                               ": /lights/0/radius: error: got 3; expected a radius below 3: its sphere reaches "
+                               "object \"ground\" at distance 3 from the centre (a sphere light must lie outside "
+                               "every object; radius 0..1e30)"),
+            std::string::npos)
+      << ground.output;
+  const RunResult clear =
+      runShadowlab("reference '" + scene.string() + "' --set scene:/lights/0/radius=2.99 -o '" + out.string() + "'");
+  EXPECT_EQ(clear.exitCode, 0) << clear.output;
+  // Beyond the float range the message states the upper limit.
+  const RunResult huge = runShadowlab("reference '" + scene.string() + "' --set scene:/lights/0/radius=1e37 -o '" +
+                                      (dir_ / "o2").string() + "'");
+  EXPECT_EQ(huge.exitCode, 2) << huge.output;
+  EXPECT_NE(huge.output.find("expected a radius 0..1e30"), std::string::npos) << huge.output;
+}
+
 TEST_F(ReferenceCli, GoodRunWritesConsistentOutputs) {
   const std::string scenePath = writeSmallScene();
   const fs::path out = dir_ / "nested" / "out";

@@ -25,6 +25,7 @@
 #include "shadowlab/scenes/camera_path.h"
 #include "shadowlab/scenes/error.h"
 #include "shadowlab/scenes/io.h"
+#include "shadowlab/scenes/number_text.h"
 #include "shadowlab/scenes/polygon.h"
 
 #ifndef SHADOWLAB_SOURCE_DIR
@@ -857,6 +858,53 @@ void readObjects(const Reader& r, const Node& root, const fs::path& dir, Scene& 
   }
 }
 
+// The closest point of triangle (a, b, c) to p (Ericson, Real-Time Collision Detection, 5.1.5),
+// in double: the distance decides whether a sphere light touches geometry.
+glm::dvec3 closestPointOnTriangle(const glm::dvec3& p, const glm::dvec3& a, const glm::dvec3& b, const glm::dvec3& c) {
+  const glm::dvec3 ab = b - a, ac = c - a, ap = p - a;
+  const double d1 = glm::dot(ab, ap), d2 = glm::dot(ac, ap);
+  if (d1 <= 0 && d2 <= 0) return a;
+  const glm::dvec3 bp = p - b;
+  const double d3 = glm::dot(ab, bp), d4 = glm::dot(ac, bp);
+  if (d3 >= 0 && d4 <= d3) return b;
+  const double vc = d1 * d4 - d3 * d2;
+  if (vc <= 0 && d1 >= 0 && d3 <= 0) return a + ab * (d1 / (d1 - d3));
+  const glm::dvec3 cp = p - c;
+  const double d5 = glm::dot(ab, cp), d6 = glm::dot(ac, cp);
+  if (d6 >= 0 && d5 <= d6) return c;
+  const double vb = d5 * d2 - d1 * d6;
+  if (vb <= 0 && d2 >= 0 && d6 <= 0) return a + ac * (d2 / (d2 - d6));
+  const double va = d3 * d6 - d5 * d4;
+  if (va <= 0 && (d4 - d3) >= 0 && (d5 - d6) >= 0) return b + (c - b) * ((d4 - d3) / ((d4 - d3) + (d5 - d6)));
+  const double denom = 1.0 / (va + vb + vc);
+  return a + ab * (vb * denom) + ac * (vc * denom);
+}
+
+// A sphere light is a light source outside the scene: one whose sphere cuts or encloses geometry
+// has surface points inside the light, whose truth the reference cannot give (its samples on the
+// sphere lie behind or inside that geometry: a bright disc where the sphere cuts the ground, every
+// pixel lit once it encloses everything). Refused: the radius must stay below the distance from
+// the light's centre to the nearest triangle of any object (every object: one that casts no
+// shadow is still lit by it).
+void checkSphereLightClear(const Reader& r, const Node& radiusNode, const Light& light, const Scene& scene) {
+  const glm::dvec3 centre(light.position);
+  double nearest = std::numeric_limits<double>::infinity();
+  const Object* reached = nullptr;
+  for (const Object& o : scene.objects)
+    for (const glm::uvec3& t : o.triangles) {
+      const glm::dvec3 q = closestPointOnTriangle(centre, glm::dvec3(o.positions[t.x]), glm::dvec3(o.positions[t.y]),
+                                                  glm::dvec3(o.positions[t.z]));
+      const double d = glm::length(q - centre);
+      if (d < nearest) nearest = d, reached = &o;
+    }
+  if (!reached || double(light.radius) < nearest) return;
+  const std::string what = nearest == 0.0 ? "its centre lies on object \"" + reached->name + "\""
+                                          : "its sphere reaches object \"" + reached->name + "\" at distance " +
+                                                numberText(nearest) + " from the centre";
+  r.expected(radiusNode, "a radius below " + numberText(nearest) + ": " + what +
+                             " (a sphere light must lie outside every object; radius 0..1e30)");
+}
+
 void readLights(const Reader& r, const Node& root, Scene& scene) {
   Node ls = r.child(root, "lights");
   if (!ls) return;
@@ -915,8 +963,10 @@ void readLights(const Reader& r, const Node& root, Scene& scene) {
     } else {
       light.position = r.vec3(r.require(l, "position", "3 numbers (x, y, z)"));
       if (Node n = r.child(l, "near")) light.nearPlane = float(r.positive(n));
-      if (Node n = r.child(l, "radius"))
-        light.radius = float(r.range(n, 0, false, 1e30, false, "a radius >= 0 (a sphere light; 0: a hard light)"));
+      if (Node n = r.child(l, "radius")) {
+        light.radius = float(r.range(n, 0, false, 1e30, false, "a radius 0..1e30 (a sphere light; 0: a hard light)"));
+        if (light.radius > 0.0f) checkSphereLightClear(r, n, light, scene);
+      }
       if (light.type == LightType::Spot) {
         Node d = r.child(l, "direction"), at = r.child(l, "look_at");
         if (d && at) r.fail(d.ptr, "both direction and look_at given; expected one of them");

@@ -21,6 +21,7 @@
 
 #include "shadowlab/compare/classify.h"
 #include "shadowlab/scenes/error.h"
+#include "shadowlab/scenes/number_text.h"
 #include "shadowlab/scenes/method.h"
 
 namespace shadowlab {
@@ -380,7 +381,7 @@ Channels readChannels(const Frame& reference, const Frame& raster, const Compare
     }
   }
   if (!(options.boundaryTexels >= 0.0f && std::isfinite(options.boundaryTexels))) {
-    throw InputError("compare: error: boundaryTexels is " + std::to_string(options.boundaryTexels) +
+    throw InputError("compare: error: boundaryTexels is " + numberText(options.boundaryTexels) +
                      "; expected a finite number >= 0");
   }
   const std::string light = resolveCompareLight(reference, raster, options);

@@ -454,6 +454,15 @@ GateResult runGate(const ResultFile& current, const ResultFile& baseline, const 
                                      "row \"" + baseline.rows[b].key() +
                                          "\" compares nothing (pixels_compared 0); expected a baseline whose camera "
                                          "sees a surface both renderers agree on"));
+  // A baseline row with no metric gates nothing: every current metric would merely be "new".
+  for (size_t b = 0; b < baseline.rows.size(); ++b) {
+    std::map<std::string, nlohmann::json> flat;
+    flatten(baseline.rows[b].metrics, "", flat);
+    if (flat.empty())
+      problems.push_back(formatError(baseline.pathOf(b), baseline.pointers[b] + "/metrics",
+                                     "row \"" + baseline.rows[b].key() +
+                                         "\" has no metrics (got {}); expected the metrics of a run to gate against"));
+  }
   throwProblems(problems);
   // A current row that compared nothing fails, whatever the baseline says: no pixel is no pass.
   auto nothingCompared = [&](size_t i, const nlohmann::json& baselineCount) {

@@ -14,6 +14,8 @@
 
 #include "shadowlab/compare/run_pipeline.h"
 #include "shadowlab/compare/classify.h"
+#include "shadowlab/compare/frame_check.h"
+#include "shadowlab/compare/interrupt_cleanup.h"
 #include "shadowlab/scenes/error.h"
 #include "shadowlab/scenes/io.h"
 
@@ -35,7 +37,9 @@ std::optional<Frame> loadEntry(const std::string& path, const Scene& scene) {
   std::error_code ec;
   if (!std::filesystem::is_regular_file(path, ec)) return std::nullopt;
   try {
-    Frame cached = readFrameExr(path);
+    // A cached frame is read through compare's door like any other (a NaN in a damaged entry is
+    // traced again, never compared).
+    Frame cached = readFrameToCompare(path);
     auto it = cached.meta.find("scene_hash");
     if (it == cached.meta.end() || !it->is_string() || it->get<std::string>() != scene.hash) return std::nullopt;
     for (const std::string& name : referenceChannelNames(scene, ReferenceChannels::Compare))
@@ -63,11 +67,17 @@ class EntryLock {
     if (rc != 0) {
       ::close(fd_);
       fd_ = -1;
+      return;
     }
+    // Held: this process's file to remove if a signal ends it mid-trace (interrupt_cleanup.h). A
+    // process killed outright (SIGKILL) leaves the file, but not the lock: the kernel releases a
+    // dead process's flock, so the next run takes it at once, traces and removes the file.
+    registerInterruptPath(path_);
   }
   ~EntryLock() {
     if (fd_ < 0) return;
     ::unlink(path_.c_str());  // before the unlock: a newcomer then makes a fresh file, and finds the entry
+    unregisterInterruptPath(path_);
     ::close(fd_);
   }
   EntryLock(const EntryLock&) = delete;
@@ -80,7 +90,33 @@ class EntryLock {
 
 }  // namespace
 
+namespace {
+
+// A camera whose every pixel misses the geometry has nothing to compare, whatever the method: bad
+// input, the same exit 2 and message from every command that compares a scene through the cache
+// (run, sweep, tune, stability), before any raster work. (A comparison that scores no pixel because
+// the renderers disagree on every surface is a result, not this: the row says nothing_compared.)
+void checkCameraSeesSurface(const Scene& scene, const Frame& reference) {
+  if (!reference.has("hit")) return;
+  for (float hit : reference.get("hit"))
+    if (hit > 0.0f) return;
+  throw InputError(formatError(scene.path, "/camera",
+                               "scene \"" + scene.name + "\": the camera sees no surface (all " +
+                                   std::to_string(reference.pixelCount()) +
+                                   " pixels of the reference miss the geometry: sky, or only zero-area triangles); "
+                                   "expected a camera that sees part of the scene"));
+}
+
+}  // namespace
+
 Frame ReferenceCache::get(const Scene& scene, const ReferenceOptions& requested, bool* traced, ReferenceStats* stats) {
+  Frame frame = getUnchecked(scene, requested, traced, stats);
+  checkCameraSeesSurface(scene, frame);
+  return frame;
+}
+
+Frame ReferenceCache::getUnchecked(const Scene& scene, const ReferenceOptions& requested, bool* traced,
+                                   ReferenceStats* stats) {
   ReferenceOptions options = requested;
   options.channels = ReferenceChannels::Compare;  // what compare and stability read (reference/README.md)
   const std::string path = dir_ + "/" + referenceHash(scene, options) + ".exr";

@@ -194,6 +194,7 @@ void loadSweepFile(const std::string& path, SweepSpec& spec) {
     if (k == "scenes") {
       if (v.is_string()) {
         spec.scenes.push_back(v.get<std::string>());
+        spec.sceneOrigins[spec.scenes.back()] = path + ": " + ptr;
         continue;
       }
       if (!v.is_array()) fail(ptr, "got " + jsonTypeName(v) + "; expected an array of scene names or paths");
@@ -206,6 +207,7 @@ void loadSweepFile(const std::string& path, SweepSpec& spec) {
         bool isPath = s.find('/') != std::string::npos || (s.size() > 5 && s.substr(s.size() - 5) == ".json");
         if (isPath && s[0] != '/') s = baseDir + s;
         spec.scenes.push_back(s);
+        spec.sceneOrigins[s] = path + ": " + ptr + "/" + std::to_string(i);
       }
     } else if (k == "grid") {
       // One grid object, or an array of them: a union of grids, each block expanded on its own.
@@ -520,6 +522,14 @@ SweepPlan planSweep(const SweepSpec& spec) {
   std::set<std::string> seenPaths;
   for (const auto& s : requested) {
     std::string p = resolveScenePath(s);
+    std::error_code missing;
+    auto origin = spec.sceneOrigins.find(s);
+    if (origin != spec.sceneOrigins.end() && !std::filesystem::is_regular_file(p, missing)) {
+      std::string names;
+      for (const std::string& n : bundledSceneNames()) names += (names.empty() ? "" : ", ") + n;
+      throw InputError(origin->second + ": error: scene \"" + s + "\" not found (" + p +
+                       "); expected a scene file or a bundled scene name: " + names);
+    }
     if (!seenPaths.insert(p).second)
       throw InputError(
           formatError("shadowlab sweep", "", "scene \"" + s + "\" is given twice; expected each scene once"));

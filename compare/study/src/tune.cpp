@@ -15,6 +15,7 @@
 #include "tune_output.h"
 #include "shadowlab/scenes/error.h"
 #include "shadowlab/scenes/io.h"
+#include "shadowlab/scenes/number_text.h"
 
 namespace shadowlab {
 namespace {
@@ -187,6 +188,7 @@ class Engine {
       }
     }
     if (missing.empty()) {
+      checkTargetsConstrain(ev);
       progressLine(e, scenes, false);
       return;
     }
@@ -215,7 +217,33 @@ class Engine {
     result_.rowsResumed += summary.resumed;
     runNow_ += summary.ran;
     if (summary.interrupted) throw Interrupted{};
+    checkTargetsConstrain(ev);
     progressLine(e, scenes, summary.ran > 0);
+  }
+
+  // A --max target on a region (penumbra_mae, ...) constrains no scene whose truth has no pixel of
+  // that region (tuneTargetVacuous): one that constrains none of the scenes would be met by any
+  // configuration, a target in name only, so it is refused; one that skips some scenes is said.
+  // The regions are the truth's, the same for every configuration: the first configuration with a
+  // row on every scene decides, before the search spends more rows.
+  void checkTargetsConstrain(const TuneEvaluation& ev) {
+    if (targetsChecked_ || ev.rows.size() < sceneJobs_.size()) return;
+    targetsChecked_ = true;
+    for (const auto& [key, limit] : plan_.spec.maxRates) {
+      std::string skipped, pixels;
+      size_t count = 0;
+      for (const auto& r : kVisRegions)
+        if (key == r.maeMetric || key == r.rmseMetric) pixels = r.pixelsMetric;
+      for (const auto& [s, row] : ev.rows)
+        if (tuneTargetVacuous(row.metrics, key)) skipped += (count++ ? ", " : "") + plan_.sweep.sceneNames[s];
+      if (count == 0) continue;
+      const std::string why = " (" + pixels + " 0: their truth has no pixel of that region)";
+      if (count == ev.rows.size())
+        throw InputError("--max " + key + "=" + numberText(limit) +
+                         ": error: constrains none of the scenes: " + skipped + why +
+                         "; expected a target some scene measures (a penumbra needs a sized light, scenes/FORMAT.md)");
+      notes_.push_back("--max " + key + " constrains nothing on " + skipped + why + ": met there by definition");
+    }
   }
 
   void progressLine(size_t e, const std::vector<size_t>& scenes, bool ran) {
@@ -484,6 +512,10 @@ class Engine {
   std::map<std::string, SweepJournalRow> journal_;
   std::string device_;
   bool deviceKnown_ = false;
+  bool targetsChecked_ = false;
+
+ public:
+  std::vector<std::string> notes_;  // said once the search is done (checkTargetsConstrain)
 };
 
 // The dense grid of the plan's keys and values through the sweep loop (same journal: the rows the
@@ -611,6 +643,7 @@ TuneResult runTune(TunePlan& plan, SweepRunner& runner, const TuneOptions& optio
     result.interrupted = true;
     return result;
   }
+  result.notes = engine.notes_;
   writeTuneOutputs(plan, runner, options, result);
   return result;
 }

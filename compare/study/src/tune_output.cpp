@@ -149,9 +149,23 @@ std::string biasNeighbours(const TunePlan& plan, const TuneResult& r, const Tune
   return out;
 }
 
+// --max alone leaves error_rate free (--max-error 1): the target is its --max limits alone.
+bool errorRateFree(const TunePlan& plan) { return plan.spec.maxError >= 1.0 && !plan.spec.maxRates.empty(); }
+
+// "0.002 (acne_rate 0.0005)", or with error_rate free "penumbra_mae 0.3".
+std::string targetText(const TunePlan& plan) {
+  std::string limit = errorRateFree(plan) ? "" : fmt("%g", plan.spec.maxError);
+  for (const auto& [k, v] : plan.spec.maxRates)
+    limit += errorRateFree(plan) ? (limit.empty() ? "" : ", ") + k + " " + fmt("%g", v)
+                                 : " (" + k + " " + fmt("%g", v) + ")";
+  return limit;
+}
+
 std::string choiceSentence(const TunePlan& plan, const TuneResult& r, const TuneChoice& c) {
   const bool target = !std::isnan(plan.spec.maxError);
   const std::string where = c.scope == "all" ? "" : c.scope + ": ";
+  if (c.evaluation < 0 && target)  // no configuration has a row on every scene: nothing to rank
+    return where + "no configuration was measured on every scene; nothing meets the target";
   if (c.evaluation < 0) {
     // --budget-ms with nothing inside it.
     double cheapest = std::numeric_limits<double>::infinity();
@@ -173,15 +187,14 @@ std::string choiceSentence(const TunePlan& plan, const TuneResult& r, const Tune
     std::string failing;
     for (size_t s : c.scenes)
       if (!tuneMeetsTarget(plan, e, {s})) failing += (failing.empty() ? "" : ", ") + plan.sweep.sceneNames[s];
-    std::string limit = fmt("%g", plan.spec.maxError);
-    for (const auto& [k, v] : plan.spec.maxRates) limit += " (" + k + " " + fmt("%g", v) + ")";
+    std::string limit = targetText(plan);
     return where + "no setting meets " + limit + " on " + failing + "; best found " + fmt("%.3g", c.worstError) + " (" +
            c.worstScene + ") with " + describe(plan, e) + ", " + costs;
   }
-  std::string s =
-      where + describe(plan, e) + ": error " + percent(c.worstError) + " at most (" + c.worstScene + ")" +
-      (target ? ", target " + percent(plan.spec.maxError) : ", budget " + fmt("%g", plan.spec.budgetMs) + " ms") +
-      ", " + costs;
+  std::string s = where + describe(plan, e) + ": error " + percent(c.worstError) + " at most (" + c.worstScene + ")" +
+                  (target ? ", target " + (errorRateFree(plan) ? targetText(plan) : percent(plan.spec.maxError))
+                          : ", budget " + fmt("%g", plan.spec.budgetMs) + " ms") +
+                  ", " + costs;
   const std::string n = biasNeighbours(plan, r, e, c.scenes);
   if (!n.empty()) s += "; " + n;
   return s;
@@ -475,7 +488,7 @@ void writeTuneOutputs(TunePlan& plan, SweepRunner& runner, const TuneOptions& op
   }
   result.resultsJson = summary.resultsJson;
   result.reportHtml = summary.reportHtml;
-  result.notes = summary.notes;
+  result.notes.insert(result.notes.end(), summary.notes.begin(), summary.notes.end());
 
   // Sentences and the verdict.
   result.robust.sentence = choiceSentence(plan, result, result.robust);

@@ -11,6 +11,7 @@
 #include "shadowlab/compare/classes.h"
 #include "shadowlab/compare/tune.h"
 #include "shadowlab/scenes/error.h"
+#include "shadowlab/scenes/number_text.h"
 #include "shadowlab/scenes/technique.h"
 
 namespace shadowlab {
@@ -80,7 +81,9 @@ std::string canonicalFor(const Method& base, const std::string& key, const std::
   return canonicalValueText(j.at(key));
 }
 
-std::string numberText(double v) {
+// A grid value's text (%.9g), part of configuration names: unchanged, so that names and resume
+// keys stay the same. Messages use numberText (number_text.h), the shortest round-trip text.
+std::string gridValueText(double v) {
   char b[64];
   std::snprintf(b, sizeof b, "%.9g", v);
   return b;
@@ -114,12 +117,12 @@ std::vector<std::string> techniqueRange(const Method& base, const std::string& k
   if (integral) {
     if (std::floor(hi) - std::ceil(lo) >= 64)
       fail("range " + range + " holds more than 64 integers; expected at most 64");
-    for (double v = std::ceil(lo); v <= hi; ++v) raw.push_back(numberText(v));
+    for (double v = std::ceil(lo); v <= hi; ++v) raw.push_back(gridValueText(v));
     if (raw.empty()) fail("empty range " + range + ": no integer between; expected at least one");
   } else {
     if (counted && (n != std::floor(n) || n < 1 || n > 64))
       fail("got " + parts[2] + " intervals; expected an integer 1..64");
-    for (int i = 0; i <= int(n); ++i) raw.push_back(numberText(lo + (hi - lo) * i / n));
+    for (int i = 0; i <= int(n); ++i) raw.push_back(gridValueText(lo + (hi - lo) * i / n));
   }
   return raw;
 }
@@ -149,7 +152,7 @@ std::vector<std::string> expandRange(const TunableKey& info, const Method& base,
       if (counted && (n != std::floor(n) || n < 1 || n > 64))
         fail("got " + parts[2] + " intervals; expected an integer 1..64");
       if (lo == hi) fail("empty range " + range + " (lo = hi); expected lo < hi");
-      for (int i = 0; i <= int(n); ++i) raw.push_back(numberText(lo + (hi - lo) * i / n));
+      for (int i = 0; i <= int(n); ++i) raw.push_back(gridValueText(lo + (hi - lo) * i / n));
     } else if (key == "filter.size") {
       if (counted) fail("got \"" + range + "\"; expected lo:hi (the odd sizes between)");
       for (long v = long(std::ceil(lo)); v <= long(std::floor(hi)) && raw.size() < 64; ++v)

@@ -21,11 +21,14 @@ class ReferenceCache {
  public:
   explicit ReferenceCache(std::string dir = "");
   const std::string& dir() const { return dir_; }
-  // Loads the cached frame or traces it (and stores it). `traced` tells which happened.
+  // Loads the cached frame or traces it (and stores it). `traced` tells which happened. A frame
+  // whose every pixel misses the geometry (the camera sees no surface) is an InputError naming the
+  // scene file and /camera: one rule for every command that compares a scene.
   Frame get(const Scene& scene, const ReferenceOptions& options, bool* traced = nullptr,
             ReferenceStats* stats = nullptr);
 
  private:
+  Frame getUnchecked(const Scene& scene, const ReferenceOptions& options, bool* traced, ReferenceStats* stats);
   std::string dir_;
 };
 

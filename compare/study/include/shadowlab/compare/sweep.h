@@ -59,6 +59,8 @@ struct SweepSetting {
 
 struct SweepSpec {
   std::vector<std::string> scenes;  // bundled names or paths; empty = every bundled scene
+  // A scene a sweep file names -> "sweep.json: /scenes/1", so that a missing one names its place.
+  std::map<std::string, std::string> sceneOrigins;
   std::vector<SweepAxis> grid;      // in the order given; the last axis varies fastest (per block)
   // A union of grids' block -> the scenes its configurations run on (names or paths, as `scenes`;
   // a block not listed runs on every scene). A scene: key swept only in such blocks need not be
