@@ -9,6 +9,7 @@
 
 #include <algorithm>
 #include <filesystem>
+#include <fstream>
 #include <regex>
 #include <string>
 
@@ -80,4 +81,21 @@ TEST_F(JsonBadInput, SweepFileWithAKeyTwice) {
   expectRejected("sweep_duplicate_key.json",
                  "sweep --sweep '" + kBadInput + "sweep_duplicate_key.json' --no-report -o '" + out.string() + "'");
   EXPECT_FALSE(fs::exists(out)) << "nothing written on bad input";
+}
+
+// A file that is no JSON at all (a pull request can name any file as a scene, a method or a
+// baseline): the message says where it stopped being JSON and never quotes what it read there.
+TEST_F(JsonBadInput, AFileThatIsNoJsonIsNeverQuoted) {
+  const fs::path secret = dir_ / "passwd";
+  std::ofstream(secret) << "root-secret-7f3a:x:0:0:root:/root:/bin/bash\n";
+  for (const std::string& args : {"reference '" + secret.string() + "' -o '" + (dir_ / "ref").string() + "'",
+                                  "gate '" + kGoodMetrics + "' --baseline '" + secret.string() + "'",
+                                  "run sphere_on_plane --method '" + secret.string() + "' -o '" +
+                                      (dir_ / "run").string() + "'"}) {
+    const CliRun r = runShadowlab(args, dir_);
+    EXPECT_EQ(r.code, 2) << args << "\n" << r.err;
+    EXPECT_NE(r.err.find(secret.string() + ":1:1: error: "), std::string::npos) << r.err;
+    EXPECT_EQ(r.err.find("root"), std::string::npos) << "the file's bytes reached the message:\n" << r.err;
+    EXPECT_EQ(r.err.find("secret"), std::string::npos) << r.err;
+  }
 }

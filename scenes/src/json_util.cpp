@@ -152,6 +152,10 @@ Json parseStrict(const std::string& text, const std::string& file) {
       byte = start + offset + 1;
     }
   }
+  // nlohmann quotes the text it last read ("; last read: '...'"): never echo a file's bytes (a
+  // scene named by a pull request may be any file on the machine); line:col says where.
+  const size_t quoted = what.find("; last read");
+  if (quoted != std::string::npos) what.erase(quoted);
   // nlohmann joins "while parsing X - detail" with a dash; the house style uses "; ".
   size_t dash = what.find(" - ");
   if (dash != std::string::npos) what.replace(dash, 3, "; ");
