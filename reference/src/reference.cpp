@@ -70,6 +70,30 @@ inline IntN load(const int* p) { return IntN(p, kAligned); }
   return no;
 }
 
+// The 8-ray packet of a shadow query, one setup for the hard lights' traceShadow and the sized
+// lights' traceOccluded: the active lanes valid, each ray from `origin` along `dir` over [0, tfar]
+// with its lane as id; an inactive lane's ray has length 0 along +y (never traced, and no zero
+// direction for Embree to check).
+[[gnu::always_inline]] inline void setShadowPacket(RTCRay8& ray, int (&valid)[kLanes], const FloatN (&origin)[3],
+                                                   const FloatN (&dir)[3], const FloatN& tfar, const MaskN& active) {
+  IntN validN = 0;
+  stdx::where(active, validN) = -1;
+  validN.copy_to(valid, kAligned);
+  const FloatN zero = 0.0f;
+  origin[0].copy_to(ray.org_x, kAligned);
+  origin[1].copy_to(ray.org_y, kAligned);
+  origin[2].copy_to(ray.org_z, kAligned);
+  select(active, dir[0], zero).copy_to(ray.dir_x, kAligned);
+  select(active, dir[1], FloatN(1.0f)).copy_to(ray.dir_y, kAligned);
+  select(active, dir[2], zero).copy_to(ray.dir_z, kAligned);
+  zero.copy_to(ray.tnear, kAligned);
+  select(active, tfar, zero).copy_to(ray.tfar, kAligned);
+  zero.copy_to(ray.time, kAligned);
+  IntN(-1).copy_to(reinterpret_cast<int*>(ray.mask), kAligned);
+  IntN([](int lane) { return lane; }).copy_to(reinterpret_cast<int*>(ray.id), kAligned);
+  IntN(0).copy_to(reinterpret_cast<int*>(ray.flags), kAligned);
+}
+
 // The camera hits of one packet, one array per quantity across its 8 lanes (structure of arrays):
 // the per-hit work is a few SIMD operations over the lanes instead of a branchy pass per lane.
 // Lanes without a hit hold 0 in hitValue, objectId, geom and prim, and values of no meaning in the
@@ -303,21 +327,9 @@ class Tracer {
     RTCRay8& ray = rayHit.ray;
     alignas(kSimdAlign) int valid[kLanes];
     const FloatN zero = 0.0f;
-    IntN validN = 0;
-    stdx::where(active, validN) = -1;
-    validN.copy_to(valid, kAligned);
-    select(active, load(hits.origin[0]), zero).copy_to(ray.org_x, kAligned);
-    select(active, load(hits.origin[1]), zero).copy_to(ray.org_y, kAligned);
-    select(active, load(hits.origin[2]), zero).copy_to(ray.org_z, kAligned);
-    select(active, dir[0], zero).copy_to(ray.dir_x, kAligned);
-    select(active, dir[1], FloatN(1.0f)).copy_to(ray.dir_y, kAligned);
-    select(active, dir[2], zero).copy_to(ray.dir_z, kAligned);
-    zero.copy_to(ray.tnear, kAligned);
-    select(active, tfar, zero).copy_to(ray.tfar, kAligned);
-    zero.copy_to(ray.time, kAligned);
-    IntN(-1).copy_to(reinterpret_cast<int*>(ray.mask), kAligned);
-    IntN([](int lane) { return lane; }).copy_to(reinterpret_cast<int*>(ray.id), kAligned);
-    IntN(0).copy_to(reinterpret_cast<int*>(ray.flags), kAligned);
+    const FloatN origin[3] = {select(active, load(hits.origin[0]), zero), select(active, load(hits.origin[1]), zero),
+                              select(active, load(hits.origin[2]), zero)};
+    setShadowPacket(ray, valid, origin, dir, tfar, active);
     if (!wantDistance) {
       rtcOccluded8(valid, embree_.handle(), &shadowContext_.rtc, &ray);
       // Embree marks an occluded ray by setting tfar to -inf.
@@ -600,22 +612,8 @@ class Tracer {
     shadowRays += unsigned(count);
     RTCRay8 ray;
     alignas(kSimdAlign) int validLanes[kLanes];
-    IntN validN = 0;
-    stdx::where(valid, validN) = -1;
-    validN.copy_to(validLanes, kAligned);
-    const FloatN zero = 0.0f;
-    FloatN(origin.x).copy_to(ray.org_x, kAligned);
-    FloatN(origin.y).copy_to(ray.org_y, kAligned);
-    FloatN(origin.z).copy_to(ray.org_z, kAligned);
-    select(valid, dir[0], zero).copy_to(ray.dir_x, kAligned);
-    select(valid, dir[1], FloatN(1.0f)).copy_to(ray.dir_y, kAligned);
-    select(valid, dir[2], zero).copy_to(ray.dir_z, kAligned);
-    zero.copy_to(ray.tnear, kAligned);
-    select(valid, tfar, zero).copy_to(ray.tfar, kAligned);
-    zero.copy_to(ray.time, kAligned);
-    IntN(-1).copy_to(reinterpret_cast<int*>(ray.mask), kAligned);
-    IntN([](int lane) { return lane; }).copy_to(reinterpret_cast<int*>(ray.id), kAligned);
-    IntN(0).copy_to(reinterpret_cast<int*>(ray.flags), kAligned);
+    const FloatN packetOrigin[3] = {FloatN(origin.x), FloatN(origin.y), FloatN(origin.z)};
+    setShadowPacket(ray, validLanes, packetOrigin, dir, tfar, valid);
     rtcOccluded8(validLanes, embree_.handle(), &shadowContext_.rtc, &ray);
     return valid && load(ray.tfar) < 0.0f;
   }
