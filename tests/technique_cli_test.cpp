@@ -152,6 +152,11 @@ TEST_F(TechniqueCli, HostileFilesExit2BeforeAnyPipeline) {
            "  return texture(extra, q.uv).r;\n}\n",
        ":4:18: error: reads 'extra', which the harness does not hand"},
       {"sample_id.glsl", fn + "  return float(gl_SampleID);\n}\n", ":2:16: error: reads 'gl_SampleID'"},
+      // What the AST check lets through, the module's interface does not: an input the harness's
+      // shader has not (the built-in FrontFacing).
+      {"front_facing.glsl", fn + "  return gl_FrontFacing ? 1.0 : 0.0;\n}\n",
+       ":2:10: error: the compiled shader has 'gl_FrontFacing' (Input, builtin 17), which the harness's resolve "
+       "shader does not declare"},
   };
   for (const Case& c : cases) {
     const std::string path = write(dir, c.name, c.text);

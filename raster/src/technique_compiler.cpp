@@ -412,7 +412,10 @@ std::map<std::string, std::string> spirvInterface(const std::vector<uint32_t>& s
   std::map<std::string, std::string> out;
   for (const auto& [id, storage] : variables) {
     const auto& d = decorations[id];
-    std::string key = "storage class " + std::to_string(storage);
+    static const std::map<uint32_t, const char*> kStorage = {
+        {0, "UniformConstant"}, {1, "Input"},        {2, "Uniform"}, {3, "Output"},
+        {4, "Workgroup"},       {9, "PushConstant"}, {11, "Image"},  {12, "StorageBuffer"}};
+    std::string key = kStorage.count(storage) ? kStorage.at(storage) : "storage class " + std::to_string(storage);
     auto has = [&](uint32_t k) { return d.count(k) != 0; };
     if (has(kDecorationBuiltIn)) key += ", builtin " + std::to_string(d.at(kDecorationBuiltIn));
     if (has(kDecorationLocation)) key += ", location " + std::to_string(d.at(kDecorationLocation));
