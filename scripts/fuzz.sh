@@ -1,10 +1,10 @@
 #!/usr/bin/env bash
 # Fuzzes the parsers a user feeds (scene JSON with its OBJ, MTL and PNG files, EXR files, method files and
 # --set strings, sweep files and --grid strings, tolerance files, results and metrics files, light
-# path specs) with libFuzzer, AddressSanitizer and UndefinedBehaviorSanitizer (Debian's clang).
+# path specs, technique files) with libFuzzer, AddressSanitizer and UndefinedBehaviorSanitizer (Debian's clang).
 #
 #   scripts/fuzz.sh TARGET SECONDS    fuzz one target (scene obj gltf image exr method sweep tolerances
-#                                     results light_path) for SECONDS; `all` runs every target in turn
+#                                     results light_path technique) for SECONDS; `all` runs every target in turn
 #   scripts/fuzz.sh --list            the targets
 #
 # Builds build-fuzz/ (SHADOWLAB_FUZZ_BUILD overrides; SHADOWLAB_FUZZ_NO_BUILD=1 skips the build, as
@@ -16,7 +16,7 @@
 # Add each finding to tests/fuzz/regressions/TARGET/ (the smoke test replays them) once it is fixed.
 set -euo pipefail
 cd "$(dirname "$0")/.."
-targets=(scene obj gltf image exr method sweep tolerances results light_path)
+targets=(scene obj gltf image exr method sweep tolerances results light_path technique)
 if [ "${1:-}" = "--list" ]; then printf '%s\n' "${targets[@]}"; exit 0; fi
 if [ $# -ne 2 ]; then echo "usage: scripts/fuzz.sh TARGET|all SECONDS (scripts/fuzz.sh --list)" >&2; exit 2; fi
 target=$1 seconds=$2
@@ -57,6 +57,7 @@ case "$target" in
   tolerances) seed tests/golden/tolerances.json tests/bad_input/tolerances_*.json tests/bad_input/timing_*tolerances*.json ;;
   results) seed tests/golden/baseline.json tests/golden/stability_baseline.json tests/bad_input/results_*.json \
                 tests/bad_input/metrics_*.json tests/bad_input/timing_renamed_results.json tests/bad_input/assets/metrics_ok.json ;;
+  technique) seed examples/techniques/*.glsl ;;
   light_path) printf 'elevation_deg=60:10:11\nazimuth_deg=0:90:4\n' > "$corpus/seed_light_path" ;;
 esac
 if [ -d "tests/fuzz/regressions/$target" ]; then seed tests/fuzz/regressions/"$target"/*; fi

@@ -7,6 +7,9 @@
 #
 # Only our code is instrumented. The tests also start /bin/sh, python3 (charts.py) and chromium;
 # they are not built with sanitizers, so they ignore ASAN_OPTIONS/UBSAN_OPTIONS they inherit.
+# UBSan's vptr check is off in raster/src/technique_compiler.cpp alone (raster/GlslangSanitize.cmake:
+# Debian's glslang has no RTTI to check against); ctest technique_ubsan_links_glslang guards that
+# link in every build, in about 20 s.
 # Slow: the build takes 15-25 minutes on 2 cores, the suite several times the Release suite's time.
 set -euo pipefail
 cd "$(dirname "$0")/.."

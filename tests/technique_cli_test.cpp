@@ -106,6 +106,132 @@ TEST_F(TechniqueCli, BadFilesExit2NamingFileAndLine) {
   }
 }
 
+// A technique may use only what the harness hands it. Each hostile file: exit 2 at its
+// file:line:column before any pipeline exists (a sampler of its own at set 0 crashed lavapipe with
+// SIGBUS inside vkCreateGraphicsPipelines, at set 3 with SIGSEGV; a storage buffer the function
+// wrote was accepted), and no output folder. The text checks name the word; what macros hide is
+// refused on glslang's AST (the pasted declaration, the global written through an out argument)
+// or by the compiled module's interface (gl_SampleID, an input the harness's shader has not).
+TEST_F(TechniqueCli, HostileFilesExit2BeforeAnyPipeline) {
+  struct Case {
+    const char* name;
+    std::string text;
+    std::string expect;  // after "file"
+  };
+  const std::string fn = "float shadowVisibility(ShadowQuery q) {\n";
+  const std::vector<Case> cases = {
+      {"sampler_set0.glsl",
+       "layout(set=0, binding=0) uniform sampler2D extra;\n" + fn + "  return texture(extra, q.uv).r;\n}\n",
+       ":1:1: error: 'layout' declares a resource or an interface variable of its own"},
+      {"sampler_set3.glsl",
+       "\n  layout(set=3, binding=0) uniform sampler2D extra;\n" + fn + "  return texture(extra, q.uv).r;\n}\n",
+       ":2:3: error: 'layout' declares a resource"},
+      {"ssbo.glsl", "buffer Evil { float evil[]; };\n" + fn + "  evil[0] = q.depth;\n  return 1.0;\n}\n",
+       ":1:1: error: 'buffer' declares a resource"},
+      {"uniform.glsl", "uniform float u;\n" + fn + "  return u;\n}\n", ":1:1: error: 'uniform' declares a resource"},
+      {"output.glsl", "out vec4 extraOut;\n" + fn + "  return 1.0;\n}\n", ":1:1: error: 'out' at file scope"},
+      {"shared.glsl", "shared float s;\n" + fn + "  return 1.0;\n}\n", ":1:1: error: 'shared' declares"},
+      {"discard.glsl", fn + "  if (q.depth > 0.5) discard;\n  return 1.0;\n}\n",
+       ":2:22: error: 'discard' ends the harness's pixel"},
+      {"demote.glsl", fn + "  demote;\n  return 1.0;\n}\n", ":2:3: error: 'demote' ends"},
+      {"barrier.glsl", fn + "  memoryBarrier();\n  return 1.0;\n}\n",
+       ":2:3: error: 'memoryBarrier' writes outside the function"},
+      {"image.glsl", fn + "  imageStore(img, ivec2(0), vec4(0.0));\n  return 1.0;\n}\n",
+       ":2:3: error: 'imageStore' writes"},
+      {"atomic.glsl", fn + "  uint c = 0u;\n  atomicAdd(c, 1u);\n  return 1.0;\n}\n",
+       ":3:3: error: 'atomicAdd' writes"},
+      {"harness_output.glsl", fn + "  outA = vec4(1.0);\n  return 1.0;\n}\n",
+       ":2:3: error: writes 'outA', which is not one of its locals"},
+      {"harness_buffer.glsl", fn + "  outPlanes[0] = 1.0;\n  return 1.0;\n}\n", ":2:3: error: writes 'outPlanes'"},
+      {"global.glsl", "float g;\n" + fn + "  return modf(q.depth, g);\n}\n",
+       ":3:24: error: writes 'g', which is not one"},
+      {"ids.glsl", fn + "  return float(texelFetch(mapIds, ivec3(0), 0).r);\n}\n",
+       ":2:27: error: reads 'mapIds', which the harness does not hand a technique"},
+      {"pasted.glsl",
+       "#define CAT(a, b) a##b\nCAT(lay, out)(set = 0, binding = 0) CAT(uni, form) sampler2D extra;\n" + fn +
+           "  return texture(extra, q.uv).r;\n}\n",
+       ":4:18: error: reads 'extra', which the harness does not hand"},
+      {"sample_id.glsl", fn + "  return float(gl_SampleID);\n}\n", ":2:16: error: reads 'gl_SampleID'"},
+      // What the AST check lets through, the module's interface does not: an input the harness's
+      // shader has not (the built-in FrontFacing).
+      {"front_facing.glsl", fn + "  return gl_FrontFacing ? 1.0 : 0.0;\n}\n",
+       ":2:10: error: the compiled shader has 'gl_FrontFacing' (Input, builtin 17), which the harness's resolve "
+       "shader does not declare"},
+  };
+  for (const Case& c : cases) {
+    const std::string path = write(dir, c.name, c.text);
+    const fs::path out = dir / (std::string("out_") + c.name);
+    const auto r = runShadowlab("run contact --set technique=" + path + kSmall + cache + " -o " + out.string(), dir);
+    EXPECT_EQ(r.code, 2) << c.name << ": " << r.err;
+    EXPECT_NE(r.err.find(path + c.expect), std::string::npos)
+        << c.name << ": expected \"" << path + c.expect << "\" in " << r.err;
+    EXPECT_FALSE(fs::exists(out)) << c.name;
+  }
+}
+
+// Errors the harness's shader used to report, at its own lines: each named in the user's file.
+// A byte-order mark is skipped (the file runs); a file over 256 KiB is refused before it is read
+// (exit 2: one of 400k statements, 8.8 MB, compiled for minutes); a file whose macros expand past
+// the compile's limits ends with exit 3 naming the file and the limits, in seconds, not minutes.
+TEST_F(TechniqueCli, ErrorsAtTheUsersFileAndBoundedCompiles) {
+  struct Case {
+    const char* name;
+    std::string text;
+    int code;
+    std::string expect;  // after "file"
+  };
+  const std::string fn = "float shadowVisibility(ShadowQuery q) {\n";
+  std::string big = fn;
+  while (big.size() <= 256 * 1024) big += "  q.depth = q.depth * 1.0001 + 0.5;\n";
+  big += "  return q.depth;\n}\n";
+  std::string bomb = "#define A0 q.depth = q.depth * 1.0001 + 0.5;\n";
+  for (int i = 1; i <= 8; ++i)
+    bomb += "#define A" + std::to_string(i) + std::string(" A") + std::to_string(i - 1) + " A" + std::to_string(i - 1) +
+            " A" + std::to_string(i - 1) + " A" + std::to_string(i - 1) + " A" + std::to_string(i - 1) + " A" +
+            std::to_string(i - 1) + " A" + std::to_string(i - 1) + " A" + std::to_string(i - 1) + "\n";
+  bomb += fn + "  A8\n  return q.depth;\n}\n";
+  const std::vector<Case> cases = {
+      {"unclosed.glsl", fn + "  if (q.depth > 0.5) {\n    return 0.0;\n  return 1.0;\n}\n", 2,
+       ":1:39: error: '{' is never closed; expected a '}' before the end of the file"},
+      {"closes_nothing.glsl", fn + "  return 1.0;\n}\n}\n", 2, ":4:1: error: '}' closes nothing"},
+      {"main.glsl", fn + "  return 1.0;\n}\nvoid main() {}\n", 2, ":4:6: error: defines main()"},
+      {"endif.glsl", fn + "  return 1.0;\n}\n#endif\n", 2, ":4:1: error: #endif closes no #if of this file"},
+      {"if.glsl", "#ifdef X\n" + fn + "  return 1.0;\n}\n", 2, ":1:1: error: #if is never closed"},
+      {"line.glsl", "#line 40\n" + fn + "  return 1.0;\n}\n", 2, ":1:1: error: #line in a technique file"},
+      {"nul.glsl", fn + std::string("  return 1.0;\0\n}\n", 15), 2, ":2:14: error: byte 0x00 is not UTF-8"},
+      {"big.glsl", big, 2,
+       ": error: " + std::to_string(big.size()) + " bytes; expected a technique file of at most 256 KiB"},
+      {"bom.glsl", "\xEF\xBB\xBF" + fn + "  return 1.0;\n}\n", 0, ""},
+      // A macro named like the harness's parameters (Lookup L) ends with the file.
+      {"macro.glsl", "#define L 2.0\n" + fn + "  return q.depth < L ? 1.0 : 0.0;\n}\n", 0, ""},
+      // Syntax errors at the token glslang stopped at, not column 1.
+      {"operands.glsl", fn + "  float a = 1.0;\n  float b = a * 2.0 q.depth;\n  return b;\n}\n", 2,
+       ":3:21: error: syntax error, unexpected IDENTIFIER"},
+      {"for.glsl", fn + "  float a = 1.0;\n  for (int i = 0; i < 3 i++) a += 1.0;\n  return a;\n}\n", 2,
+       ":3:25: error: syntax error, unexpected IDENTIFIER"},
+      {"undeclared.glsl", fn + "  float radius = 1.0;\n  return q.depth * r;\n}\n", 2, ":3:20: error: 'r': undeclared"},
+      // A function the harness defines after the file: at the file's definition.
+      {"collision.glsl", "float techniqueVisibility(Lookup L) {\n  return 1.0;\n}\n" + fn + "  return 1.0;\n}\n", 2,
+       ":1:7: error: the harness's resolve.frag does not compile with this file"},
+      {"bomb.glsl", bomb, 3, ": error: compiling the technique "},
+  };
+  for (const Case& c : cases) {
+    const std::string path = write(dir, c.name, c.text);
+    const fs::path out = dir / (std::string("out_") + c.name);
+    const auto t0 = std::chrono::steady_clock::now();
+    const auto r = runShadowlab("run contact --set technique=" + path + kSmall + cache + " -o " + out.string(), dir);
+    const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    EXPECT_EQ(r.code, c.code) << c.name << ": " << r.err;
+    if (c.code == 0) continue;
+    EXPECT_NE(r.err.find(path + c.expect), std::string::npos)
+        << c.name << ": expected \"" << path + c.expect << "\" in " << r.err;
+    // The place is the user's file; the harness's line may follow as glslang's words.
+    EXPECT_LT(r.err.find(path + ":"), r.err.find("resolve.frag:")) << c.name << ": " << r.err;
+    EXPECT_FALSE(fs::exists(out)) << c.name;
+    if (c.code == 3) std::printf("%s: exit 3 after %.1f s: %s\n", c.name, seconds, r.err.c_str());
+  }
+}
+
 // A file that does not end in practice, even on llvmpipe, which ends a shader's loops by itself
 // after 65535 iterations (a `while (true)` returns there, and nested loops share that budget): each
 // iteration is 1024 dependent steps written out (S1024, whose result the next step and the return

@@ -6,6 +6,7 @@
 #include <cmath>
 #include <cstdlib>
 #include <cstring>
+#include <filesystem>
 #include <map>
 #include <memory>
 #include <mutex>
@@ -192,6 +193,184 @@ TechniqueParam parseDeclaration(const TechniqueFile& f, const std::string& rest,
   return p;
 }
 
+// What a technique may not say (raster/METHODS.md "Your own technique"): a technique is a pure
+// function of what the harness hands it, because anything it declares or writes reaches the
+// harness's pipeline unchecked: a resource of its own is bound to nothing (the driver crashes
+// building the pipeline), a write to a buffer, an image or an output changes what other pixels
+// and passes read, and discard drops the harness's own channels of the pixel.
+struct Forbidden {
+  const char* word;
+  const char* why;
+};
+const char* const kResources = "declares a resource or an interface variable of its own";
+const char* const kWrites = "writes outside the function";
+const char* const kEnds = "ends the harness's pixel";
+const Forbidden kForbidden[] = {
+    {"uniform", kResources},
+    {"buffer", kResources},
+    {"shared", kResources},
+    {"attribute", kResources},
+    {"varying", kResources},
+    {"layout", kResources},
+    {"push_constant", kResources},
+    {"patch", kResources},
+    {"centroid", kResources},
+    {"flat", kResources},
+    {"smooth", kResources},
+    {"noperspective", kResources},
+    {"invariant", kResources},
+    {"subroutine", kResources},
+    {"coherent", kResources},
+    {"volatile", kResources},
+    {"restrict", kResources},
+    {"readonly", kResources},
+    {"writeonly", kResources},
+    {"discard", kEnds},
+    {"demote", kEnds},
+    {"terminateInvocation", kEnds},
+    {"imageStore", kWrites},
+    {"imageAtomicAdd", kWrites},
+    {"imageAtomicMin", kWrites},
+    {"imageAtomicMax", kWrites},
+    {"imageAtomicAnd", kWrites},
+    {"imageAtomicOr", kWrites},
+    {"imageAtomicXor", kWrites},
+    {"imageAtomicExchange", kWrites},
+    {"imageAtomicCompSwap", kWrites},
+    {"imageAtomicLoad", kWrites},
+    {"imageAtomicStore", kWrites},
+    {"atomicAdd", kWrites},
+    {"atomicMin", kWrites},
+    {"atomicMax", kWrites},
+    {"atomicAnd", kWrites},
+    {"atomicOr", kWrites},
+    {"atomicXor", kWrites},
+    {"atomicExchange", kWrites},
+    {"atomicCompSwap", kWrites},
+    {"atomicLoad", kWrites},
+    {"atomicStore", kWrites},
+    {"atomicCounterIncrement", kWrites},
+    {"atomicCounterDecrement", kWrites},
+    {"barrier", kWrites},
+    {"memoryBarrier", kWrites},
+    {"memoryBarrierBuffer", kWrites},
+    {"memoryBarrierImage", kWrites},
+    {"memoryBarrierShared", kWrites},
+    {"groupMemoryBarrier", kWrites},
+    {"gl_FragDepth", kWrites},
+    {"gl_SampleMask", kWrites},
+    {"gl_FragColor", kWrites},
+    {"gl_FragData", kWrites},
+};
+
+// The file's code (comments blanked) token by token: what it may not say (kForbidden), `in`/`out`
+// at file scope (an interface variable, not a parameter), a definition of main, brackets and
+// preprocessor conditionals that do not pair up within the file. The file is compiled in the
+// middle of the harness's shader, so an unclosed brace or #if would be reported in the harness's
+// code, far from its cause: said here, at the bracket.
+void checkTokens(const TechniqueFile& f, const std::string& code) {
+  const std::string& s = f.source;
+  size_t line = 0, column = 0;
+  auto fail = [&](size_t at, const std::string& what) {
+    place(s, at, line, column);
+    failAt(f.path, line, column, what);
+  };
+  struct Open {
+    char c;
+    size_t at;
+  };
+  std::vector<Open> brackets, conditionals;
+  const size_t n = code.size();
+  bool lineStart = true, directive = false;
+  std::string directiveName;
+  auto isIdent = [](char c) { return std::isalnum(static_cast<unsigned char>(c)) || c == '_'; };
+  for (size_t i = 0; i < n;) {
+    const char c = code[i];
+    if (c == '\n') {
+      // A directive ends at a newline not escaped by a backslash.
+      size_t k = i;
+      while (k > 0 && (code[k - 1] == ' ' || code[k - 1] == '\t' || code[k - 1] == '\r')) --k;
+      if (!(k > 0 && code[k - 1] == '\\')) directive = false;
+      lineStart = !directive;
+      ++i;
+      continue;
+    }
+    if (std::isspace(static_cast<unsigned char>(c))) {
+      ++i;
+      continue;
+    }
+    if (lineStart && c == '#') {
+      lineStart = false;
+      directive = true;
+      size_t j = i + 1;
+      while (j < n && (code[j] == ' ' || code[j] == '\t')) ++j;
+      size_t e = j;
+      while (e < n && isIdent(code[e])) ++e;
+      const std::string name = code.substr(j, e - j);
+      if (name == "if" || name == "ifdef" || name == "ifndef") conditionals.push_back({'#', i});
+      else if (name == "elif" || name == "else") {
+        if (conditionals.empty())
+          fail(i, "#" + name + " without an #if in this file; expected the file's own #if first");
+      } else if (name == "endif") {
+        if (conditionals.empty())
+          fail(i, "#endif closes no #if of this file; expected each #if, #ifdef, #ifndef closed within the file");
+        conditionals.pop_back();
+      }
+      i = e;
+      continue;
+    }
+    lineStart = false;
+    if (isIdent(c) && !std::isdigit(static_cast<unsigned char>(c))) {
+      size_t e = i;
+      while (e < n && isIdent(code[e])) ++e;
+      const std::string word = code.substr(i, e - i);
+      for (const Forbidden& x : kForbidden)
+        if (word == x.word)
+          fail(i, "'" + word + "' " + x.why +
+                      "; expected a technique that reads only what the harness hands it (ShadowQuery q, mapDepth, "
+                      "mapShadow, mapMoments, its declared keys) and writes only its locals and its return value "
+                      "(raster/METHODS.md \"Your own technique\")");
+      if (!directive && brackets.empty() && (word == "in" || word == "out" || word == "inout"))
+        fail(i, "'" + word + "' at file scope " + kResources +
+                    "; expected parameters and locals only (raster/METHODS.md \"Your own technique\")");
+      if (!directive && word == "main") {
+        size_t j = e;
+        while (j < n && std::isspace(static_cast<unsigned char>(code[j]))) ++j;
+        if (brackets.empty() && j < n && code[j] == '(')
+          fail(i,
+               "defines main(); expected only shadowVisibility and its helpers (the harness's resolve.frag "
+               "holds the shader's entry point)");
+      }
+      i = e;
+      continue;
+    }
+    if (!directive) {
+      if (c == '{' || c == '(' || c == '[') brackets.push_back({c, i});
+      else if (c == '}' || c == ')' || c == ']') {
+        const char want = c == '}' ? '{' : c == ')' ? '(' : '[';
+        if (brackets.empty())
+          fail(i, std::string("'") + c + "' closes nothing; expected it to close a '" + want + "' of this file");
+        if (brackets.back().c != want)
+          fail(
+              i, std::string("'") + c + "' where the '" + brackets.back().c + "' at " + [&] {
+                size_t l = 0, col = 0;
+                place(s, brackets.back().at, l, col);
+                return std::to_string(l) + ":" + std::to_string(col);
+              }() + " is open; expected its closing bracket first");
+        brackets.pop_back();
+      }
+    }
+    ++i;
+  }
+  if (!brackets.empty()) {
+    const Open& o = brackets.back();
+    const char close = o.c == '{' ? '}' : o.c == '(' ? ')' : ']';
+    fail(o.at, std::string("'") + o.c + "' is never closed; expected a '" + close + "' before the end of the file");
+  }
+  if (!conditionals.empty())
+    fail(conditionals.back().at, "#if is never closed; expected its #endif before the end of the file");
+}
+
 // The checks of technique.h on `f.source`, filling f.params.
 void check(TechniqueFile& f) {
   const std::string& s = f.source;
@@ -207,7 +386,7 @@ void check(TechniqueFile& f) {
   const std::string code = withoutComments(s);
   f.readsPlaneSlope = code.find("planeSlope") != std::string::npos || code.find("##") != std::string::npos;
   // Preprocessor lines that would change what the harness compiles around the file.
-  static const std::regex directive(R"(^[ \t]*#[ \t]*(include|version|extension)\b)", std::regex::multiline);
+  static const std::regex directive(R"(^[ \t]*#[ \t]*(include|version|extension|line)\b)", std::regex::multiline);
   for (auto it = std::sregex_iterator(code.begin(), code.end(), directive); it != std::sregex_iterator(); ++it) {
     place(s, size_t(it->position(0)), line, column);
     const std::string what = (*it)[1];
@@ -215,6 +394,7 @@ void check(TechniqueFile& f) {
            "#" + what + " in a technique file; expected one self-contained file (the harness sets the version, " +
                "the extensions and includes the ABI: raster/METHODS.md \"Your own technique\")");
   }
+  checkTokens(f, code);
   // Declarations: whole-line comments "// shadowlab: ...".
   static const std::regex declaration(R"(^[ \t]*//[ \t]*shadowlab:(.*)$)", std::regex::multiline);
   for (auto it = std::sregex_iterator(s.begin(), s.end(), declaration); it != std::sregex_iterator(); ++it) {
@@ -304,7 +484,21 @@ const TechniqueParam* TechniqueFile::find(const std::string& name) const {
 }
 
 const TechniqueFile& loadTechniqueFile(const std::string& path) {
+  // Checked before reading: glslang's time and memory grow with the text (a file of 400k
+  // statements, 8.8 MB, compiled for minutes), and a lookup function fits in far less.
+  std::error_code ec;
+  const auto size = std::filesystem::file_size(path, ec);
+  if (!ec && size > kTechniqueMaxBytes)
+    throw InputError(formatError(path, "",
+                                 std::to_string(size) + " bytes; expected a technique file of at most " +
+                                     std::to_string(kTechniqueMaxBytes / 1024) + " KiB (" +
+                                     std::to_string(kTechniqueMaxBytes) + " bytes)"));
   std::string bytes = readFile(path);
+  if (bytes.size() > kTechniqueMaxBytes)  // grown since, or not a regular file
+    throw InputError(formatError(path, "",
+                                 std::to_string(bytes.size()) + " bytes; expected a technique file of at most " +
+                                     std::to_string(kTechniqueMaxBytes / 1024) + " KiB (" +
+                                     std::to_string(kTechniqueMaxBytes) + " bytes)"));
   const std::string hash = hashHex(fnv1a64(bytes.data(), bytes.size()));
   static std::mutex mutex;
   // Never erased: references stay valid, and an edited file is a new entry (a new hash).
@@ -314,7 +508,9 @@ const TechniqueFile& loadTechniqueFile(const std::string& path) {
   if (slot) return *slot;
   auto f = std::make_unique<TechniqueFile>();
   f->path = path;
-  f->source = std::move(bytes);
+  // A UTF-8 byte-order mark (some editors write one) is no GLSL: the hash keeps the file's bytes,
+  // the text handed on starts after it (line 1's columns as an editor counts them).
+  f->source = bytes.compare(0, 3, "\xEF\xBB\xBF") == 0 ? bytes.substr(3) : std::move(bytes);
   f->hash = hash;
   std::string name = path.substr(path.find_last_of('/') + 1);
   const size_t dot = name.find_last_of('.');

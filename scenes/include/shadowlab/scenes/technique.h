@@ -10,6 +10,7 @@
 // `mapMoments` and ShadowQuery::moments). This part reads and checks the text
 // without a GPU: UTF-8, no #include, the function's signature, the declarations, the content hash.
 // raster/ compiles it (raster/src/technique_compiler.cpp).
+#include <cstddef>
 #include <cstdint>
 #include <string>
 #include <vector>
@@ -41,6 +42,10 @@ struct TechniqueFile {
   std::string id() const { return stem + "@" + hash; }
   const TechniqueParam* find(const std::string& name) const;
 };
+
+// The largest technique file read (bytes): glslang's compile time and memory grow with the text,
+// and a lookup function is a few KiB.
+constexpr size_t kTechniqueMaxBytes = 256 * 1024;
 
 // The name of the function a technique file defines, and its signature as errors print it.
 constexpr const char* kTechniqueFunction = "shadowVisibility";
