@@ -311,14 +311,19 @@ window.addEventListener('load', function () {
   d.figures = String(laid);
   d.tooltips = String(document.querySelectorAll('figure.chart svg title').length);
   d.overflow = String(Math.max(0, document.documentElement.scrollWidth - document.documentElement.clientWidth));
-  // Numbers never wrap: a number cell (every td but the text ones) laid out on more than one line.
+  // Numbers never wrap: a number cell (every td but the text ones) laid out on more than one line,
+  // that is with a piece of it wholly below another (a raised superscript overlaps its line).
   var cells = document.querySelectorAll('td:not(.t)'), wrapped = 0;
   for (var c = 0; c < cells.length; c++) {
-    var range = document.createRange(), tops = {};
+    var range = document.createRange(), lowestTop = -Infinity, highestBottom = Infinity;
     range.selectNodeContents(cells[c]);
     var rects = range.getClientRects();
-    for (var q = 0; q < rects.length; q++) if (rects[q].height > 0) tops[Math.round(rects[q].bottom)] = 1;
-    if (Object.keys(tops).length > 1) wrapped++;
+    for (var q = 0; q < rects.length; q++) {
+      if (!(rects[q].height > 0)) continue;
+      lowestTop = Math.max(lowestTop, rects[q].top);
+      highestBottom = Math.min(highestBottom, rects[q].bottom);
+    }
+    if (lowestTop >= highestBottom) { wrapped++; cells[c].dataset.wrapped = 'true'; }
   }
   d.wrappedNumbers = String(wrapped);
   var glance = document.getElementById('glance');
