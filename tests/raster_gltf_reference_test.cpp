@@ -21,10 +21,12 @@
 #include "shadowlab/scenes/loader.h"
 #include "support/gltf_builder.h"
 #include "support/raster_device.h"
+#include "support/same_frames.h"
 #include "support/test_models.h"
 
 namespace fs = std::filesystem;
 using namespace shadowlab;
+using shadowlab::testing::differingValues;
 using shadowlab::testing::GltfBuilder;
 
 namespace {
@@ -36,23 +38,6 @@ fs::path freshDir(const std::string& name) {
   fs::remove_all(d);
   fs::create_directories(d);
   return d;
-}
-
-// Every channel of `b` equals `a`'s, float for float (NaN equal to NaN); returns the differing count.
-size_t differingValues(const Frame& a, const Frame& b, const std::string& what) {
-  EXPECT_EQ(a.names, b.names) << what;
-  size_t differ = 0;
-  for (const auto& name : a.names) {
-    const auto& x = a.get(name);
-    const auto& y = b.get(name);
-    EXPECT_EQ(x.size(), y.size()) << what << " " << name;
-    size_t here = 0;
-    for (size_t i = 0; i < std::min(x.size(), y.size()); ++i)
-      if (!(x[i] == y[i] || (std::isnan(x[i]) && std::isnan(y[i])))) ++here;
-    EXPECT_EQ(here, 0u) << what << ": channel " << name << " differs in " << here << " pixels";
-    differ += here;
-  }
-  return differ;
 }
 
 // The object's triangles as corner positions (and uvs when it has them): what both renderers draw,
