@@ -137,7 +137,7 @@ TEST_F(GltfHostile, IntegerPositionsNeedKhrMeshQuantization) {
 TEST_F(GltfHostile, RotationsAreUnitQuaternions) {
   GltfBuilder b = square();
   for (const auto& [q, length] : std::vector<std::pair<nlohmann::json, const char*>>{
-           {{0, 0, 0, 0}, "0.000000"}, {{0, 0, 0, 2}, "2.000000"}, {{0, 0.5, 0, 0.5}, "0.707107"}}) {
+           {{0, 0, 0, 0}, "0"}, {{0, 0, 0, 2}, "2"}, {{0, 0.5, 0, 0.5}, "0.7071067811865476"}}) {
     b.doc["nodes"][0]["rotation"] = q;
     EXPECT_HAS(inputErrorOf([&] { loadScene(b.write(dir(), "rotation")); }),
                std::string("rotation.gltf: /nodes/0/rotation: error: got a quaternion of length ") + length +

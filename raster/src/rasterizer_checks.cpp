@@ -4,6 +4,7 @@
 #include <string>
 
 #include "rasterizer_impl.h"
+#include "shadowlab/scenes/number_text.h"
 #include "shadowlab/scenes/error.h"
 
 namespace shadowlab {
@@ -60,7 +61,7 @@ const Light* Rasterizer::Impl::validate(const Scene& scene, const Method& method
                     "got " + std::to_string(method.filterTaps) + "; expected 1.." + std::to_string(abi::kMaxTaps)));
   if (method.filter == Filter::Poisson && !(method.filterRadius > 0.0f && method.filterRadius <= 32.0f))
     throw InputError(formatError("method", "filter.radius",
-                                 "got " + std::to_string(method.filterRadius) + "; expected > 0 and <= 32 texels"));
+                                 "got " + numberText(method.filterRadius) + "; expected > 0 and <= 32 texels"));
   // The soft filters take the light's size in map units from a layer that is a plain crop (an
   // orthographic one for a directional light): a warped map's texel and depth scales change
   // across it, so no one size per layer holds (raster/METHODS.md "Soft filters").

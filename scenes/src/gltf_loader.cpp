@@ -27,6 +27,7 @@
 #include "image_io.h"
 #include "json_util.h"
 #include "shadowlab/scenes/error.h"
+#include "shadowlab/scenes/number_text.h"
 #include "shadowlab/scenes/io.h"
 
 namespace shadowlab::gltf {
@@ -1065,17 +1066,17 @@ Camera cameraFromNode(const std::string& file, const tinygltf::Camera& c, size_t
     // (required). The image is 640 wide and 640 ymag / xmag high, so its aspect is the view's.
     const auto& o = c.orthographic;
     if (!(o.xmag > 0) || !std::isfinite(o.xmag))
-      fail(file, ptr + "/orthographic/xmag", "got " + std::to_string(o.xmag) + "; expected a positive number");
+      fail(file, ptr + "/orthographic/xmag", "got " + numberText(o.xmag) + "; expected a positive number");
     if (!(o.ymag > 0) || !std::isfinite(o.ymag))
-      fail(file, ptr + "/orthographic/ymag", "got " + std::to_string(o.ymag) + "; expected a positive number");
+      fail(file, ptr + "/orthographic/ymag", "got " + numberText(o.ymag) + "; expected a positive number");
     if (!(o.znear >= 0))
-      fail(file, ptr + "/orthographic/znear", "got " + std::to_string(o.znear) + "; expected a number >= 0");
+      fail(file, ptr + "/orthographic/znear", "got " + numberText(o.znear) + "; expected a number >= 0");
     if (!(o.zfar > o.znear) || !std::isfinite(o.zfar))
-      fail(file, ptr + "/orthographic/zfar", "got " + std::to_string(o.zfar) + "; expected zfar > znear");
+      fail(file, ptr + "/orthographic/zfar", "got " + numberText(o.zfar) + "; expected zfar > znear");
     const double h = std::round(640.0 * o.ymag / o.xmag);
     if (!(h >= 1 && h <= 16384))
       fail(file, ptr + "/orthographic/ymag",
-           "gives a 640 x " + std::to_string(h) + " image (ymag / xmag); expected 1..16384 rows");
+           "gives a 640 x " + numberText(h) + " image (ymag / xmag); expected 1..16384 rows");
     cam.projection = Projection::Orthographic;
     cam.orthoHeight = float(2.0 * o.ymag);
     cam.width = 640;
@@ -1088,19 +1089,18 @@ Camera cameraFromNode(const std::string& file, const tinygltf::Camera& c, size_t
   }
   const auto& p = c.perspective;
   if (!(p.yfov > 0 && p.yfov < kPi))
-    fail(file, ptr + "/perspective/yfov", "got " + std::to_string(p.yfov) + "; expected 0 < yfov < pi radians");
+    fail(file, ptr + "/perspective/yfov", "got " + numberText(p.yfov) + "; expected 0 < yfov < pi radians");
   if (!(p.znear > 0))
-    fail(file, ptr + "/perspective/znear", "got " + std::to_string(p.znear) + "; expected a positive number");
+    fail(file, ptr + "/perspective/znear", "got " + numberText(p.znear) + "; expected a positive number");
   if (p.zfar != 0 && !(p.zfar > p.znear))
-    fail(file, ptr + "/perspective/zfar", "got " + std::to_string(p.zfar) + "; expected zfar > znear");
+    fail(file, ptr + "/perspective/zfar", "got " + numberText(p.zfar) + "; expected zfar > znear");
   cam.vfovDeg = float(p.yfov * 180.0 / kPi);
   cam.width = 640;
   cam.height = 480;
   if (p.aspectRatio > 0) {
     const double h = std::round(640.0 / p.aspectRatio);
     if (!(h >= 1 && h <= 16384))
-      fail(file, ptr + "/perspective/aspectRatio",
-           "gives a 640 x " + std::to_string(h) + " image; expected 1..16384 rows");
+      fail(file, ptr + "/perspective/aspectRatio", "gives a 640 x " + numberText(h) + " image; expected 1..16384 rows");
     cam.height = int(h);
   }
   cam.nearPlane = float(p.znear);

@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "json_util.h"
+#include "shadowlab/scenes/number_text.h"
 #include "shadowlab/scenes/error.h"
 
 namespace shadowlab::gltf {
@@ -373,8 +374,8 @@ void checkRules(const std::string& file, const nlohmann::json& doc) {
       // a renderer would either refuse or silently normalize).
       if (!(std::fabs(length - 1.0) <= kUnitQuaternionTolerance))
         fail(file, "/nodes/" + std::to_string(i) + "/rotation",
-             "got a quaternion of length " + std::to_string(length) + "; expected a unit quaternion (length 1 within " +
-                 std::to_string(kUnitQuaternionTolerance).substr(0, 5) + ")");
+             "got a quaternion of length " + numberText(length) + "; expected a unit quaternion (length 1 within " +
+                 numberText(kUnitQuaternionTolerance) + ")");
     }
 
   // glTF 2.0 ("Meshes"): POSITION is float; integer positions are KHR_mesh_quantization's.
