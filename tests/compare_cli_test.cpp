@@ -316,6 +316,8 @@ TEST_F(CompareCli, CameraThatSeesOnlySkyExits2WithOneMessageFromRunSweepAndTune)
     EXPECT_EQ(r.err.substr(r.err.size() - message.size()), message) << command << "\n" << r.err;
     EXPECT_FALSE(fs::exists(path("out/metrics.json"))) << command;
     EXPECT_FALSE(fs::exists(path("out/results.json"))) << command;
+    // No half-written output: the folder the command made (its journal, log and lock) is gone.
+    EXPECT_FALSE(fs::exists(path("out"))) << command;
     EXPECT_EQ(r.out.find("nothing fits"), std::string::npos) << command << "\n" << r.out;
     fs::remove_all(path("out"));
   }

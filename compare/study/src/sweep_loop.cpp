@@ -454,7 +454,39 @@ std::string defaultSweepCacheDir(const std::string& outDir) {
   return (out.parent_path() / ".shadowlab-cache").string();
 }
 
+namespace {
+SweepSummary runSweepIn(const SweepPlan& plan, SweepRunner& runner, const SweepOptions& options, size_t& finished);
+}  // namespace
+
 SweepSummary runSweep(const SweepPlan& plan, SweepRunner& runner, const SweepOptions& options) {
+  // Bad input that only the work finds (a camera that sees no surface: the reference's check) is
+  // exit 2 with no half-written output: what this call created in the folder (its journal, log,
+  // lock, shard.json, images/) goes when no row was finished into a journal that did not exist
+  // before. A folder with rows keeps them: the next run resumes from them.
+  const std::string workDir = options.shard.active() && options.shard.index < options.shard.count
+                                  ? shardDir(options.outDir, options.shard)
+                                  : options.outDir;
+  std::vector<std::string> fresh;
+  std::error_code ec;
+  if (!workDir.empty()) {
+    if (!fs::exists(workDir, ec)) fresh.push_back(workDir);
+    for (const char* name : {"rows.jsonl", "sweep.log", ".sweep.lock", "shard.json", "images"})
+      if (!fs::exists(joinPath(workDir, name), ec)) fresh.push_back(joinPath(workDir, name));
+  }
+  size_t finished = 0;
+  try {
+    return runSweepIn(plan, runner, options, finished);
+  } catch (const InputError&) {
+    const bool journalIsNew = std::find(fresh.begin(), fresh.end(), joinPath(workDir, "rows.jsonl")) != fresh.end() ||
+                              (!fresh.empty() && fresh.front() == workDir);
+    if (finished == 0 && journalIsNew)
+      for (auto it = fresh.rbegin(); it != fresh.rend(); ++it) fs::remove_all(*it, ec);
+    throw;
+  }
+}
+
+namespace {
+SweepSummary runSweepIn(const SweepPlan& plan, SweepRunner& runner, const SweepOptions& options, size_t& finished) {
   const auto t0 = Clock::now();
   SweepSummary summary;
   const SweepShard& shard = options.shard;
@@ -590,6 +622,7 @@ SweepSummary runSweep(const SweepPlan& plan, SweepRunner& runner, const SweepOpt
     fresh[i] = std::move(s);
     have[i] = &fresh[i];
     ++summary.ran;
+    ++finished;
     progress.finish(what, errorRate, seconds);
   }
   progress.end();
@@ -687,6 +720,8 @@ SweepSummary runSweep(const SweepPlan& plan, SweepRunner& runner, const SweepOpt
   if (log) log << "pid " << pid << " end: " << summary.ran << " rows run, " << summary.commandWallSeconds << " s\n";
   return summary;
 }
+
+}  // namespace
 
 SweepSummary mergeSweepShards(const SweepPlan& plan, SweepRunner& runner, const SweepOptions& options) {
   const auto t0 = Clock::now();
