@@ -13,6 +13,7 @@
 #include <cmath>
 #include <cstdio>
 #include <cstring>
+#include <optional>
 #include <filesystem>
 #include <fstream>
 #include <limits>
@@ -339,6 +340,50 @@ void checkBinChunk(const std::string& file, const json& doc, const Container& c)
       fail(file, ptr + "/byteLength",
            "got " + std::to_string(length) + "; expected at most " + std::to_string(c.binSize) +
                " bytes (the GLB BIN chunk's length)");
+  }
+}
+
+// tinygltf reads a bufferView image's bytes at &buffer.data[byteOffset] for byteLength while it
+// parses, without checking that they lie inside the buffer (a hostile file read past it: a fuzz
+// finding, tests/fuzz/regressions/gltf/image_bufferview_past_buffer). The range of every bufferView
+// an image names is checked against its buffer's byteLength first; the buffer's bytes are checked
+// to be that long (checkBinChunk, the data: URI and file checks). Geometry's bufferViews are read
+// by this loader, after tinygltf, with their own checks.
+void checkImageBufferViewRanges(const std::string& file, const json& doc) {
+  const auto views = doc.find("bufferViews");
+  const auto images = doc.find("images");
+  if (views == doc.end() || !views->is_array() || images == doc.end() || !images->is_array()) return;
+  const auto buffers = doc.find("buffers");
+  for (const json& image : *images) {
+    const auto named = image.is_object() ? image.find("bufferView") : image.end();
+    if (named == image.end() || !named->is_number_unsigned() || named->get<uint64_t>() >= views->size()) continue;
+    const size_t i = named->get<size_t>();
+    const json& v = (*views)[i];
+    if (!v.is_object()) continue;
+    const std::string ptr = ptrOf("bufferViews", i);
+    auto count = [&](const char* key, bool required) -> std::optional<uint64_t> {
+      const auto it = v.find(key);
+      if (it == v.end()) {
+        if (required) fail(file, ptr, std::string("missing key \"") + key + "\"; expected an integer >= 0");
+        return std::nullopt;
+      }
+      if (!it->is_number_unsigned())
+        fail(file, ptr + "/" + key, "got " + detail::describe(*it) + "; expected an integer >= 0");
+      return it->get<uint64_t>();
+    };
+    const uint64_t buffer = *count("buffer", true), length = *count("byteLength", true);
+    const uint64_t offset = count("byteOffset", false).value_or(0);
+    if (buffers == doc.end() || !buffers->is_array() || buffer >= buffers->size())
+      fail(file, ptr + "/buffer",
+           "got " + std::to_string(buffer) + "; expected one of the file's " +
+               std::to_string(buffers != doc.end() && buffers->is_array() ? buffers->size() : 0) + " buffers");
+    const auto size = (*buffers)[buffer].find("byteLength");
+    if (size == (*buffers)[buffer].end() || !size->is_number_unsigned()) continue;  // the buffer's own check
+    if (offset > size->get<uint64_t>() || length > size->get<uint64_t>() - offset)
+      fail(file, ptr,
+           "bytes " + std::to_string(offset) + ".." + std::to_string(offset + length) + " of buffer " +
+               std::to_string(buffer) + "; expected a range inside its byteLength " +
+               std::to_string(size->get<uint64_t>()));
   }
 }
 
@@ -1370,6 +1415,7 @@ Content loadFile(const Request& req, std::vector<Material>& materials) {
   const fs::path dir = fs::path(file).parent_path();
   checkUris(file, doc, dir.empty() ? fs::path(".") : dir);
   checkBinChunk(file, doc, c);
+  checkImageBufferViewRanges(file, doc);
   const std::string jsonText = req.overrides.empty() ? c.jsonText : doc.dump();
 
   tinygltf::TinyGLTF loader;
