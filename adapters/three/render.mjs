@@ -259,7 +259,7 @@ function decode(body) {
 }
 
 // Written into a new folder beside DIR, then renamed: DIR appears whole or not at all.
-function writeOutputs(outDir, request, scenePath, { meta, vis, coverage }) {
+function writeOutputs(outDir, request, { meta, vis, coverage }) {
   const tmp = `${outDir}.tmp-${process.pid}`;
   fs.rmSync(tmp, { recursive: true, force: true });
   fs.mkdirSync(tmp, { recursive: true });
@@ -275,7 +275,6 @@ function writeOutputs(outDir, request, scenePath, { meta, vis, coverage }) {
   if (request.shadowSide) settings['three.shadow_side'] = request.shadowSide;
   const renderer = {
     name: `three.js r${meta.three_revision} ${request.type}`,
-    light: meta.light,
     light_clip_from_world: meta.light_clip_from_world,
     map_size: request.mapSize,
     normal_bias_world: request.normalBias,
@@ -283,10 +282,6 @@ function writeOutputs(outDir, request, scenePath, { meta, vis, coverage }) {
     filter: request.type,
     frame_ms: meta.frame_ms,
     settings,
-    scene: path.basename(scenePath),
-    width: meta.width,
-    height: meta.height,
-    device: meta.gl_renderer,
   };
   fs.writeFileSync(path.join(tmp, 'renderer.json'), JSON.stringify(renderer, null, 2) + '\n');
   fs.rmSync(outDir, { recursive: true, force: true });
@@ -302,8 +297,8 @@ async function main() {
     const parent = path.dirname(path.resolve(parsed.out));
     if (!fs.existsSync(parent)) throw new UsageError(`-o ${parsed.out}: the folder ${parent} does not exist`);
     const result = await render(parsed.scene, parsed.out, parsed.request);
-    const renderer = writeOutputs(parsed.out, parsed.request, parsed.scene, result);
-    process.stdout.write(`${renderer.name}: ${renderer.width}x${renderer.height}, light "${renderer.light}", ` +
+    const renderer = writeOutputs(parsed.out, parsed.request, result);
+    process.stdout.write(`${renderer.name}: ${result.meta.width}x${result.meta.height}, light "${result.meta.light}", ` +
       `frame ${renderer.frame_ms === null ? '?' : renderer.frame_ms.toFixed(2)} ms (${result.meta.gl_renderer}); wrote ${parsed.out}/vis.png, coverage.png, renderer.json\n`);
     return 0;
   } catch (e) {
