@@ -19,13 +19,15 @@ function fail(message) {
 }
 
 // The first camera of the file (shadowlab's export writes one), at the pixel size the request names,
-// else the one the camera's extras name (shadowlab's export writes them), else 640x480.
+// else the one the camera node's extras name, else 640x480.
 function setUpCamera(gltf, request) {
   if (gltf.cameras.length === 0) fail('the glTF file has no camera; expected one (shadowlab export writes it)');
   const camera = gltf.cameras[0];
-  const extras = camera.userData && (camera.userData.shadowlab || camera.userData);
-  const width = request.width || (extras && extras.width) || 640;
-  const height = request.height || (extras && extras.height) || 480;
+  // shadowlab export writes the size into the camera node's extras (shadowlab.camera.width/height).
+  const node = camera.userData && camera.userData.shadowlab && camera.userData.shadowlab.camera;
+  const size = node && Number.isInteger(node.width) && Number.isInteger(node.height) ? node : null;
+  const width = request.width || (size && size.width) || 640;
+  const height = request.height || (size && size.height) || 480;
   if (camera.isPerspectiveCamera) {
     camera.aspect = width / height;
   } else if (camera.isOrthographicCamera) {

@@ -224,7 +224,7 @@ async function render(scenePath, outDir, request) {
       child = spawn(browser, ['--headless=new', '--no-sandbox', '--enable-unsafe-swiftshader', '--use-angle=swiftshader',
         '--disable-background-networking', '--disable-component-update', '--disable-sync', '--disable-quic',
         '--no-first-run', '--no-default-browser-check', '--disable-extensions', '--mute-audio',
-        `--user-data-dir=${profile}`, url], { stdio: ['ignore', 'ignore', 'pipe'] });
+        `--user-data-dir=${profile}`, url], { stdio: ['ignore', 'ignore', 'pipe'], detached: true });
       let stderr = '';
       child.stderr.on('data', (d) => { stderr = (stderr + d.toString()).slice(-4000); });
       child.on('error', (e) => reject(new RendererError(`${browser}: ${e.message}`)));
@@ -234,9 +234,23 @@ async function render(scenePath, outDir, request) {
     return decode(result);
   } finally {
     clearTimeout(timer);
-    if (child && child.exitCode === null) child.kill('SIGKILL');
+    // Chromium runs in a process group of its own (detached): the whole group goes, its GPU and
+    // renderer processes too, and the profile only once the browser is gone (it writes there).
+    if (child && child.exitCode === null && child.signalCode === null) {
+      const ended = new Promise((resolve) => child.once('exit', resolve));
+      try {
+        process.kill(-child.pid, 'SIGKILL');
+      } catch {
+        child.kill('SIGKILL');
+      }
+      await ended;
+    }
     if (server) server.close();
-    fs.rmSync(profile, { recursive: true, force: true });
+    try {
+      fs.rmSync(profile, { recursive: true, force: true, maxRetries: 10, retryDelay: 100 });
+    } catch (e) {
+      process.stderr.write(`three adapter: note: could not remove the browser profile ${profile}: ${e.message}\n`);
+    }
   }
 }
 
