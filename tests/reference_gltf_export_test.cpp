@@ -159,6 +159,50 @@ TEST(GltfExport, EveryBundledSceneRoundTripsToTheSameTruth) {
   }
 }
 
+// The floats of accessor `a` (tightly packed, as the exporter writes them) from the BIN chunk.
+std::vector<float> accessorFloats(const std::string& glb, const json& doc, int a) {
+  uint32_t jsonLen;
+  std::memcpy(&jsonLen, glb.data() + 12, 4);
+  const size_t bin = 20 + jsonLen + 8;
+  const json& acc = doc["accessors"][size_t(a)];
+  const json& view = doc["bufferViews"][acc["bufferView"].get<size_t>()];
+  const size_t n = acc["count"].get<size_t>() * (acc["type"] == "VEC3" ? 3 : acc["type"] == "VEC2" ? 2 : 1);
+  std::vector<float> out(n);
+  std::memcpy(out.data(), glb.data() + bin + view["byteOffset"].get<size_t>(), n * 4);
+  return out;
+}
+
+TEST(GltfExport, NormalsAreUnitFaceNormalsAndBoundsHoldThePositions) {
+  const GltfExport e = exportGlb(loadSmall(resolveScenePath("sphere_on_plane")), "shadowlab test");
+  const json doc = glbJson(e.glb);
+  size_t triangles = 0;
+  for (const json& m : doc["meshes"])
+    for (const json& p : m["primitives"]) {
+      const json& posAcc = doc["accessors"][p["attributes"]["POSITION"].get<size_t>()];
+      const std::vector<float> pos = accessorFloats(e.glb, doc, p["attributes"]["POSITION"].get<int>());
+      const std::vector<float> nrm = accessorFloats(e.glb, doc, p["attributes"]["NORMAL"].get<int>());
+      ASSERT_EQ(pos.size(), nrm.size());
+      for (size_t v = 0; v < pos.size(); v += 3)
+        for (int k = 0; k < 3; ++k) {
+          ASSERT_GE(pos[v + k], posAcc["min"][k].get<float>());
+          ASSERT_LE(pos[v + k], posAcc["max"][k].get<float>());
+        }
+      for (size_t t = 0; t < pos.size(); t += 9, ++triangles) {
+        const glm::dvec3 a(pos[t], pos[t + 1], pos[t + 2]), b(pos[t + 3], pos[t + 4], pos[t + 5]),
+            c(pos[t + 6], pos[t + 7], pos[t + 8]);
+        const glm::dvec3 n(nrm[t], nrm[t + 1], nrm[t + 2]);
+        ASSERT_NEAR(glm::length(n), 1.0, 1e-6);
+        // The face normal: perpendicular to the edges, on the counter-clockwise side (front face).
+        const glm::dvec3 cross = glm::cross(b - a, c - a);
+        if (glm::length(cross) > 1e-12) {
+          ASSERT_GT(glm::dot(glm::normalize(cross), n), 1 - 1e-6);
+        }
+        for (int k = 3; k < 9; k += 3) ASSERT_EQ(nrm[t + k], nrm[t]);  // flat: one normal per face
+      }
+    }
+  EXPECT_EQ(triangles, 65026u);
+}
+
 TEST(GltfExport, TheFileCarriesWhatEnginesNeed) {
   const Scene scene = loadSmall(resolveScenePath("alpha_fence"));
   const GltfExport e = exportGlb(scene, "shadowlab 9.9.9");
