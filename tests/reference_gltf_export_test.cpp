@@ -291,6 +291,30 @@ TEST(GltfExport, SpotConeAndNotesAreWrittenDown) {
   fs::remove(dir.parent_path() / "img.png");
 }
 
+TEST(GltfExport, AnOrthographicCameraRoundTrips) {
+  const fs::path dir = freshTempDir("gltf_export_ortho");
+  std::ofstream(dir / "ortho.json") << R"({"camera": {"projection": "orthographic", "position": [2, 5, 4],
+      "look_at": [0, 0, 0], "up": [0.1, 1, 0], "ortho_height": 6.5, "width": 96, "height": 40, "near": 0.5, "far": 40},
+    "objects": [{"type": "plane", "name": "ground", "size": [10, 10]},
+                {"type": "sphere", "name": "ball", "radius": 0.7, "segments": 24, "rings": 12,
+                 "transform": {"translate": [0, 1, 0]}}],
+    "lights": [{"type": "directional", "name": "sun", "elevation_deg": 90}]})";
+  const Scene a = loadScene((dir / "ortho.json").string());
+  const GltfExport e = exportGlb(a, "shadowlab test");
+  const json cam = glbJson(e.glb)["cameras"][0];
+  EXPECT_EQ(cam["type"], "orthographic");
+  EXPECT_EQ(cam["orthographic"]["ymag"].get<double>(), 3.25);
+  EXPECT_DOUBLE_EQ(cam["orthographic"]["xmag"].get<double>(), 3.25 * 96 / 40);
+  writeFileAtomic((dir / "ortho.glb").string(), e.glb);
+  const Scene b = loadScene((dir / "ortho.glb").string());
+  EXPECT_TRUE(b.camera.orthographic());
+  expectSameScene(a, b, "ortho");
+  const Frame fa = renderReference(a, {}), fb = renderReference(b, {});
+  expectSamePlane(fa, fb, "hit", "ortho");
+  expectSamePlane(fa, fb, "object_id", "ortho");
+  expectSamePlane(fa, fb, "light.sun.vis", "ortho");
+}
+
 TEST(GltfExport, ExtrasThatDisagreeWithTheNodesLoseToThem) {
   const fs::path dir = freshTempDir("gltf_export_edited");
   const Scene a = loadSmall(resolveScenePath("grazing"));
@@ -391,6 +415,8 @@ TEST(GltfExportCli, ExportsAndTheReferenceReadsIt) {
                                   dir);
   ASSERT_EQ(ref.code, 0) << ref.err;
   EXPECT_TRUE(fs::exists(dir / "ref" / "reference.exr"));
+  const CliRun help = runShadowlab("--help", dir);
+  EXPECT_NE(help.out.find("export"), std::string::npos) << help.out;
   // --set applies to the scene before it is exported.
   const CliRun sized =
       runShadowlab("export grazing --set scene:/camera/width=32 -o '" + (dir / "s.glb").string() + "'", dir);

@@ -91,8 +91,8 @@ std::vector<uint8_t> alphaPng(const Image& alpha, bool& exact) {
     rgba[i * 4 + 3] = byte;
   }
   // image_io writes files: a private temporary one, read back and removed.
-  char name[] = "/tmp/shadowlab-export-XXXXXX.png";
-  const int fd = mkstemps(name, 4);
+  std::string name = (fs::temp_directory_path() / "shadowlab-export-XXXXXX.png").string();
+  const int fd = mkstemps(name.data(), 4);
   if (fd < 0) throw DriverError("shadowlab export: cannot create a temporary file for a PNG texture");
   close(fd);
   const std::string err = image_io::writePng(name, alpha.width, alpha.height, 4, rgba.data());
