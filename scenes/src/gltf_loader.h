@@ -1,6 +1,7 @@
 #pragma once
 // glTF 2.0 files (.gltf, .glb) as scene content: the meshes of one glTF scene flattened into one
-// world-space triangle mesh, its MASK materials as alpha-tested Materials, its KHR_lights_punctual
+// world-space triangle mesh (with the nodes' shadowlab objects marked in it, for a file that
+// `shadowlab export` wrote: Part), its MASK materials as alpha-tested Materials, its KHR_lights_punctual
 // lights and its cameras, converted into the structures of scene.h so that neither renderer knows
 // glTF exists. The mapping table is scenes/FORMAT.md ("glTF files"). Parsing is tinygltf's
 // (Debian's libtinygltf-dev, compiled in gltf_tinygltf.cpp without image decoding); this file's
