@@ -534,6 +534,89 @@ double component(const uint8_t* p, int componentType, bool normalized) {
   }
 }
 
+// extras.shadowlab.<what> of a node (written by exportGlb, scenes/FORMAT.md "Exporting a scene as
+// glTF"): nullptr when absent. Untrusted like every other value: each reader below checks types,
+// ranges and keys and names the JSON pointer.
+const json* shadowlabExtras(const std::string& file, const json& node, size_t index, const char* what) {
+  if (!node.is_object() || !node.contains("extras")) return nullptr;
+  const json& e = node["extras"];
+  if (!e.is_object() || !e.contains("shadowlab")) return nullptr;
+  const json& s = e["shadowlab"];
+  const std::string ptr = ptrOf("nodes", index) + "/extras/shadowlab";
+  if (!s.is_object()) fail(file, ptr, "got " + detail::describe(s) + "; expected an object");
+  if (!s.contains(what)) return nullptr;
+  const json& w = s[what];
+  if (!w.is_object()) fail(file, ptr + "/" + what, "got " + detail::describe(w) + "; expected an object");
+  return &w;
+}
+
+class ExtrasReader {
+ public:
+  ExtrasReader(const std::string& file, const json& j, std::string ptr) : file_(file), j_(j), ptr_(std::move(ptr)) {}
+  void keys(const std::vector<std::string>& allowed) const {
+    for (const auto& item : j_.items())
+      if (std::find(allowed.begin(), allowed.end(), item.key()) == allowed.end()) {
+        std::string list;
+        for (const auto& k : allowed) list += (list.empty() ? "" : ", ") + k;
+        fail(file_, ptr_, "unknown key \"" + printableText(item.key()) + "\"; expected one of " + list);
+      }
+  }
+  bool has(const char* key) const { return j_.contains(key); }
+  const json& require(const char* key, const std::string& what) const {
+    if (!j_.contains(key)) fail(file_, ptr_, std::string("missing key \"") + key + "\"; expected " + what);
+    return j_[key];
+  }
+  // A number that is finite as a float, lo < v < hi (or <= where the bound is inclusive).
+  float number(const char* key, double lo, bool loOpen, double hi, bool hiOpen, const std::string& what) const {
+    const json& v = require(key, what);
+    const double d = v.is_number() ? v.get<double>() : std::nan("");
+    const bool ok =
+        v.is_number() && std::isfinite(float(d)) && (loOpen ? d > lo : d >= lo) && (hiOpen ? d < hi : d <= hi);
+    if (!ok) fail(file_, ptr_ + "/" + key, "got " + detail::describe(v) + "; expected " + what);
+    return float(d);
+  }
+  glm::vec3 vec3(const char* key) const {
+    const json& v = require(key, "3 numbers (x, y, z)");
+    if (!v.is_array() || v.size() != 3)
+      fail(file_, ptr_ + "/" + key, "got " + detail::describe(v) + "; expected 3 numbers (x, y, z)");
+    glm::vec3 out;
+    for (int k = 0; k < 3; ++k) {
+      const json& c = v[size_t(k)];
+      if (!c.is_number() || !std::isfinite(float(c.get<double>())))
+        fail(file_, ptr_ + "/" + key + "/" + std::to_string(k),
+             "got " + detail::describe(c) + "; expected a finite number");
+      out[k] = float(c.get<double>());
+    }
+    return out;
+  }
+  long long integer(const char* key, long long lo, long long hi, const std::string& what) const {
+    const json& v = require(key, what);
+    if (!v.is_number_integer() || (v.is_number_unsigned() && v.get<uint64_t>() > uint64_t(hi)) ||
+        v.get<long long>() < lo || v.get<long long>() > hi)
+      fail(file_, ptr_ + "/" + key, "got " + detail::describe(v) + "; expected " + what);
+    return v.get<long long>();
+  }
+  bool boolean(const char* key) const {
+    const json& v = require(key, "true or false");
+    if (!v.is_boolean()) fail(file_, ptr_ + "/" + key, "got " + detail::describe(v) + "; expected true or false");
+    return v.get<bool>();
+  }
+  std::string ptr(const char* key) const { return ptr_ + "/" + key; }
+
+ private:
+  const std::string& file_;
+  const json& j_;
+  std::string ptr_;
+};
+
+// How far the glTF-standard values (node transforms, yfov, cone angles) may lie from the exact
+// shadowlab values in the extras for the extras to be used: the export writes both from the same
+// floats, in double, so they agree to ~1e-15; a file an editor has changed since is further off,
+// and then the standard values win (with a warning). Relative, or absolute below 1.
+constexpr double kExtrasTolerance = 1e-6;
+bool near(double a, double b) { return std::abs(a - b) <= kExtrasTolerance * std::max(1.0, std::abs(b)); }
+bool near(glm::dvec3 a, glm::dvec3 b) { return glm::length(a - b) <= kExtrasTolerance * std::max(1.0, glm::length(b)); }
+
 class Converter {
  public:
   Converter(const Request& req, const json& doc, const tinygltf::Model& model, std::vector<Material>& materials)
@@ -573,6 +656,9 @@ class Converter {
   void emitMesh(size_t mesh, const glm::dmat4& world, size_t node, Content& out);
   void chooseCamera(const std::vector<std::pair<size_t, glm::dmat4>>& cameraNodes, Content& out) const;
   void addLights(const std::vector<std::pair<size_t, glm::dmat4>>& lightNodes, Content& out) const;
+  void exactCamera(size_t node, const glm::dmat4& world, int ci, Content& out) const;
+  void exactLight(size_t node, const glm::dmat4& world, const json& lj, Light& light, Content& out) const;
+  void addPart(size_t node, size_t firstVertex, size_t firstTriangle, Content& out);
 
   const Request& req_;
   std::string file_;
@@ -586,6 +672,9 @@ class Converter {
   size_t skippedPrimitives_ = 0;
   std::set<int> blendMaterials_;
   uint64_t triangles_ = 0;
+  std::vector<size_t> unmarkedMeshNodes_;  // mesh nodes without extras.shadowlab.object
+  std::set<uint32_t> partIds_;
+  std::set<std::string> partNames_;
 };
 
 const uint8_t* Converter::viewBytes(int view, size_t offset, size_t size, int accessor, const std::string& use) const {
@@ -1166,6 +1255,112 @@ void placeCamera(const std::string& file, const std::string& ptr, const glm::dma
   cam.up = glm::vec3(glm::normalize(up));
 }
 
+// The exact camera of extras.shadowlab.camera on the camera's node, where it agrees with the node's
+// transform and the glTF camera (kExtrasTolerance): its position, look_at, up, field of view (or
+// orthographic height), image size and planes replace what the node gives, bit for bit.
+void Converter::exactCamera(size_t node, const glm::dmat4& world, int ci, Content& out) const {
+  const json* e = shadowlabExtras(file_, doc_["nodes"][node], node, "camera");
+  if (!e) return;
+  const tinygltf::Camera& gc = m_.cameras[size_t(ci)];
+  const bool ortho = gc.type == "orthographic";
+  const ExtrasReader x(file_, *e, ptrOf("nodes", node) + "/extras/shadowlab/camera");
+  x.keys({"position", "look_at", "up", "width", "height", "near", "far", ortho ? "ortho_height" : "vfov_deg"});
+  Camera k = out.camera;
+  k.position = x.vec3("position");
+  k.lookAt = x.vec3("look_at");
+  k.up = x.vec3("up");
+  k.width = int(x.integer("width", 1, 16384, "an integer 1..16384 (pixels)"));
+  k.height = int(x.integer("height", 1, 16384, "an integer 1..16384 (pixels)"));
+  k.nearPlane = x.number("near", 0, !ortho, 1e30, false, ortho ? "a number >= 0" : "a positive number");
+  k.farPlane = x.number("far", double(k.nearPlane), true, 1e30, false, "a number above near");
+  if (ortho) k.orthoHeight = x.number("ortho_height", 0, true, 1e30, false, "a positive height (world units)");
+  else k.vfovDeg = x.number("vfov_deg", 0, true, 180, true, "a field of view in degrees, 0 < vfov_deg < 180");
+  const glm::dvec3 view = glm::dvec3(k.lookAt) - glm::dvec3(k.position);
+  if (!(glm::length(view) > 0))
+    fail(file_, x.ptr("look_at"), "got the camera's own position; expected a point away from it");
+  const glm::dvec3 forward = glm::normalize(view);
+  const glm::dvec3 side = glm::cross(forward, glm::dvec3(k.up));
+  if (!(glm::length(side) > 1e-12))
+    fail(file_, x.ptr("up"), "parallel to the view direction; expected an up vector not parallel to it");
+  const glm::dvec3 trueUp = glm::cross(glm::normalize(side), forward);
+  // What the node and the glTF camera say (placeCamera's reading of the node).
+  const glm::dvec3 nodePos(world * glm::dvec4(0, 0, 0, 1));
+  const glm::dvec3 nodeFwd = glm::normalize(glm::dmat3(world) * glm::dvec3(0, 0, -1));
+  const glm::dvec3 nodeUp = glm::normalize(glm::dmat3(world) * glm::dvec3(0, 1, 0));
+  const double aspect = double(k.width) / double(k.height);
+  std::string off;
+  if (!near(glm::dvec3(k.position), nodePos)) off = "position";
+  else if (!near(forward, nodeFwd)) off = "view direction";
+  else if (!near(trueUp, nodeUp)) off = "up";
+  else if (ortho && (!near(0.5 * double(k.orthoHeight), gc.orthographic.ymag) ||
+                     !near(0.5 * double(k.orthoHeight) * aspect, gc.orthographic.xmag)))
+    off = "xmag, ymag";
+  else if (!ortho && !near(double(k.vfovDeg) * kPi / 180.0, gc.perspective.yfov)) off = "yfov";
+  else if (!ortho && gc.perspective.aspectRatio > 0 && !near(aspect, gc.perspective.aspectRatio)) off = "aspectRatio";
+  else if (!near(double(k.nearPlane), ortho ? gc.orthographic.znear : gc.perspective.znear) ||
+           !near(double(k.farPlane), ortho ? gc.orthographic.zfar : gc.perspective.zfar))
+    off = "znear, zfar";
+  if (!off.empty()) {
+    out.warnings.push_back(warningLine(file_, ptrOf("nodes", node) + "/extras/shadowlab/camera: its " + off +
+                                                  " differs from the glTF camera's; the glTF camera is used"));
+    return;
+  }
+  out.camera = k;
+  out.infiniteFar = false;
+  out.cameraExact = true;
+}
+
+// The exact light of extras.shadowlab.light on a light's node: near plane and size (which
+// KHR_lights_punctual has no field for) always; direction, position and cone where they agree with
+// the node and the light (kExtrasTolerance).
+void Converter::exactLight(size_t node, const glm::dmat4& world, const json& lj, Light& light, Content& out) const {
+  out.lightExact.push_back(false);
+  out.lightRadiusPtr.emplace_back();
+  const json* e = shadowlabExtras(file_, doc_["nodes"][node], node, "light");
+  if (!e) return;
+  const ExtrasReader x(file_, *e, ptrOf("nodes", node) + "/extras/shadowlab/light");
+  const bool directional = light.type == LightType::Directional;
+  if (directional) x.keys({"direction", "angular_diameter_deg"});
+  else if (light.type == LightType::Spot) x.keys({"direction", "position", "near", "radius", "cone_deg"});
+  else x.keys({"direction", "position", "near", "radius"});
+  if (directional) {
+    if (x.has("angular_diameter_deg"))
+      light.angularDiameterDeg = x.number("angular_diameter_deg", 0, false, kMaxAngularDiameterDeg, false,
+                                          "an angle in degrees 0.." + std::to_string(int(kMaxAngularDiameterDeg)));
+  } else {
+    if (x.has("near")) light.nearPlane = x.number("near", 0, true, 1e30, false, "a positive number");
+    if (x.has("radius")) {
+      light.radius = x.number("radius", 0, false, 1e30, false, "a radius 0..1e30 (a sphere light; 0: a hard light)");
+      if (light.radius > 0) out.lightRadiusPtr.back() = x.ptr("radius");
+    }
+  }
+  Light k = light;
+  k.direction = x.vec3("direction");
+  const double len = glm::length(glm::dvec3(k.direction));
+  if (!(std::abs(len - 1.0) <= 1e-5))
+    fail(file_, x.ptr("direction"), "has length " + numberText(len) + "; expected a unit vector");
+  std::string off;
+  if (!near(glm::dvec3(k.direction), glm::dvec3(light.direction))) off = "direction";
+  if (!directional) {
+    k.position = x.vec3("position");
+    if (off.empty() && !near(glm::dvec3(k.position), glm::dvec3(world * glm::dvec4(0, 0, 0, 1)))) off = "position";
+  }
+  if (light.type == LightType::Spot) {
+    k.coneDeg = x.number("cone_deg", 0, true, 180, true, "a cone angle in degrees, 0 < cone_deg < 180");
+    const double outer = lj.contains("spot") && lj["spot"].contains("outerConeAngle")
+                             ? lj["spot"]["outerConeAngle"].get<double>()
+                             : kPi / 4;
+    if (off.empty() && !near(double(k.coneDeg) * 0.5 * kPi / 180.0, outer)) off = "cone_deg";
+  }
+  if (!off.empty()) {
+    out.warnings.push_back(warningLine(file_, ptrOf("nodes", node) + "/extras/shadowlab/light: its " + off +
+                                                  " differs from the glTF light's; the glTF light's is used"));
+    return;
+  }
+  light = k;
+  out.lightExact.back() = true;
+}
+
 void Converter::chooseCamera(const std::vector<std::pair<size_t, glm::dmat4>>& cameraNodes, Content& out) const {
   int want = req_.cameraIndex;
   if (!req_.cameraName.empty()) {
@@ -1191,6 +1386,7 @@ void Converter::chooseCamera(const std::vector<std::pair<size_t, glm::dmat4>>& c
       const int ci = m_.nodes[node].camera;
       if (want >= 0 ? ci != want : m_.cameras[size_t(ci)].type != type) continue;
       out.camera = cameraFromNode(file_, m_.cameras[size_t(ci)], size_t(ci), world, out.infiniteFar);
+      exactCamera(node, world, ci, out);
       out.hasCamera = true;
       out.cameraIndex = ci;
       return;
@@ -1253,8 +1449,36 @@ void Converter::addLights(const std::vector<std::pair<size_t, glm::dmat4>>& ligh
     std::string name = base;
     for (int k = 2; !names.insert(name).second; ++k) name = base + "_" + std::to_string(k);
     light.name = name;
+    exactLight(node, world, lj, light, out);
     out.lights.push_back(light);
   }
+}
+
+// A mesh node's extras.shadowlab.object: the triangles it just emitted are that shadowlab object.
+void Converter::addPart(size_t node, size_t firstVertex, size_t firstTriangle, Content& out) {
+  const json* e = shadowlabExtras(file_, doc_["nodes"][node], node, "object");
+  if (!e) {
+    unmarkedMeshNodes_.push_back(node);
+    return;
+  }
+  const ExtrasReader x(file_, *e, ptrOf("nodes", node) + "/extras/shadowlab/object");
+  x.keys({"id", "casts_shadow"});
+  Part p;
+  p.id = uint32_t(x.integer("id", 1, (1ll << 24) - 1, "an object id 1..16777215 (ids travel through float channels)"));
+  if (!partIds_.insert(p.id).second)
+    fail(file_, x.ptr("id"),
+         "object id " + std::to_string(p.id) + " is already used by another node; expected a unique id");
+  if (x.has("casts_shadow")) p.castsShadow = x.boolean("casts_shadow");
+  p.name = sanitizeName(m_.nodes[node].name);
+  if (p.name.empty()) p.name = "object" + std::to_string(p.id);
+  if (!partNames_.insert(p.name).second)
+    fail(file_, ptrOf("nodes", node) + "/name",
+         "object name \"" + p.name + "\" is already used by another node; expected a unique name (it names outputs)");
+  p.firstVertex = firstVertex;
+  p.vertexCount = out.positions.size() - firstVertex;
+  p.firstTriangle = firstTriangle;
+  p.triangleCount = out.triangles.size() - firstTriangle;
+  out.parts.push_back(std::move(p));
 }
 
 Content Converter::run() {
@@ -1300,7 +1524,11 @@ Content Converter::run() {
     seen[node] = true;
     const tinygltf::Node& n = m_.nodes[node];
     const glm::dmat4 world = parentWorld * localMatrix(n);
-    if (n.mesh >= 0) emitMesh(size_t(n.mesh), world, node, out);
+    if (n.mesh >= 0) {
+      const size_t firstVertex = out.positions.size(), firstTriangle = out.triangles.size();
+      emitMesh(size_t(n.mesh), world, node, out);
+      addPart(node, firstVertex, firstTriangle, out);
+    }
     if (n.camera >= 0) cameraNodes.emplace_back(node, world);
     const json& nj = doc_["nodes"][node];
     if (nj.contains("extensions") && nj["extensions"].contains("KHR_lights_punctual"))
@@ -1318,6 +1546,11 @@ Content Converter::run() {
     fail(file_, "/meshes",
          "the glTF scene has no triangle" + std::string(skippedPrimitives_ ? " (only POINTS/LINES primitives)" : "") +
              "; expected at least one");
+  // Objects come from the nodes only when every mesh node says which object it is.
+  if (!out.parts.empty() && !unmarkedMeshNodes_.empty())
+    fail(file_, ptrOf("nodes", unmarkedMeshNodes_.front()),
+         "a mesh node without extras.shadowlab.object where other mesh nodes have one; expected it on every mesh node "
+         "or on none");
   chooseCamera(cameraNodes, out);
   addLights(lightNodes, out);
   return out;

@@ -1,6 +1,7 @@
 #pragma once
 // glTF 2.0 files (.gltf, .glb) as scene content: the meshes of one glTF scene flattened into one
-// world-space triangle mesh, its MASK materials as alpha-tested Materials, its KHR_lights_punctual
+// world-space triangle mesh (with the nodes' shadowlab objects marked in it, for a file that
+// `shadowlab export` wrote: Part), its MASK materials as alpha-tested Materials, its KHR_lights_punctual
 // lights and its cameras, converted into the structures of scene.h so that neither renderer knows
 // glTF exists. The mapping table is scenes/FORMAT.md ("glTF files"). Parsing is tinygltf's
 // (Debian's libtinygltf-dev, compiled in gltf_tinygltf.cpp without image decoding); this file's
@@ -42,6 +43,16 @@ struct Request {
   std::string requestPtr;
 };
 
+// A mesh node that says which shadowlab object it is (extras.shadowlab.object, written by
+// exportGlb): a glTF path loaded as the scene becomes one object per such node (loader.cpp).
+struct Part {
+  std::string name;  // the node's name (sanitized)
+  uint32_t id = 0;   // 1..2^24-1
+  bool castsShadow = true;
+  size_t firstVertex = 0, vertexCount = 0;      // in Content::positions (and uvs)
+  size_t firstTriangle = 0, triangleCount = 0;  // in Content::triangles
+};
+
 struct Content {
   // The flattened mesh in the glTF scene's world space (node transforms applied).
   std::vector<glm::vec3> positions;
@@ -53,6 +64,10 @@ struct Content {
   int cameraIndex = -1;                    // which one (into the file's "cameras")
   Camera camera;                           // width 640, height from aspectRatio (480 without)
   bool infiniteFar = false;                // no zfar: the caller sets farPlane from the scene's bounds
+  bool cameraExact = false;                // the camera is extras.shadowlab.camera's, bit for bit
+  std::vector<Part> parts;                 // empty unless every mesh node carries extras.shadowlab.object
+  std::vector<bool> lightExact;            // per light: direction and position from extras.shadowlab.light
+  std::vector<std::string> lightRadiusPtr;  // per light: the JSON pointer of its radius ("" without one)
   std::vector<std::string> warnings;       // GCC-style "file: warning: ..." lines
   uint64_t hash = 0;                       // FNV-1a over the (overridden) glTF JSON and the buffers read
 };

@@ -676,6 +676,9 @@ struct GltfState {
   std::string cameraFile;  // the glTF file the camera came from, and its index in "cameras"
   int cameraIndex = -1;
   std::vector<Light> lights;
+  std::vector<std::string> lightFile, lightRadiusPtr;  // per light: its glTF file and the pointer of its radius
+  bool scene = false;                                  // the glTF file is the scene: its marked nodes become objects
+  std::vector<gltf::Part> parts;                       // the marked nodes of that file (gltf_loader.h)
   uint64_t hash = 0;
 };
 
@@ -707,17 +710,27 @@ Mesh readGltfObject(const Reader& r, const Node& o, const fs::path& dir, const s
   const glm::mat4 xf = readTransform(r, o);
   const glm::mat3 xf3(xf);
   auto point = [&](glm::vec3 v) { return glm::vec3(xf * glm::vec4(v, 1.0f)); };
-  for (Light l : c.lights) {
-    l.position = point(l.position);
-    l.direction = glm::normalize(xf3 * l.direction);
+  // Exact values from a file's shadowlab extras stay bit for bit where no transform moves them.
+  const bool moved = bool(r.child(o, "transform"));
+  for (size_t i = 0; i < c.lights.size(); ++i) {
+    Light l = c.lights[i];
+    if (moved || !c.lightExact[i]) {
+      l.position = point(l.position);
+      l.direction = glm::normalize(xf3 * l.direction);
+    }
     st.lights.push_back(l);
+    st.lightFile.push_back(q.path);
+    st.lightRadiusPtr.push_back(c.lightRadiusPtr[i]);
   }
+  if (st.scene) st.parts = std::move(c.parts);
   if (c.hasCamera && (cam || !st.hasCamera)) {
     Camera k = c.camera;
-    const glm::vec3 forward = glm::normalize(xf3 * (c.camera.lookAt - c.camera.position));
-    k.position = point(c.camera.position);
-    k.lookAt = k.position + forward;
-    k.up = glm::normalize(xf3 * c.camera.up);
+    if (moved || !c.cameraExact) {
+      const glm::vec3 forward = glm::normalize(xf3 * (c.camera.lookAt - c.camera.position));
+      k.position = point(c.camera.position);
+      k.lookAt = k.position + forward;
+      k.up = glm::normalize(xf3 * c.camera.up);
+    }
     st.camera = k;
     st.infiniteFar = c.infiniteFar;
     st.hasCamera = true;
@@ -733,6 +746,30 @@ Mesh readGltfObject(const Reader& r, const Node& o, const fs::path& dir, const s
   m.triangles = std::move(c.triangles);
   m.triangleMaterial = std::move(c.triangleMaterial);
   return m;
+}
+
+// A glTF path as the scene whose mesh nodes say which shadowlab object they are (exportGlb): one
+// object per node, in node order, with its name, id and casts_shadow (ids and names were checked
+// unique by gltf_loader.cpp). The node's vertices are contiguous in the flattened mesh.
+void splitParts(const Object& all, const std::vector<gltf::Part>& parts, Scene& scene) {
+  for (const gltf::Part& p : parts) {
+    if (p.triangleCount == 0) continue;  // a node of POINTS or LINES only
+    Object obj;
+    obj.name = p.name;
+    obj.id = p.id;
+    obj.castsShadow = p.castsShadow && all.castsShadow;
+    obj.positions.assign(all.positions.begin() + ptrdiff_t(p.firstVertex),
+                         all.positions.begin() + ptrdiff_t(p.firstVertex + p.vertexCount));
+    if (!all.uvs.empty())
+      obj.uvs.assign(all.uvs.begin() + ptrdiff_t(p.firstVertex),
+                     all.uvs.begin() + ptrdiff_t(p.firstVertex + p.vertexCount));
+    obj.triangles.reserve(p.triangleCount);
+    for (size_t t = p.firstTriangle; t < p.firstTriangle + p.triangleCount; ++t)
+      obj.triangles.push_back(all.triangles[t] - glm::uvec3(uint32_t(p.firstVertex)));
+    obj.triangleMaterial.assign(all.triangleMaterial.begin() + ptrdiff_t(p.firstTriangle),
+                                all.triangleMaterial.begin() + ptrdiff_t(p.firstTriangle + p.triangleCount));
+    scene.objects.push_back(std::move(obj));
+  }
 }
 
 void readObjects(const Reader& r, const Node& root, const fs::path& dir, Scene& scene, GltfState& gltfState) {
@@ -854,7 +891,8 @@ void readObjects(const Reader& r, const Node& root, const fs::path& dir, Scene& 
                    " has no uv coordinates; expected a plane, quad, box or an OBJ with vt");
     sceneTriangles += obj.triangles.size();
     checkTriangles(o, sceneTriangles);
-    scene.objects.push_back(std::move(obj));
+    if (type == "gltf" && !gltfState.parts.empty()) splitParts(obj, gltfState.parts, scene);
+    else scene.objects.push_back(std::move(obj));
   }
 }
 
@@ -1252,6 +1290,12 @@ bool hasGltfObject(const json& doc) {
 // the scene's bounds when the glTF camera has no zfar), else one framing the bounds. A glTF path
 // without lights gets a default sun, with a warning.
 void finishGltf(const Reader& r, const Node& root, Scene& scene, const GltfState& st, bool gltfScene) {
+  // A sphere light from a file's extras must lie outside every object, as a JSON scene's must.
+  for (size_t i = 0; i < st.lights.size(); ++i)
+    if (!st.lightRadiusPtr[i].empty()) {
+      const json radius = double(st.lights[i].radius);
+      checkSphereLightClear(Reader(st.lightFile[i]), Node{&radius, st.lightRadiusPtr[i]}, st.lights[i], scene);
+    }
   std::set<std::string> names;
   for (const auto& l : scene.lights) names.insert(l.name);
   for (Light l : st.lights) {
@@ -1368,6 +1412,7 @@ Scene loadScene(const std::string& path, const std::vector<SceneOverride>& overr
   scene.name = fs::path(path).stem().string();
   GltfState gltfState;
   if (gltfScene) gltfState.overrides = rest;
+  gltfState.scene = gltfScene;
   // With a glTF object the camera may come from the glTF file (finishGltf).
   if (r.child(root, "camera") || !hasGltfObject(doc)) readCamera(r, root, scene.camera);
   readMaterials(r, root, dir, scene.materials);
