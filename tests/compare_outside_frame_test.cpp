@@ -160,6 +160,30 @@ TEST_F(OutsideFrame, AFieldOfView5PercentWiderOrNarrowerIsRefused) {
   expectRefused(compare("frame.png", "out"), "looks rendered with a narrower field of view (-5%", path("out"));
 }
 
+TEST_F(OutsideFrame, AFlippedCoverageIsRefusedToo) {
+  // With coverage the geometry's own edges (the block, the ground's far edge) count as well.
+  writeGreyPng16(path("frame.png"), kWidth, kHeight, flipRows(vis(scene_), kWidth, kHeight));
+  writeGreyPng16(path("coverage.png"), kWidth, kHeight, flipRows(hit(scene_), kWidth, kHeight));
+  expectRefused(compare("frame.png", "out", "--coverage '" + path("coverage.png") + "'"), "looks upside down",
+                path("out"));
+}
+
+TEST_F(OutsideFrame, AFeaturelessFrameIsScoredAsCannotTell) {
+  // Ground and sun, no occluder: no shadow edge, so no transform can be told from another; the
+  // frame is scored, and metrics.json says the alignment could not be told.
+  writeFileAtomic(path("flat.json"), R"({
+    "camera": {"position": [0, 6, 10], "look_at": [0, 0, -2], "vfov_deg": 50, "width": 320, "height": 180},
+    "objects": [{"type": "plane", "name": "ground", "size": [60, 60]}],
+    "lights": [{"type": "directional", "name": "sun", "elevation_deg": 40, "azimuth_deg": 60}]
+  })");
+  const Scene flat = loadScene(path("flat.json"));
+  writeGreyPng16(path("frame.png"), kWidth, kHeight, flipRows(vis(flat), kWidth, kHeight));
+  const auto r = shadowlab("compare '" + path("flat.json") + "' '" + path("frame.png") + "' -o '" + path("out") + "'");
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_NE(r.out.find("alignment: cannot tell (0 edge pixels"), std::string::npos) << r.out;
+  EXPECT_EQ(metrics("out")["method"]["alignment"]["verdict"], "cannot tell");
+}
+
 TEST_F(OutsideFrame, AnotherSizeOrAspectIsRefused) {
   writeGreyPng16(path("frame.png"), 160, 90, std::vector<float>(160 * 90, 1.0f));
   expectRefused(compare("frame.png", "out"),
@@ -297,6 +321,7 @@ TEST_F(OutsideFrame, TheRendererJsonIsValidatedAndNamesTheConfiguration) {
   EXPECT_EQ(m["method"]["renderer"], "mine 1.0");
   EXPECT_EQ(m["method"]["map_size"], 2048);
   EXPECT_EQ(m["method"]["frame_ms"], 4.5);
+  EXPECT_EQ(m["timings"]["renderer_frame_ms"], 4.5);
 }
 
 TEST_F(OutsideFrame, GatePassesTheSameRendererAndFailsAWorseFrame) {

@@ -60,7 +60,7 @@ struct PngPixels {
 
 // libpng's classic interface, so that nothing is converted behind our back: no gamma, no sRGB
 // decoding, no alpha association (a renderer's visibility is a number, not a colour).
-PngPixels readPng(const std::string& path) {
+PngPixels readPng(const std::string& path, const std::function<void(int, int)>& checkSize) {
   std::unique_ptr<std::FILE, FileCloser> file(std::fopen(path.c_str(), "rb"));
   if (!file) throw InputError(formatError(path, "", std::string("cannot open file: ") + std::strerror(errno)));
   PngFailure failure;
@@ -85,6 +85,14 @@ PngPixels readPng(const std::string& path) {
     throw InputError(formatError(path, "",
                                  "image is " + std::to_string(width) + "x" + std::to_string(height) +
                                      "; expected sides of 1.." + std::to_string(kMaxOutsideImageSide) + " pixels"));
+  }
+  if (checkSize) {
+    try {
+      checkSize(int(width), int(height));
+    } catch (...) {
+      png_destroy_read_struct(&png, &info, nullptr);
+      throw;
+    }
   }
   const int colorType = png_get_color_type(png, info);
   const int bitDepth = png_get_bit_depth(png, info);
@@ -122,8 +130,9 @@ PngPixels readPng(const std::string& path) {
   return out;
 }
 
-ImagePlane pngPlane(const std::string& path, const std::string& wanted) {
-  const PngPixels png = readPng(path);
+ImagePlane pngPlane(const std::string& path, const std::string& wanted,
+                    const std::function<void(int, int)>& checkSize) {
+  const PngPixels png = readPng(path, checkSize);
   const size_t n = png.channels.size();
   const std::string kind = std::string(n >= 3 ? (n == 4 ? "RGBA" : "RGB") : (n == 2 ? "grey+alpha" : "grey"));
   ImagePlane plane;
@@ -159,7 +168,8 @@ ImagePlane pngPlane(const std::string& path, const std::string& wanted) {
   return plane;
 }
 
-ImagePlane exrPlane(const std::string& path, const std::string& wanted) {
+ImagePlane exrPlane(const std::string& path, const std::string& wanted,
+                    const std::function<void(int, int)>& checkSize) {
   const Frame image = readFrameExr(path);
   if (image.width < 1 || image.height < 1 || image.width > kMaxOutsideImageSide ||
       image.height > kMaxOutsideImageSide) {
@@ -167,6 +177,7 @@ ImagePlane exrPlane(const std::string& path, const std::string& wanted) {
                                  "image is " + std::to_string(image.width) + "x" + std::to_string(image.height) +
                                      "; expected sides of 1.." + std::to_string(kMaxOutsideImageSide) + " pixels"));
   }
+  if (checkSize) checkSize(image.width, image.height);
   std::string channel = wanted;
   if (channel.empty()) {
     if (image.has("vis")) {
@@ -218,14 +229,15 @@ std::string metaText(const Frame& f, const char* key) {
 
 }  // namespace
 
-ImagePlane readImagePlane(const std::string& path, const std::string& channel) {
+ImagePlane readImagePlane(const std::string& path, const std::string& channel,
+                          const std::function<void(int, int)>& checkSize) {
   std::error_code ec;
   if (!fs::is_regular_file(path, ec)) throw InputError(formatError(path, "", "cannot open file: no such file"));
   ImagePlane plane;
   if (endsWithNoCase(path, ".png")) {
-    plane = pngPlane(path, channel);
+    plane = pngPlane(path, channel, checkSize);
   } else if (endsWithNoCase(path, ".exr")) {
-    plane = exrPlane(path, channel);
+    plane = exrPlane(path, channel, checkSize);
     checkPlane(plane, path, "a finite number", [](float v) { return !std::isfinite(v); });
   } else {
     throw InputError(formatError(path, "", "unknown image type; expected a .png or .exr file"));

@@ -4,6 +4,7 @@
 // An outside frame is an image of the shadow term alone for the scene's camera, read here into a
 // Frame like the rasterizer's (meta "kind": "outside"), so that everything after it (compare, the
 // pictures, metrics.json, the gate) treats it as any other frame.
+#include <functional>
 #include <optional>
 #include <string>
 #include <vector>
@@ -36,8 +37,10 @@ struct ImagePlane {
 // RGB(A) PNG's R when R = G = B at every pixel (else a colour image must name its channel), an
 // EXR's "vis" or its only channel. Throws InputError naming `path` and the channel: no such
 // channel, an unreadable file, a side beyond kMaxOutsideImageSide, and (EXR) a value that is not
-// finite, named at its first pixel.
-ImagePlane readImagePlane(const std::string& path, const std::string& channel);
+// finite, named at its first pixel. `checkSize(width, height)`, when given, is called as soon as
+// the size is known (a PNG: from its header, before any pixel is decoded) and may throw.
+ImagePlane readImagePlane(const std::string& path, const std::string& channel,
+                          const std::function<void(int, int)>& checkSize = {});
 
 // Writes `values` (width * height, row 0 at the top, each in [0, 1]) as a 16-bit grey PNG, code =
 // round(v * 65535), atomically: an outside frame as a renderer would write it (tests, adapters).
