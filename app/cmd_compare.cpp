@@ -168,6 +168,13 @@ int report(const Metrics& metrics, double compareMs, const std::string& outDir, 
 // and only then compared.
 int runOutside(const Options& o) {
   const std::string& framePath = o.rasterDir;
+  std::error_code ec;
+  if (fs::is_directory(o.referenceDir, ec)) {
+    throw InputError(formatError(o.referenceDir, "",
+                                 "is a folder; a frame from another program (" + framePath +
+                                     ") is compared against its scene: expected SCENE (a bundled name, a JSON, glTF "
+                                     "or glb file), whose truth compare traces"));
+  }
   const Scene scene = loadScene(resolveScenePath(o.referenceDir));
   if (!o.light.empty() && !scene.findLight(o.light)) {
     std::string names;

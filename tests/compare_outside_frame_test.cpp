@@ -343,6 +343,15 @@ TEST_F(OutsideFrame, GatePassesTheSameRendererAndFailsAWorseFrame) {
   EXPECT_NE(g.err.find("error_rate"), std::string::npos) << g.err;
 }
 
+TEST_F(OutsideFrame, AReferenceFolderInPlaceOfTheSceneIsRefused) {
+  writeGreyPng16(path("frame.png"), kWidth, kHeight, vis(scene_));
+  fs::create_directories(path("ref"));
+  const auto r = shadowlab("compare '" + path("ref") + "' '" + path("frame.png") + "' -o '" + path("out") + "'");
+  EXPECT_EQ(r.code, 2) << r.err;
+  EXPECT_NE(r.err.find("ref: error: is a folder; a frame from another program"), std::string::npos) << r.err;
+  EXPECT_FALSE(fs::exists(path("out")));
+}
+
 TEST_F(OutsideFrame, OutsideOptionsOnShadowlabsOwnFramesAreRefused) {
   Frame f;
   f.width = 4;
