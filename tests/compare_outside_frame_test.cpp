@@ -343,6 +343,31 @@ TEST_F(OutsideFrame, GatePassesTheSameRendererAndFailsAWorseFrame) {
   EXPECT_NE(g.err.find("error_rate"), std::string::npos) << g.err;
 }
 
+TEST_F(OutsideFrame, ASoftShadowFrameOfTheTruthIsAcceptedWithoutError) {
+  // A sized light: the truth's fractional visibility, 16-bit (quantization error <= 1/131070,
+  // far below the soft tolerance), is right; compare scores it in soft mode.
+  std::string text = readFile(fs::path(SHADOWLAB_SOURCE_DIR) / "scenes/data/soft_post.json");
+  const std::string from = "\"width\": 640, \"height\": 360";
+  const size_t at = text.find(from);
+  ASSERT_NE(at, std::string::npos);
+  text.replace(at, from.size(), "\"width\": 160, \"height\": 90");
+  writeFileAtomic(path("soft.json"), text);
+  const Scene soft = loadScene(path("soft.json"));
+  ReferenceOptions options;
+  options.channels = ReferenceChannels::Compare;
+  const Frame truth = renderReference(soft, options);
+  const std::string light = soft.lightOrDefault("");
+  const std::vector<float>& v = truth.get("light." + light + ".vis");
+  ASSERT_TRUE(std::any_of(v.begin(), v.end(), [](float x) { return x > 0.05f && x < 0.95f; })) << "no penumbra";
+  writeGreyPng16(path("frame.png"), 160, 90, v);
+  const auto r = shadowlab("compare '" + path("soft.json") + "' '" + path("frame.png") + "' -o '" + path("out") + "'");
+  ASSERT_EQ(r.code, 0) << r.err;
+  const nlohmann::json m = metrics("out")["metrics"];
+  EXPECT_EQ(m["error_rate"], 0.0);
+  EXPECT_GT(m["penumbra_pixels"].get<int>(), 0);
+  EXPECT_LT(m["penumbra_mae"].get<double>(), 1e-5);
+}
+
 TEST_F(OutsideFrame, AReferenceFolderInPlaceOfTheSceneIsRefused) {
   writeGreyPng16(path("frame.png"), kWidth, kHeight, vis(scene_));
   fs::create_directories(path("ref"));
