@@ -1,19 +1,29 @@
 // `shadowlab compare REF_DIR RASTER_DIR -o DIR`: classifies every wrong pixel of a raster frame
 // against a reference frame and writes metrics.json, errors.png and triptych.png.
+// `shadowlab compare SCENE FRAME -o DIR`: the same for a frame rendered by another program (a .png,
+// or an .exr without shadowlab's metadata; scenes/FRAME-CONTRACT.md): the truth is traced for the
+// scene, the frame's alignment checked, then it is compared as any other frame.
+#include <algorithm>
 #include <chrono>
+#include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <memory>
+#include <optional>
 
 #include "command.h"
 #include "shadowlab/compare/config_name.h"
 #include "shadowlab/compare/compare.h"
 #include "shadowlab/compare/frame_check.h"
+#include "shadowlab/compare/outside_alignment.h"
+#include "shadowlab/compare/outside_frame.h"
 #include "shadowlab/compare/results.h"
 #include "shadowlab/compare/timings.h"
 #include "shadowlab/scenes/error.h"
 #include "shadowlab/scenes/io.h"
 #include "shadowlab/scenes/json_reader.h"
+#include "shadowlab/scenes/loader.h"
+#include "shadowlab/scenes/number_text.h"
 
 namespace {
 
@@ -26,6 +36,15 @@ struct Options {
   std::string outDir;
   std::string light;
   float boundaryTexels = 2.0f;
+  // Outside frames only (scenes/FRAME-CONTRACT.md).
+  std::string channel;
+  std::string coverage;
+  std::string coverageChannel;
+  std::optional<float> coverageFar;
+  std::string renderer;
+  bool outsideOnlyGiven() const {
+    return !channel.empty() || !coverage.empty() || !coverageChannel.empty() || coverageFar || !renderer.empty();
+  }
 };
 
 // A folder means the renderer's output folder; a path to a file is taken as it is.
@@ -62,7 +81,7 @@ nlohmann::json rasterTimings(const std::string& rasterExr) {
   return timings;
 }
 
-int run(const Options& o) {
+int runOwn(const Options& o) {
   const std::string refPath = framePath(o.referenceDir, "reference.exr");
   const std::string rasPath = framePath(o.rasterDir, "raster.exr");
   std::error_code ec;
@@ -124,19 +143,155 @@ int run(const Options& o) {
   return 0;
 }
 
+// What both kinds of comparison print and return once the outputs are written.
+int report(const Metrics& metrics, double compareMs, const std::string& outDir, const std::string& refName,
+           const std::string& frameName) {
+  if (metrics.nothingCompared()) {
+    std::printf("compared 0 pixels (%llu geometry mismatch) in %.1f ms\n",
+                (unsigned long long)metrics.count(PixelClass::GeometryMismatch), compareMs);
+    std::printf("wrote %s/metrics.json, errors.png, triptych.png\n", outDir.c_str());
+    std::fflush(stdout);
+    std::fprintf(stderr, "%s and %s: error: %s\n", refName.c_str(), frameName.c_str(),
+                 nothingComparedMessage(metrics).c_str());
+    return 2;
+  }
+  std::printf("compared %llu pixels (%llu geometry mismatch): error_rate %.4f (%s) in %.1f ms\n",
+              (unsigned long long)metrics.pixelsCompared,
+              (unsigned long long)metrics.count(PixelClass::GeometryMismatch), metrics.errorRate,
+              errorClassSummary(metrics, false).c_str(), compareMs);
+  std::printf("wrote %s/metrics.json, errors.png, triptych.png\n", outDir.c_str());
+  return 0;
+}
+
+// A frame from another program: the truth is traced here (with the All channels, which the
+// evidence of an outside frame is filled from), the frame is read, sized, checked for alignment
+// and only then compared.
+int runOutside(const Options& o) {
+  const std::string& framePath = o.rasterDir;
+  std::error_code ec;
+  if (fs::is_directory(o.referenceDir, ec)) {
+    throw InputError(formatError(o.referenceDir, "",
+                                 "is a folder; a frame from another program (" + framePath +
+                                     ") is compared against its scene: expected SCENE (a bundled name, a JSON, glTF "
+                                     "or glb file), whose truth compare traces"));
+  }
+  const Scene scene = loadScene(resolveScenePath(o.referenceDir));
+  if (!o.light.empty() && !scene.findLight(o.light)) {
+    std::string names;
+    for (const auto& l : scene.lights) names += (names.empty() ? "" : ", ") + l.name;
+    throw InputError("--light " + o.light + ": error: scene " + scene.path + " has no light \"" + o.light +
+                     "\"; expected one of: " + (names.empty() ? "(none)" : names));
+  }
+  if (scene.lights.empty())
+    throw InputError(formatError(scene.path, "/lights",
+                                 "the scene has no light; expected a light whose shadow the outside frame shows"));
+  const std::string light = scene.lightOrDefault(o.light);
+  if (o.coverageFar && !std::isfinite(*o.coverageFar))
+    throw InputError("--coverage-far: error: got " + numberText(*o.coverageFar) + "; expected a finite depth");
+  if (!o.coverageChannel.empty() && o.coverage.empty())
+    throw InputError("--coverage-channel: error: given without --coverage; expected a coverage image to read it from");
+  const DeclaredRenderer declared = o.renderer.empty() ? DeclaredRenderer{} : readDeclaredRenderer(o.renderer);
+  // Sizes are refused from the header, before a pixel of a wrong-sized image is decoded.
+  auto sized = [&](const std::string& file) {
+    return [&scene, file](int width, int height) { checkOutsideSize(width, height, scene.camera, file); };
+  };
+  const ImagePlane vis = readImagePlane(framePath, o.channel, sized(framePath));
+  std::optional<ImagePlane> coverage;
+  if (!o.coverage.empty()) coverage = readImagePlane(o.coverage, o.coverageChannel, sized(o.coverage));
+  OutputFolder out(o.outDir);  // an unusable -o fails before anything is traced
+
+  ReferenceOptions traceOptions;
+  traceOptions.channels = ReferenceChannels::All;
+  const Frame truth = renderReference(scene, traceOptions);
+  {
+    const std::vector<float>& hit = truth.get("hit");
+    if (std::none_of(hit.begin(), hit.end(), [](float h) { return h >= 0.5f; }))
+      throw InputError(formatError(scene.path, "/camera", "the camera sees no surface; expected a view of the scene"));
+  }
+  CoverageRule rule;
+  rule.far = o.coverageFar;
+  Frame outside =
+      makeOutsideFrame(truth, light, vis, framePath, coverage ? &*coverage : nullptr, o.coverage, rule, declared);
+  const AlignmentCheck alignment =
+      checkOutsideAlignment(scene, truth, outside, coverage.has_value(), light, framePath, traceOptions);
+
+  CompareOptions options;
+  options.light = light;
+  options.boundaryTexels = o.boundaryTexels;
+  options.referenceName = scene.path + " (traced)";
+  options.rasterName = framePath;
+  prepareOutsideComparison(truth, outside, declared, options);
+  Classification classification;
+  const auto t0 = std::chrono::steady_clock::now();
+  const Metrics metrics = compareFrames(truth, outside, options, &classification);
+  const double compareMs = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+
+  ResultRow row;
+  row.scene = scene.name;
+  row.light = light;
+  row.method = outsideMethodJson(declared, outside, alignment);
+  row.config = outsideConfigName(declared);
+  row.metrics = metrics.toJson();
+  row.timings[timing::kCompareMs] = compareMs;
+  // The renderer's own time, so that the gate can hold its cost beside its accuracy.
+  if (declared.frameMs) row.timings[timing::kRendererFrameMs] = *declared.frameMs;
+
+  writeMetricsJson((fs::path(o.outDir) / "metrics.json").string(), row);
+  writeErrorsPng((fs::path(o.outDir) / "errors.png").string(), classification, &truth);
+  writeTriptychPng((fs::path(o.outDir) / "triptych.png").string(), truth, outside, classification);
+  out.keep();
+  if (alignment.verdict == "cannot tell")
+    std::printf("alignment: cannot tell (%llu edge pixels in the truth's pattern; %llu needed)\n",
+                (unsigned long long)alignment.edgePixels, (unsigned long long)kMinEdgePixels);
+  std::printf("outside frame: %s, %s channel %s, coverage %s, boundary band %g pixels\n",
+              declared.name.empty() ? "(renderer not declared)" : declared.name.c_str(), vis.description.c_str(),
+              vis.channel.c_str(), coverage ? "given" : "assumed (the truth's)", double(o.boundaryTexels));
+  return report(metrics, compareMs, o.outDir, options.referenceName, framePath);
+}
+
+int run(const Options& o) {
+  if (isOutsideFrameFile(o.rasterDir)) return runOutside(o);
+  if (o.outsideOnlyGiven()) {
+    throw InputError(o.rasterDir +
+                     ": error: --channel, --coverage, --coverage-channel, --coverage-far and --renderer apply to a "
+                     "frame from another program (a .png, or an .exr without shadowlab's metadata); expected such a "
+                     "frame or none of these options");
+  }
+  return runOwn(o);
+}
+
 app::Registrar reg{
     "compare", [](CLI::App& app) {
       auto opts = std::make_shared<Options>();
       auto* sub =
           app.add_subcommand("compare", "Classify every wrong shadow pixel of a raster frame against the reference");
-      sub->add_option("REF_DIR", opts->referenceDir, "Folder with reference.exr (or the .exr itself)")->required();
-      sub->add_option("RASTER_DIR", opts->rasterDir, "Folder with raster.exr (or the .exr itself)")->required();
+      sub->add_option("REF_DIR", opts->referenceDir,
+                      "Folder with reference.exr (or the .exr itself); for a frame from another program: the scene "
+                      "(bundled name, JSON, glTF/glb)")
+          ->required();
+      sub->add_option("RASTER_DIR", opts->rasterDir,
+                      "Folder with raster.exr (or the .exr itself), or a frame from another program: a .png, or an "
+                      ".exr without shadowlab's metadata (scenes/FRAME-CONTRACT.md)")
+          ->required();
       sub->add_option("-o,--out", opts->outDir, "Output folder for metrics.json, errors.png, triptych.png")->required();
       sub->add_option("--light", opts->light, "Light to compare (default: the light the raster frame rendered)");
       sub->add_option("--boundary-texels", opts->boundaryTexels,
                       "Aliasing: disagreements within this many map texels of a reference shadow boundary")
           ->check(CLI::NonNegativeNumber)
           ->capture_default_str();
+      sub->add_option("--channel", opts->channel,
+                      "Outside frame: its visibility channel (PNG: Y, R, G, B or A; EXR: a name; default: grey, "
+                      "\"vis\" or the only channel)");
+      sub->add_option("--coverage", opts->coverage,
+                      "Outside frame: the renderer's coverage image (PNG/EXR; a mask, surface where > 0.5, or a depth "
+                      "image with --coverage-far); without it the truth's hit is assumed");
+      sub->add_option("--coverage-channel", opts->coverageChannel, "Outside frame: the coverage image's channel");
+      sub->add_option("--coverage-far", opts->coverageFar,
+                      "Outside frame: the coverage image is depth; no surface where it equals this value (1: cleared "
+                      "to the far plane, 0: reversed-Z)");
+      sub->add_option("--renderer", opts->renderer,
+                      "Outside frame: what the renderer used (JSON: name, light_clip_from_world, map_size, biases, "
+                      "filter, frame_ms, settings)");
       return std::function<int()>([opts] { return run(*opts); });
     }};
 

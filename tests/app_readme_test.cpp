@@ -11,6 +11,11 @@
 //     last_week/) gets a copy of the current file as that baseline, so the gate runs (exit 0);
 //   - a `--shard 0/N` line stands for one command per machine: the test runs the other N - 1
 //     shards too before the merge.
+//   - a `compare SCENE FRAME.png` line whose PNG no line wrote (section "Score your own renderer":
+//     the user's own engine renders it) gets the frame an engine that gets everything right would
+//     write: the truth's own visibility of the scene's first light, as a 16-bit grey PNG;
+//   - an `export` line, where this build has no `shadowlab export` subcommand, is skipped with the
+//     reason printed.
 // Lines that need what a build tree cannot give are skipped with the reason printed: the device
 // bundle's launcher `shadowlab/shadowlab` (scripts/device-bundle.sh builds it), and `--submit`
 // where `sbatch` is on PATH (it would submit to a cluster; CTest `slurm_loopback` runs that path).
@@ -30,6 +35,10 @@
 #include <vector>
 
 #include <gtest/gtest.h>
+
+#include "shadowlab/compare/outside_frame.h"
+#include "shadowlab/reference/reference.h"
+#include "shadowlab/scenes/loader.h"
 
 namespace {
 
@@ -149,6 +158,7 @@ TEST(Readme, EveryShadowlabLineRunsAsWritten) {
   }
   fs::remove_all(dir / "probe");
   const bool sbatch = onPath("sbatch");
+  const bool hasExport = runIn(dir, "$B export --help").code == 0;
   double total = 0;
   for (const ReadmeLine& l : lines) {
     std::string command = l.command;
@@ -163,6 +173,23 @@ TEST(Readme, EveryShadowlabLineRunsAsWritten) {
           "--submit)\n",
           where.c_str());
       continue;
+    }
+    if (command.rfind("$B export ", 0) == 0 && !hasExport) {
+      std::printf("*** SKIPPED %s: this build has no `shadowlab export` subcommand\n", where.c_str());
+      continue;
+    }
+    // The frame the reader's own engine renders: the truth's visibility, as a right frame would be.
+    std::smatch outside;
+    if (std::regex_search(command, outside, std::regex("^\\$B compare ([^ ]+) ([^ ]+\\.png) ")) &&
+        !fs::exists(dir / outside[2].str())) {
+      using namespace shadowlab;
+      const Scene scene = loadScene(resolveScenePath(outside[1].str()));
+      ReferenceOptions options;
+      options.channels = ReferenceChannels::Compare;
+      const Frame truth = renderReference(scene, options);
+      fs::create_directories((dir / outside[2].str()).parent_path());
+      writeGreyPng16((dir / outside[2].str()).string(), truth.width, truth.height,
+                     truth.get("light." + scene.lightOrDefault("") + ".vis"));
     }
     const std::string binary = "./build/app/shadowlab ";
     if (command.rfind(binary, 0) == 0) command = "$B " + command.substr(binary.size());

@@ -83,15 +83,26 @@ TEST_F(JsonBadInput, SweepFileWithAKeyTwice) {
   EXPECT_FALSE(fs::exists(out)) << "nothing written on bad input";
 }
 
+TEST_F(JsonBadInput, RendererFileWithAKeyTwice) {
+  // The renderer JSON is read before the frame: the frame need not exist for the error.
+  const fs::path out = dir_ / "cmp";
+  expectRejected("renderer_duplicate_key.json", "compare grazing '" + (dir_ / "frame.png").string() + "' --renderer '" +
+                                                    kBadInput + "renderer_duplicate_key.json' -o '" + out.string() +
+                                                    "'");
+  EXPECT_FALSE(fs::exists(out)) << "nothing written on bad input";
+}
+
 // A file that is no JSON at all (a pull request can name any file as a scene, a method or a
 // baseline): the message says where it stopped being JSON and never quotes what it read there.
 TEST_F(JsonBadInput, AFileThatIsNoJsonIsNeverQuoted) {
   const fs::path secret = dir_ / "passwd";
   std::ofstream(secret) << "root-secret-7f3a:x:0:0:root:/root:/bin/bash\n";
-  for (const std::string& args : {"reference '" + secret.string() + "' -o '" + (dir_ / "ref").string() + "'",
-                                  "gate '" + kGoodMetrics + "' --baseline '" + secret.string() + "'",
-                                  "run sphere_on_plane --method '" + secret.string() + "' -o '" +
-                                      (dir_ / "run").string() + "'"}) {
+  for (const std::string& args :
+       {"reference '" + secret.string() + "' -o '" + (dir_ / "ref").string() + "'",
+        "gate '" + kGoodMetrics + "' --baseline '" + secret.string() + "'",
+        "run sphere_on_plane --method '" + secret.string() + "' -o '" + (dir_ / "run").string() + "'",
+        "compare grazing '" + (dir_ / "frame.png").string() + "' --renderer '" + secret.string() + "' -o '" +
+            (dir_ / "cmp").string() + "'"}) {
     const CliRun r = runShadowlab(args, dir_);
     EXPECT_EQ(r.code, 2) << args << "\n" << r.err;
     EXPECT_NE(r.err.find(secret.string() + ":1:1: error: "), std::string::npos) << r.err;

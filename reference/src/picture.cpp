@@ -8,6 +8,7 @@
 #include "picture_shading.h"
 #include "shadowlab/reference/reference.h"
 #include "shadowlab/scenes/io.h"
+#include "shadowlab/scenes/number_text.h"
 
 namespace shadowlab {
 
@@ -20,6 +21,9 @@ std::string referenceHash(const Scene& scene, const ReferenceOptions& options) {
   // Light samples change only a sized light's values: a scene of hard lights keeps its key.
   if (std::any_of(scene.lights.begin(), scene.lights.end(), [](const Light& light) { return light.sized(); }))
     key += ";light_samples=" + std::to_string(options.lightSamples);
+  // A shifted trace is another frame; an unshifted one keeps its key.
+  if (options.pixelOffset != glm::vec2(0.0f))
+    key += ";pixel_offset=" + numberText(options.pixelOffset.x) + "," + numberText(options.pixelOffset.y);
   return hashHex(fnv1a64(key.data(), key.size()));
 }
 

@@ -24,6 +24,7 @@
 #include "picture_shading.h"
 #include "shadowlab/scenes/error.h"
 #include "shadowlab/scenes/io.h"
+#include "shadowlab/scenes/number_text.h"
 
 namespace shadowlab {
 namespace {
@@ -885,6 +886,10 @@ Frame SHADOWLAB_RENDER_REFERENCE(const Scene& scene, const ReferenceOptions& opt
   if (options.threads < 0) {
     throw InputError("reference: error: threads " + std::to_string(options.threads) + "; expected 0 (all) or more");
   }
+  if (!(std::fabs(options.pixelOffset.x) <= 1.0f && std::fabs(options.pixelOffset.y) <= 1.0f)) {
+    throw InputError("reference: error: pixel offset (" + numberText(options.pixelOffset.x) + ", " +
+                     numberText(options.pixelOffset.y) + "); expected each component in [-1, 1]");
+  }
   const int width = scene.camera.width;
   const int height = scene.camera.height;
   if (width < 1 || height < 1) {
@@ -1006,6 +1011,7 @@ Frame SHADOWLAB_RENDER_REFERENCE(const Scene& scene, const ReferenceOptions& opt
     }
   };
 
+  const glm::vec2 shift = options.pixelOffset;
   arena.execute([&] {
     tbb::parallel_for(tbb::blocked_range<int>(0, tileCount), [&](const tbb::blocked_range<int>& range) {
       Tracer tracer(scene, *embree, objectIds.data(), triangleTables.data());
@@ -1042,7 +1048,7 @@ Frame SHADOWLAB_RENDER_REFERENCE(const Scene& scene, const ReferenceOptions& opt
               py[lane] = by + lane / kBlockWidth;
               active[lane] = px[lane] < x1 && py[lane] < y1;
             }
-            tracer.tracePrimary(px, py, active, 0.5f, 0.5f, surface, center);
+            tracer.tracePrimary(px, py, active, 0.5f + shift.x, 0.5f + shift.y, surface, center);
             for (size_t l = 0; l < lightCount; ++l) {
               tracer.evalLight(lights[l], center, true, &centerVis[l * kLanes], &centerDist[l * kLanes]);
               if (!lights[l].sized) continue;
@@ -1064,7 +1070,7 @@ Frame SHADOWLAB_RENDER_REFERENCE(const Scene& scene, const ReferenceOptions& opt
               for (int lane = 0; lane < kLanes; ++lane) sampleActive[lane] = active[lane] && center.hit(lane);
               for (size_t sampleIndex = 0; sampleIndex < pattern.size(); ++sampleIndex) {
                 const glm::vec2& offset = pattern[sampleIndex];
-                tracer.tracePrimary(px, py, sampleActive, offset.x, offset.y, surface, sample);
+                tracer.tracePrimary(px, py, sampleActive, offset.x + shift.x, offset.y + shift.y, surface, sample);
                 // Only samples on the center's object count: the pixel's fractional visibility
                 // is that of the surface its id and position describe.
                 for (int lane = 0; lane < kLanes; ++lane) {

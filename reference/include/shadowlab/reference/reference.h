@@ -63,6 +63,11 @@ struct ReferenceOptions {
   // Not part of the cache key (referenceHash): the values are the same, the cache always holds Compare.
   ReferenceChannels channels = ReferenceChannels::All;
   ReferenceSimd simd = ReferenceSimd::Auto;  // not part of the result or its hash: the same bits
+  // Added to every camera sample point, pixels (the center ray of pixel (i, j) passes through
+  // (i + 0.5 + x, j + 0.5 + y)): a frame traced as a renderer whose pixel centers are elsewhere
+  // would see it (compare's alignment check of outside frames, scenes/FRAME-CONTRACT.md). Part of
+  // the cache key (referenceHash) when not zero; each component in [-1, 1].
+  glm::vec2 pixelOffset{0.0f, 0.0f};
   // Called with the fraction of tiles traced (0..1], at most once per percent, from one thread
   // at a time (the caller's terminal progress line). Not part of the result or its hash.
   std::function<void(double)> progress;

@@ -43,7 +43,8 @@
 //     proj.PROJ.reverse        1 where the point is behind the projector (w < 0) but its divided
 //                              coordinates land in [0,1]^2: what reverse projection would colour
 //
-// Metadata keys (meta): "kind" ("reference" | "raster"), "scene" (name), "scene_hash",
+// Metadata keys (meta): "kind" ("reference" | "raster" | "outside": a frame rendered by another
+// program, scenes/FRAME-CONTRACT.md, with "renderer" and "coverage"), "scene" (name), "scene_hash",
 // "camera_hash", "width", "height", "lights" (names), "projectors" (names); raster adds
 // "light" (the light it rendered), "method" (resolved method JSON), "device"; frames rendered with
 // evidence on demand (raster.h) add "evidence" ("partial" when only the listed pixels' evidence is

@@ -24,12 +24,14 @@ constexpr const char* kCompareMs = "compare_ms";           // CPU wall of compar
 constexpr const char* kReferenceMs = "reference_ms";       // CPU wall: reference traced or read from the cache
 constexpr const char* kConfigWallMs = "config_wall_ms";    // one configuration end to end
 constexpr const char* kCommandWallMs = "command_wall_ms";  // the whole command (stability.json)
+// An outside renderer's own time for its frame, as its renderer JSON declares it (frame_ms).
+constexpr const char* kRendererFrameMs = "renderer_frame_ms";
 
 // True for a current per-row timing name above.
 inline bool isTimingName(const std::string& key) {
   for (const char* name : {kShadowGpuMs, kCameraGpuMs, kVisibilityGpuMs, kLookupGpuMs, kMethodGpuMs, kMethodGpuMsMin,
                            kMethodGpuMsMax, kMomentsGpuMs, kEvidenceGpuMs, kReadbackMs, kRenderWallMs, kCompareMs,
-                           kReferenceMs, kConfigWallMs, kCommandWallMs})
+                           kReferenceMs, kConfigWallMs, kCommandWallMs, kRendererFrameMs})
     if (key == name) return true;
   return false;
 }
