@@ -1,4 +1,4 @@
-// Every `shadowlab` command line of README.md's command blocks, as written, in order, in a fresh
+// Every `shadowlab` command line (and `node adapters/...` line) of README.md's command blocks, as written, in order, in a fresh
 // folder (the README's out/ paths relative to it): a README line that no longer works fails here,
 // not in a reader's terminal.
 //
@@ -75,7 +75,7 @@ std::string withoutComment(const std::string& line) {
 }
 
 bool isShadowlabLine(const std::string& command) {
-  for (const char* prefix : {"$B ", "./build/app/shadowlab ", "shadowlab/shadowlab "})
+  for (const char* prefix : {"$B ", "./build/app/shadowlab ", "shadowlab/shadowlab ", "node adapters/"})
     if (command.rfind(prefix, 0) == 0) return true;
   return false;
 }
@@ -159,6 +159,15 @@ TEST(Readme, EveryShadowlabLineRunsAsWritten) {
   fs::remove_all(dir / "probe");
   const bool sbatch = onPath("sbatch");
   const bool hasExport = runIn(dir, "$B export --help").code == 0;
+  // The three.js adapter's lines (and the lines that read its frame) need node, its npm packages
+  // and chromium: a loud skip without them, a failure under CI=true (the install script installs them).
+  const fs::path adapters = fs::path(SHADOWLAB_SOURCE_DIR) / "adapters";
+  std::string noThree;
+  if (!onPath("node")) noThree = "no node on PATH";
+  else if (!fs::exists(adapters / "three/node_modules/three/package.json")) noThree = "adapters/three has no node_modules (npm ci)";
+  else if (!fs::exists("/usr/bin/chromium") && !std::getenv("CHROMIUM")) noThree = "no chromium";
+  const bool ci = std::getenv("CI") && std::string(std::getenv("CI")) == "true";
+  if (!noThree.empty() && ci) ADD_FAILURE() << "CI=true and the three.js adapter cannot run: " << noThree;
   double total = 0;
   for (const ReadmeLine& l : lines) {
     std::string command = l.command;
@@ -176,6 +185,20 @@ TEST(Readme, EveryShadowlabLineRunsAsWritten) {
     }
     if (command.rfind("$B export ", 0) == 0 && !hasExport) {
       std::printf("*** SKIPPED %s: this build has no `shadowlab export` subcommand\n", where.c_str());
+      continue;
+    }
+    if (command.rfind("node adapters/", 0) == 0) {
+      if (!noThree.empty()) {
+        std::printf("*** SKIPPED %s: %s\n", where.c_str(), noThree.c_str());
+        continue;
+      }
+      // node adapters/SCRIPT ARGS, with SCRIPT under the checkout (the test runs in a temporary folder).
+      const std::string rest = command.substr(std::string("node adapters/").size());
+      const size_t space = rest.find(' ');
+      command = "node '" + (adapters / rest.substr(0, space)).string() + "'" +
+                (space == std::string::npos ? "" : rest.substr(space));
+    } else if (command.find("out/three/") != std::string::npos && !noThree.empty()) {
+      std::printf("*** SKIPPED %s: it reads the three.js adapter's frame (%s)\n", where.c_str(), noThree.c_str());
       continue;
     }
     // The frame the reader's own engine renders: the truth's visibility, as a right frame would be.
