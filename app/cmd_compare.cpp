@@ -274,7 +274,9 @@ app::Registrar reg{
                       ".exr without shadowlab's metadata (scenes/FRAME-CONTRACT.md)")
           ->required();
       sub->add_option("-o,--out", opts->outDir, "Output folder for metrics.json, errors.png, triptych.png")->required();
-      sub->add_option("--light", opts->light, "Light to compare (default: the light the raster frame rendered)");
+      sub->add_option("--light", opts->light,
+                      "Light to compare (default: the light the raster frame rendered; an outside frame: the scene's "
+                      "first light)");
       sub->add_option("--boundary-texels", opts->boundaryTexels,
                       "Aliasing: disagreements within this many map texels of a reference shadow boundary")
           ->check(CLI::NonNegativeNumber)
