@@ -52,6 +52,47 @@ function findLight(scene, name) {
   return { light, others: lights.filter((l) => l !== light) };
 }
 
+// An alpha-masked (glTF MASK) surface: a ShadowMaterial has no map, so the camera pass would draw its
+// holes. A Lambert material keeps three.js's own alpha test (map alpha x opacity against alphaTest,
+// as glTF defines it and shadowlab traces it) and writes the same output as a ShadowMaterial; the
+// shadow pass copies map and alphaTest from it (WebGLShadowMap), so the holes cast no shadow.
+function maskedShadowMaterial(original) {
+  const material = new THREE.MeshLambertMaterial({ map: original.map, alphaTest: original.alphaTest, opacity: original.opacity });
+  material.userData.shadowlabPatch = (shader) => {
+    shader.fragmentShader = shader.fragmentShader
+      .replace('#include <shadowmap_pars_fragment>', '#include <shadowmap_pars_fragment>\n#include <shadowmask_pars_fragment>')
+      .replace('#include <opaque_fragment>', 'gl_FragColor = vec4( 1.0, 1.0, 1.0, 1.0 - getShadowMask() );');
+  };
+  return material;
+}
+
+// The frame contract's value for a spot light is 0 outside its cone, where three.js's shadow term is
+// 1: every material multiplies its visibility by the cone test (the angle between the point's
+// direction from the light and the light's axis at most the spot's angle, hard-edged as shadowlab's
+// cone), written as 1 - alpha like the shadow term.
+function patchMaterials(scene, light) {
+  const spot = light.isSpotLight;
+  const position = light.getWorldPosition(new THREE.Vector3());
+  const axis = spot ? light.target.getWorldPosition(new THREE.Vector3()).sub(position).normalize() : null;
+  scene.traverse((o) => {
+    if (!o.isMesh) return;
+    const own = o.material.userData.shadowlabPatch;
+    o.material.onBeforeCompile = (shader) => {
+      if (own) own(shader);
+      if (!spot) return;
+      shader.uniforms.slSpotPosition = { value: position };
+      shader.uniforms.slSpotAxis = { value: axis };
+      shader.uniforms.slSpotCos = { value: Math.cos(light.angle) };
+      shader.vertexShader = 'varying vec3 slWorld;\n' + shader.vertexShader.replace('#include <worldpos_vertex>',
+        '#include <worldpos_vertex>\nslWorld = ( modelMatrix * vec4( transformed, 1.0 ) ).xyz;');
+      shader.fragmentShader = 'varying vec3 slWorld;\nuniform vec3 slSpotPosition;\nuniform vec3 slSpotAxis;\nuniform float slSpotCos;\n' +
+        shader.fragmentShader.replace('1.0 - getShadowMask()',
+          '1.0 - getShadowMask() * ( dot( normalize( slWorld - slSpotPosition ), slSpotAxis ) >= slSpotCos ? 1.0 : 0.0 )');
+    };
+    o.material.needsUpdate = true;
+  });
+}
+
 // Every mesh gets a ShadowMaterial of the same side (GLTFLoader maps doubleSided to DoubleSide, else
 // FrontSide), opaque so that its alpha (1 - shadow) is written as it is; red 1 marks coverage.
 function replaceMaterials(scene, request) {
@@ -59,17 +100,12 @@ function replaceMaterials(scene, request) {
   scene.traverse((o) => {
     if (!o.isMesh) return;
     const original = o.material;
-    const material = new THREE.ShadowMaterial({ color: 0xffffff, opacity: 1 });
+    const masked = original.alphaTest > 0 && original.map;
+    const material = masked ? maskedShadowMaterial(original) : new THREE.ShadowMaterial({ color: 0xffffff, opacity: 1 });
     material.transparent = false;
     material.side = request.side ? kSides[request.side] : original.side;
     if (request.shadowSide) material.shadowSide = kSides[request.shadowSide];
-    // Alpha-tested casters: the shadow pass copies map and alphaTest from the material
-    // (WebGLShadowMap), so the holes cast no shadow; the camera pass of a ShadowMaterial has no map.
-    if (original.alphaTest > 0 && original.map) {
-      material.map = original.map;
-      material.alphaTest = original.alphaTest;
-      counts.alphaMasked++;
-    }
+    if (masked) counts.alphaMasked++;
     o.material = material;
     const casts = !(o.userData && o.userData.shadowlab && o.userData.shadowlab.casts_shadow === false);
     o.castShadow = casts;
@@ -135,6 +171,8 @@ async function main() {
   const counts = replaceMaterials(scene, request);
   const fit = fitShadowCamera(scene, light, request);
   if (fit.sun) light = fit.sun;
+  scene.updateMatrixWorld(true);
+  patchMaterials(scene, light);
   light.castShadow = true;
   light.shadow.mapSize.set(request.mapSize, request.mapSize);
   light.shadow.bias = request.bias;

@@ -297,6 +297,8 @@ function writeOutputs(outDir, request, { meta, vis, coverage }) {
     frame_ms: meta.frame_ms,
     settings,
   };
+  // A point light's cube faces are not declared: the key is left out rather than written empty.
+  if (renderer.light_clip_from_world.length === 0) delete renderer.light_clip_from_world;
   fs.writeFileSync(path.join(tmp, 'renderer.json'), JSON.stringify(renderer, null, 2) + '\n');
   fs.rmSync(outDir, { recursive: true, force: true });
   fs.renameSync(tmp, outDir);
