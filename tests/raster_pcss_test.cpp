@@ -21,6 +21,8 @@
 #include <string>
 #include <vector>
 
+#include <nlohmann/json.hpp>
+
 #include "shadowlab/raster/raster.h"
 #include "shadowlab/raster/resolve_params.h"
 #include "shadowlab/scenes/error.h"
@@ -90,7 +92,7 @@ Method softMethod(Filter filter) {
   m.filter = filter;
   m.biasReceiverPlane = true;  // the kernels are wide: a tap's reference follows the receiver's plane
   m.biasCompare = 0.0002f;
-  m.pcssMaxPenumbra = 64.0f;
+  m.pcssMaxPenumbra = 32.0f;  // 64 texels of this 1024 map (the cap scales with the map): no cap in these scenes
   return m;
 }
 
@@ -205,7 +207,7 @@ TEST(RasterPcssParams, SunSizeOnTheSphereFitIsTanHalfAngleTimesTheMapSize) {
   m.dpcfTaps = 20;
   const raster::abi::Params prm = raster::packResolveParams(s, &s.lights[0], m, s.camera, cascades, {});
   EXPECT_EQ(prm.softTaps, glm::ivec4(12, 40, 20, 1));
-  EXPECT_EQ(prm.softInfo, glm::vec4(1.5f, 64.0f, 8.0f, 0.0f));
+  EXPECT_EQ(prm.softInfo, glm::vec4(1.5f, 32.0f, 8.0f, 0.0f));
   for (int i = 0; i < 3; ++i)
     EXPECT_EQ(prm.lightSize[i], raster::lightSizeInMap(s.lights[0], cascades.layers[size_t(i)], m.mapSize)) << i;
   EXPECT_EQ(prm.lightSize[3], glm::vec4(0.0f));
@@ -518,4 +520,36 @@ TEST_F(RasterPcss, PenumbraErrorAgainstTheTruthIsBelowFixedKernels) {
       EXPECT_LT(pcss, poisson) << c.name << ", poisson radius " << radius;
     }
   }
+}
+
+// At the default cap (pcss.max_penumbra 16 texels of a 512 map, scaled with the map's size) a
+// sharper map does not measure worse on soft_post (240 x 135): penumbra_mae at map 1024 is at most
+// map 512's plus 0.01 (0.119 and 0.121). A cap fixed at 16 texels cuts soft_post's wide penumbra
+// short at 1024 (16 texels there are 8 of a 512 map): 0.119 and 0.187.
+TEST(RasterPcssCli, DefaultCapDoesNotMakeASharperMapWorseOnSoftPost) {
+  REQUIRE_DEVICE();
+  const fs::path dir = shadowlab::testing::freshTempDir("pcss_cap");
+  std::vector<double> mae;
+  for (int mapSize : {512, 1024}) {
+    const std::string out = "m" + std::to_string(mapSize);
+    const auto r = shadowlab::testing::runShadowlab(
+        "run soft_post --set filter=pcss --set map.size=" + std::to_string(mapSize) +
+            " --set scene:/camera/width=240 --set scene:/camera/height=135 -q -o '" + (dir / out).string() + "'",
+        dir);
+    ASSERT_EQ(r.code, 0) << r.err;
+    const auto metrics = nlohmann::json::parse(shadowlab::testing::slurp(dir / out / "metrics.json"));
+    double value = -1;
+    std::function<void(const nlohmann::json&)> find = [&](const nlohmann::json& j) {
+      if (!j.is_object()) return;
+      for (auto it = j.begin(); it != j.end(); ++it) {
+        if (it.key() == "penumbra_mae" && it->is_number()) value = it->get<double>();
+        else find(*it);
+      }
+    };
+    find(metrics);
+    ASSERT_GE(value, 0.0) << "map " << mapSize << ": metrics.json has penumbra_mae";
+    mae.push_back(value);
+    std::printf("  soft_post map %d: penumbra_mae %.4f\n", mapSize, value);
+  }
+  EXPECT_LE(mae[1], mae[0] + 0.01) << "map 1024 against 512";
 }

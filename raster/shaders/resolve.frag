@@ -368,11 +368,14 @@ vec2 softBlockerSearch(Lookup L, mat2 rotation, vec2 radius, int taps) {
 
 // PCSS (Fernando 2005): search the blocker region for blockers (none: lit), their mean depth gives
 // the penumbra radius, a Poisson PCF over that radius the visibility. Both radii clamped to
-// [pcss.min_filter, pcss.max_penumbra] (a hard light's kernel is pcss.min_filter).
+// [pcss.min_filter, pcss.max_penumbra] (a hard light's kernel is pcss.min_filter). The cap is
+// pcss.max_penumbra texels of a 512 map, scaled with the layer's size: it bounds the same share
+// of the map whatever its resolution, so a sharper map resolves the same penumbra instead of
+// cutting a wider (in texels) one short.
 float pcssVisibility(Lookup L) {
   vec4 lightSize = P.lightSize[L.layer.index];
   mat2 rotation = softRotation();
-  vec2 lo = vec2(P.softInfo.x), hi = vec2(P.softInfo.y);
+  vec2 lo = vec2(P.softInfo.x), hi = vec2(max(P.softInfo.x, P.softInfo.y * (L.layer.size / 512.0)));
   vec2 found = softBlockerSearch(L, rotation, clamp(softPenumbraTexels(lightSize, L.ref, 0.0), lo, hi), PLoops.softTaps.x);
   if (found.x == 0.0) return 1.0;
   vec2 radius = clamp(softPenumbraTexels(lightSize, L.ref, found.y / found.x), lo, hi);
