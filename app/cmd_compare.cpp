@@ -81,6 +81,28 @@ nlohmann::json rasterTimings(const std::string& rasterExr) {
   return timings;
 }
 
+// What both kinds of comparison print and return once the outputs are written.
+int report(const Metrics& metrics, double compareMs, const std::string& outDir, const std::string& refName,
+           const std::string& frameName) {
+  if (metrics.nothingCompared()) {
+    std::printf("compared 0 pixels (%llu geometry mismatch) in %.1f ms\n",
+                (unsigned long long)metrics.count(PixelClass::GeometryMismatch), compareMs);
+    std::printf("wrote %s/metrics.json, errors.png, triptych.png\n", outDir.c_str());
+    std::fflush(stdout);
+    std::fprintf(stderr, "%s and %s: error: %s\n", refName.c_str(), frameName.c_str(),
+                 nothingComparedMessage(metrics).c_str());
+    return 2;
+  }
+  std::printf("compared %llu pixels (%llu geometry mismatch): error_rate %.4f (%s) in %.1f ms\n",
+              (unsigned long long)metrics.pixelsCompared,
+              (unsigned long long)metrics.count(PixelClass::GeometryMismatch), metrics.errorRate,
+              errorClassSummary(metrics, false).c_str(), compareMs);
+  if (metrics.hasProjector) std::printf("%s\n", projectorSummary(metrics).c_str());
+  if (metrics.mCapped > 0) std::printf("%s\n", footprintCapNote(metrics).c_str());
+  std::printf("wrote %s/metrics.json, errors.png, triptych.png\n", outDir.c_str());
+  return 0;
+}
+
 int runOwn(const Options& o) {
   const std::string refPath = framePath(o.referenceDir, "reference.exr");
   const std::string rasPath = framePath(o.rasterDir, "raster.exr");
@@ -122,46 +144,11 @@ int runOwn(const Options& o) {
   writeErrorsPng((fs::path(o.outDir) / "errors.png").string(), classification, &reference);
   writeTriptychPng((fs::path(o.outDir) / "triptych.png").string(), reference, raster, classification);
   out.keep();
-  if (metrics.nothingCompared()) {
-    // The outputs are written (errors.png shows what each renderer saw), but a comparison of no
-    // pixel is no result: exit 2, so that a script stops here rather than at the gate.
-    std::printf("compared 0 pixels (%llu geometry mismatch) in %.1f ms\n",
-                (unsigned long long)metrics.count(PixelClass::GeometryMismatch), compareMs);
-    std::printf("wrote %s/metrics.json, errors.png, triptych.png\n", o.outDir.c_str());
-    std::fflush(stdout);
-    std::fprintf(stderr, "%s and %s: error: %s\n", refPath.c_str(), rasPath.c_str(),
-                 nothingComparedMessage(metrics).c_str());
-    return 2;
-  }
-  std::printf("compared %llu pixels (%llu geometry mismatch): error_rate %.4f (%s) in %.1f ms\n",
-              (unsigned long long)metrics.pixelsCompared,
-              (unsigned long long)metrics.count(PixelClass::GeometryMismatch), metrics.errorRate,
-              errorClassSummary(metrics, false).c_str(), compareMs);
-  if (metrics.hasProjector) std::printf("%s\n", projectorSummary(metrics).c_str());
-  if (metrics.mCapped > 0) std::printf("%s\n", footprintCapNote(metrics).c_str());
-  std::printf("wrote %s/metrics.json, errors.png, triptych.png\n", o.outDir.c_str());
-  return 0;
+  // The outputs are written (errors.png shows what each renderer saw), but a comparison of no
+  // pixel is no result: report() exits 2 then, so that a script stops here rather than at the gate.
+  return report(metrics, compareMs, o.outDir, refPath, rasPath);
 }
 
-// What both kinds of comparison print and return once the outputs are written.
-int report(const Metrics& metrics, double compareMs, const std::string& outDir, const std::string& refName,
-           const std::string& frameName) {
-  if (metrics.nothingCompared()) {
-    std::printf("compared 0 pixels (%llu geometry mismatch) in %.1f ms\n",
-                (unsigned long long)metrics.count(PixelClass::GeometryMismatch), compareMs);
-    std::printf("wrote %s/metrics.json, errors.png, triptych.png\n", outDir.c_str());
-    std::fflush(stdout);
-    std::fprintf(stderr, "%s and %s: error: %s\n", refName.c_str(), frameName.c_str(),
-                 nothingComparedMessage(metrics).c_str());
-    return 2;
-  }
-  std::printf("compared %llu pixels (%llu geometry mismatch): error_rate %.4f (%s) in %.1f ms\n",
-              (unsigned long long)metrics.pixelsCompared,
-              (unsigned long long)metrics.count(PixelClass::GeometryMismatch), metrics.errorRate,
-              errorClassSummary(metrics, false).c_str(), compareMs);
-  std::printf("wrote %s/metrics.json, errors.png, triptych.png\n", outDir.c_str());
-  return 0;
-}
 
 // A frame from another program: the truth is traced here (with the All channels, which the
 // evidence of an outside frame is filled from), the frame is read, sized, checked for alignment
