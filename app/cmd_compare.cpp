@@ -149,7 +149,6 @@ int runOwn(const Options& o) {
   return report(metrics, compareMs, o.outDir, refPath, rasPath);
 }
 
-
 // A frame from another program: the truth is traced here (with the All channels, which the
 // evidence of an outside frame is filled from), the frame is read, sized, checked for alignment
 // and only then compared.
