@@ -137,7 +137,7 @@ void prepareOutsideComparison(const Frame& truthAll, Frame& outside, const Decla
         }
         return best > 0.0;
       };
-      glm::dvec3 dx, dy;
+      glm::dvec3 dx(0.0), dy(0.0);
       const glm::dvec2 t0 = texel(lpP.clip, size);
       if (step(1, 0, &dx) && step(0, 1, &dy)) {
         // Lloyd's m as resolve.frag takes it: J = d(texel)/d(pixel), m = sMax / det J = 1 / sMin.
