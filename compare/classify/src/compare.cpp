@@ -575,7 +575,10 @@ void resolveCandidates(uint8_t* klass, const uint8_t* decision, const float* mPl
   // horizon) is within it of any boundary pixel, so it needs no distance at all, only whether
   // a boundary exists anywhere.
   const double diagonalPx = std::sqrt(double(width) * width + double(height) * height);
-  auto limitPx = [&](size_t i) { return double(boundaryTexels) * (mPlane ? double(sanitizeM(mPlane[i])) : 1.0); };
+  auto limitPx = [&](size_t i) {
+    const double texels = klass[i] == kCandidateAcne ? double(kBlindAcneBandTexels) : double(boundaryTexels);
+    return texels * (mPlane ? double(sanitizeM(mPlane[i])) : 1.0);
+  };
   std::vector<int> rowReach(size_t(height), -1);  // -1: no candidate that needs a distance
   std::vector<uint8_t> rowHasCandidate(size_t(height), 0), rowHasBoundary(size_t(height), 0);
   tbb::parallel_for(0, height, [&](int y) {
@@ -1301,7 +1304,8 @@ Metrics compareFrames(const CompareContext& context, const Frame& reference, con
         const DisagreementClass dc = classifyAnyDisagreement(ch.evidence(i), leakFactor);
         PixelClass c = dc.cls;
         if (dc.candidate) {
-          const double limit = double(d.options.boundaryTexels) * (ch.m ? double(sanitizeM(ch.m[i])) : 1.0);
+          const double texels = dc.acneEvidence ? double(kBlindAcneBandTexels) : double(d.options.boundaryTexels);
+          const double limit = texels * (ch.m ? double(sanitizeM(ch.m[i])) : 1.0);
           const bool within = limit >= diagonalPx ? px.anyBoundary : double(px.boundaryDist2[i]) <= limit * limit;
           c = resolveCandidate(dc.leakEvidence, within, dc.bleedEvidence, dc.acneEvidence);
         }

@@ -38,11 +38,11 @@ struct LayerPoint {
   bool inside = false;  // in front of the layer (w > 0), x/w and y/w in [-1, 1]
 };
 
-LayerPoint projectPoint(const glm::mat4& clipFromWorld, const glm::dvec3& p) {
+LayerPoint projectPoint(const glm::mat4& clipFromWorld, const glm::dvec3& p, double edge = 1.0) {
   LayerPoint out;
   out.clip = glm::dmat4(clipFromWorld) * glm::dvec4(p, 1.0);
   const double w = out.clip.w;
-  out.inside = w > 0.0 && std::fabs(out.clip.x) <= w && std::fabs(out.clip.y) <= w;
+  out.inside = w > 0.0 && std::fabs(out.clip.x) <= edge * w && std::fabs(out.clip.y) <= edge * w;
   return out;
 }
 
@@ -92,6 +92,9 @@ void prepareOutsideComparison(const Frame& truthAll, Frame& outside, const Decla
   std::vector<float>& footprint = outside.get(lp + "m");
   std::vector<float>& contact = outside.get(lp + "contact_world");
   const int size = declared.mapSize;
+  const double contactTexels = options.declaredFilterable ? kContactTexelsFilterable : kContactTexels;
+  // in_map: inside the layer by kMapEdgeTexels (x/w and y/w within 1 - 2 k / size).
+  const double edge = 1.0 - 2.0 * double(kMapEdgeTexels) / double(declared.mapSize);
   const double normalBias = declared.normalBiasWorld ? std::max(0.0, *declared.normalBiasWorld) : 0.0;
   for (int y = 0; y < height; ++y) {
     for (int x = 0; x < width; ++x) {
@@ -106,7 +109,7 @@ void prepareOutsideComparison(const Frame& truthAll, Frame& outside, const Decla
       LayerPoint lpP;
       bool found = false;
       for (size_t l = 0; l < declared.lightClipFromWorld.size() && !found; ++l) {
-        lpP = projectPoint(declared.lightClipFromWorld[l], p);
+        lpP = projectPoint(declared.lightClipFromWorld[l], p, edge);
         if (lpP.inside) {
           layer = l;
           found = true;
@@ -139,7 +142,8 @@ void prepareOutsideComparison(const Frame& truthAll, Frame& outside, const Decla
       };
       glm::dvec3 dx(0.0), dy(0.0);
       const glm::dvec2 t0 = texel(lpP.clip, size);
-      if (step(1, 0, &dx) && step(0, 1, &dy)) {
+      const bool hasDx = step(1, 0, &dx), hasDy = step(0, 1, &dy);
+      if (hasDx && hasDy) {
         // Lloyd's m as resolve.frag takes it: J = d(texel)/d(pixel), m = sMax / det J = 1 / sMin.
         const glm::dvec2 jx = texel(projectPoint(M, p + dx).clip, size) - t0;
         const glm::dvec2 jy = texel(projectPoint(M, p + dy).clip, size) - t0;
@@ -147,6 +151,11 @@ void prepareOutsideComparison(const Frame& truthAll, Frame& outside, const Decla
         const double detJ = std::fabs(jx.x * jy.y - jy.x * jx.y);
         const double sMax = std::sqrt(0.5 * (sumSq + std::sqrt(std::max(sumSq * sumSq - 4.0 * detJ * detJ, 0.0))));
         footprint[i] = detJ > 1e-6 * sMax ? float(std::min(sMax / detJ, double(kFootprintCapPx))) : kFootprintCapPx;
+      } else if (hasDx || hasDy) {
+        // A sliver one pixel wide (an edge-on card, a gap): the one step there is, read as both.
+        const glm::dvec2 j = texel(projectPoint(M, p + (hasDx ? dx : dy)).clip, size) - t0;
+        const double len = glm::length(j);
+        footprint[i] = len > 1e-6 ? float(std::min(1.0 / len, double(kFootprintCapPx))) : kFootprintCapPx;
       }
       // The world size of one texel at the point (its larger side, across the light's rays): the
       // texel coordinates' gradients in world space, u = size (x/w + 1) / 2.
@@ -156,7 +165,7 @@ void prepareOutsideComparison(const Frame& truthAll, Frame& outside, const Decla
       const glm::dvec3 dv = (row(1) - (c.y / c.w) * row(3)) * (0.5 * size / c.w);
       const double g = std::min(glm::length(du), glm::length(dv));
       const double texelWorld = g > 0.0 ? 1.0 / g : 0.0;
-      contact[i] = float(options.leakBiasFactor * (kContactTexels * texelWorld + normalBias));
+      contact[i] = float(options.leakBiasFactor * (contactTexels * texelWorld + normalBias));
     }
   }
   outside.meta["boundary_band"] = "texels";

@@ -156,13 +156,17 @@ inline DisagreementClass classifyDisagreement(const PixelEvidence& e, float leak
 
 // The blind rule (compare/METRICS.md "Frames from other renderers"): a disagreement of a frame
 // without the raster's internals. Coverage (outside every declared layer) and the penumbra classes
-// (from the values) are final as in classifyDisagreement; everything else waits for the boundary
-// band, since away from a true boundary is what proves acne here: the truth lit means no surface
-// lies between the point and the light, so a shadow far from every true shadow edge can only be
-// the receiver shadowing itself. Too lit, away from the band: leak when the true occluder is in
-// contact (within contactWorld of the receiver: a bias of the declared map's few texels lets it
-// through), else bleed when the renderer declared a filterable map (a far occluder lit through by
-// the moments' bound), else other.
+// (from the values) are final as in classifyDisagreement; everything else waits for the distance
+// to the true shadow boundary. Too dark (the truth lit, the frame shadowed): a map texel holding
+// the true occluder's edge reaches about half a texel past it, so within kBlindAcneBandTexels of
+// the true boundary it is aliasing and beyond it acne (the truth lit means no surface lies between
+// the point and the light, so a shadow away from every true edge is the receiver shadowing itself).
+// Too lit, beyond the aliasing band (CompareOptions::boundaryTexels): leak when the true occluder
+// is in contact (within contactWorld of the receiver: a bias of the declared map's few texels lets
+// it through), else bleed when the renderer declared a filterable map (an occluder lit through by
+// the moments' bound), else other. The constants are those that measure best against the full
+// rule (bench/blind_agreement_bench.cpp; the matrix is in compare/METRICS.md).
+constexpr float kBlindAcneBandTexels = 0.5f;
 inline DisagreementClass classifyBlindDisagreement(const PixelEvidence& e) {
   if (e.hasInMap && !(e.inMap >= 0.5f)) return {PixelClass::Coverage, false, false};
   const float r = clampVisibility(e.referenceVis), s = clampVisibility(e.rasterVis);
@@ -175,7 +179,11 @@ inline DisagreementClass classifyBlindDisagreement(const PixelEvidence& e) {
   DisagreementClass d{PixelClass::Other, true, false, false, false};
   const bool tooLit = e.softTruth ? s > r : !referenceLit;
   if (!tooLit) {
-    d.acneEvidence = referenceLit && !litDecision(e.rasterVis);
+    // Only with a declared map (its in_map plane): without one the band is in pixels, and a texel
+    // may span many. Under a sized light only a fully lit truth point shadowed outright: a penumbra
+    // drawn too dark is not the receiver shadowing itself.
+    d.acneEvidence = e.hasInMap && referenceLit && !litDecision(e.rasterVis) &&
+                     (!e.softTruth || (truthFully(r, sanitizeSigma(e.referenceSigma)) && !rasterPartial(s)));
     return d;
   }
   const bool contact = e.hasContact && e.hasTruthOccluderDistance && e.truthOccluderDist >= 0.0f &&

@@ -72,7 +72,15 @@ Frame makeOutsideFrame(const Frame& truth, const std::string& light, const Image
 // within this many texels of the declared map (its world size at the receiver) plus the declared
 // normal bias, times CompareOptions::leakBiasFactor, of the receiver. A renderer's depth bias that
 // removes acne on sloped receivers spans a few texels, so a shadow it loses there is peter panning.
+// A filterable map (VSM, MSM) has no depth bias: its shadows are lost either through the moments'
+// slack right at contact (leak) or by light bleeding (bleed), and the shorter distance is the one
+// that separates the two best (bench/blind_agreement_bench.cpp).
 constexpr float kContactTexels = 2.0f;
+constexpr float kContactTexelsFilterable = 0.6f;
+// in_map: a point this many texels inside a declared layer's edge counts as outside it. A lookup
+// there reads clamped texels (a filter kernel's reach, a normal offset the frame does not declare),
+// so the map does not hold the point reliably: a wrong pixel there is coverage.
+constexpr float kMapEdgeTexels = 3.0f;
 
 // The one place where the evidence of an outside frame is filled in before it is compared: from
 // the truth with the All channels (P, N, occluder_dist, ...), the outside Frame (meta kind
