@@ -10,6 +10,7 @@
 #include <limits>
 #include <string>
 
+#include <glm/gtc/matrix_transform.hpp>
 #include <gtest/gtest.h>
 #include <unistd.h>
 
@@ -220,6 +221,83 @@ TEST_F(OutsideFrame, PlantedErrorsFarFromEdgesAreCountedExactly) {
   EXPECT_EQ(m["aliasing"], 0);
   EXPECT_EQ(m["acne"], 0);
   EXPECT_EQ(m["leak"], 0);
+}
+
+// A renderer.json with the light's matrix and map size: the blind rule names the classes. On the
+// truth's own frame (no error of its own), dark pixels planted on the lit ground far from every
+// shadow edge are acne (nothing lies between them and the light, so only the receiver can shadow
+// itself), the same whatever filter is declared; with a declared layer that covers only the middle
+// of the map, those outside it are coverage. (The too-lit classes by contact and filter:
+// compare_metrics_blind_test.cpp; the rule against the full one: compare_blind_agreement_test.cpp.)
+TEST_F(OutsideFrame, ADeclaredMapNamesAcneAndCoverageOfPlantedErrors) {
+  REQUIRE_DEVICE();
+  Method method;
+  method.mapSize = 4096;  // the block's shadow on the ground spans many texels: bands narrower than it
+  R->render(scene_, method, "sun");
+  const std::vector<glm::mat4> layers = R->lastLightClipFromWorld();
+  ASSERT_EQ(layers.size(), 1u);
+  const std::vector<float> truth = vis(scene_), h = hit(scene_);
+  ReferenceOptions ids;
+  ids.channels = ReferenceChannels::Compare;
+  const std::vector<float> id = renderReference(scene_, ids).get("object_id");
+  const float ground = id[size_t(kHeight - 2) * kWidth + kWidth / 2];  // the bottom row sees the ground
+  std::vector<float> v = truth;
+  // Ground pixels whose 9x9 neighbourhood is all ground of one decision: far from every true edge
+  // (and not the block's own faces turned from the sun).
+  auto plant = [&](float decision, float to, int count, int step, int reach) {
+    int planted = 0;
+    for (int y = 6; y < kHeight - 6 && planted < count; y += step)
+      for (int x = 6; x < kWidth - 6 && planted < count; x += 2 * step + 1) {
+        bool far = true;
+        for (int dy = -reach; dy <= reach && far; ++dy)
+          for (int dx = -reach; dx <= reach && far; ++dx) {
+            const int nx = x + dx, ny = y + dy;
+            if (nx < 0 || ny < 0 || nx >= kWidth || ny >= kHeight) {
+              far = false;
+              break;
+            }
+            const size_t n = size_t(ny) * kWidth + size_t(nx);
+            far = h[n] == 1.0f && id[n] == ground && truth[n] == decision;
+          }
+        if (!far) continue;
+        v[size_t(y) * kWidth + size_t(x)] = to;
+        ++planted;
+      }
+    return planted;
+  };
+  ASSERT_EQ(plant(1.0f, 0.0f, 40, 3, 4), 40);  // lit ground made dark
+  writeGreyPng16(path("frame.png"), kWidth, kHeight, v);
+  auto declare = [&](const glm::mat4& layer, const std::string& filter) {
+    std::string elements;
+    for (int c = 0; c < 4; ++c)
+      for (int r = 0; r < 4; ++r) elements += (elements.empty() ? "" : ",") + std::to_string(double(layer[c][r]));
+    writeFileAtomic(path("renderer.json"), "{\"name\": \"declared\", \"light_clip_from_world\": [[" + elements +
+                                               "]], \"map_size\": 4096, \"filter\": \"" + filter + "\"}");
+    return "--renderer '" + path("renderer.json") + "'";
+  };
+  auto r = compare("frame.png", "pcf", declare(layers[0], "PCF"));
+  ASSERT_EQ(r.code, 0) << r.err;
+  nlohmann::json m = metrics("pcf")["metrics"];
+  EXPECT_EQ(m["errors"], 40);
+  EXPECT_EQ(m["acne"], 40);
+  EXPECT_EQ(m["coverage"], 0);
+  r = compare("frame.png", "vsm", declare(layers[0], "VSMShadowMap"));
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_EQ(metrics("vsm")["metrics"]["acne"], 40);
+  // Without a declared map the band is in pixels and a texel may span many: never acne.
+  r = compare("frame.png", "none");
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_EQ(metrics("none")["metrics"]["acne"], 0);
+  EXPECT_EQ(metrics("none")["metrics"]["other"], 40);
+  // A layer twice as fine (x/w and y/w doubled): only the middle half of the old one is inside.
+  const glm::mat4 zoom = glm::scale(glm::mat4(1.0f), glm::vec3(2.0f, 2.0f, 1.0f)) * layers[0];
+  r = compare("frame.png", "zoom", declare(zoom, "PCF"));
+  ASSERT_EQ(r.code, 0) << r.err;
+  m = metrics("zoom")["metrics"];
+  EXPECT_EQ(m["errors"], 40);
+  EXPECT_GT(m["coverage"].get<int>(), 0);
+  EXPECT_LT(m["coverage"].get<int>(), 40);
+  EXPECT_EQ(m["coverage"].get<int>() + m["acne"].get<int>(), 40);
 }
 
 TEST_F(OutsideFrame, CoverageDisagreementIsGeometryMismatchNotScored) {

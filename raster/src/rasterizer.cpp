@@ -233,6 +233,10 @@ void Rasterizer::check(const Scene& scene, const Method& method, const std::stri
 
 int Rasterizer::validationMessages() const { return impl_->context->validationMessages(); }
 
+std::vector<glm::mat4> Rasterizer::lastLightClipFromWorld() const {
+  return impl_->last.valid ? impl_->last.lightClipFromWorld : std::vector<glm::mat4>{};
+}
+
 std::vector<uint8_t> Rasterizer::lookupVisibility() const { return impl_->lookup.copy(*impl_->context); }
 
 std::vector<Rasterizer::MethodTiming> Rasterizer::retimeMethod(int repeats) {
@@ -383,6 +387,9 @@ Rasterizer::Impl::Drawn Rasterizer::Impl::submit(const Scene& sc, const Method& 
   last.valid = true;
   last.layerDraws = layerDraws;
   last.lightLayers = layers.lightLayers;
+  last.lightClipFromWorld.clear();
+  for (int i = 0; i < layers.lightLayers; ++i)
+    last.lightClipFromWorld.push_back(raster::clipFromTex() * layers.layers[size_t(i)].texFromWorld);
   last.pipes = pipes;
   last.method = method;
   last.cameraClip = cameraClip;

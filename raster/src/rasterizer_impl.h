@@ -123,6 +123,7 @@ struct Rasterizer::Impl {
     bool valid = false;
     std::vector<raster::LayerDraw> layerDraws;
     int lightLayers = 0;
+    std::vector<glm::mat4> lightClipFromWorld;  // the light's layers, Vulkan clip space (lastLightClipFromWorld)
     FramePipelines pipes;
     Method method;
     glm::mat4 cameraClip{1.0f};

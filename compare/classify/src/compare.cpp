@@ -147,8 +147,18 @@ namespace {
 // Aliasing, or beyond the boundary band to Leak (kCandidateLeak: the leak evidence holds) or
 // Other, once the boundary distances are known. Never leave this file.
 // kCandidateBleed: the bleed evidence holds (it wins over the leak evidence beyond the band).
-constexpr uint8_t kCandidate = 255, kCandidateLeak = 254, kCandidateBleed = 253;
-constexpr uint8_t kFirstCandidate = kCandidateBleed;  // codes >= this are unresolved candidates
+// kCandidateAcne: the blind rule's acne evidence holds (frames from other renderers).
+constexpr uint8_t kCandidate = 255, kCandidateLeak = 254, kCandidateBleed = 253, kCandidateAcne = 252;
+constexpr uint8_t kFirstCandidate = kCandidateAcne;  // codes >= this are unresolved candidates
+uint8_t candidateCode(const DisagreementClass& d) {
+  return d.bleedEvidence ? kCandidateBleed
+         : d.leakEvidence ? kCandidateLeak
+         : d.acneEvidence ? kCandidateAcne
+                          : kCandidate;
+}
+PixelClass resolveCandidateCode(uint8_t code, bool withinBand) {
+  return resolveCandidate(code == kCandidateLeak, withinBand, code == kCandidateBleed, code == kCandidateAcne);
+}
 // Reference decision per pixel, for the boundary distance transform.
 constexpr uint8_t kDecisionNone = 0, kDecisionLit = 1, kDecisionShadowed = 2;
 constexpr int kBlockRows = 16;
@@ -317,6 +327,10 @@ struct Channels {
               *biasDepth = nullptr, *biasWorld = nullptr;
   const float *momentMean = nullptr, *momentBound = nullptr;  // filterable maps only
   const float* m = nullptr;                                   // texel footprint, pixels per map texel
+  // A frame from another renderer (CompareOptions::blind or meta kind "outside"): the blind rule,
+  // with the declared map's contact distance (outside_frame.h prepareOutsideComparison).
+  bool blind = false, declaredFilterable = false;
+  const float* contact = nullptr;
   const float* cascade = nullptr;                             // only for cascaded frames (readChannels says why)
   int cascadeCount = 0;  // from the method, so that an empty cascade is still listed
   // Without a light (a projector-only scene), both decisions read this plane of ones: lit
@@ -358,6 +372,14 @@ struct Channels {
     if (e.hasOccluderDistance) {
       e.referenceOccluderDist = refOccDist[i];
       e.biasWorld = biasWorld[i];
+    }
+    if (blind) {
+      e.blind = true;
+      e.declaredFilterable = declaredFilterable;
+      e.hasTruthOccluderDistance = refOccDist != nullptr;
+      if (refOccDist) e.truthOccluderDist = refOccDist[i];
+      e.hasContact = contact != nullptr;
+      if (contact) e.contactWorld = contact[i];
     }
     return e;
   }
@@ -420,6 +442,9 @@ Channels readChannels(const Frame& reference, const Frame& raster, const Compare
     ch.m = optional(raster, lp + "m");
     ch.momentMean = optional(raster, lp + "moment_mean");
     ch.momentBound = optional(raster, lp + "moment_bound");
+    ch.blind = options.blind || metaString(raster, "kind") == "outside";
+    ch.declaredFilterable = ch.blind && options.declaredFilterable;
+    if (ch.blind) ch.contact = optional(raster, lp + "contact_world");
     // Per-cascade metrics: only for cascaded frames, so every other row keeps its keys (the channel
     // is 0 everywhere for the other fits). Frames built in code without metadata count as cascaded.
     ch.cascade = optional(raster, lp + "cascade");
@@ -550,7 +575,10 @@ void resolveCandidates(uint8_t* klass, const uint8_t* decision, const float* mPl
   // horizon) is within it of any boundary pixel, so it needs no distance at all, only whether
   // a boundary exists anywhere.
   const double diagonalPx = std::sqrt(double(width) * width + double(height) * height);
-  auto limitPx = [&](size_t i) { return double(boundaryTexels) * (mPlane ? double(sanitizeM(mPlane[i])) : 1.0); };
+  auto limitPx = [&](size_t i) {
+    const double texels = klass[i] == kCandidateAcne ? double(kBlindAcneBandTexels) : double(boundaryTexels);
+    return texels * (mPlane ? double(sanitizeM(mPlane[i])) : 1.0);
+  };
   std::vector<int> rowReach(size_t(height), -1);  // -1: no candidate that needs a distance
   std::vector<uint8_t> rowHasCandidate(size_t(height), 0), rowHasBoundary(size_t(height), 0);
   tbb::parallel_for(0, height, [&](int y) {
@@ -619,7 +647,7 @@ void resolveCandidates(uint8_t* klass, const uint8_t* decision, const float* mPl
     uint8_t* krow = klass + size_t(y) * width;
     PerPixelClass<uint64_t>& counts = rowCounts[size_t(y)];
     auto resolve = [&](int x, bool withinLimit) {
-      const PixelClass c = resolveCandidate(krow[x] == kCandidateLeak, withinLimit, krow[x] == kCandidateBleed);
+      const PixelClass c = resolveCandidateCode(krow[x], withinLimit);
       krow[x] = uint8_t(c);
       ++counts[classIndex(c)];
     };
@@ -881,10 +909,10 @@ Metrics compareFrames(const Frame& reference, const Frame& raster, const Compare
         disagreement = sd == SoftDecision::Error;
       }
       if (disagreement) {
-        const DisagreementClass dc = classifyDisagreement(ch.evidence(i), leakFactor);
+        const DisagreementClass dc = classifyAnyDisagreement(ch.evidence(i), leakFactor);
         if (dc.candidate) {
           // Aliasing or, beyond the boundary band, leak (with its evidence) or other: pass 2.
-          klass_[i] = dc.bleedEvidence ? kCandidateBleed : dc.leakEvidence ? kCandidateLeak : kCandidate;
+          klass_[i] = candidateCode(dc);
           ++s.candidates;
           s.candidateLimitPx = std::max(s.candidateLimitPx, mPlane_ ? m : 1.0f);
           continue;
@@ -1273,12 +1301,13 @@ Metrics compareFrames(const CompareContext& context, const Frame& reference, con
         if (!disagreement) continue;
         // A disagreement: step 2 on its evidence, and pass 2's decision from the kept distances.
         ++s.disagreements;
-        const DisagreementClass dc = classifyDisagreement(ch.evidence(i), leakFactor);
+        const DisagreementClass dc = classifyAnyDisagreement(ch.evidence(i), leakFactor);
         PixelClass c = dc.cls;
         if (dc.candidate) {
-          const double limit = double(d.options.boundaryTexels) * (ch.m ? double(sanitizeM(ch.m[i])) : 1.0);
+          const double texels = dc.acneEvidence ? double(kBlindAcneBandTexels) : double(d.options.boundaryTexels);
+          const double limit = texels * (ch.m ? double(sanitizeM(ch.m[i])) : 1.0);
           const bool within = limit >= diagonalPx ? px.anyBoundary : double(px.boundaryDist2[i]) <= limit * limit;
-          c = resolveCandidate(dc.leakEvidence, within, dc.bleedEvidence);
+          c = resolveCandidate(dc.leakEvidence, within, dc.bleedEvidence, dc.acneEvidence);
         }
         ++s.counts[classIndex(c)];
         if (klass) klass[i] = uint8_t(c);

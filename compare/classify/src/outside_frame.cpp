@@ -1,5 +1,5 @@
-// Outside frames (outside_frame.h): the image reader, the Frame built from it and the hook where
-// its evidence is filled in. The renderer JSON's parser is declared_renderer.cpp.
+// Outside frames (outside_frame.h): the image reader and the Frame built from it. The renderer
+// JSON's parser is declared_renderer.cpp, the evidence filled in before compare outside_evidence.cpp.
 #include "shadowlab/compare/outside_frame.h"
 
 #include <png.h>
@@ -346,16 +346,6 @@ Frame makeOutsideFrame(const Frame& truth, const std::string& light, const Image
   frame.meta["width"] = frame.width;
   frame.meta["height"] = frame.height;
   return frame;
-}
-
-void prepareOutsideComparison(const Frame& truthAll, Frame& outside, const DeclaredRenderer& declared,
-                              CompareOptions& options) {
-  (void)truthAll;
-  (void)declared;
-  // Without a footprint channel (`m`), compare's boundary band is boundaryTexels x 1 pixel: the
-  // band is read in pixels. Recorded in the frame so that metrics.json can say so.
-  outside.meta["boundary_band"] = "pixels";
-  options.rasterName = options.rasterName.empty() ? "outside frame" : options.rasterName;
 }
 
 }  // namespace shadowlab

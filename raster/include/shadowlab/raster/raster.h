@@ -119,6 +119,11 @@ class Rasterizer {
   // It equals the frame's vis channel converted to 8 bits, 255 only where vis is exactly 1 and 0
   // only where it is exactly 0, 128..255 exactly where vis >= 0.5 (tests/raster_lookup_test.cpp).
   std::vector<uint8_t> lookupVisibility() const;
+  // The last render()'s light layers (a cascade, a cube face +X -X +Y -Y +Z -Z; one for a plain
+  // directional or spot map; none without a light): clip space from world space as the shadow pass
+  // drew them, Vulkan's (x/w, y/w in [-1, 1] across the map, y = -1 on its top row, depth 0..1).
+  // What a renderer declares beside an outside frame (compare/classify declared_renderer.h).
+  std::vector<glm::mat4> lastLightClipFromWorld() const;
 
   // Renders `scene` with `method` for the light named `light` (empty: the scene's first light)
   // and all projectors. The GPU copy of the scene is kept and reused while the scene hash is the

@@ -41,6 +41,15 @@ struct PixelEvidence {
   // (softError below); without it every test here is the hard light's.
   bool softTruth = false;
   float referenceSigma = 0;  // reference `vis_sigma`; NaN or negative read as 0
+  // A frame from another renderer (compare/METRICS.md "Frames from other renderers"): none of the
+  // raster's own evidence, so classifyBlindDisagreement decides from the truth's evidence and the
+  // planes prepareOutsideComparison (outside_frame.h) made from what the renderer declared.
+  bool blind = false;
+  bool hasTruthOccluderDistance = false;  // reference `occluder_dist` (-1: nothing occludes)
+  float truthOccluderDist = -1;
+  bool hasContact = false;  // `contact_world` of the declared map
+  float contactWorld = 0;   // a true occluder this close (world units, along the shadow ray) is contact
+  bool declaredFilterable = false;  // the renderer declared a filterable map (VSM, EVSM, MSM)
 };
 
 // ---- soft truth (sized lights; compare/METRICS.md "Soft shadows") ----------------------------
@@ -109,6 +118,7 @@ struct DisagreementClass {
   bool candidate = false;
   bool leakEvidence = false;
   bool bleedEvidence = false;
+  bool acneEvidence = false;  // blind only: acne is final with the raster's occluder evidence
 };
 // Light bleeding of a filterable map: the truth is shadowed, and the lookup's moments say the
 // footprint's mean depth lies in front of the receiver by more than the bias (a real occluder on
@@ -144,15 +154,62 @@ inline DisagreementClass classifyDisagreement(const PixelEvidence& e, float leak
   return {PixelClass::Other, true, rasterTooLit && (throughMap || withinBias), rasterTooLit && bleedEvidence(e)};
 }
 
+// The blind rule (compare/METRICS.md "Frames from other renderers"): a disagreement of a frame
+// without the raster's internals. Coverage (outside every declared layer) and the penumbra classes
+// (from the values) are final as in classifyDisagreement; everything else waits for the distance
+// to the true shadow boundary. Too dark (the truth lit, the frame shadowed): a map texel holding
+// the true occluder's edge reaches about half a texel past it, so within kBlindAcneBandTexels of
+// the true boundary it is aliasing and beyond it acne (the truth lit means no surface lies between
+// the point and the light, so a shadow away from every true edge is the receiver shadowing itself).
+// Too lit, beyond the aliasing band (CompareOptions::boundaryTexels): leak when the true occluder
+// is in contact (within contactWorld of the receiver: a bias of the declared map's few texels lets
+// it through), else bleed when the renderer declared a filterable map (an occluder lit through by
+// the moments' bound), else other. The constants are those that measure best against the full
+// rule (bench/blind_agreement_bench.cpp; the matrix is in compare/METRICS.md).
+constexpr float kBlindAcneBandTexels = 0.5f;
+inline DisagreementClass classifyBlindDisagreement(const PixelEvidence& e) {
+  if (e.hasInMap && !(e.inMap >= 0.5f)) return {PixelClass::Coverage, false, false};
+  const float r = clampVisibility(e.referenceVis), s = clampVisibility(e.rasterVis);
+  if (e.softTruth) {
+    const float sigma = sanitizeSigma(e.referenceSigma);
+    if (truthPartial(r, sigma) && !rasterPartial(s)) return {PixelClass::PenumbraHard, false, false};
+    if (truthFully(r, sigma) && rasterPartial(s)) return {PixelClass::PenumbraWide, false, false};
+  }
+  const bool referenceLit = litDecision(e.referenceVis);
+  DisagreementClass d{PixelClass::Other, true, false, false, false};
+  const bool tooLit = e.softTruth ? s > r : !referenceLit;
+  if (!tooLit) {
+    // Only with a declared map (its in_map plane): without one the band is in pixels, and a texel
+    // may span many. Under a sized light only a fully lit truth point shadowed outright: a penumbra
+    // drawn too dark is not the receiver shadowing itself.
+    d.acneEvidence = e.hasInMap && referenceLit && !litDecision(e.rasterVis) &&
+                     (!e.softTruth || (truthFully(r, sanitizeSigma(e.referenceSigma)) && !rasterPartial(s)));
+    return d;
+  }
+  const bool contact = e.hasContact && e.hasTruthOccluderDistance && e.truthOccluderDist >= 0.0f &&
+                       e.truthOccluderDist <= e.contactWorld;
+  d.leakEvidence = contact;
+  d.bleedEvidence = !contact && e.declaredFilterable;
+  return d;
+}
+
 // A candidate's class once its boundary distance is known: aliasing within the band, beyond it
-// bleed (with the bleed evidence), leak (with the leak evidence) or other.
-inline PixelClass resolveCandidate(bool leakEvidence, bool withinBoundaryBand, bool bleedEvidence = false) {
+// bleed (with the bleed evidence), leak (with the leak evidence), acne (blind: with its evidence)
+// or other.
+inline PixelClass resolveCandidate(bool leakEvidence, bool withinBoundaryBand, bool bleedEvidence = false,
+                                   bool acneEvidence = false) {
   // Aliasing before leak: within the band the map's resolution alone explains the error (METRICS.md).
   if (withinBoundaryBand) return PixelClass::Aliasing;
   // Bleed before leak: the moments prove an occluder in front by more than the bias, so the bias
   // did not let it through (a bleeding pixel's true occluder may well lie within the bias's slack).
   if (bleedEvidence) return PixelClass::Bleed;
-  return leakEvidence ? PixelClass::Leak : PixelClass::Other;
+  if (leakEvidence) return PixelClass::Leak;
+  return acneEvidence ? PixelClass::Acne : PixelClass::Other;
+}
+
+// The rule a pixel's evidence calls for: the blind one for a frame from another renderer.
+inline DisagreementClass classifyAnyDisagreement(const PixelEvidence& e, float leakBiasFactor) {
+  return e.blind ? classifyBlindDisagreement(e) : classifyDisagreement(e, leakBiasFactor);
 }
 
 // Whether a compared pixel is a disagreement that needs a class: hard, the decisions differ; soft,
@@ -176,8 +233,9 @@ inline PixelClass classifyPixel(const PixelEvidence& e, float leakBiasFactor = C
   const PixelClass scored = scoredClass(e.referenceHit, e.rasterHit, e.referenceObject, e.rasterObject);
   if (scored != PixelClass::Correct) return scored;
   if (!isDisagreement(e)) return PixelClass::Correct;
-  const DisagreementClass d = classifyDisagreement(e, leakBiasFactor);
-  return d.candidate ? resolveCandidate(d.leakEvidence, e.withinBoundaryBand, d.bleedEvidence) : d.cls;
+  const DisagreementClass d = classifyAnyDisagreement(e, leakBiasFactor);
+  return d.candidate ? resolveCandidate(d.leakEvidence, e.withinBoundaryBand, d.bleedEvidence, d.acneEvidence)
+                     : d.cls;
 }
 
 // Tallies: pixels per class (indexed by the class code).

@@ -32,6 +32,11 @@ struct CompareOptions {
   // How the two inputs are named in error messages (the CLI passes the file paths).
   std::string referenceName = "reference frame";
   std::string rasterName = "raster frame";
+  // A frame from another renderer: classified by the blind rule (classify.h
+  // classifyBlindDisagreement, compare/METRICS.md "Frames from other renderers"), also implied by
+  // the compared frame's meta "kind": "outside". prepareOutsideComparison (outside_frame.h) sets it.
+  bool blind = false;
+  bool declaredFilterable = false;  // blind: the renderer declared a filterable map (bleed evidence)
 };
 
 // Metrics of the compared pixels whose raster lookup used one cascade (raster `light.L.cascade`).

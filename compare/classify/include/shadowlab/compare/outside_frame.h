@@ -68,14 +68,31 @@ Frame makeOutsideFrame(const Frame& truth, const std::string& light, const Image
                        const ImagePlane* coverage, const std::string& coverageFile, const CoverageRule& rule,
                        const DeclaredRenderer& declared);
 
+// Contact (the blind leak rule, compare/METRICS.md "Frames from other renderers"): a true occluder
+// within this many texels of the declared map (its world size at the receiver) plus the declared
+// normal bias, times CompareOptions::leakBiasFactor, of the receiver. A renderer's depth bias that
+// removes acne on sloped receivers spans a few texels, so a shadow it loses there is peter panning.
+// A filterable map (VSM, MSM) has no depth bias: its shadows are lost either through the moments'
+// slack right at contact (leak) or by light bleeding (bleed), and the shorter distance is the one
+// that separates the two best (bench/blind_agreement_bench.cpp).
+constexpr float kContactTexels = 2.0f;
+constexpr float kContactTexelsFilterable = 0.6f;
+// in_map: a point this many texels inside a declared layer's edge counts as outside it. A lookup
+// there reads clamped texels (a filter kernel's reach, a normal offset the frame does not declare),
+// so the map does not hold the point reliably: a wrong pixel there is coverage.
+constexpr float kMapEdgeTexels = 3.0f;
+
 // The one place where the evidence of an outside frame is filled in before it is compared: from
 // the truth with the All channels (P, N, occluder_dist, ...), the outside Frame (meta kind
-// "outside") and what its renderer declared. Today it sets what the existing classification needs
-// without a footprint channel: the boundary band of aliasing counts in pixels (no `m`), so
-// `options.boundaryTexels` is read as pixels; no evidence channel is added, so acne, leak and
-// coverage are not proven and an outside frame's wrong pixels are aliasing or other
-// (compare/METRICS.md, "Frames from outside"). The blind classification of outside frames
-// completes this function (its evidence, `options.declared`).
+// "outside") and what its renderer declared. Sets options.blind (the blind rule of classify.h)
+// and options.declaredFilterable (a declared filter of a filterable map: vsm, evsm2, evsm4, msm,
+// "VSM", "VSMShadowMap"). With a declared map (light matrices and map size) it adds to `outside`
+// the planes light.L.in_map (the truth's point inside some declared layer), light.L.m (the texel
+// footprint of the first layer holding the point, from the truth's points of the neighbouring
+// pixels in its tangent plane: the boundary band in texels) and light.L.contact_world (the contact
+// distance above); meta "boundary_band" says "texels". Without one, the band is read in pixels
+// ("boundary_band": "pixels") and coverage and leak are not proven. Throws InputError when the
+// truth lacks a channel it needs (P, N, hit, object_id with a declared map).
 void prepareOutsideComparison(const Frame& truthAll, Frame& outside, const DeclaredRenderer& declared,
                               CompareOptions& options);
 
