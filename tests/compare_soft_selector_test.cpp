@@ -67,8 +67,10 @@ Frame partial(const Frame& full, const EvidenceSelector& select) {
 TEST(SoftSelector, PartialFramesGiveTheFullFramesMetrics) {
   const int w = 80, h = 60;
   Frame reference = frame(w, h), raster = frame(w, h);
-  std::vector<float>& sigma = reference.add("light.sun.vis_sigma");
+  reference.add("light.sun.vis_sigma");
   reference.add("light.sun.occluder_dist", -1.0f);
+  // After the last add: add() may move every plane.
+  std::vector<float>& sigma = reference.get("light.sun.vis_sigma");
   for (const char* c : kEvidence) raster.add(std::string("light.sun.") + c);
   raster.add("light.sun.m", 2.0f);
   std::mt19937 rng(9);
