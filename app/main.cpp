@@ -12,6 +12,7 @@
 #include <cstring>
 #include <exception>
 #include <filesystem>
+#include <future>
 #include <thread>
 #include <map>
 
@@ -50,8 +51,15 @@ void cleanUpOnSignal(const std::string& command) {
   sigaddset(&set, SIGINT);
   sigaddset(&set, SIGTERM);
   if (pthread_sigmask(SIG_BLOCK, &set, nullptr) != 0) return;
-  std::thread([set, command] {
+  // The command goes on once the thread waits in sigwait, which allocates nothing: a technique's
+  // compile forks (raster/src/technique_compiler.cpp), and a fork while this thread is still
+  // starting can copy an allocator lock it holds into the child, whose compile then never returns
+  // (seen under AddressSanitizer, whose allocator has no fork handler).
+  std::promise<void> waiting;
+  std::future<void> started = waiting.get_future();
+  std::thread([set, command, waiting = std::move(waiting)]() mutable {
     int signo = 0;
+    waiting.set_value();
     if (sigwait(&set, &signo) != 0) return;
     const int removed = removeInterruptPaths();
     const std::string line = "shadowlab " + command + ": interrupted (" + (signo == SIGINT ? "SIGINT" : "SIGTERM") +
@@ -60,6 +68,7 @@ void cleanUpOnSignal(const std::string& command) {
     if (::write(STDERR_FILENO, line.data(), line.size()) < 0) _exit(128 + signo);
     _exit(128 + signo);  // no exit handlers: the other threads may be mid-trace
   }).detach();
+  started.wait();
 }
 
 std::string firstMissingFolder(const std::string& dir) {

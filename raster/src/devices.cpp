@@ -48,6 +48,7 @@ std::vector<RasterDeviceInfo> listRasterDevices() {
     VK_CHECK(vkEnumeratePhysicalDevices(instance, &count, nullptr));
     std::vector<VkPhysicalDevice> devices(count);
     VK_CHECK(vkEnumeratePhysicalDevices(instance, &count, devices.data()));
+    vk::keepLoadedLibrariesMapped();  // the drivers' init blocks stay reachable after vkDestroyInstance
     for (VkPhysicalDevice d : devices) {
       VkPhysicalDeviceDriverProperties driver{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_DRIVER_PROPERTIES};
       VkPhysicalDeviceProperties2 props{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_PROPERTIES_2};

@@ -519,7 +519,10 @@ constexpr bool kAddressSanitizer = false;
 // compile() in a forked child under RLIMIT_CPU and RLIMIT_AS, its answer through a pipe: 'S' and
 // the SPIR-V, 'E' and an input error's message. A child stopped by a limit (or failing otherwise)
 // is a DriverError naming the file and the limits (exit 3). The caller holds compileTechnique's
-// lock, so no other thread of this process is inside glslang while it forks.
+// lock, so no other thread of this process is inside glslang while it forks. Under AddressSanitizer
+// (GCC 12's allocator has no fork handler) a fork while another thread allocates can leave the child
+// blocked on a copied allocator lock until the wall limit: the CLI's one other thread at this point
+// already waits in sigwait (app/main.cpp, cleanUpOnSignal).
 std::shared_ptr<const CompiledTechnique> compileBounded(const TechniqueFile& t) {
 #ifdef SHADOWLAB_TECHNIQUE_COMPILE_IN_PROCESS
   // The fuzz target (tests/fuzz/fuzz_technique.cpp): libFuzzer sees the coverage of this process

@@ -27,6 +27,11 @@ inline bool injectedFailure(const char* expression) { return injectedResult(expr
 [[noreturn]] void throwAllocationError(const char* expression, VkResult result, const std::string& what,
                                        const std::string& device, const char* file, int line);
 
+// Under AddressSanitizer only (a no-op otherwise): marks every library loaded by now RTLD_NODELETE,
+// so a Vulkan driver that the loader dlcloses stays mapped and LeakSanitizer still sees the blocks
+// its one-time init keeps (raster/src/vk/context.cpp). Call it after the loader has loaded drivers.
+void keepLoadedLibrariesMapped();
+
 }  // namespace shadowlab::vk
 
 // VK_CHECK for a call that allocates device memory (vkCreateImage, vkAllocateMemory,

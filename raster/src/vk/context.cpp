@@ -23,7 +23,7 @@ namespace shadowlab::vk {
 // LeakSanitizer reports them at exit as leaks from "<unknown module>", which no suppression can
 // name. Marking every library loaded by now RTLD_NODELETE keeps the driver mapped: its blocks stay
 // reachable and a real leak in it is reported under the library's name.
-static void keepLoadedLibrariesMapped() {
+void keepLoadedLibrariesMapped() {
   dl_iterate_phdr(
       [](dl_phdr_info* info, size_t, void*) {
         if (info->dlpi_name && info->dlpi_name[0]) dlopen(info->dlpi_name, RTLD_NOW | RTLD_NOLOAD | RTLD_NODELETE);
@@ -32,7 +32,7 @@ static void keepLoadedLibrariesMapped() {
       nullptr);
 }
 #else
-static void keepLoadedLibrariesMapped() {}
+void keepLoadedLibrariesMapped() {}
 #endif
 
 const char* resultName(VkResult r) {
