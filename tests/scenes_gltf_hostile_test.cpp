@@ -331,9 +331,15 @@ TEST_F(GltfHostile, AGltfPathThatIsNotAGltfFileSaysWhatItIs) {
   EXPECT_HAS(inputErrorOf([&] { loadScene(wrapper(dir() + "/missing.glb")); }), "missing.glb: not found");
   // Text that is not JSON: said so, without quoting it.
   const std::string passwd = inputErrorOf([&] { loadScene(wrapper("/etc/passwd")); });
-  EXPECT_HAS(passwd, "/etc/passwd: error: not a glTF file: invalid JSON (syntax error");
+  EXPECT_HAS(passwd, "/etc/passwd:1:1: error: not a glTF file: invalid JSON (syntax error");
   EXPECT_EQ(passwd.find("root"), std::string::npos) << passwd;
   EXPECT_EQ(passwd.find("last read"), std::string::npos) << passwd;
+  // A number too large for a double (nlohmann's out_of_range, which once ended the process): its
+  // line:col, as every JSON file of the project.
+  std::ofstream(dir_ / "huge.gltf") << "{\"asset\": {\"version\": \"2.0\"},\n \"bufferViews\": [{\"byteLength\": 1e99918}]}";
+  EXPECT_HAS(inputErrorOf([&] { loadScene(wrapper(dir() + "/huge.gltf")); }),
+             "huge.gltf:2:33: error: not a glTF file: invalid JSON (number overflow parsing '1e99918'; expected a "
+             "finite number");
   // A JSON scene where a glTF was expected.
   std::ofstream(dir_ / "scene.json") << R"({"objects": [], "lights": []})";
   EXPECT_HAS(inputErrorOf([&] { loadScene(wrapper(dir() + "/scene.json")); }),

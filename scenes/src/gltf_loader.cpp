@@ -30,6 +30,7 @@
 #include "shadowlab/scenes/error.h"
 #include "shadowlab/scenes/number_text.h"
 #include "shadowlab/scenes/io.h"
+#include "shadowlab/scenes/json_reader.h"
 
 namespace shadowlab::gltf {
 
@@ -1611,15 +1612,16 @@ Content loadFile(const Request& req, std::vector<Material>& materials) {
   Container c = splitContainer(file, bytes);
   json doc;
   try {
-    doc = json::parse(c.jsonText);
-  } catch (const json::parse_error& e) {
-    std::string what = e.what();
-    const auto at = what.find("syntax error");
-    if (at != std::string::npos) what = what.substr(at);
-    // nlohmann quotes the text it last read: never echo a file's bytes (it may not be glTF at all).
-    const auto quote = what.find("; last read");
-    if (quote != std::string::npos) what = what.substr(0, quote);
-    fail(file, "", "not a glTF file: invalid JSON (" + what + "); expected a glTF 2.0 .gltf (JSON) or .glb file");
+    // The project's one JSON reader: a syntax error at its line:col (of the JSON chunk in a .glb),
+    // a number too large for a double or a key given twice refused with its place, and never the
+    // file's bytes echoed (it may not be glTF at all).
+    doc = parseJsonText(c.jsonText, file);
+  } catch (const InputError& e) {
+    const std::string what = e.what();
+    const auto at = what.find(": error: ");
+    if (at == std::string::npos) throw;
+    throw InputError(what.substr(0, at) + ": error: not a glTF file: invalid " + (c.binary ? "JSON chunk (" : "JSON (") +
+                     what.substr(at + 9) + "); expected a glTF 2.0 .gltf (JSON) or .glb file");
   }
   if (!doc.is_object()) fail(file, "", "got " + detail::describe(doc) + "; expected a glTF JSON object");
   // glTF 1.0: asset.version "1.x", or objects where 2.0 has arrays.
