@@ -73,6 +73,10 @@ int run(const Options& o) {
                            {timing::kEvidenceGpuMs, t.evidenceGpuMs},
                            {timing::kReadbackMs, t.readbackMs},
                            {timing::kRenderWallMs, t.renderWallMs}};
+  if (t.sdsmSampled) {
+    report[timing::kSdsmGpuMs] = t.sdsmGpuMs;
+    report[timing::kSdsmReduceMs] = t.sdsmReduceMs;
+  }
   writeJsonAtomic(o.outDir + "/raster.json", report);
   out.keep();
   std::printf("raster: %s %dx%d light=%s device=%s shadow %.2f ms, camera %.2f ms, readback %.2f ms -> %s\n",

@@ -117,6 +117,10 @@ int run(const Options& o) {
                  {timing::kCompareMs, r.compareMs},
                  {timing::kReferenceMs, r.referenceMs},
                  {timing::kConfigWallMs, configWallMs}};
+  if (r.timings.sdsmSampled) {
+    row.timings[timing::kSdsmGpuMs] = r.timings.sdsmGpuMs;
+    row.timings[timing::kSdsmReduceMs] = r.timings.sdsmReduceMs;
+  }
 
   const fs::path dir(o.outDir);
   if (o.keepImages) {

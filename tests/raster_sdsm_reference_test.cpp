@@ -48,10 +48,11 @@ TEST_F(SdsmVsReference, LowerFootprintThanCascadesAtEqualMemoryOnLongView) {
   cascades.cascadeCount = 4;
   Method cascadesLog = cascades;
   cascadesLog.cascadeLambda = 1.0f;
-  Method sdsm = cascadesLog;  // logarithmic splits over the samples' range, as Lauritzen et al.
+  Method sdsm = cascades;  // its default: logarithmic splits over the samples' range, as Lauritzen et al.
   sdsm.fit = Fit::Sdsm;
-  Method sdsmDefault = sdsm;
-  sdsmDefault.cascadeLambda = 0.75f;
+  ASSERT_EQ(sdsm.sdsmLambda, 1.0f);
+  Method sdsmDefault = sdsm;  // cascades' default split, which sdsm once shared
+  sdsmDefault.sdsmLambda = 0.75f;
   const Frame rasCascades = R->render(s, cascades), rasSdsm = R->render(s, sdsm);
   const Score c = score(ref, rasCascades, light), d = score(ref, rasSdsm, light);
   const Score cLog = score(ref, R->render(s, cascadesLog), light),

@@ -237,13 +237,13 @@ TEST(RasterSdsm, FitOnLongViewHoldsEverySampleInItsLayer) {
   double p95[2][2];  // [sdsm, cascades][lambda 0.75, 1]
   for (int l = 0; l < 2; ++l) {
     Method ms = sdsm, mc = cascades;
-    ms.cascadeLambda = mc.cascadeLambda = l == 0 ? 0.75f : 1.0f;
+    ms.sdsmLambda = mc.cascadeLambda = l == 0 ? 0.75f : 1.0f;
     const FrameLayers fs = fitFrameLayers(s, &s.lights[0], ms, cam, &ground),
                       fc = fitFrameLayers(s, &s.lights[0], mc, cam);
     p95[0][l] = texelP95(fs);
     p95[1][l] = texelP95(fc);
     std::printf("  lambda %.2f: sdsm splits %.2f %.2f %.2f %.2f %.2f, cascades' %.2f %.2f %.2f %.2f %.2f\n",
-                ms.cascadeLambda, fs.cascadeSplitsView[0], fs.cascadeSplitsView[1], fs.cascadeSplitsView[2],
+                ms.sdsmLambda, fs.cascadeSplitsView[0], fs.cascadeSplitsView[1], fs.cascadeSplitsView[2],
                 fs.cascadeSplitsView[3], fs.cascadeSplitsView[4], fc.cascadeSplitsView[0], fc.cascadeSplitsView[1],
                 fc.cascadeSplitsView[2], fc.cascadeSplitsView[3], fc.cascadeSplitsView[4]);
     std::printf("    texel / depth at the 95th percentile: sdsm %.6f, cascades %.6f\n", p95[0][l], p95[1][l]);
@@ -251,7 +251,15 @@ TEST(RasterSdsm, FitOnLongViewHoldsEverySampleInItsLayer) {
   EXPECT_LT(p95[0][1], 0.8 * p95[1][0]);
   EXPECT_LT(p95[0][1], 0.8 * p95[1][1]);
   EXPECT_GT(p95[0][0], p95[1][0]);
-  sdsm.cascadeLambda = 1.0f;
+  // sdsm's splits follow sdsm.lambda (default 1) alone: cascades.lambda is fit=cascades' own.
+  sdsm.sdsmLambda = 1.0f;
+  {
+    Method other = sdsm;
+    other.cascadeLambda = 0.25f;
+    EXPECT_EQ(fitFrameLayers(s, &s.lights[0], other, cam, &ground).cascadeSplitsView,
+              fitFrameLayers(s, &s.lights[0], sdsm, cam, &ground).cascadeSplitsView);
+    EXPECT_EQ(Method().sdsmLambda, 1.0f);
+  }
   for (bool snap : {false, true})
     for (float blend : {0.0f, 0.2f}) {
       Method m = sdsm;
@@ -272,7 +280,7 @@ TEST(RasterSdsm, FitOnLongViewHoldsEverySampleInItsLayer) {
       }
       EXPECT_EQ(outside, 0u) << "snap " << snap << " blend " << blend;
     }
-  // Without samples (none given, or none seen): exactly fit=cascades (the same keys).
+  // Without samples (none given, or none seen): exactly fit=cascades with cascades.lambda.
   const std::vector<glm::vec3> none;
   cascades.cascadeLambda = sdsm.cascadeLambda;
   const FrameLayers c1 = fitFrameLayers(s, &s.lights[0], cascades, cam);

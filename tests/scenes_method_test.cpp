@@ -60,6 +60,7 @@ TEST(ScenesMethod, KeysInDocumentationOrder) {
                                                     "cascades.lambda",
                                                     "cascades.blend",
                                                     "cascades.stabilize",
+                                                    "sdsm.lambda",
                                                     "sdsm.snap",
                                                     "lispsm.n_scale",
                                                     "psm.slide_back",
@@ -306,10 +307,13 @@ TEST(ScenesMethod, CascadeKeys) {
   EXPECT_THROW(validateMethod(hand, "code"), InputError);
 }
 
-// fit=sdsm: the kind (in every fit listing, code 6), its one key sdsm.snap (off by default), the
-// JSON round trip, and both as cascaded fits (cascades.count layers).
+// fit=sdsm: the kind (in every fit listing, code 6), its keys sdsm.lambda (1 by default, apart
+// from cascades.lambda) and sdsm.snap (off by default), the JSON round trip, and both as cascaded
+// fits (cascades.count layers).
 TEST(ScenesMethod, SdsmKeys) {
   EXPECT_FALSE(Method().sdsmSnap);
+  EXPECT_EQ(Method().sdsmLambda, 1.0f);
+  EXPECT_EQ(Method().cascadeLambda, 0.75f);
   const KindInfo<Fit>* kind = findKind(fitKinds(), "sdsm");
   ASSERT_NE(kind, nullptr);
   EXPECT_EQ(int(kind->kind), 6);
@@ -317,12 +321,18 @@ TEST(ScenesMethod, SdsmKeys) {
   Method m;
   applyMethodSetting(m, "fit", "sdsm", "--set");
   applyMethodSetting(m, "sdsm.snap", "true", "--set");
+  applyMethodSetting(m, "sdsm.lambda", "0.5", "--set");
   EXPECT_EQ(m.fit, Fit::Sdsm);
   EXPECT_TRUE(m.sdsmSnap);
+  EXPECT_EQ(m.sdsmLambda, 0.5f);
+  EXPECT_EQ(m.cascadeLambda, 0.75f);
   validateMethod(m, "--set");
   nlohmann::json j = roundTripped(m);
   EXPECT_EQ(j["fit"], "sdsm");
   EXPECT_EQ(j["sdsm.snap"], true);
+  EXPECT_EQ(j["sdsm.lambda"], 0.5);
+  EXPECT_EQ(setError("sdsm.lambda", "1.5"),
+            "--set: sdsm.lambda: error: got \"1.5\"; expected a number 0..1 (0 uniform, 1 logarithmic splits)");
   applyMethodJson(m, "sdsm.snap", 0, "grid");
   EXPECT_FALSE(m.sdsmSnap);
   EXPECT_EQ(setError("sdsm.snap", "yes"), "--set: sdsm.snap: error: got \"yes\"; expected true, false, 1 or 0");

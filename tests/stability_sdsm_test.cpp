@@ -1,6 +1,6 @@
 // fit=sdsm's shimmer (compare/stability.h): long_view's evaluation camera fixed, the fit camera
 // dollied 4 units forward in 32 frames (the scene's "walk" path), 4 x 1024 maps, sdsm with
-// logarithmic splits (cascades.lambda 1). SDSM's crops follow the samples, so they move and change
+// logarithmic splits (sdsm.lambda's default 1). SDSM's crops follow the samples, so they move and change
 // size by fractions of a texel every frame: its shadow edges crawl like unstabilized cascades'. sdsm.snap (power-of-two
 // texel sizes, crops moved by whole texels) keeps the texel grid in place while the samples' boxes stay within a size
 // step.
@@ -41,7 +41,6 @@ TEST(SdsmShimmer, SdsmShimmersOnADollyAndTheSnapCutsIt) {
     m.cascadeCount = 4;
     m.cascadeStabilize = row.stabilize;
     m.sdsmSnap = row.snap;
-    if (row.fit == Fit::Sdsm) m.cascadeLambda = 1.0f;  // logarithmic splits, as Lauritzen et al.
     std::vector<Frame> rasters;
     for (const Camera& fit : path) rasters.push_back(R->render(scene, m, "", nullptr, &fit));
     row.s = measureStability(ref, rasters);

@@ -680,7 +680,10 @@ LightChannels shadeLight(Surface s) {
   float detJ = abs(jx.x * jy.y - jy.x * jx.y);
   // The singular values of J: sMax, and sMin = detJ / sMax; m = 1 / sMin.
   float sMax = sqrt(0.5 * (sumSq + sqrt(max(sumSq * sumSq - 4.0 * detJ * detJ, 0.0))));
-  float m = detJ > 1e-6 * sMax ? min(sMax / detJ, 1e6) : 1e6;
+  // Capped where J is singular to float precision (sMin = detJ / sMax below kFootprintSingularRatio
+  // sMax: a plane edge-on to the light, within about 0.0006 degrees) or m would pass the cap.
+  float m = detJ > max(kFootprintSingularRatio * sMax, 1.0 / kFootprintCap) * sMax ? min(sMax / detJ, kFootprintCap)
+                                                                                 : kFootprintCap;
 
   // The blend band: the same lookup in the next cascade.
   if (kBlend && pick.blendT > 0.0) vis = mix(vis, blendVisibility(lookUp(pick.cascade + 1, s)), pick.blendT);

@@ -244,7 +244,7 @@ bool sdsmLayers(const Camera& camera, const glm::mat4& lightViewFromWorld, const
   ViewDepthRange range;
   if (!sdsmDepthRange(samples, range)) return false;
   const int count = std::clamp(method.cascadeCount, 1, 8);
-  const std::vector<double> splits = cascadeSplits(range.nearView, range.farView, count, method.cascadeLambda);
+  const std::vector<double> splits = cascadeSplits(range.nearView, range.farView, count, method.sdsmLambda);
   const std::vector<SdsmBounds> bounds = sdsmPartitionBounds(samples, splits, method.cascadeBlend);
   for (int i = 0; i < count; ++i) {
     const CascadeCrop crop = bounds[size_t(i)].samples > 0

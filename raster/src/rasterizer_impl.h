@@ -129,6 +129,7 @@ struct Rasterizer::Impl {
     glm::mat4 cameraClip{1.0f};
     int width = 0, height = 0;
     bool light = false;
+    double sdsmGpuMs = 0;  // fit=sdsm: the kept samples' pass (part of the method's time)
   } last;
 };
 

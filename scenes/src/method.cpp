@@ -304,6 +304,10 @@ const std::vector<SetterRow>& setters() {
        }},
       {"cascades.stabilize", "fit=cascades: constant-size crops snapped to whole texels",
        [](Method& m, const Value& v, const Where& w) { m.cascadeStabilize = boolOf(v, w); }},
+      {"sdsm.lambda", "fit=sdsm: split scheme over the visible depth range, 0 uniform .. 1 logarithmic",
+       [](Method& m, const Value& v, const Where& w) {
+         m.sdsmLambda = floatIn(v, w, 0.0, 1.0, false, "a number 0..1 (0 uniform, 1 logarithmic splits)");
+       }},
       {"sdsm.snap", "fit=sdsm: each slice's crop snapped to whole texels of a power-of-two size (less shimmer)",
        [](Method& m, const Value& v, const Where& w) { m.sdsmSnap = boolOf(v, w); }},
       {"lispsm.n_scale", "fit=lispsm: the warp's projection center, times the optimal n (larger: closer to uniform)",
@@ -464,6 +468,8 @@ void crossCheck(const Method& m, const std::string& file, const std::string& pre
     bad("cascades.count", std::to_string(m.cascadeCount), "an integer 1..8");
   if (!(m.cascadeLambda >= 0.0f && m.cascadeLambda <= 1.0f))
     bad("cascades.lambda", jsonFloat(m.cascadeLambda).dump(), "a number 0..1");
+  if (!(m.sdsmLambda >= 0.0f && m.sdsmLambda <= 1.0f))
+    bad("sdsm.lambda", jsonFloat(m.sdsmLambda).dump(), "a number 0..1");
   if (!(m.cascadeBlend >= 0.0f && m.cascadeBlend <= 0.5f))
     bad("cascades.blend", jsonFloat(m.cascadeBlend).dump(), "a number 0..0.5");
   if (!(m.lispsmNScale > 0.0f && m.lispsmNScale <= kNScaleLimit))
@@ -592,6 +598,7 @@ nlohmann::json methodToJson(const Method& m) {
   j["cascades.lambda"] = jsonFloat(m.cascadeLambda);
   j["cascades.blend"] = jsonFloat(m.cascadeBlend);
   j["cascades.stabilize"] = m.cascadeStabilize;
+  j["sdsm.lambda"] = jsonFloat(m.sdsmLambda);
   j["sdsm.snap"] = m.sdsmSnap;
   j["lispsm.n_scale"] = jsonFloat(m.lispsmNScale);
   j["psm.slide_back"] = jsonFloat(m.psmSlideBack);

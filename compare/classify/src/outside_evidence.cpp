@@ -150,7 +150,8 @@ void prepareOutsideComparison(const Frame& truthAll, Frame& outside, const Decla
         const double sumSq = glm::dot(jx, jx) + glm::dot(jy, jy);
         const double detJ = std::fabs(jx.x * jy.y - jy.x * jx.y);
         const double sMax = std::sqrt(0.5 * (sumSq + std::sqrt(std::max(sumSq * sumSq - 4.0 * detJ * detJ, 0.0))));
-        footprint[i] = detJ > 1e-6 * sMax ? float(std::min(sMax / detJ, double(kFootprintCapPx))) : kFootprintCapPx;
+        const double singular = std::max(double(kFootprintSingularRatio) * sMax, 1.0 / double(kFootprintCapPx)) * sMax;
+        footprint[i] = detJ > singular ? float(std::min(sMax / detJ, double(kFootprintCapPx))) : kFootprintCapPx;
       } else if (hasDx || hasDy) {
         // A sliver one pixel wide (an edge-on card, a gap): the one step there is, read as both.
         const glm::dvec2 j = texel(projectPoint(M, p + (hasDx ? dx : dy)).clip, size) - t0;

@@ -114,6 +114,10 @@ class PipelineRunner final : public SweepRunner {
         {timing::kEvidenceGpuMs, t.evidenceGpuMs},     {timing::kReadbackMs, t.readbackMs},
         {timing::kRenderWallMs, t.renderWallMs},       {timing::kCompareMs, compareMs},
     };
+    if (t.sdsmSampled) {
+      out.timings[timing::kSdsmGpuMs] = t.sdsmGpuMs;
+      out.timings[timing::kSdsmReduceMs] = t.sdsmReduceMs;
+    }
     return out;
   }
 
@@ -129,10 +133,10 @@ class PipelineRunner final : public SweepRunner {
     const EvidenceSelector none = [](const uint8_t*, int, int, EvidenceRequest&) {};
     RasterTimings t;
     Frame raster = rasterizer().render(scene, method, light, &t, nullptr, fullEvidence_ ? nullptr : &none);
-    out.push_back({t.shadowGpuMs, t.lookupGpuMs, t.momentsGpuMs});
+    out.push_back({t.shadowGpuMs, t.lookupGpuMs, t.momentsGpuMs, t.sdsmGpuMs});
     if (runs > 1)
       for (const Rasterizer::MethodTiming& m : rasterizer().retimeMethod(runs - 1))
-        out.push_back({m.shadowGpuMs, m.lookupGpuMs, m.momentsGpuMs});
+        out.push_back({m.shadowGpuMs, m.lookupGpuMs, m.momentsGpuMs, m.sdsmGpuMs});
     rasterizer().recycle(std::move(raster));
     return out;
   }

@@ -54,7 +54,7 @@ nlohmann::json withMedianTiming(const nlohmann::json& timings, const std::vector
     return it != timings.end() && it->is_number() ? it->get<double>() : 0.0;
   };
   std::vector<MethodSample> runs = more;
-  runs.push_back({ms(timing::kShadowGpuMs), ms(timing::kLookupGpuMs), ms(timing::kMomentsGpuMs)});
+  runs.push_back({ms(timing::kShadowGpuMs), ms(timing::kLookupGpuMs), ms(timing::kMomentsGpuMs), ms(timing::kSdsmGpuMs)});
   std::stable_sort(runs.begin(), runs.end(),
                    [](const MethodSample& a, const MethodSample& b) { return a.methodGpuMs() < b.methodGpuMs(); });
   // The lower middle of an even count: a run, never an average of two, so its parts sum up.
@@ -63,6 +63,7 @@ nlohmann::json withMedianTiming(const nlohmann::json& timings, const std::vector
   out[timing::kShadowGpuMs] = median.shadowGpuMs;
   out[timing::kLookupGpuMs] = median.lookupGpuMs;
   out[timing::kMomentsGpuMs] = median.momentsGpuMs;
+  if (timings.contains(timing::kSdsmGpuMs)) out[timing::kSdsmGpuMs] = median.sdsmGpuMs;
   out[timing::kMethodGpuMs] = median.methodGpuMs();
   out[timing::kMethodGpuMsMin] = runs.front().methodGpuMs();
   out[timing::kMethodGpuMsMax] = runs.back().methodGpuMs();

@@ -40,9 +40,16 @@ struct RasterTimings {
   double visibilityGpuMs = 0;  // visibility_gpu_ms: the camera pass's first part, the visibility buffer
   // lookup_gpu_ms: GPU timestamps of the lookup pass, the method's visibility (and filter) alone
   // per pixel into 1 byte, what an engine pays beside the shadow pass (0 without a light).
-  // method_gpu_ms = shadowGpuMs + lookupGpuMs (compare/TIMINGS.md).
+  // method_gpu_ms = shadowGpuMs + lookupGpuMs + sdsmGpuMs (compare/TIMINGS.md).
   double lookupGpuMs = 0;
-  double methodGpuMs() const { return shadowGpuMs + lookupGpuMs; }
+  // sdsm_gpu_ms: fit=sdsm's sample pass (the fit camera's visibility buffer, read back), what an
+  // engine pays for its depth samples before the shadow pass; timed when the samples were taken
+  // (they are kept per scene and fit camera), 0 for the other fits. sdsm_reduce_ms: the readback
+  // and the reduction on the CPU, not in method_gpu_ms.
+  bool sdsmSampled = false;  // the fit read the samples (fit=sdsm, a directional light)
+  double sdsmGpuMs = 0;
+  double sdsmReduceMs = 0;
+  double methodGpuMs() const { return shadowGpuMs + lookupGpuMs + sdsmGpuMs; }
   // moments_gpu_ms: the filterable maps' moments pass, the part of shadowGpuMs after the map
   // layers are drawn (0 for the other filters).
   double momentsGpuMs = 0;
@@ -105,7 +112,8 @@ class Rasterizer {
     double shadowGpuMs = 0;   // the shadow pass: every map layer drawn, then the moments pass
     double lookupGpuMs = 0;   // the lookup pass (0 without a light)
     double momentsGpuMs = 0;  // the moments pass's part of shadowGpuMs (0 for the other filters)
-    double methodGpuMs() const { return shadowGpuMs + lookupGpuMs; }
+    double sdsmGpuMs = 0;     // fit=sdsm: the kept samples' pass, as taken (not run again)
+    double methodGpuMs() const { return shadowGpuMs + lookupGpuMs + sdsmGpuMs; }
   };
   // Runs the last render()'s method passes again `repeats` times, each submitted and timed on its
   // own: the shadow pass (every map layer drawn, never the kept maps; then the moments pass) and

@@ -28,6 +28,12 @@ SHADOWLAB_CONST(int, kMaxLightLayers, 8)
 SHADOWLAB_CONST(int, kMaxProjectors, 8)
 SHADOWLAB_CONST(int, kMaxTaps, 64)           // the Poisson disc's points
 SHADOWLAB_CONST(int, kProjectorChannels, 5)  // coverage, R, G, B, reverse
+// Lloyd's m where the visible plane is edge-on to the light: the cap, and the singular values'
+// ratio sMin / sMax below which the map-space Jacobian counts as singular (float rounding leaves
+// an exactly edge-on plane's Jacobian at 1e-7 .. 1e-6 of its larger value, not 0). The same two
+// values as compare.h's kFootprintCapPx and kFootprintSingularRatio (tests/raster_m_test.cpp).
+SHADOWLAB_CONST(float, kFootprintCap, 1.0e6)
+SHADOWLAB_CONST(float, kFootprintSingularRatio, 1.0e-5)
 // Filterable maps: what 32-bit float moments hold of EVSM's warps (e^(2 c) < FLT_MAX with c <= 44).
 SHADOWLAB_CONST(float, kEvsmMaxExponent, 42.0)
 

@@ -38,7 +38,11 @@ struct Method {
   bool cascadeStabilize = false;  // cascades.stabilize: constant-size crops snapped to whole texels
   // Sample distribution shadow maps (fit=sdsm, directional lights; raster/METHODS.md): the cascades'
   // splits over the view depth range of what the camera sees, each crop the box of its samples.
-  bool sdsmSnap = false;  // sdsm.snap: power-of-two texel sizes, crops snapped to whole texels
+  // Its own split scheme: the range starts at the nearest visible point, where logarithmic splits
+  // measure best (raster/METHODS.md "Sample distribution shadow maps"); cascades.count and
+  // cascades.blend are shared with fit=cascades.
+  float sdsmLambda = 1.0f;  // sdsm.lambda: 0 uniform .. 1 logarithmic splits
+  bool sdsmSnap = false;    // sdsm.snap: power-of-two texel sizes, crops snapped to whole texels
   // Light-space perspective shadow maps (fit=lispsm, directional lights): the warp's projection
   // center lies lispsmNScale * n_opt before the body's near face (larger: closer to uniform).
   float lispsmNScale = 1.0f;  // lispsm.n_scale: > 0, <= 1e6

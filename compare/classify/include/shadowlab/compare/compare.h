@@ -19,8 +19,11 @@ const char* toString(PixelClass c);  // the class's key (classes.h)
 // The texel footprint the rasterizer writes where the visible plane is edge-on to the light (its
 // Jacobian is singular: a point light lying in the plane, a directional light along it):
 // raster/shaders/resolve.frag caps `light.L.m` at this value. Such pixels are counted in
-// `m_capped` and left out of the m statistics (compare/METRICS.md).
+// `m_capped` and left out of the m statistics (compare/METRICS.md). Singular: sMin / sMax of the
+// Jacobian below kFootprintSingularRatio (float rounding leaves an edge-on plane's at 1e-7 .. 1e-6),
+// or m past the cap. raster/include/shadowlab/raster/resolve_abi.h holds the same two values.
 constexpr float kFootprintCapPx = 1e6f;
+constexpr float kFootprintSingularRatio = 1e-5f;
 
 struct CompareOptions {
   std::string light;            // empty: the light the raster frame rendered (meta "light")

@@ -13,10 +13,12 @@ constexpr const char* kShadowGpuMs = "shadow_gpu_ms";          // GPU timestamps
 constexpr const char* kCameraGpuMs = "camera_gpu_ms";          // GPU timestamps: visibility buffer + resolve
 constexpr const char* kVisibilityGpuMs = "visibility_gpu_ms";  // the visibility-buffer part of camera_gpu_ms
 constexpr const char* kLookupGpuMs = "lookup_gpu_ms";    // GPU timestamps: the method's visibility alone, 1 byte/pixel
-constexpr const char* kMethodGpuMs = "method_gpu_ms";    // shadow_gpu_ms + lookup_gpu_ms: what an engine pays
+constexpr const char* kMethodGpuMs = "method_gpu_ms";  // shadow + lookup (+ sdsm) _gpu_ms: what an engine pays
 constexpr const char* kMethodGpuMsMin = "method_gpu_ms_min";  // the fastest of a sweep row's timed repetitions
 constexpr const char* kMethodGpuMsMax = "method_gpu_ms_max";  // the slowest of them (method_gpu_ms: their median)
 constexpr const char* kMomentsGpuMs = "moments_gpu_ms";  // the moments pass's part of shadow_gpu_ms (filterable maps)
+constexpr const char* kSdsmGpuMs = "sdsm_gpu_ms";        // fit=sdsm: the sample pass, part of method_gpu_ms
+constexpr const char* kSdsmReduceMs = "sdsm_reduce_ms";  // fit=sdsm: CPU wall of the samples' readback and reduction
 constexpr const char* kEvidenceGpuMs = "evidence_gpu_ms";  // camera_gpu_ms - visibility: the evidence resolve
 constexpr const char* kReadbackMs = "readback_ms";         // CPU wall: outputs copied into the Frame
 constexpr const char* kRenderWallMs = "render_wall_ms";    // CPU wall of Rasterizer::render
@@ -30,7 +32,7 @@ constexpr const char* kRendererFrameMs = "renderer_frame_ms";
 // True for a current per-row timing name above.
 inline bool isTimingName(const std::string& key) {
   for (const char* name : {kShadowGpuMs, kCameraGpuMs, kVisibilityGpuMs, kLookupGpuMs, kMethodGpuMs, kMethodGpuMsMin,
-                           kMethodGpuMsMax, kMomentsGpuMs, kEvidenceGpuMs, kReadbackMs, kRenderWallMs, kCompareMs,
+                           kMethodGpuMsMax, kMomentsGpuMs, kSdsmGpuMs, kSdsmReduceMs, kEvidenceGpuMs, kReadbackMs, kRenderWallMs, kCompareMs,
                            kReferenceMs, kConfigWallMs, kCommandWallMs, kRendererFrameMs})
     if (key == name) return true;
   return false;

@@ -145,7 +145,8 @@ std::vector<SweepAxis> sweptAxes(const SweepPlan& plan);
 // One timed run of a configuration's method passes, GPU milliseconds (compare/TIMINGS.md).
 struct MethodSample {
   double shadowGpuMs = 0, lookupGpuMs = 0, momentsGpuMs = 0;
-  double methodGpuMs() const { return shadowGpuMs + lookupGpuMs; }
+  double sdsmGpuMs = 0;  // fit=sdsm: the kept samples' pass, the same in every run
+  double methodGpuMs() const { return shadowGpuMs + lookupGpuMs + sdsmGpuMs; }
 };
 
 struct SweepRunOutput {
