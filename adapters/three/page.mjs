@@ -1,8 +1,9 @@
 // Runs in headless Chromium (page.html): loads the scene's .glb with three.js's own GLTFLoader, keeps
 // its camera and one light, replaces every material with a ShadowMaterial (the shadow term only), and
 // renders into a float render target, so that what comes back is three.js's visibility, linear, with no
-// tone mapping, sRGB encoding or premultiplication (those apply only to the canvas). The pixels go back
-// to render.mjs by POST; nothing else leaves the page.
+// tone mapping, sRGB encoding or premultiplication (those apply only to the canvas). The scene is
+// loaded once; then render.mjs hands out one frame's keys at a time (GET /next) and each frame's
+// pixels go back to it by POST before the next is asked for; nothing else leaves the page.
 import * as THREE from 'three';
 import { GLTFLoader } from 'three/addons/loaders/GLTFLoader.js';
 
@@ -20,14 +21,14 @@ function fail(message) {
 
 // The first camera of the file (shadowlab's export writes one), at the pixel size the request names,
 // else the one the camera node's extras name, else 640x480.
-function setUpCamera(gltf, request) {
+function setUpCamera(gltf, setup) {
   if (gltf.cameras.length === 0) fail('the glTF file has no camera; expected one (shadowlab export writes it)');
   const camera = gltf.cameras[0];
   // shadowlab export writes the size into the camera node's extras (shadowlab.camera.width/height).
   const node = camera.userData && camera.userData.shadowlab && camera.userData.shadowlab.camera;
   const size = node && Number.isInteger(node.width) && Number.isInteger(node.height) ? node : null;
-  const width = request.width || (size && size.width) || 640;
-  const height = request.height || (size && size.height) || 480;
+  const width = setup.width || (size && size.width) || 640;
+  const height = setup.height || (size && size.height) || 480;
   if (camera.isPerspectiveCamera) {
     camera.aspect = width / height;
   } else if (camera.isOrthographicCamera) {
@@ -93,46 +94,46 @@ function patchMaterials(scene, light) {
   });
 }
 
-// Every mesh gets a ShadowMaterial of the same side (GLTFLoader maps doubleSided to DoubleSide, else
-// FrontSide), opaque so that its alpha (1 - shadow) is written as it is; red 1 marks coverage.
-function replaceMaterials(scene, request) {
+// Every mesh gets a ShadowMaterial (opaque, so that its alpha, 1 - shadow, is written as it is; red 1
+// marks coverage), made once; a frame's `side` and `shadow_side` are set on it by applyKeys. The glTF's
+// own side (GLTFLoader maps doubleSided to DoubleSide, else FrontSide) is kept for side=gltf.
+function replaceMaterials(scene) {
   const counts = { meshes: 0, alphaMasked: 0 };
+  const materials = [];
   scene.traverse((o) => {
     if (!o.isMesh) return;
     const original = o.material;
     const masked = original.alphaTest > 0 && original.map;
     const material = masked ? maskedShadowMaterial(original) : new THREE.ShadowMaterial({ color: 0xffffff, opacity: 1 });
     material.transparent = false;
-    material.side = request.side ? kSides[request.side] : original.side;
-    if (request.shadowSide) material.shadowSide = kSides[request.shadowSide];
+    material.userData.gltfSide = original.side;
     if (masked) counts.alphaMasked++;
     o.material = material;
+    materials.push(material);
     const casts = !(o.userData && o.userData.shadowlab && o.userData.shadowlab.casts_shadow === false);
     o.castShadow = casts;
     o.receiveShadow = true;
     counts.meshes++;
   });
-  return counts;
+  return { counts, materials };
 }
 
-// The shadow camera's fit. "bounds" (the default, what most apps do by hand): an orthographic box
-// around the scene's bounding sphere, seen along the light. "fixed": a box of +-extent around the
-// scene's centre. Spot and point lights keep three.js's own perspective shadow cameras.
-function fitShadowCamera(scene, light, request) {
+// The scene's box and bounding sphere, and for a directional light a light of our own at the scene's
+// root, looking along the loaded one's direction at the sphere's centre from 2 radii away (the
+// loaded light's node may sit anywhere: a glTF directional light has a direction only). Spot and
+// point lights keep three.js's own perspective shadow cameras.
+function placeLight(scene, light) {
   const box = new THREE.Box3();
   scene.traverse((o) => {
     if (o.isMesh) box.expandByObject(o);
   });
   const sphere = box.getBoundingSphere(new THREE.Sphere());
-  if (!light.isDirectionalLight) return sphere;
+  const r = Math.max(sphere.radius, 1e-6);
+  if (!light.isDirectionalLight) return { light, box, sphere, r };
   // GLTFLoader puts the light's target at (0, 0, -1) in the light node: the light looks down -Z.
   light.target.updateMatrixWorld(true);
   const from = light.getWorldPosition(new THREE.Vector3());
   const direction = light.target.getWorldPosition(new THREE.Vector3()).sub(from).normalize();
-  const r = Math.max(sphere.radius, 1e-6);
-  const extent = request.fit === 'fixed' ? request.extent : r;
-  // A light of our own at the scene's root: the loaded light's node may sit anywhere (a glTF
-  // directional light has a direction only).
   light.parent.remove(light);
   const sun = new THREE.DirectionalLight(0xffffff, 1);
   sun.name = light.name;
@@ -140,15 +141,94 @@ function fitShadowCamera(scene, light, request) {
   sun.target.position.copy(sphere.center);
   scene.add(sun);
   scene.add(sun.target);
-  const cam = sun.shadow.camera;
-  cam.left = -extent;
-  cam.right = extent;
-  cam.top = extent;
-  cam.bottom = -extent;
-  cam.near = r;
-  cam.far = 3 * r;
+  return { light: sun, box, sphere, r };
+}
+
+// The directional shadow camera's fit, per frame. "bounds" (the default, what most apps do by hand):
+// an orthographic box of +-radius around the scene's bounding sphere, seen along the light, depth r..3r.
+// "tight": the scene's axis-aligned box as the light sees it, its 8 corners in the light's view
+// space giving min/max x, y and depth (padded by 1e-4 of the box's size, against rounding at its
+// faces). "fixed": +-extent around the sphere's centre, depth as "bounds".
+function fitShadowCamera(placed, keys) {
+  const { light, box, r } = placed;
+  if (!light.isDirectionalLight) return;
+  const cam = light.shadow.camera;
+  if (keys.fit === 'tight') {
+    // The view three.js gives the shadow camera (LightShadow.updateMatrices): at the light, looking at
+    // its target, up +Y.
+    light.updateMatrixWorld(true);
+    light.target.updateMatrixWorld(true);
+    cam.position.setFromMatrixPosition(light.matrixWorld);
+    cam.lookAt(new THREE.Vector3().setFromMatrixPosition(light.target.matrixWorld));
+    cam.updateMatrixWorld(true);
+    const lo = new THREE.Vector3(Infinity, Infinity, Infinity);
+    const hi = new THREE.Vector3(-Infinity, -Infinity, -Infinity);
+    const p = new THREE.Vector3();
+    for (let i = 0; i < 8; i++) {
+      p.set(i & 1 ? box.max.x : box.min.x, i & 2 ? box.max.y : box.min.y, i & 4 ? box.max.z : box.min.z).applyMatrix4(cam.matrixWorldInverse);
+      lo.min(p);
+      hi.max(p);
+    }
+    const pad = 1e-4 * Math.max(hi.x - lo.x, hi.y - lo.y, hi.z - lo.z, 1e-6);
+    cam.left = lo.x - pad;
+    cam.right = hi.x + pad;
+    cam.bottom = lo.y - pad;
+    cam.top = hi.y + pad;
+    // The camera looks down -Z: depth is -z.
+    cam.near = -hi.z - pad;
+    cam.far = -lo.z + pad;
+  } else {
+    const extent = keys.fit === 'fixed' ? keys.extent : r;
+    cam.left = -extent;
+    cam.right = extent;
+    cam.top = extent;
+    cam.bottom = -extent;
+    cam.near = r;
+    cam.far = 3 * r;
+  }
   cam.updateProjectionMatrix();
-  return { sun, sphere };
+}
+
+// The shadow map three.js allocated for the last frame's size and type, freed (with VSM's blur
+// target): the next render allocates one for this frame's.
+function disposeShadowMap(shadow) {
+  if (shadow.map) {
+    if (shadow.map.depthTexture) {
+      shadow.map.depthTexture.dispose();
+      shadow.map.depthTexture = null;
+    }
+    shadow.map.dispose();
+    shadow.map = null;
+  }
+  if (shadow.mapPass) {
+    shadow.mapPass.dispose();
+    shadow.mapPass = null;
+  }
+}
+
+// One frame's keys (adapter.json's names) onto the stage, resetting whatever an earlier frame set.
+function applyKeys(stage, keys) {
+  const { renderer, light, materials } = stage;
+  const last = stage.lastKeys;
+  if (!last || last.map_size !== keys.map_size || last.type !== keys.type) disposeShadowMap(light.shadow);
+  renderer.shadowMap.type = kShadowTypes[keys.type];
+  light.shadow.mapSize.set(keys.map_size, keys.map_size);
+  light.shadow.bias = keys.bias;
+  light.shadow.normalBias = keys.normal_bias;
+  light.shadow.radius = keys.radius;
+  light.shadow.blurSamples = keys.blur_samples;
+  for (const material of materials) {
+    const side = keys.side === 'gltf' ? material.userData.gltfSide : kSides[keys.side];
+    const shadowSide = keys.shadow_side === 'default' ? null : kSides[keys.shadow_side];
+    if (material.side !== side || material.shadowSide !== shadowSide) {
+      material.side = side;
+      material.shadowSide = shadowSide;
+      material.needsUpdate = true;
+    }
+  }
+  fitShadowCamera(stage.placed, keys);
+  stage.scene.updateMatrixWorld(true);
+  stage.lastKeys = keys;
 }
 
 function unmaskedRenderer(gl) {
@@ -157,48 +237,60 @@ function unmaskedRenderer(gl) {
 }
 
 async function post(path, body) {
-  await fetch(path, { method: 'POST', body });
+  const r = await fetch(path, { method: 'POST', body });
+  if (!r.ok) throw new Error(`${path}: ${r.status} ${await r.text()}`);
 }
 
-async function main() {
-  const request = await (await fetch('/request.json')).json();
+// Everything a frame does not change, once: the scene, its camera, its light, the materials, the
+// renderer and its float target.
+async function loadStage() {
+  const setup = await (await fetch('/setup.json')).json();
   const gltf = await new GLTFLoader().loadAsync('/scene.glb');
   const scene = gltf.scene;
   scene.updateMatrixWorld(true);
-  const { camera, width, height } = setUpCamera(gltf, request);
-  let { light, others } = findLight(scene, request.light);
-  for (const other of others) other.parent.remove(other);
-  const counts = replaceMaterials(scene, request);
-  const fit = fitShadowCamera(scene, light, request);
-  if (fit.sun) light = fit.sun;
+  const { camera, width, height } = setUpCamera(gltf, setup);
+  const found = findLight(scene, setup.light);
+  for (const other of found.others) other.parent.remove(other);
+  const { counts, materials } = replaceMaterials(scene);
+  const placed = placeLight(scene, found.light);
+  const light = placed.light;
   scene.updateMatrixWorld(true);
   patchMaterials(scene, light);
   light.castShadow = true;
-  light.shadow.mapSize.set(request.mapSize, request.mapSize);
-  light.shadow.bias = request.bias;
-  light.shadow.normalBias = request.normalBias;
-  light.shadow.radius = request.radius;
-  light.shadow.blurSamples = request.blurSamples;
 
   const canvas = document.createElement('canvas');
   const renderer = new THREE.WebGLRenderer({ canvas, antialias: false });
   renderer.setPixelRatio(1);
   renderer.setSize(width, height, false);
   renderer.shadowMap.enabled = true;
-  renderer.shadowMap.type = kShadowTypes[request.type];
-  const gl = renderer.getContext();
-  const target = new THREE.WebGLRenderTarget(width, height, { type: THREE.FloatType, depthBuffer: true });
-  renderer.setRenderTarget(target);
+  const stage = { scene, camera, width, height, light, placed, materials, counts, renderer, lastKeys: null, shaderErrors: [] };
+  // A program that does not link fails the frame that needed it (three.js would only log it).
+  renderer.debug.onShaderError = (gl, program, vertexShader, fragmentShader) => {
+    const log = [gl.getProgramInfoLog(program), gl.getShaderInfoLog(vertexShader), gl.getShaderInfoLog(fragmentShader)]
+      .map((t) => (t || '').trim()).filter((t) => t).join(' | ');
+    stage.shaderErrors.push(`a three.js shader program did not link: ${log.slice(0, 500)}`);
+  };
+  canvas.addEventListener('webglcontextlost', () => post('/error', 'the WebGL context was lost'));
+  stage.gl = renderer.getContext();
+  stage.target = new THREE.WebGLRenderTarget(width, height, { type: THREE.FloatType, depthBuffer: true });
+  renderer.setRenderTarget(stage.target);
   renderer.setClearColor(0x000000, 0);
+  return stage;
+}
 
-  // The first render compiles the programs; each timed one after it is the frame's own work (the shadow
-  // pass and the camera pass), not the compile.
-  // A one-pixel read waits for the frame's work to be done (a finish alone need not, in a browser).
+// One frame: its keys, a warm-up render (it compiles the programs and allocates the map), `repeat`
+// timed renders (each is the frame's own work, the shadow pass and the camera pass, not the compile;
+// a one-pixel read waits for it to be done: a finish alone need not, in a browser), the pixels.
+function renderFrame(stage, keys) {
+  const { scene, camera, width, height, light, renderer, target } = stage;
+  applyKeys(stage, keys);
+  stage.shaderErrors = [];
   const probe = new Float32Array(4);
   renderer.render(scene, camera);
   renderer.readRenderTargetPixels(target, 0, 0, 1, 1, probe);
+  if (stage.shaderErrors.length) fail(stage.shaderErrors[0]);
   const times = [];
-  for (let i = 0; i < request.repeat; i++) {
+  for (let i = 0; i < keys.repeat; i++) {
     const t0 = performance.now();
     renderer.render(scene, camera);
     renderer.readRenderTargetPixels(target, 0, 0, 1, 1, probe);
@@ -230,16 +322,36 @@ async function main() {
     light_type: light.isDirectionalLight ? 'directional' : light.isSpotLight ? 'spot' : 'point',
     // A point light's six cube faces are not declared (one layer per face would need their order).
     light_clip_from_world: light.isPointLight ? [] : [Array.from(clipFromWorld.elements)],
+    // What three.js rendered: it shrinks a map larger than the GPU's largest texture.
+    map_size: light.shadow.mapSize.x,
     frame_ms: times.length ? times[Math.floor(times.length / 2)] : null,
     frame_ms_all: times,
-    meshes: counts.meshes,
-    alpha_masked: counts.alphaMasked,
+    meshes: stage.counts.meshes,
+    alpha_masked: stage.counts.alphaMasked,
     three_revision: THREE.REVISION,
-    gl_renderer: unmaskedRenderer(gl),
+    gl_renderer: unmaskedRenderer(stage.gl),
   };
   const header = new TextEncoder().encode(JSON.stringify(meta));
   const length = new Uint32Array([header.length]);
-  await post('/result', new Blob([length, header, new Uint8Array(vis.buffer), new Uint8Array(coverage.buffer)]));
+  return new Blob([length, header, new Uint8Array(vis.buffer), new Uint8Array(coverage.buffer)]);
 }
 
+async function main() {
+  const stage = await loadStage();
+  for (;;) {
+    const job = await (await fetch('/next')).json();
+    if (job.done) return;
+    let body = null;
+    try {
+      body = renderFrame(stage, job.keys);
+    } catch (e) {
+      await post(`/frame-error?index=${job.index}`, String((e && e.message) || e));
+      continue;
+    }
+    await post(`/result?index=${job.index}`, body);
+  }
+}
+
+window.addEventListener('error', (e) => post('/error', String(e.message || e)));
+window.addEventListener('unhandledrejection', (e) => post('/error', String((e.reason && e.reason.message) || e.reason)));
 main().catch((e) => post('/error', String((e && e.message) || e)));
