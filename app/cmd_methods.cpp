@@ -8,6 +8,7 @@
 #include <string>
 
 #include "command.h"
+#include "shadowlab/scenes/adapter_manifest.h"
 #include "shadowlab/scenes/method.h"
 #include "shadowlab/scenes/method_keys.h"
 
@@ -15,8 +16,22 @@ namespace {
 
 using namespace shadowlab;
 
-int run(bool json) {
-  const std::vector<MethodKeyInfo>& table = methodKeyTable();
+// An outside renderer's keys (its manifest's table, adapters/README.md), each as NAME.KEY.
+std::vector<MethodKeyInfo> rendererKeyTable(const AdapterManifest& a) {
+  std::vector<MethodKeyInfo> rows;
+  for (const AdapterKey& k : a.keys) {
+    const char* type = k.type == AdapterKey::Type::Int      ? "integer"
+                       : k.type == AdapterKey::Type::Number ? "number"
+                       : k.type == AdapterKey::Type::Bool   ? "boolean"
+                                                            : "choice";
+    rows.push_back({a.name + "." + k.name, type, k.defaultValue, k.expected(), k.help});
+  }
+  return rows;
+}
+
+int run(bool json, const std::string& renderer) {
+  const AdapterManifest* adapter = renderer.empty() ? nullptr : &loadAdapterManifest(resolveAdapterPath(renderer));
+  const std::vector<MethodKeyInfo> table = adapter ? rendererKeyTable(*adapter) : methodKeyTable();
   if (json) {
     nlohmann::json rows = nlohmann::json::array();
     for (const MethodKeyInfo& k : table)
@@ -25,9 +40,14 @@ int run(bool json) {
                       {"default", k.defaultValue},
                       {"range", k.range},
                       {"help", k.help}});
-    std::printf("%s\n", nlohmann::json{{"schema", "shadowlab.methods/1"}, {"keys", rows}}.dump(2).c_str());
+    nlohmann::json doc = {{"schema", "shadowlab.methods/1"}, {"keys", rows}};
+    if (adapter)
+      doc["renderer"] = {{"name", adapter->name}, {"path", adapter->path}, {"description", adapter->description}};
+    std::printf("%s\n", doc.dump(2).c_str());
     return 0;
   }
+  if (adapter)
+    std::printf("renderer=%s: %s (%s)\n", renderer.c_str(), adapter->description.c_str(), adapter->path.c_str());
   size_t keyWidth = 0;
   for (const MethodKeyInfo& k : table) keyWidth = std::max(keyWidth, k.key.size());
   for (const MethodKeyInfo& k : table) {
@@ -42,11 +62,15 @@ int run(bool json) {
 
 shadowlab::app::Registrar reg{"methods", [](CLI::App& app) {
                                 auto json = std::make_shared<bool>(false);
+                                auto renderer = std::make_shared<std::string>();
                                 auto* sub = app.add_subcommand(
                                     "methods",
                                     "List every method key (--set, --grid, method files): type, default, range, help");
                                 sub->add_flag("--json", *json, "Print the keys as JSON (schema shadowlab.methods/1)");
-                                return std::function<int()>([json] { return run(*json); });
+                                sub->add_option("--renderer", *renderer,
+                                                "List an outside renderer's keys instead: a bundled adapter's name "
+                                                "or its adapter.json (adapters/README.md)");
+                                return std::function<int()>([json, renderer] { return run(*json, *renderer); });
                               }};
 
 }  // namespace

@@ -35,6 +35,10 @@ int run(const Options& o) {
   // The same --set as run, sweep and stability: method keys and scene:/pointer values.
   const SetArguments set = applySetArguments(o.methodFile, o.settings);
   const Method& method = set.method;
+  if (!method.renderer.empty())
+    throw InputError("--set renderer=" + method.renderer +
+                     ": error: raster draws with the built-in rasterizer; expected `shadowlab run` or `sweep` for an "
+                     "outside renderer (adapters/README.md)");
   const Scene scene = loadScene(resolveScenePath(o.scene), set.sceneOverrides);
   checkGpuTimeout(o.gpuTimeoutS, "--gpu-timeout-s");
   precompileTechnique(method);  // a technique that does not compile: exit 2 before any output

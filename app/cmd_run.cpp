@@ -7,14 +7,18 @@
 #include <map>
 #include <memory>
 
+#include <unistd.h>
+
 #include "command.h"
 #include "interrupt.h"
 #include "job_limits.h"
+#include "shadowlab/compare/adapter_session.h"
 #include "shadowlab/compare/interrupt_cleanup.h"
 #include "shadowlab/compare/run_pipeline.h"
 #include "shadowlab/compare/results.h"
 #include "shadowlab/compare/set_arguments.h"
 #include "shadowlab/compare/timings.h"
+#include "shadowlab/scenes/adapter_manifest.h"
 #include "shadowlab/scenes/error.h"
 #include "shadowlab/scenes/io.h"
 #include "shadowlab/scenes/loader.h"
@@ -38,6 +42,77 @@ struct Options {
   bool keepImages = false;
   double maxMemoryGiB = 0;
 };
+
+// renderer=: the frame comes from an outside renderer's adapter (adapters/README.md), scored as
+// `compare SCENE FRAME` scores one (or, for a `shadowlab` frame, as the built-in path compares).
+// The adapter's output is kept as adapter.log beside metrics.json; a failure (exit 3) names the log.
+int runWithAdapter(const Options& o, const Scene& scene, const std::string& light, const std::string& config,
+                   const Method& method) {
+  const AdapterManifest& a = *rendererManifest(method);
+  const std::string created = app::firstMissingFolder(o.outDir);
+  OutputFolder out(o.outDir);
+  if (!created.empty()) registerInterruptPath(created);  // until out.keep()
+  ReferenceCache cache(o.cacheDir);
+  OutputFolder cacheFolder(cache.dir(), "--cache");
+  cacheFolder.keep();
+  ReferenceOptions referenceOptions;
+  referenceOptions.spp = o.spp;
+  referenceOptions.lightSamples = o.lightSamples;
+  referenceOptions.progress = app::terminalProgress("run: tracing the reference");
+  const auto configStart = std::chrono::steady_clock::now();
+  Frame reference;
+  double referenceMs = 0;
+  if (a.frame == AdapterManifest::FrameKind::Shadowlab) {
+    const auto r0 = std::chrono::steady_clock::now();
+    reference = cache.get(scene, referenceOptions);
+    referenceMs = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - r0).count();
+  }
+  const std::string work = cache.dir() + "/adapter-work/run-" + std::to_string(long(::getpid()));
+  AdapterSession session(work, cache.dir());
+  std::vector<AdapterOutcome> outcomes = session.render(scene, light, {{config, method}}, reference);
+  const AdapterOutcome& r = outcomes.front();
+  r.throwIfFailed();  // exit 3: its folder, with the log, stays for the user to read
+  const double configWallMs =
+      std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - configStart).count();
+  const Frame& truth = a.frame == AdapterManifest::FrameKind::Shadowlab ? reference : session.truth();
+
+  ResultRow row;
+  row.scene = scene.name;
+  row.config = config;
+  row.light = light;
+  row.method = methodToJson(method);
+  row.metrics = r.metrics.toJson();
+  row.timings = r.timings;
+  if (referenceMs > 0) row.timings[timing::kReferenceMs] = referenceMs;
+  row.timings[timing::kConfigWallMs] = configWallMs;
+  const fs::path dir(o.outDir);
+  std::error_code ec;
+  fs::copy_file(session.lastBatchDir() + "/adapter.log", dir / "adapter.log", fs::copy_options::overwrite_existing, ec);
+  fs::copy_file(r.frameDir + "/renderer.json", dir / "renderer.json", fs::copy_options::overwrite_existing, ec);
+  if (o.keepImages) {
+    writeFrameExr(truth, (dir / "reference.exr").string());
+    writeFrameExr(r.frame, (dir / "raster.exr").string());
+  }
+  writeErrorsPng((dir / "errors.png").string(), r.classification, &truth);
+  writeTriptychPng((dir / "triptych.png").string(), truth, r.frame, r.classification);
+  writeMetricsJson((dir / "metrics.json").string(), row);
+  out.keep();
+  if (!created.empty()) unregisterInterruptPath(created);
+  fs::remove_all(work, ec);
+  const Metrics& m = r.metrics;
+  std::printf("renderer: %s (%s): frame %.2f ms (its own), %.0f ms with start-up\n", a.name.c_str(), a.path.c_str(),
+              r.timings.value(timing::kRendererFrameMs, 0.0), r.timings.value(timing::kAdapterMs, 0.0));
+  if (m.nothingCompared()) {
+    std::printf("wrote %s/metrics.json, errors.png, triptych.png, adapter.log\n", o.outDir.c_str());
+    std::fflush(stdout);
+    std::fprintf(stderr, "%s: /camera: error: %s\n", scene.path.c_str(), nothingComparedMessage(m).c_str());
+    return 2;
+  }
+  std::printf("compare: %llu pixels: error_rate %.4f (%s), shadow_iou %.4f\n", (unsigned long long)m.pixelsCompared,
+              m.errorRate, errorClassSummary(m, true).c_str(), m.shadowIou);
+  std::printf("wrote %s/metrics.json, errors.png, triptych.png, adapter.log\n", o.outDir.c_str());
+  return 0;
+}
 
 int run(const Options& o) {
   app::cleanUpOnSignal("run");
@@ -64,6 +139,7 @@ int run(const Options& o) {
   const std::string& config = set.config;
 
   checkGpuTimeout(o.gpuTimeoutS, "--gpu-timeout-s");
+  if (!method.renderer.empty()) return runWithAdapter(o, scene, light, config, method);
   precompileTechnique(method);  // a technique that does not compile: exit 2 before any output
   app::checkMemory("run", app::compareJobMemory(scene, method), o.maxMemoryGiB);
   // Every output location, before any work: a bad -o or --cache must not cost a trace first.

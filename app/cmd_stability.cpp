@@ -106,6 +106,10 @@ int run(const Options& o) {
   // --set: method keys, or scene values as in sweeps (scene:/json/pointer=value).
   const SetArguments set = applySetArguments(o.methodFile, o.sets);
   const Method& method = set.method;
+  if (!method.renderer.empty())
+    throw InputError("--set renderer=" + method.renderer +
+                     ": error: stability renders its camera path with the built-in rasterizer only; expected `shadowlab "
+                     "run`, `sweep` or `tune` for an outside renderer (adapters/README.md)");
   const std::vector<SceneOverride>& sceneOverrides = set.sceneOverrides;
 
   const std::string scenePath = resolveScenePath(o.scene);

@@ -1410,6 +1410,7 @@ Scene loadScene(const std::string& path, const std::vector<SceneOverride>& overr
   Scene scene;
   scene.path = path;
   scene.name = fs::path(path).stem().string();
+  for (const SceneOverride& o : overrides) scene.overridesGiven.emplace_back(o.pointer, dumpJson(o.value));
   GltfState gltfState;
   if (gltfScene) gltfState.overrides = rest;
   gltfState.scene = gltfScene;

@@ -13,6 +13,7 @@
 #include "shadowlab/scenes/json_reader.h"
 #include "shadowlab/scenes/error.h"
 #include "shadowlab/scenes/technique.h"
+#include "shadowlab/scenes/adapter_manifest.h"
 
 namespace shadowlab {
 
@@ -272,6 +273,28 @@ void checkTechnique(const Method& m, const std::string& file, const std::string&
   }
 }
 
+// renderer=NAME|path: the adapter's manifest is read and checked at once (its errors name it).
+std::string rendererOf(const Value& v, const Where& w) {
+  std::string given;
+  if (!v.asString(given) || given.empty())
+    fail(w.file, w.place, v.got(), "a bundled adapter's name or a path to an adapter.json (adapters/README.md)");
+  loadAdapterManifest(resolveAdapterPath(given));
+  return given;
+}
+
+bool isRendererKey(const std::string& key) { return isRendererMethodKey(key); }
+
+void applyRendererKey(Method& m, const std::string& key, const Value& v) {
+  Method::RendererValue value;
+  if (v.json) {
+    value.value = *v.json;
+  } else {
+    value.value = *v.text;
+    value.fromText = true;
+  }
+  m.rendererParams[key] = std::move(value);
+}
+
 using Setter = std::function<void(Method&, const Value&, const Where&)>;
 
 // One method key: its name, one line of help (`shadowlab methods`) and its parser. The default is
@@ -413,9 +436,28 @@ const std::vector<SetterRow>& setters() {
        [](Method& m, const Value& v, const Where& w) { m.projectorReverseGuard = boolOf(v, w); }},
       {"technique", "a GLSL file defining float shadowVisibility(ShadowQuery q) (filter=none; its keys: technique.*)",
        [](Method& m, const Value& v, const Where& w) { m.technique = techniqueOf(v, w); }},
+      {"renderer",
+       "an outside renderer's adapter, bundled (three) or adapter.json (its keys: NAME.*; adapters/README.md)",
+       [](Method& m, const Value& v, const Where& w) { m.renderer = rendererOf(v, w); }},
   };
   return table;
 }
+
+}  // namespace
+
+bool isRendererMethodKey(const std::string& key) {
+  const size_t dot = key.find('.');
+  if (dot == std::string::npos || dot == 0 || dot + 1 == key.size()) return false;
+  const std::string group = key.substr(0, dot);
+  if (group == "technique" || group == "renderer") return false;
+  for (const SetterRow& row : setters())
+    if (row.key.compare(0, dot + 1, group + ".") == 0) return false;
+  for (char c : group)
+    if (!((c >= 'a' && c <= 'z') || (c >= '0' && c <= '9') || c == '-' || c == '_')) return false;
+  return true;
+}
+
+namespace {
 
 std::string keyList() {
   std::string s = "name";
@@ -436,11 +478,50 @@ void apply(Method& m, const std::string& key, const Value& v, const Where& w) {
       row.set(m, v, w);
       return;
     }
+  if (isRendererKey(key)) return applyRendererKey(m, key, v);
   std::vector<std::string> all = methodKeys();
   all.push_back("name");
   throw InputError(formatError(
       w.file, w.place,
       "unknown method key \"" + key + "\"" + detail::didYouMean(key, all) + "; expected one of " + keyList()));
+}
+
+// An outside renderer's keys: NAME.KEY of its manifest, each in its range; no technique beside it.
+void checkRenderer(const Method& m, const std::string& file, const std::string& prefix) {
+  auto bad = [&](const std::string& key, const std::string& what) {
+    throw InputError(formatError(file, prefix + key, what));
+  };
+  if (m.renderer.empty()) {
+    if (m.rendererParams.empty()) return;
+    const std::string& key = m.rendererParams.begin()->first;
+    std::vector<std::string> all = methodKeys();
+    all.push_back("name");
+    bad(key, "unknown method key \"" + key + "\"" + detail::didYouMean(key, all) + "; expected one of " + keyList() +
+                 " (or an outside renderer's NAME.KEY beside renderer=NAME)");
+  }
+  const AdapterManifest& a = loadAdapterManifest(resolveAdapterPath(m.renderer));
+  if (!m.technique.empty())
+    bad("technique", "set beside renderer=" + m.renderer +
+                         "; expected one of the two (a technique runs in the built-in rasterizer)");
+  for (const auto& [key, given] : m.rendererParams) {
+    const size_t dot = key.find('.');
+    const std::string group = key.substr(0, dot), name = key.substr(dot + 1);
+    std::string declared;
+    std::vector<std::string> full;
+    for (const AdapterKey& k : a.keys) {
+      full.push_back(a.name + "." + k.name);
+      declared += (declared.empty() ? "" : ", ") + full.back();
+    }
+    if (group != a.name)
+      bad(key, "not a key of renderer=" + m.renderer + " (" + a.path + ")" + detail::didYouMean(key, full) +
+                   "; expected one of its keys: " + (declared.empty() ? std::string("(it declares none)") : declared));
+    const AdapterKey* k = a.find(name);
+    if (!k)
+      bad(key, "not declared by " + a.path + "; expected one of its keys: " +
+                   (declared.empty() ? std::string("(it declares none)") : declared) + detail::didYouMean(key, full));
+    if (k->accept(given.value, given.fromText).is_null())
+      bad(key, "got " + detail::describe(given.value) + "; expected " + k->expected() + " (" + a.path + ")");
+  }
 }
 
 // Cross-field and range rules on a whole Method (a hand-built Method skips the setters).
@@ -505,6 +586,7 @@ void crossCheck(const Method& m, const std::string& file, const std::string& pre
     bad("dpcf.max_penumbra", jsonFloat(m.dpcfMaxPenumbra).dump(), kDpcfMaxPenumbraExpected);
   if (m.name.empty()) bad("name", "\"\"", "a non-empty string");
   checkTechnique(m, file, prefix);
+  checkRenderer(m, file, prefix);
 }
 
 }  // namespace
@@ -644,7 +726,32 @@ nlohmann::json methodToJson(const Method& m) {
       else out = jsonFloat(float(v));  // the shortest text, as every method float
     }
   }
+  if (!m.renderer.empty()) {  // only then, as technique
+    j["renderer"] = m.renderer;
+    const AdapterManifest& a = loadAdapterManifest(resolveAdapterPath(m.renderer));
+    const nlohmann::json values = adapterKeyValues(m);
+    for (const AdapterKey& k : a.keys) j[a.name + "." + k.name] = values[k.name];
+  }
   return j;
+}
+
+const AdapterManifest* rendererManifest(const Method& m) {
+  return m.renderer.empty() ? nullptr : &loadAdapterManifest(resolveAdapterPath(m.renderer));
+}
+
+nlohmann::json adapterKeyValues(const Method& m) {
+  nlohmann::json out = nlohmann::json::object();
+  const AdapterManifest* a = rendererManifest(m);
+  if (!a) return out;
+  for (const AdapterKey& k : a->keys) {
+    nlohmann::json value = k.defaultValue;
+    if (auto it = m.rendererParams.find(a->name + "." + k.name); it != m.rendererParams.end()) {
+      nlohmann::json typed = k.accept(it->second.value, it->second.fromText);
+      if (!typed.is_null()) value = std::move(typed);  // an unchecked Method keeps the default
+    }
+    out[k.name] = std::move(value);
+  }
+  return out;
 }
 
 void validateMethod(const Method& m, const std::string& origin) { crossCheck(m, origin, ""); }

@@ -5,6 +5,7 @@
 #include <cmath>
 #include <utility>
 
+#include "shadowlab/scenes/adapter_manifest.h"
 #include "shadowlab/scenes/json_reader.h"
 
 namespace shadowlab {
@@ -55,6 +56,12 @@ std::string configName(const nlohmann::json& methodJson, const std::vector<Scene
   for (auto it = methodJson.begin(); it != methodJson.end(); ++it)
     if (it.key().rfind("technique.", 0) == 0 && it.key() != "technique.hash")
       applyMethodJson(method, it.key(), it.value(), "method");
+  // An outside renderer's keys (NAME.KEY of its manifest): every other dotted key the method names.
+  if (!method.renderer.empty())
+    for (auto it = methodJson.begin(); it != methodJson.end(); ++it)
+      if (it.key().find('.') != std::string::npos && it.key().rfind("technique.", 0) != 0 &&
+          std::find(methodKeys().begin(), methodKeys().end(), it.key()) == methodKeys().end())
+        applyMethodJson(method, it.key(), it.value(), "method");
   return configName(method, sceneOverrides);
 }
 
@@ -73,6 +80,13 @@ std::string configName(const Method& method, const std::vector<SceneOverride>& s
   for (auto it = resolved.begin(); it != resolved.end(); ++it)
     if (it.key().rfind("technique.", 0) == 0 && it.key() != "technique.hash")
       parts.emplace_back(it.key(), canonicalValueText(it.value()));
+  // An outside renderer's keys where they differ from its manifest's defaults.
+  if (const AdapterManifest* a = rendererManifest(method)) {
+    const nlohmann::json values = adapterKeyValues(method);
+    for (const AdapterKey& k : a->keys)
+      if (canonicalValueText(values[k.name]) != canonicalValueText(k.defaultValue))
+        parts.emplace_back(a->name + "." + k.name, canonicalValueText(values[k.name]));
+  }
   for (const SceneOverride& o : sceneOverrides) parts.emplace_back("scene:" + o.pointer, canonicalValueText(o.value));
   std::stable_sort(parts.begin(), parts.end(), [](const auto& a, const auto& b) { return a.first < b.first; });
   std::string name;

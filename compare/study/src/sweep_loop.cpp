@@ -576,6 +576,7 @@ SweepSummary runSweepIn(const SweepPlan& plan, SweepRunner& runner, const SweepO
 
   Progress progress(options.progress, options.progressBar, summary.configurations, summary.resumed);
   std::vector<StoredRow> fresh(plan.jobs.size());
+  std::vector<char> batched(plan.jobs.size(), 0);
   const auto loop0 = Clock::now();
   for (size_t i = 0; i < plan.jobs.size(); ++i) {
     if (have[i] || !shard.owns(i)) continue;
@@ -586,6 +587,20 @@ SweepSummary runSweepIn(const SweepPlan& plan, SweepRunner& runner, const SweepO
     const SweepJob& job = plan.jobs[i];
     const SweepConfig& config = plan.configs[job.configIndex];
     const Scene& scene = plan.variants[job.variantIndex];
+    // An outside renderer's rows of this scene and light that still need a frame: one batch of its
+    // adapter (adapters/README.md), its request, frames and log under adapter/<scene>/.
+    if (!config.method.renderer.empty() && !batched[i]) {
+      std::vector<std::pair<std::string, Method>> batch;
+      for (size_t j = i; j < plan.jobs.size(); ++j) {
+        const SweepJob& other = plan.jobs[j];
+        if (have[j] || !shard.owns(j) || other.variantIndex != job.variantIndex || other.light != job.light ||
+            plan.configs[other.configIndex].method.renderer.empty())
+          continue;
+        batched[j] = 1;
+        batch.emplace_back(other.config, plan.configs[other.configIndex].method);
+      }
+      runner.prefetch(scene, batch, job.light, joinPath(joinPath(workDir, "adapter"), slug(job.sceneName)));
+    }
     const std::string what = job.sceneName + " " + job.config;
     if (log) log << "pid " << pid << " start " << job.key() << "\n" << std::flush;
     progress.start(what);

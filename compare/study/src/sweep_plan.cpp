@@ -62,6 +62,7 @@ size_t topLevelComma(const std::string& text, size_t from) {
 
 bool isMethodKey(const std::string& key) {
   if (key.rfind("technique.", 0) == 0) return true;  // a technique file's own keys (checked per configuration)
+  if (isRendererMethodKey(key)) return true;          // an outside renderer's keys (checked per configuration)
   const auto& keys = methodKeys();
   return std::find(keys.begin(), keys.end(), key) != keys.end();
 }
@@ -104,6 +105,8 @@ std::string methodValueText(const Method& m, const std::string& key) {
   // A technique's key its file does not declare (a grid over files that declare different keys):
   // the method's check names the file.
   if (!j.contains(key) && key.rfind("technique.", 0) == 0) validateMethod(m, "shadowlab sweep: configuration");
+  // An outside renderer's key: checked against its manifest before its value is named.
+  if (isRendererMethodKey(key)) validateMethod(m, "shadowlab sweep: configuration");
   if (!j.contains(key)) throw DriverError("methodToJson has no key \"" + key + "\"");
   return canonicalValueText(j.at(key));
 }
@@ -400,7 +403,8 @@ SweepPlan planSweep(const SweepSpec& spec) {
         p.value = axis.values[i];
         // A technique's key before the technique is known (--grid technique=... beside it): the
         // value as given, checked against the file once each configuration is whole.
-        const bool pending = axis.key.rfind("technique.", 0) == 0 && probe.technique.empty();
+        const bool pending = (axis.key.rfind("technique.", 0) == 0 && probe.technique.empty()) ||
+                             (isRendererMethodKey(axis.key) && probe.renderer.empty());
         p.text = pending ? canonicalValueText(sceneValueFromText(axis.values[i])) : methodValueText(probe, axis.key);
       }
       if (!seen.insert(p.text).second)

@@ -401,11 +401,15 @@ std::unique_ptr<PrestartedCharts> prestartCharts(const SweepOptions& options) {
 
 // The report's time axis: the method's cost, what an engine would pay (method_gpu_ms = shadow pass
 // + lookup pass, compare/TIMINGS.md), not the harness's evidence resolve, readback and compare;
-// GPU timestamps, so CPU scheduling noise does not reorder the front. A row written before the
+// GPU timestamps, so CPU scheduling noise does not reorder the front; an outside renderer's row, its
+// renderer_frame_ms. A row written before the
 // lookup pass existed (a resumed journal) has no method_gpu_ms: its shadow pass alone.
 double methodMs(const ResultRow& r) {
   const double method = num(r.timings, timing::kMethodGpuMs);
   if (std::isfinite(method)) return method;
+  // An outside renderer's row (adapters/README.md): the renderer's own time for its frame.
+  const double renderer = num(r.timings, timing::kRendererFrameMs);
+  if (std::isfinite(renderer)) return renderer;
   return num(r.timings, timing::kShadowGpuMs, 0.0) + num(r.timings, timing::kLookupGpuMs, 0.0);
 }
 

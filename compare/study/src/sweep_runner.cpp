@@ -6,22 +6,29 @@
 // a CompareContext kept per evidence group (compareRow below; the same bits)
 // (SweepCli.SmallSweepRowsMatchShadowlabRunExactly in tests/sweep_cli_test.cpp checks the numbers
 // against `shadowlab run`).
+#include <unistd.h>
+
 #include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <exception>
 #include <future>
 #include <list>
+#include <map>
 #include <memory>
 
+#include "shadowlab/compare/adapter_session.h"
 #include "shadowlab/compare/compare.h"
+#include "shadowlab/compare/config_name.h"
 #include "shadowlab/compare/run_pipeline.h"
 #include "shadowlab/compare/sweep.h"
 #include "shadowlab/compare/timings.h"
 #include "shadowlab/raster/raster.h"
 #include "shadowlab/reference/reference.h"
+#include "shadowlab/scenes/adapter_manifest.h"
 #include "shadowlab/scenes/error.h"
 #include "shadowlab/scenes/frame.h"
+#include "shadowlab/scenes/json_reader.h"
 
 namespace shadowlab {
 namespace {
@@ -51,6 +58,7 @@ class PipelineRunner final : public SweepRunner {
 
   SweepRunOutput run(const Scene& scene, const Method& method, const std::string& light,
                      const std::string& imagesDir) override {
+    if (!method.renderer.empty()) return runAdapter(scene, method, light, imagesDir);
     RasterTimings t;
     CompareOptions options;
     options.light = scene.lightOrDefault(light);
@@ -129,7 +137,7 @@ class PipelineRunner final : public SweepRunner {
   std::vector<MethodSample> timeAgain(const Scene& scene, const Method& method, const std::string& light,
                                       int runs) override {
     std::vector<MethodSample> out;
-    if (runs < 1) return out;
+    if (runs < 1 || !method.renderer.empty()) return out;  // an adapter's rows: the renderer's own time
     const EvidenceSelector none = [](const uint8_t*, int, int, EvidenceRequest&) {};
     RasterTimings t;
     Frame raster = rasterizer().render(scene, method, light, &t, nullptr, fullEvidence_ ? nullptr : &none);
@@ -143,6 +151,7 @@ class PipelineRunner final : public SweepRunner {
 
   bool writeTriptych(const Scene& scene, const Method& method, const std::string& light,
                      const std::string& pngPath) override {
+    if (!method.renderer.empty()) return false;  // an adapter's frames are not kept for pictures
     std::string referenceKey;
     const Frame& reference = referenceFor(scene, &referenceKey);
     // A configuration the loop kept as its scene's best or worst: drawn from what it kept.
@@ -174,7 +183,17 @@ class PipelineRunner final : public SweepRunner {
     return true;
   }
 
+  void prefetch(const Scene& scene, const std::vector<std::pair<std::string, Method>>& configs,
+                const std::string& light, const std::string& workDir) override {
+    std::vector<AdapterFrame> frames;
+    for (const auto& [config, method] : configs)
+      if (!method.renderer.empty()) frames.push_back({config, method});
+    if (frames.empty()) return;
+    adapterBatch(scene, scene.lightOrDefault(light), frames, workDir);
+  }
+
   void checkMethod(const Method& method, const std::string& origin) override {
+    if (!method.renderer.empty()) return;  // the renderer's own limits: its frame says
     const int maxSize = rasterizer().maxMapSize();
     if (method.mapSize > maxSize)
       throw InputError(formatError(origin, "map.size",
@@ -204,6 +223,58 @@ class PipelineRunner final : public SweepRunner {
   }
 
  private:
+  // An outside renderer's rows (adapter_session.h): scored from the scene's batch where prefetch
+  // rendered one, else rendered as a batch of one. A failed frame throws its AdapterError (exit 3).
+  static std::string adapterKey(const Scene& scene, const std::string& light, const Method& method) {
+    return scene.hash + "\n" + light + "\n" + dumpJson(methodToJson(method));
+  }
+
+  void adapterBatch(const Scene& scene, const std::string& light, const std::vector<AdapterFrame>& frames,
+                    const std::string& workDir) {
+    const AdapterManifest* a = rendererManifest(frames.front().method);
+    if (!adapter_ || adapterDir_ != workDir) {
+      adapter_ = std::make_unique<AdapterSession>(workDir, cache_.dir());
+      adapterDir_ = workDir;
+    }
+    const Frame none;
+    const Frame& reference = a->frame == AdapterManifest::FrameKind::Shadowlab ? referenceFor(scene) : none;
+    // One renderer a batch: a sweep over renderer= holds several.
+    std::map<std::string, std::vector<AdapterFrame>> byRenderer;
+    for (const AdapterFrame& f : frames) byRenderer[rendererManifest(f.method)->path].push_back(f);
+    adapterOutcomes_.clear();
+    for (const auto& [path, group] : byRenderer) {
+      std::vector<AdapterOutcome> outcomes = adapter_->render(scene, light, group, reference);
+      for (size_t i = 0; i < group.size(); ++i)
+        adapterOutcomes_[adapterKey(scene, light, group[i].method)] = std::move(outcomes[i]);
+    }
+  }
+
+  SweepRunOutput runAdapter(const Scene& scene, const Method& method, const std::string& light,
+                            const std::string& imagesDir) {
+    const std::string l = scene.lightOrDefault(light);
+    const std::string key = adapterKey(scene, l, method);
+    auto it = adapterOutcomes_.find(key);
+    if (it == adapterOutcomes_.end()) {
+      adapterBatch(scene, l, {{configName(method, {}), method}}, cache_.dir() + "/adapter-work/" + std::to_string(::getpid()));
+      it = adapterOutcomes_.find(key);
+    }
+    const AdapterOutcome o = std::move(it->second);
+    adapterOutcomes_.erase(it);
+    o.throwIfFailed();
+    SweepRunOutput out;
+    out.metrics = o.metrics.toJson();
+    out.timings = o.timings;
+    if (!imagesDir.empty()) {
+      writeFrameExr(o.frame, imagesDir + "/raster.exr");
+      writeErrorsPng(imagesDir + "/errors.png", o.classification);
+    }
+    return out;
+  }
+
+  std::unique_ptr<AdapterSession> adapter_;
+  std::string adapterDir_;
+  std::map<std::string, AdapterOutcome> adapterOutcomes_;
+
   // The selector for evidence on demand (null with --full-evidence, or where the reference gives
   // none): the disagreement selector of the reference and light, kept while they stay, as it holds
   // the reference's decisions as bytes, made once rather than per row.

@@ -14,6 +14,8 @@
 
 namespace shadowlab {
 
+struct AdapterManifest;
+
 enum class DepthFormat { D16, D24, D32F };
 enum class CullMode { Back, Front, None };
 // The codes are kinds.h's: the shader switches on the same numbers.
@@ -98,7 +100,27 @@ struct Method {
   std::string technique;
   std::map<std::string, double> techniqueParams;
   std::string techniqueHash;
+  // renderer: an outside renderer's adapter (adapter_manifest.h, adapters/README.md) that renders
+  // this method's frames instead of the built-in rasterizer: a bundled adapter's name or a path to
+  // its adapter.json, as given; empty: the built-in rasterizer. Its keys NAME.KEY, as given (a
+  // value from the command line stays text until the manifest types it; adapterKeyValues).
+  std::string renderer;
+  struct RendererValue {
+    nlohmann::json value;
+    bool fromText = false;
+  };
+  std::map<std::string, RendererValue> rendererParams;
 };
+
+// A key NAME.KEY of an outside renderer's adapter: a dotted key whose first part is no built-in
+// key's group (map, bias, technique, ...). A method keeps it as given; validateMethod types it
+// against the manifest of renderer=, whatever the key order.
+bool isRendererMethodKey(const std::string& key);
+// renderer= set: the adapter's manifest (loaded and cached), else null.
+const AdapterManifest* rendererManifest(const Method& m);
+// Every key of the method's adapter (by its manifest name, without the NAME. prefix) with its
+// typed value: the method's where given, else the manifest's default. Empty without a renderer.
+nlohmann::json adapterKeyValues(const Method& m);
 
 // The fits with one map layer per slice of the view depth (cascades.count of them): cascades, sdsm.
 bool isCascadedFit(Fit f);

@@ -9,6 +9,7 @@
 // (i + 0.5, j + 0.5). Image textures: texel (0, 0) is the top-left, u grows right, v grows down.
 #include <cstdint>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include <glm/glm.hpp>
@@ -154,6 +155,10 @@ struct Scene {
   std::string path;  // the scene file as given
   std::string name;  // file stem, e.g. "sphere_on_plane"
   std::string hash;  // 16 hex digits over the resolved content (JSON + geometry + textures)
+  // The scene: values it was loaded with (loadScene's overrides): JSON pointer and the value as
+  // JSON text, in the order given. An adapter that loads the scene itself (adapters/README.md,
+  // source_scene) applies them again.
+  std::vector<std::pair<std::string, std::string>> overridesGiven;
   Camera camera;
   std::vector<Material> materials;  // index 0 is the default material
   std::vector<Object> objects;

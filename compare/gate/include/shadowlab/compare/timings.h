@@ -28,12 +28,16 @@ constexpr const char* kConfigWallMs = "config_wall_ms";    // one configuration 
 constexpr const char* kCommandWallMs = "command_wall_ms";  // the whole command (stability.json)
 // An outside renderer's own time for its frame, as its renderer JSON declares it (frame_ms).
 constexpr const char* kRendererFrameMs = "renderer_frame_ms";
+// An adapter's batch (adapters/README.md): its command's wall time per frame, start-up included,
+// and shadowlab's time reading and checking one frame's files.
+constexpr const char* kAdapterMs = "adapter_ms";
+constexpr const char* kAdapterDecodeMs = "adapter_decode_ms";
 
 // True for a current per-row timing name above.
 inline bool isTimingName(const std::string& key) {
   for (const char* name : {kShadowGpuMs, kCameraGpuMs, kVisibilityGpuMs, kLookupGpuMs, kMethodGpuMs, kMethodGpuMsMin,
                            kMethodGpuMsMax, kMomentsGpuMs, kSdsmGpuMs, kSdsmReduceMs, kEvidenceGpuMs, kReadbackMs, kRenderWallMs, kCompareMs,
-                           kReferenceMs, kConfigWallMs, kCommandWallMs, kRendererFrameMs})
+                           kReferenceMs, kConfigWallMs, kCommandWallMs, kRendererFrameMs, kAdapterMs, kAdapterDecodeMs})
     if (key == name) return true;
   return false;
 }

@@ -179,6 +179,14 @@ class SweepRunner {
     (void)scene, (void)method, (void)light, (void)runs;
     return {};
   }
+  // An outside renderer's configurations of one scene and light (each renderer= the same adapter,
+  // adapters/README.md), before the first of them runs: rendered in one batch of the adapter, with
+  // its request, frames and log under `workDir`; run() then scores each from the batch. Without it
+  // run() renders an adapter's configuration as a batch of one. Default: nothing.
+  virtual void prefetch(const Scene& scene, const std::vector<std::pair<std::string, Method>>& configs,
+                        const std::string& light, const std::string& workDir) {
+    (void)scene, (void)configs, (void)light, (void)workDir;
+  }
   // Device and cache facts for results.json ("device", "reference_cache", ...).
   virtual nlohmann::json info() const { return nlohmann::json::object(); }
   // The device whose clock the timings come from ("" when there is none, e.g. a fake runner).
