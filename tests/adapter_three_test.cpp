@@ -128,6 +128,35 @@ TEST(ThreeAdapter, NormalBiasRemovesTheAcneOfADoubleSidedReceiver) {
   EXPECT_GT(metric(huge, "error_rate"), metric(some, "error_rate"));
 }
 
+// The same trade-off through the adapter protocol (adapters/README.md): a sweep hands three.js both
+// rows in one batch, scores them with the declared shadow camera, and the classifier names the
+// double-sided receiver's false shadow acne; the normal bias that removes it leaves a small error.
+TEST(ThreeAdapter, ASweepThroughTheAdapterNamesTheAcneAndTheNormalBiasThatRemovesIt) {
+  SHADOWLAB_REQUIRE_THREE();
+  const fs::path dir = freshTempDir("three_sweep");
+  const auto r = runShadowlab(
+      "sweep sphere_on_plane --set scene:/camera/width=480 --set scene:/camera/height=270 --set renderer=three "
+      "--grid three.normal_bias=0,0.05 --no-report --cache '" +
+          (dir / "cache").string() + "' -o '" + (dir / "sw").string() + "'",
+      dir);
+  ASSERT_EQ(r.code, 0) << r.err;
+  const nlohmann::json request = readJson(dir / "sw" / "adapter" / "sphere_on_plane" / "batch-0" / "request.json");
+  EXPECT_EQ(request["frames"].size(), 2u) << "one batch, one browser";
+  const nlohmann::json rows = readJson(dir / "sw" / "results.json")["rows"];
+  ASSERT_EQ(rows.size(), 2u);
+  const nlohmann::json &none = rows[0], &some = rows[1];
+  ASSERT_EQ(none["config"].get<std::string>().find("normal_bias"), std::string::npos) << none["config"];
+  const double pixels = 480.0 * 270.0;
+  for (const auto& row : rows) {
+    EXPECT_LE(metric(row, "geometry_mismatch") / pixels, 0.005) << row["config"];
+    EXPECT_GT(row["timings"]["renderer_frame_ms"].get<double>(), 0.0) << row["config"];
+  }
+  EXPECT_GT(metric(none, "error_rate"), 0.2);
+  EXPECT_GT(metric(none, "acne"), 0.9 * metric(none, "errors")) << "the false shadow far from any edge is acne";
+  EXPECT_LT(metric(some, "error_rate"), 0.02);
+  EXPECT_LT(metric(some, "acne"), 0.01 * metric(none, "acne"));
+}
+
 // The adapter's own failures: bad arguments and files are exit 2, a renderer that cannot run exit 3,
 // and neither leaves an output folder.
 TEST(ThreeAdapter, FailuresAreExitCodesWithNoOutputLeft) {
