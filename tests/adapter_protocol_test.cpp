@@ -209,6 +209,19 @@ TEST_F(AdapterProtocol, MethodKeysAreCheckedAgainstTheManifest) {
   const auto stray = runShadowlab("run contact --set three.bias=0 -o '" + (dir / "o").string() + "'", dir);
   EXPECT_EQ(stray.code, 2);
   EXPECT_NE(stray.err.find("unknown method key \"three.bias\""), std::string::npos) << stray.err;
+  // tune takes an adapter's keys with a --range, beside --fixed renderer=.
+  const auto noRange = runShadowlab("tune contact --fixed renderer='" + manifest.string() +
+                                        "' --keys fake.size --max-error 0.1 -o '" + (dir / "o").string() + "'",
+                                    dir);
+  EXPECT_EQ(noRange.code, 2);
+  EXPECT_NE(noRange.err.find("an outside renderer's key has no default range; expected --range fake.size=v1,v2,..."),
+            std::string::npos)
+      << noRange.err;
+  const auto noRenderer = runShadowlab(
+      "tune contact --keys three.bias --range three.bias=0:0.01 --max-error 0.1 -o '" + (dir / "o").string() + "'", dir);
+  EXPECT_EQ(noRenderer.code, 2);
+  EXPECT_NE(noRenderer.err.find("\"three.bias\" without a renderer; expected --fixed renderer=NAME"), std::string::npos)
+      << noRenderer.err;
   const auto raster = runShadowlab("raster contact --set renderer=three -o '" + (dir / "o").string() + "'", dir);
   EXPECT_EQ(raster.code, 2);
   EXPECT_NE(raster.err.find("raster draws with the built-in rasterizer"), std::string::npos) << raster.err;

@@ -157,6 +157,42 @@ TEST(ThreeAdapter, ASweepThroughTheAdapterNamesTheAcneAndTheNormalBiasThatRemove
   EXPECT_LT(metric(some, "acne"), 0.01 * metric(none, "acne"));
 }
 
+// tune through the adapter: three.js's normalBias searched as a bias (a U-curve: acne below, peter
+// panning above) finds a value that removes the acne and meets the target; what it costs in leaks
+// is in tune.json (a larger normal bias leaks more).
+TEST(ThreeAdapter, TuneFindsTheNormalBiasThatRemovesTheAcneAndSaysWhatItCostsInLeaks) {
+  SHADOWLAB_REQUIRE_THREE();
+  const fs::path dir = freshTempDir("three_tune");
+  const auto r = runShadowlab(
+      "tune sphere_on_plane --fixed renderer=three --fixed scene:/camera/width=320 --fixed scene:/camera/height=180 "
+      "--keys three.normal_bias --range three.normal_bias=0:0.4:8 --max-error 0.02 --no-report --cache '" +
+          (dir / "cache").string() + "' -o '" + (dir / "tune").string() + "'",
+      dir);
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_NE(r.out.find("three.normal_bias 0 starts acne"), std::string::npos) << r.out;
+  const nlohmann::json tuned = readJson(dir / "tune" / "tuned.json");
+  const double chosen = tuned.at("three.normal_bias").get<double>();
+  EXPECT_GT(chosen, 0.0);
+  EXPECT_LE(chosen, 0.2);
+  double acneAtZero = -1, leakChosen = -1, leakLargest = -1, largest = -1;
+  const nlohmann::json tune = readJson(dir / "tune" / "tune.json");
+  for (const auto& e : tune.at("evaluations")) {
+    const nlohmann::json& s = e.at("scenes").at("sphere_on_plane");
+    const std::string config = e.at("config");
+    const size_t at = config.find("three.normal_bias=");
+    const double nb = at == std::string::npos ? 0.0 : std::stod(config.substr(at + 18));
+    if (nb == 0.0) acneAtZero = s.at("acne_rate").get<double>();
+    if (nb == chosen) {
+      leakChosen = s.at("leak_rate").get<double>();
+      EXPECT_LT(s.at("acne_rate").get<double>(), 0.001) << config;
+    }
+    if (nb > largest) largest = nb, leakLargest = s.at("leak_rate").get<double>();
+  }
+  EXPECT_GT(acneAtZero, 0.4);
+  EXPECT_GT(largest, chosen) << "the search looked past the value it chose";
+  EXPECT_GT(leakLargest, leakChosen) << "a larger normal bias detaches shadows: its cost in leaks";
+}
+
 // The adapter's own failures: bad arguments and files are exit 2, a renderer that cannot run exit 3,
 // and neither leaves an output folder.
 TEST(ThreeAdapter, FailuresAreExitCodesWithNoOutputLeft) {

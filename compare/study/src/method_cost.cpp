@@ -40,6 +40,7 @@ nlohmann::json MethodCost::toJson() const {
 
 MethodCost estimateMethodCost(const Scene& scene, const Method& method, const std::string& lightName) {
   MethodCost c;
+  if (!method.renderer.empty()) return c;  // an outside renderer's cost is its measured renderer_frame_ms
   const Light* light = scene.findLight(scene.lightOrDefault(lightName));
   int layers = 1;
   if (light) {

@@ -259,8 +259,14 @@ class Engine {
           worstScene = plan_.sweep.sceneNames[s];
         }
       }
-      std::fprintf(options_.progress, "tune: %s: worst error_rate %.3g (%s), estimated %.2f ms%s%s\n",
-                   ev.config.c_str(), worst, worstScene.c_str(), tuneCost(ev, scenes).first,
+      // An outside renderer has no cost model: its own measured frame time instead.
+      double rendererMs = 0;
+      for (size_t s : scenes) rendererMs = std::max(rendererMs, methodMs(ev.rows.at(s)));
+      char cost[64];
+      if (ev.method.renderer.empty()) std::snprintf(cost, sizeof cost, "estimated %.2f ms", tuneCost(ev, scenes).first);
+      else std::snprintf(cost, sizeof cost, "renderer_frame_ms %.2f", rendererMs);
+      std::fprintf(options_.progress, "tune: %s: worst error_rate %.3g (%s), %s%s%s\n", ev.config.c_str(), worst,
+                   worstScene.c_str(), cost,
                    sc.feasible ? (std::isnan(plan_.spec.maxError) ? ", within the budget" : ", meets the target") : "",
                    ran ? "" : " (from rows.jsonl)");
       std::fflush(options_.progress);

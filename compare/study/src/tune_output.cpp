@@ -181,8 +181,11 @@ std::string choiceSentence(const TunePlan& plan, const TuneResult& r, const Tune
            (which ? ", " + describe(plan, *which) + ", is estimated at " + fmt("%.3g", cheapest) + " ms" : "");
   }
   const TuneEvaluation& e = r.evaluations[size_t(c.evaluation)];
-  const std::string costs = "estimated " + fmt("%.3g", c.costMs) + " ms (measured method_gpu_ms " +
-                            fmt("%.3g", c.measuredMs) + " ms), map " + mib(c.mapBytes);
+  const std::string costs = !plan.base.renderer.empty()
+                                ? "measured renderer_frame_ms " + fmt("%.3g", c.measuredMs) +
+                                      " ms (an outside renderer: no cost model)"
+                                : "estimated " + fmt("%.3g", c.costMs) + " ms (measured method_gpu_ms " +
+                                      fmt("%.3g", c.measuredMs) + " ms), map " + mib(c.mapBytes);
   if (!c.met) {
     std::string failing;
     for (size_t s : c.scenes)

@@ -10,6 +10,7 @@
 
 #include "shadowlab/compare/classes.h"
 #include "shadowlab/compare/tune.h"
+#include "shadowlab/scenes/adapter_manifest.h"
 #include "shadowlab/scenes/error.h"
 #include "shadowlab/scenes/number_text.h"
 #include "shadowlab/scenes/technique.h"
@@ -60,7 +61,32 @@ const TunableKey* findTunable(const std::string& key) {
     slot.second.key = slot.first.c_str();
     return &slot.second;
   }
+  // An outside renderer's keys (NAME.KEY, --fixed renderer=NAME): its role is its manifest type's
+  // (tunedRendererKey), its values those of its --range.
+  if (isRendererMethodKey(key)) {
+    static std::map<std::string, std::pair<std::string, TunableKey>> interned;
+    auto& slot = interned[key];
+    if (slot.first.empty()) slot = {key, TunableKey{nullptr, TuneRole::Categorical, "", ""}};
+    slot.second.key = slot.first.c_str();
+    return &slot.second;
+  }
   return nullptr;
+}
+
+// An outside renderer's key as tune searches it: a number (a bias, a normal offset) as a bias, its
+// U-curve searched over --range lo:hi[:intervals]; an int, enum or bool as a list of values.
+TunableKey tunedRendererKey(const Method& base, const std::string& key) {
+  const AdapterManifest* a = rendererManifest(base);
+  if (!a)
+    throw InputError(formatError("--keys " + key, "",
+                                 "\"" + key + "\" without a renderer; expected --fixed renderer=NAME beside it"));
+  const size_t dot = key.find('.');
+  const AdapterKey* k = key.substr(0, dot) == a->name ? a->find(key.substr(dot + 1)) : nullptr;
+  if (!k)
+    throw InputError(formatError("--keys " + key, "", "\"" + key + "\" is not a key of " + a->path));
+  TunableKey t = *findTunable(key);
+  t.role = k->type == AdapterKey::Type::Number ? TuneRole::Bias : TuneRole::Categorical;
+  return t;
 }
 
 // A finite number from the whole of `text`, else nullopt.
@@ -356,6 +382,13 @@ TunePlan planTune(const TuneSpec& spec) {
             "--keys " + k, "",
             "a technique's key has no default range; expected --range " + k + "=lo:hi or " + k + "=v1,v2,..."));
       candidates.push_back(*findTunable(k));
+    } else if (isRendererMethodKey(k)) {
+      const TunableKey t = tunedRendererKey(plan.base, k);
+      if (!ranges.count(k))
+        throw InputError(formatError("--keys " + k, "",
+                                     "an outside renderer's key has no default range; expected --range " + k +
+                                         (t.role == TuneRole::Bias ? "=lo:hi[:intervals]" : "=v1,v2,...")));
+      candidates.push_back(t);
     }
   for (const auto& k : candidates) {
     if (!tuned.count(k.key)) continue;

@@ -29,7 +29,8 @@ struct MethodCost {
 };
 
 // The model for `method` on `scene` rendering `light` (empty: the scene's first light). Pure
-// arithmetic on the scene's camera, light type, triangle count and the method's keys.
+// arithmetic on the scene's camera, light type, triangle count and the method's keys. A method of an
+// outside renderer (renderer=) has no model: every field 0 (its rows measure renderer_frame_ms).
 MethodCost estimateMethodCost(const Scene& scene, const Method& method, const std::string& light);
 
 }  // namespace shadowlab
