@@ -244,6 +244,31 @@ TEST_F(AdapterProtocol, APerfectFrameIsScoredWithTheRenderersOwnTime) {
   EXPECT_EQ(m["method"]["fake.size"], 32);
   EXPECT_NE(slurp(dir / "good" / "adapter.log").find("fake: frame 0 good"), std::string::npos);
   EXPECT_TRUE(fs::exists(dir / "good" / "renderer.json"));
+
+  // The gate guards the renderer's settings: the same configuration rendered worse (a block of
+  // lit ground drawn shadowed, as a broken update would) is a regression, exit 1.
+  const shadowlab::Frame truth = shadowlab::readFrameExr((dir / "truth" / "reference.exr").string());
+  std::vector<float> worse = truth.get("light.sun.vis");
+  size_t planted = 0;
+  for (int y = 100; y < 130; ++y)
+    for (int x = 10; x < 70; ++x) {
+      float& v = worse[size_t(y) * truth.width + x];
+      planted += v > 0.5f ? 1 : 0;
+      v = 0.0f;
+    }
+  ASSERT_GT(planted, 1000u);
+  shadowlab::writeGreyPng16((dir / "fixtures" / "vis.png").string(), truth.width, truth.height, worse);
+  const auto again = runFake("--set fake.size=32", "worse");
+  ASSERT_EQ(again.code, 0) << again.err;
+  const auto gate = runShadowlab("gate '" + (dir / "worse" / "metrics.json").string() + "' --baseline '" +
+                                     (dir / "good" / "metrics.json").string() + "'",
+                                 dir);
+  EXPECT_EQ(gate.code, 1) << gate.out << gate.err;
+  EXPECT_NE(gate.out.find("FAIL"), std::string::npos) << gate.out;
+  const auto same = runShadowlab("gate '" + (dir / "good" / "metrics.json").string() + "' --baseline '" +
+                                     (dir / "good" / "metrics.json").string() + "'",
+                                 dir);
+  EXPECT_EQ(same.code, 0) << same.out << same.err;
 }
 
 TEST_F(AdapterProtocol, EveryFailureIsTheAdaptersExit3WithItsLog) {
