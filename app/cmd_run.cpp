@@ -43,6 +43,18 @@ struct Options {
   double maxMemoryGiB = 0;
 };
 
+// metrics.json's row of one configuration, its timings still to come.
+ResultRow resultRow(const Scene& scene, const std::string& config, const std::string& light, const Method& method,
+                    const Metrics& metrics) {
+  ResultRow row;
+  row.scene = scene.name;
+  row.config = config;
+  row.light = light;
+  row.method = methodToJson(method);
+  row.metrics = metrics.toJson();
+  return row;
+}
+
 // renderer=: the frame comes from an outside renderer's adapter (adapters/README.md), scored as
 // `compare SCENE FRAME` scores one (or, for a `shadowlab` frame, as the built-in path compares).
 // The adapter's output is kept as adapter.log beside metrics.json; a failure (exit 3) names the log.
@@ -76,12 +88,7 @@ int runWithAdapter(const Options& o, const Scene& scene, const std::string& ligh
       std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - configStart).count();
   const Frame& truth = a.frame == AdapterManifest::FrameKind::Shadowlab ? reference : session.truth();
 
-  ResultRow row;
-  row.scene = scene.name;
-  row.config = config;
-  row.light = light;
-  row.method = methodToJson(method);
-  row.metrics = r.metrics.toJson();
+  ResultRow row = resultRow(scene, config, light, method, r.metrics);
   row.timings = r.timings;
   if (referenceMs > 0) row.timings[timing::kReferenceMs] = referenceMs;
   row.timings[timing::kConfigWallMs] = configWallMs;
@@ -175,12 +182,7 @@ int run(const Options& o) {
   std::printf("raster: %s, shadow %.2f ms, camera %.2f ms, readback %.2f ms\n", rasterizer.deviceName().c_str(),
               r.timings.shadowGpuMs, r.timings.cameraGpuMs, r.timings.readbackMs);
 
-  ResultRow row;
-  row.scene = scene.name;
-  row.config = config;
-  row.light = light;
-  row.method = methodToJson(method);
-  row.metrics = r.metrics.toJson();
+  ResultRow row = resultRow(scene, config, light, method, r.metrics);
   row.timings = {{timing::kShadowGpuMs, r.timings.shadowGpuMs},
                  {timing::kCameraGpuMs, r.timings.cameraGpuMs},
                  {timing::kVisibilityGpuMs, r.timings.visibilityGpuMs},

@@ -8,7 +8,7 @@
 //   node adapters/three/render.mjs --request REQUEST.json [--chromium PATH]
 //        the adapter protocol (adapters/README.md): every frame of the request, the browser started
 //        and the scene loaded once; each frame's keys are adapter.json's;
-//   node adapters/three/render.mjs SCENE.glb -o DIR [--map-size 1024] [--bias 0] [--normal-bias 0]
+//   node adapters/three/render.mjs SCENE.glb -o DIR [--map-size 512] [--bias 0] [--normal-bias 0]
 //        [--type PCF] [--radius 1] [--blur-samples 8] [--fit bounds|tight|fixed] [--extent E]
 //        [--side gltf|front|back|double] [--shadow-side default|front|back|double] [--repeat 3]
 //        [--width W --height H] [--light NAME] [--timeout-s 120] [--chromium PATH]
@@ -43,7 +43,7 @@ class FrameError extends Error {}     // one frame's failure: its error.txt, the
 // adapter.json's `keys` must be exactly these (checked at start-up), and each is also a single-frame
 // option (`--` and the name with '-' for '_'). The page reads them by these names.
 const kKeys = [
-  { name: 'map_size', type: 'int', default: 1024, min: 16, max: 16384, help: 'shadow.mapSize, texels per side' },
+  { name: 'map_size', type: 'int', default: 512, min: 16, max: 16384, help: "shadow.mapSize, texels per side (three.js's default 512)" },
   { name: 'bias', type: 'number', default: 0, min: -1, max: 1, help: 'shadow.bias, depth units (usually small negative)' },
   { name: 'normal_bias', type: 'number', default: 0, min: 0, max: 1e6, help: 'shadow.normalBias, world units along the normal' },
   { name: 'type', type: 'enum', default: 'PCF', values: ['Basic', 'PCF', 'PCFSoft', 'VSM'], help: 'renderer.shadowMap.type (three.js r187 renders PCFSoft as PCF)' },

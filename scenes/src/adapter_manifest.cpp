@@ -209,16 +209,7 @@ const AdapterManifest& loadAdapterManifest(const std::string& path) {
   if (!fs::is_regular_file(path, ec))
     throw InputError(
         formatError(path, "", "no such file; expected an adapter manifest (adapter.json, adapters/README.md)"));
-  const auto size = fs::file_size(path, ec);
-  if (!ec && size > kAdapterManifestMaxBytes)
-    throw InputError(formatError(path, "",
-                                 std::to_string(size) + " bytes; expected a manifest of at most " +
-                                     std::to_string(kAdapterManifestMaxBytes) + " bytes"));
-  const std::string bytes = readFile(path);
-  if (bytes.size() > kAdapterManifestMaxBytes)
-    throw InputError(formatError(path, "",
-                                 std::to_string(bytes.size()) + " bytes; expected a manifest of at most " +
-                                     std::to_string(kAdapterManifestMaxBytes) + " bytes"));
+  const std::string bytes = readFileAtMost(path, kAdapterManifestMaxBytes, "an adapter manifest");
   const std::string hash = hashHex(fnv1a64(bytes.data(), bytes.size()));
   static std::mutex mutex;
   // Never erased: references stay valid, and an edited file is a new entry (a new hash).

@@ -70,6 +70,21 @@ std::string readFile(const std::string& path) {
   return ss.str();
 }
 
+std::string readFileAtMost(const std::string& path, size_t maxBytes, const std::string& what) {
+  auto tooLarge = [&](uintmax_t size) {
+    return InputError(formatError(path, "",
+                                  std::to_string(size) + " bytes; expected " + what + " of at most " +
+                                      std::to_string(maxBytes / 1024) + " KiB (" + std::to_string(maxBytes) +
+                                      " bytes)"));
+  };
+  std::error_code ec;
+  const auto size = fs::file_size(path, ec);
+  if (!ec && size > maxBytes) throw tooLarge(size);
+  std::string bytes = readFile(path);
+  if (bytes.size() > maxBytes) throw tooLarge(bytes.size());
+  return bytes;
+}
+
 void makeDirs(const std::string& dir) {
   if (dir.empty()) return;
   std::error_code ec;

@@ -486,19 +486,7 @@ const TechniqueParam* TechniqueFile::find(const std::string& name) const {
 const TechniqueFile& loadTechniqueFile(const std::string& path) {
   // Checked before reading: glslang's time and memory grow with the text (a file of 400k
   // statements, 8.8 MB, compiled for minutes), and a lookup function fits in far less.
-  std::error_code ec;
-  const auto size = std::filesystem::file_size(path, ec);
-  if (!ec && size > kTechniqueMaxBytes)
-    throw InputError(formatError(path, "",
-                                 std::to_string(size) + " bytes; expected a technique file of at most " +
-                                     std::to_string(kTechniqueMaxBytes / 1024) + " KiB (" +
-                                     std::to_string(kTechniqueMaxBytes) + " bytes)"));
-  std::string bytes = readFile(path);
-  if (bytes.size() > kTechniqueMaxBytes)  // grown since, or not a regular file
-    throw InputError(formatError(path, "",
-                                 std::to_string(bytes.size()) + " bytes; expected a technique file of at most " +
-                                     std::to_string(kTechniqueMaxBytes / 1024) + " KiB (" +
-                                     std::to_string(kTechniqueMaxBytes) + " bytes)"));
+  std::string bytes = readFileAtMost(path, kTechniqueMaxBytes, "a technique file");
   const std::string hash = hashHex(fnv1a64(bytes.data(), bytes.size()));
   static std::mutex mutex;
   // Never erased: references stay valid, and an edited file is a new entry (a new hash).

@@ -16,6 +16,10 @@ void writeJsonAtomic(const std::string& path, const nlohmann::json& j);  // pret
 
 // Reads a whole file; throws InputError "<path>: error: cannot open file ..." when missing.
 std::string readFile(const std::string& path);
+// readFile of a file that must hold at most `maxBytes` (checked from its size before it is read,
+// and again after, should it have grown or not be a regular file): InputError "<path>: error: N
+// bytes; expected <what> of at most K KiB (maxBytes bytes)" beyond.
+std::string readFileAtMost(const std::string& path, size_t maxBytes, const std::string& what);
 
 // Escapes text for XML and HTML, in content and in quoted attribute values (& < > " ' as entities;
 // control characters other than tab, CR and LF, which XML 1.0 does not allow, become '?'). Used by
