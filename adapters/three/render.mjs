@@ -315,8 +315,10 @@ function greyPng(width, height, values, bits) {
   ihdr.writeUInt32BE(height, 4);
   ihdr[8] = bits;
   ihdr[9] = 0;  // grey
+  // Level 1: the file is an exchange between two programs on one machine, read once; level 6
+  // costs the adapter several times as long per frame (bench/three_adapter_overhead.py).
   return Buffer.concat([Buffer.from([137, 80, 78, 71, 13, 10, 26, 10]), chunk('IHDR', ihdr),
-    chunk('IDAT', zlib.deflateSync(raw, { level: 6 })), chunk('IEND', Buffer.alloc(0))]);
+    chunk('IDAT', zlib.deflateSync(raw, { level: 1 })), chunk('IEND', Buffer.alloc(0))]);
 }
 
 // ---- the scene file -------------------------------------------------------------------------------
@@ -416,7 +418,9 @@ async function renderFrames({ sceneBytes, setup, frames, chromium, timeouts, onF
             let error = null;
             if (url.pathname === '/result') {
               try {
+                const d0 = performance.now();
                 result = decode(body, setup);
+                result.exchangeMs = performance.now() - d0;
               } catch (e) {
                 if (!(e instanceof FrameError)) return reject(e);
                 error = e;
@@ -622,9 +626,13 @@ async function renderRequest(parsed, manifest) {
       const name = `frame ${frame.index} (id "${frame.id}")`;
       if (result) {
         try {
+          const w0 = performance.now();
           const renderer = writeFrame(frame.out, '', frame.keys, result);
+          // The file exchange on this side: the pixels decoded from the page's POST, the PNGs
+          // encoded and written (bench/RESULTS.md sets it against frame_ms).
+          const exchange = result.exchangeMs + (performance.now() - w0);
           written++;
-          process.stdout.write(`${name}: ${describe(renderer, result.meta)}; wrote ${frame.out}\n`);
+          process.stdout.write(`${name}: ${describe(renderer, result.meta)}; wrote ${frame.out} (exchange ${exchange.toFixed(2)} ms)\n`);
           return;
         } catch (e) {
           error = new FrameError(`could not write the frame: ${e.message}`);
