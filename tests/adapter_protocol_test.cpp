@@ -337,6 +337,14 @@ TEST_F(AdapterProtocol, ASweepRendersAScenesRowsInOneBatchAndRetriesAFailedRowOn
   // The retried rows alone went into the resumed sweep's batch.
   const nlohmann::json again = readJson(dir / "sw" / "adapter" / "sphere_on_plane" / "batch-0" / "request.json");
   EXPECT_LE(again["frames"].size(), 3u);
+
+  // A shard's batch holds its own rows only, in its own folder.
+  const std::string sharded = sweep.substr(0, sweep.find(" -o ")) + " --shard 1/2 -o '" + (dir / "sh").string() + "'";
+  const auto shard = runShadowlab(sharded, dir, env);
+  ASSERT_EQ(shard.code, 0) << shard.err;
+  const nlohmann::json part =
+      readJson(dir / "sh" / "shards" / "1-of-2" / "adapter" / "sphere_on_plane" / "batch-0" / "request.json");
+  EXPECT_EQ(part["frames"].size(), 2u);
 }
 
 // shadowlab's own rasterizer behind the protocol: the same frame, so the same metrics, bit for bit;

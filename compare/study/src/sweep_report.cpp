@@ -414,6 +414,19 @@ double methodMs(const ResultRow& r) {
 }
 
 namespace {
+// What the rows' times are: the built-in rasterizer's method_gpu_ms, an outside renderer's own
+// renderer_frame_ms (adapters/README.md), or both.
+std::string timeAxisSentence(const std::vector<ResultRow>& rows) {
+  size_t outside = 0;
+  for (const ResultRow& r : rows)
+    outside += !r.timings.contains(timing::kMethodGpuMs) && r.timings.contains(timing::kRendererFrameMs) ? 1 : 0;
+  const std::string builtIn = "<code>method_gpu_ms</code> (shadow pass + lookup pass, what an engine pays)";
+  const std::string renderer = "<code>renderer_frame_ms</code> (an outside renderer's own time for its frame)";
+  if (outside == 0) return builtIn + ".";
+  if (outside == rows.size()) return renderer + ".";
+  return builtIn + " for the built-in rasterizer's rows and " + renderer + " for the adapter's.";
+}
+
 // The method's time with three significant digits, and the range of its timed repetitions when the
 // row has them ("1.23 (1.2&ndash;1.31)").
 std::string timeWithSpread(const ResultRow& r) {
@@ -699,8 +712,7 @@ std::vector<std::string> writeSweepReport(const SweepPlan& plan, const std::vect
     << " scene(s), " << plan.configs.size() << " configuration(s)"
     << (rows.size() == plan.sceneNames.size() * plan.configs.size() ? "" : " (some grids run on named scenes only)")
     << ". Generated " << stamp
-    << ". Rates are fractions of the compared pixels; times are <code>method_gpu_ms</code> (shadow pass + lookup "
-       "pass, what an engine pays). "
+    << ". Rates are fractions of the compared pixels; times are " << timeAxisSentence(rows) << " "
     << timingSentence(results) << " Each link goes to the chart, triptych or row that shows it.</p>\n";
 
   // Findings (from figures/charts.json: the chart script computes them from results.json).
