@@ -60,6 +60,7 @@ ResultRow resultRow(const Scene& scene, const std::string& config, const std::st
 // The adapter's output is kept as adapter.log beside metrics.json; a failure (exit 3) names the log.
 int runWithAdapter(const Options& o, const Scene& scene, const std::string& light, const std::string& config,
                    const Method& method) {
+  checkAdapterMayRun(method, "shadowlab run");
   const AdapterManifest& a = *rendererManifest(method);
   const std::string created = app::firstMissingFolder(o.outDir);
   OutputFolder out(o.outDir);

@@ -205,6 +205,24 @@ TEST_F(AdapterProtocol, MethodKeysAreCheckedAgainstTheManifest) {
     EXPECT_NE(r.err.find(c.expected), std::string::npos) << c.sets << "\n" << r.err;
     EXPECT_FALSE(fs::exists(dir / "o")) << c.sets;
   }
+  // An adapter is a program: a method or sweep file may name a bundled one only; a path runs when
+  // the command line names it. Refused before anything runs.
+  write(dir / "method.json", nlohmann::json{{"renderer", manifest.string()}}.dump());
+  const auto fromFile = runShadowlab("run " + kScene + " --method '" + (dir / "method.json").string() + "' --cache '" +
+                                         (dir / "cache").string() + "' -o '" + (dir / "o").string() + "'",
+                                     dir, env);
+  EXPECT_EQ(fromFile.code, 2) << fromFile.err;
+  EXPECT_NE(fromFile.err.find("from a file; expected a bundled adapter's name"), std::string::npos) << fromFile.err;
+  EXPECT_FALSE(fs::exists(dir / "cache" / "adapter-work")) << "nothing was started";
+  write(dir / "sweep.json", nlohmann::json{{"scenes", {"contact"}}, {"set", {{"renderer", manifest.string()}}},
+                                           {"grid", {{"fake.size", {16, 32}}}}}
+                                .dump());
+  const auto sweepFile = runShadowlab("sweep --sweep '" + (dir / "sweep.json").string() + "' --no-report --cache '" +
+                                          (dir / "cache").string() + "' -o '" + (dir / "sw").string() + "'",
+                                      dir, env);
+  EXPECT_EQ(sweepFile.code, 2) << sweepFile.err;
+  EXPECT_NE(sweepFile.err.find("from a file; expected a bundled adapter's name"), std::string::npos) << sweepFile.err;
+  EXPECT_FALSE(fs::exists(dir / "sw" / "adapter"));
   // A renderer's key without renderer= is an unknown key, as before adapters existed.
   const auto stray = runShadowlab("run contact --set three.bias=0 -o '" + (dir / "o").string() + "'", dir);
   EXPECT_EQ(stray.code, 2);

@@ -438,7 +438,10 @@ const std::vector<SetterRow>& setters() {
        [](Method& m, const Value& v, const Where& w) { m.technique = techniqueOf(v, w); }},
       {"renderer",
        "an outside renderer's adapter, bundled (three) or adapter.json (its keys: NAME.*; adapters/README.md)",
-       [](Method& m, const Value& v, const Where& w) { m.renderer = rendererOf(v, w); }},
+       [](Method& m, const Value& v, const Where& w) {
+         m.renderer = rendererOf(v, w);
+         m.rendererFromCommandLine = w.file.rfind("--", 0) == 0;  // "--set ...", "--grid ...", "--fixed ..."
+       }},
   };
   return table;
 }

@@ -64,6 +64,22 @@ bool isFile(const std::string& p) {
 
 }  // namespace
 
+void checkAdapterMayRun(const Method& method, const std::string& origin) {
+  if (method.renderer.empty() || method.rendererFromCommandLine) return;
+  if (resolveAdapterPath(method.renderer) != method.renderer) return;  // a bundled adapter's name
+  throw InputError(formatError(origin, "renderer",
+                               "got " + method.renderer +
+                                   " from a file; expected a bundled adapter's name (" +
+                                   [] {
+                                     std::string names;
+                                     for (const std::string& n : bundledAdapterNames())
+                                       names += (names.empty() ? "" : ", ") + n;
+                                     return names;
+                                   }() +
+                                   "), or the path on the command line (--set renderer=" + method.renderer +
+                                   "): an adapter is a program, and a method or sweep file does not start one"));
+}
+
 std::string runAdapterCommand(const AdapterManifest& manifest, const std::string& request, const std::string& logPath,
                               double timeoutS) {
   std::vector<std::string> args;
@@ -226,6 +242,7 @@ std::vector<AdapterOutcome> AdapterSession::render(const Scene& scene, const std
                                                    const std::vector<AdapterFrame>& frames, const Frame& reference) {
   std::vector<AdapterOutcome> out(frames.size());
   if (frames.empty()) return out;
+  for (const AdapterFrame& f : frames) checkAdapterMayRun(f.method, "configuration " + f.config);
   const AdapterManifest& a = *rendererManifest(frames.front().method);
   const std::string batchDir = impl_->workDir + "/batch-" + std::to_string(impl_->batches++);
   std::error_code ec;

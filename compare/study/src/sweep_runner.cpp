@@ -193,7 +193,7 @@ class PipelineRunner final : public SweepRunner {
   }
 
   void checkMethod(const Method& method, const std::string& origin) override {
-    if (!method.renderer.empty()) return;  // the renderer's own limits: its frame says
+    if (!method.renderer.empty()) return checkAdapterMayRun(method, origin);  // its own limits: its frame says
     const int maxSize = rasterizer().maxMapSize();
     if (method.mapSize > maxSize)
       throw InputError(formatError(origin, "map.size",

@@ -110,6 +110,10 @@ struct Method {
     bool fromText = false;
   };
   std::map<std::string, RendererValue> rendererParams;
+  // renderer= came from the command line (--set, --grid, --fixed), not from a file: an adapter that
+  // is not bundled runs only then (adapter_session.h, checkAdapterMayRun). Not part of the method's
+  // JSON or name.
+  bool rendererFromCommandLine = false;
 };
 
 // A key NAME.KEY of an outside renderer's adapter: a dotted key whose first part is no built-in

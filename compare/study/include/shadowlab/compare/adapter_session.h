@@ -69,6 +69,12 @@ class AdapterSession {
   std::unique_ptr<Impl> impl_;
 };
 
+// A renderer's adapter is a program: a bundled one (renderer=NAME) runs from anywhere, another
+// (renderer=path/adapter.json) only when the command line named it (--set, --grid, --fixed), never
+// because a method or sweep file did (such files come from anywhere, a pull request's too).
+// InputError prefixed by `origin` otherwise.
+void checkAdapterMayRun(const Method& method, const std::string& origin);
+
 // The adapter's command, run in its manifest's folder with `request` for {request}, its output into
 // `logPath`, killed (its process group) after `timeoutS`: "" when it exited 0, else what happened
 // ("exited with status 3", "timed out after 12 s", "could not start: ..."). For tests and benches.
