@@ -16,17 +16,22 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <filesystem>
 #include <map>
 #include <memory>
 
+#include <unistd.h>
+
 #include "command.h"
 #include "job_limits.h"
+#include "shadowlab/compare/adapter_session.h"
 #include "shadowlab/compare/run_pipeline.h"
 #include "shadowlab/compare/stability.h"
 #include "shadowlab/scenes/light_path.h"
 #include "shadowlab/compare/set_arguments.h"
 #include "shadowlab/compare/sweep.h"
 #include "shadowlab/compare/timings.h"
+#include "shadowlab/scenes/adapter_manifest.h"
 #include "shadowlab/scenes/error.h"
 #include "shadowlab/scenes/io.h"
 #include "shadowlab/scenes/json_reader.h"
@@ -106,10 +111,14 @@ int run(const Options& o) {
   // --set: method keys, or scene values as in sweeps (scene:/json/pointer=value).
   const SetArguments set = applySetArguments(o.methodFile, o.sets);
   const Method& method = set.method;
-  if (!method.renderer.empty())
+  // An outside renderer fits its map as it does (three.js: around the scene's bounds): a fit-camera
+  // path moves what only the built-in rasterizer fits to. A light path is any renderer's.
+  if (!method.renderer.empty() && !lightPath)
     throw InputError("--set renderer=" + method.renderer +
-                     ": error: stability renders its camera path with the built-in rasterizer only; expected `shadowlab "
-                     "run`, `sweep` or `tune` for an outside renderer (adapters/README.md)");
+                     ": error: a fit-camera path (--path) moves the camera the built-in rasterizer fits its map to, "
+                     "and an outside renderer fits its own; expected --light-path for an outside renderer "
+                     "(adapters/README.md)");
+  if (!method.renderer.empty()) checkAdapterMayRun(method, "shadowlab stability");
   const std::vector<SceneOverride>& sceneOverrides = set.sceneOverrides;
 
   const std::string scenePath = resolveScenePath(o.scene);
@@ -202,8 +211,15 @@ int run(const Options& o) {
   RasterDeviceOptions deviceOptions;
   deviceOptions.device = o.device;
   deviceOptions.gpuTimeoutS = o.gpuTimeoutS;
-  Rasterizer rasterizer(deviceOptions);
-  app::checkDeviceMemory("stability", rasterizer, scene, method, light);  // before any reference
+  // The built-in rasterizer, or an outside renderer's adapter (one batch a frame: each frame is a
+  // scene of its own), its work under the cache folder.
+  const bool outside = !method.renderer.empty();
+  std::unique_ptr<Rasterizer> ownRasterizer;
+  if (!outside) ownRasterizer = std::make_unique<Rasterizer>(deviceOptions);
+  std::unique_ptr<AdapterSession> adapter;
+  const std::string adapterWork = cache.dir() + "/adapter-work/stability-" + std::to_string(long(::getpid()));
+  if (outside) adapter = std::make_unique<AdapterSession>(adapterWork, cache.dir());
+  if (ownRasterizer) app::checkDeviceMemory("stability", *ownRasterizer, scene, method, light);  // before any reference
   CompareOptions compareOptions;
   compareOptions.light = light;
   StabilityMetrics s;
@@ -217,8 +233,14 @@ int run(const Options& o) {
       bool t = false;
       const Frame reference = cache.get(frameSceneK, ReferenceOptions{}, &t);
       traced += t;
-      const Frame raster = rasterizer.render(frameSceneK, method, light);
-      const Metrics m = compareFrames(reference, raster, compareOptions);
+      Metrics m;
+      if (adapter) {
+        const std::vector<AdapterOutcome> got = adapter->render(frameSceneK, light, {{set.config, method}}, reference);
+        got.front().throwIfFailed();  // exit 3, its log named
+        m = got.front().metrics;
+      } else {
+        m = compareFrames(reference, ownRasterizer->render(frameSceneK, method, light), compareOptions);
+      }
       errors.push_back(m.errorRate);
       nlohmann::json values = nlohmann::json::object();
       for (const auto& a : axes) values[a.key] = a.value(k);
@@ -234,6 +256,7 @@ int run(const Options& o) {
     traced += t;
     // One frame at a time against the previous one: memory stays that of two frames.
     StabilityStream stream(reference, compareOptions);
+    Rasterizer& rasterizer = *ownRasterizer;
     for (const Camera& fit : fitCameras)
       rasterizer.recycle(stream.add(rasterizer.render(scene, method, light, nullptr, &fit)));
     s = stream.result();
@@ -261,9 +284,13 @@ int run(const Options& o) {
   report["path"] = pathJson;
   if (lightPath) report["per_frame"] = perFrame;
   report["references_traced"] = traced;
-  report["device"] = rasterizer.deviceName();
+  report["device"] = ownRasterizer ? ownRasterizer->deviceName() : "renderer " + rendererManifest(method)->name;
   writeJsonAtomic(o.outDir + "/stability.json", report);
   out.keep();
+  if (adapter) {
+    std::error_code ec;
+    std::filesystem::remove_all(adapterWork, ec);
+  }
   std::printf("stability: %s %s, %d frames, %d reference(s) traced: ", scene.name.c_str(), pathConfig.c_str(), frames,
               traced);
   if (s.hasShimmer()) std::printf("shimmer_rate %.6g, ", s.shimmerRate);

@@ -404,6 +404,30 @@ TEST(AdapterShadowlabRaster, MatchesTheBuiltInPathBitForBit) {
   ASSERT_EQ(rowsB.size(), 2u);
   for (size_t i = 0; i < 2; ++i) EXPECT_EQ(rowsA[i]["metrics"], rowsB[i]["metrics"]) << rowsB[i]["config"];
   EXPECT_EQ(readJson(dir / "sw_adapted" / "adapter" / "contact" / "batch-0" / "request.json")["frames"].size(), 2u);
+
+  // A light path (stability): every frame's metrics, and so the temporal ones, are the built-in's.
+  const std::string path = " --light-path elevation_deg=60:20:3";
+  const auto stable = runShadowlab("stability " + scene + path + " --set map.size=512 --set filter=pcf" + cache +
+                                       " -o '" + (dir / "st_builtin").string() + "'",
+                                   dir);
+  ASSERT_EQ(stable.code, 0) << stable.err;
+  const auto stableAdapted = runShadowlab("stability " + scene + path +
+                                              " --set renderer=shadowlab-raster --set shadowlab-raster.map.size=512 "
+                                              "--set shadowlab-raster.filter=pcf" +
+                                              cache + " -o '" + (dir / "st_adapted").string() + "'",
+                                          dir);
+  ASSERT_EQ(stableAdapted.code, 0) << stableAdapted.err;
+  const nlohmann::json sa = readJson(dir / "st_builtin" / "stability.json");
+  const nlohmann::json sb = readJson(dir / "st_adapted" / "stability.json");
+  EXPECT_EQ(sa["metrics"], sb["metrics"]);
+  ASSERT_EQ(sb["per_frame"].size(), 3u);
+  for (size_t i = 0; i < 3; ++i) EXPECT_EQ(sa["per_frame"][i], sb["per_frame"][i]) << "frame " << i;
+  // A fit-camera path moves what only the built-in rasterizer fits its map to.
+  const auto dolly = runShadowlab("stability " + scene + " --path dolly --frames 3 --set renderer=shadowlab-raster -o '" +
+                                      (dir / "st_dolly").string() + "'",
+                                  dir);
+  EXPECT_EQ(dolly.code, 2);
+  EXPECT_NE(dolly.err.find("expected --light-path for an outside renderer"), std::string::npos) << dolly.err;
 }
 
 }  // namespace
