@@ -356,6 +356,20 @@ TEST_F(AdapterProtocol, ASweepRendersAScenesRowsInOneBatchAndRetriesAFailedRowOn
   const nlohmann::json again = readJson(dir / "sw" / "adapter" / "sphere_on_plane" / "batch-0" / "request.json");
   EXPECT_LE(again["frames"].size(), 3u);
 
+  // Two renderers of either frame kind in one sweep: a batch each, each compared as its kind is.
+  const auto mixed = runShadowlab("sweep " + kScene + " --grid renderer='" + manifest.string() +
+                                      "',shadowlab-raster --no-report --cache '" + (dir / "cache").string() + "' -o '" +
+                                      (dir / "mixed").string() + "'",
+                                  dir, env);
+  ASSERT_EQ(mixed.code, 0) << mixed.err;
+  const nlohmann::json mixedRows = readJson(dir / "mixed" / "results.json")["rows"];
+  ASSERT_EQ(mixedRows.size(), 2u);
+  for (const auto& row : mixedRows) {
+    EXPECT_GT(row["metrics"]["pixels_compared"].get<double>(), 20000) << row["config"];
+    EXPECT_LT(row["metrics"]["error_rate"].get<double>(), 0.05) << row["config"];
+  }
+  EXPECT_TRUE(fs::exists(dir / "mixed" / "adapter" / "sphere_on_plane" / "batch-1" / "request.json"));
+
   // A shard's batch holds its own rows only, in its own folder.
   const std::string sharded = sweep.substr(0, sweep.find(" -o ")) + " --shard 1/2 -o '" + (dir / "sh").string() + "'";
   const auto shard = runShadowlab(sharded, dir, env);

@@ -186,10 +186,8 @@ class PipelineRunner final : public SweepRunner {
   void prefetch(const Scene& scene, const std::vector<std::pair<std::string, Method>>& configs,
                 const std::string& light, const std::string& workDir) override {
     std::vector<AdapterFrame> frames;
-    for (const auto& [config, method] : configs)
-      if (!method.renderer.empty()) frames.push_back({config, method});
-    if (frames.empty()) return;
-    adapterBatch(scene, scene.lightOrDefault(light), frames, workDir);
+    for (const auto& [config, method] : configs) frames.push_back({config, method});
+    if (!frames.empty()) adapterBatch(scene, scene.lightOrDefault(light), frames, workDir);
   }
 
   void checkMethod(const Method& method, const std::string& origin) override {
@@ -231,19 +229,20 @@ class PipelineRunner final : public SweepRunner {
 
   void adapterBatch(const Scene& scene, const std::string& light, const std::vector<AdapterFrame>& frames,
                     const std::string& workDir) {
-    const AdapterManifest* a = rendererManifest(frames.front().method);
     if (!adapter_ || adapterDir_ != workDir) {
       adapter_ = std::make_unique<AdapterSession>(workDir, cache_.dir());
       adapterDir_ = workDir;
     }
-    const Frame none;
-    const Frame& reference = a->frame == AdapterManifest::FrameKind::Shadowlab ? referenceFor(scene) : none;
-    // One renderer a batch: a sweep over renderer= holds several.
+    // One renderer a batch: a sweep over renderer= holds several, of either frame kind.
     std::map<std::string, std::vector<AdapterFrame>> byRenderer;
     for (const AdapterFrame& f : frames) byRenderer[rendererManifest(f.method)->path].push_back(f);
     adapterOutcomes_.clear();
+    const Frame none;
     for (const auto& [path, group] : byRenderer) {
-      std::vector<AdapterOutcome> outcomes = adapter_->render(scene, light, group, reference);
+      // A shadowlab frame is compared against the reference the built-in rows use; a png frame
+      // against the truth the session traces with every channel.
+      const bool ownFrame = rendererManifest(group.front().method)->frame == AdapterManifest::FrameKind::Shadowlab;
+      std::vector<AdapterOutcome> outcomes = adapter_->render(scene, light, group, ownFrame ? referenceFor(scene) : none);
       for (size_t i = 0; i < group.size(); ++i)
         adapterOutcomes_[adapterKey(scene, light, group[i].method)] = std::move(outcomes[i]);
     }

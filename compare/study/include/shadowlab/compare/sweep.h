@@ -179,9 +179,9 @@ class SweepRunner {
     (void)scene, (void)method, (void)light, (void)runs;
     return {};
   }
-  // An outside renderer's configurations of one scene and light (each renderer= the same adapter,
-  // adapters/README.md), before the first of them runs: rendered in one batch of the adapter, with
-  // its request, frames and log under `workDir`; run() then scores each from the batch. Without it
+  // An outside renderer's configurations of one scene and light (each with a renderer=;
+  // adapters/README.md), before the first of them runs: one batch per adapter, each with its
+  // request, frames and log under `workDir`; run() then scores each from the batch. Without it
   // run() renders an adapter's configuration as a batch of one. Default: nothing.
   virtual void prefetch(const Scene& scene, const std::vector<std::pair<std::string, Method>>& configs,
                         const std::string& light, const std::string& workDir) {
