@@ -282,8 +282,6 @@ std::string rendererOf(const Value& v, const Where& w) {
   return given;
 }
 
-bool isRendererKey(const std::string& key) { return isRendererMethodKey(key); }
-
 void applyRendererKey(Method& m, const std::string& key, const Value& v) {
   Method::RendererValue value;
   if (v.json) {
@@ -481,7 +479,7 @@ void apply(Method& m, const std::string& key, const Value& v, const Where& w) {
       row.set(m, v, w);
       return;
     }
-  if (isRendererKey(key)) return applyRendererKey(m, key, v);
+  if (isRendererMethodKey(key)) return applyRendererKey(m, key, v);
   std::vector<std::string> all = methodKeys();
   all.push_back("name");
   throw InputError(formatError(
@@ -502,19 +500,19 @@ void checkRenderer(const Method& m, const std::string& file, const std::string& 
     bad(key, "unknown method key \"" + key + "\"" + detail::didYouMean(key, all) + "; expected one of " + keyList() +
                  " (or an outside renderer's NAME.KEY beside renderer=NAME)");
   }
-  const AdapterManifest& a = loadAdapterManifest(resolveAdapterPath(m.renderer));
+  const AdapterManifest& a = *rendererManifest(m);
   if (!m.technique.empty())
     bad("technique", "set beside renderer=" + m.renderer +
                          "; expected one of the two (a technique runs in the built-in rasterizer)");
+  std::string declared;
+  std::vector<std::string> full;
+  for (const AdapterKey& k : a.keys) {
+    full.push_back(a.name + "." + k.name);
+    declared += (declared.empty() ? "" : ", ") + full.back();
+  }
   for (const auto& [key, given] : m.rendererParams) {
     const size_t dot = key.find('.');
     const std::string group = key.substr(0, dot), name = key.substr(dot + 1);
-    std::string declared;
-    std::vector<std::string> full;
-    for (const AdapterKey& k : a.keys) {
-      full.push_back(a.name + "." + k.name);
-      declared += (declared.empty() ? "" : ", ") + full.back();
-    }
     if (group != a.name)
       bad(key, "not a key of renderer=" + m.renderer + " (" + a.path + ")" + detail::didYouMean(key, full) +
                    "; expected one of its keys: " + (declared.empty() ? std::string("(it declares none)") : declared));
@@ -731,7 +729,7 @@ nlohmann::json methodToJson(const Method& m) {
   }
   if (!m.renderer.empty()) {  // only then, as technique
     j["renderer"] = m.renderer;
-    const AdapterManifest& a = loadAdapterManifest(resolveAdapterPath(m.renderer));
+    const AdapterManifest& a = *rendererManifest(m);
     const nlohmann::json values = adapterKeyValues(m);
     for (const AdapterKey& k : a.keys) j[a.name + "." + k.name] = values[k.name];
   }
