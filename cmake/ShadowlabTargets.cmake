@@ -1,5 +1,6 @@
-# Which library a test (tests/<unit>_test.cpp) or benchmark (bench/<unit>_bench.cpp) links, from the
-# prefix of its name. One place for tests/ and bench/, so a new prefix is added once.
+# Which library a test (tests/<unit>_test.cpp, compiled into that library's test executable) or
+# benchmark (bench/<unit>_bench.cpp) links, from the prefix of its name. One place for tests/ and
+# bench/, so a new prefix is added once.
 #   scenes_*               -> shadowlab_scenes
 #   reference_*            -> shadowlab_reference
 #   raster_*reference*     -> shadowlab_raster + shadowlab_reference (checked against Embree)

@@ -22,6 +22,8 @@
 #include "shadowlab/scenes/io.h"
 #include "support/cli.h"
 
+namespace adapter_protocol_test {
+
 namespace {
 
 namespace fs = std::filesystem;
@@ -445,3 +447,5 @@ TEST(AdapterShadowlabRaster, MatchesTheBuiltInPathBitForBit) {
 }
 
 }  // namespace
+
+}  // namespace adapter_protocol_test

@@ -17,6 +17,8 @@
 #include "support/cli.h"
 #include "support/test_models.h"
 
+namespace adapter_three_test {
+
 namespace {
 
 namespace fs = std::filesystem;
@@ -231,3 +233,5 @@ TEST(ThreeAdapter, FailuresAreExitCodesWithNoOutputLeft) {
 }
 
 }  // namespace
+
+}  // namespace adapter_three_test

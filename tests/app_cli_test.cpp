@@ -17,6 +17,8 @@
 #include "shadowlab/scenes/method.h"
 #include "support/cli.h"
 
+namespace app_cli_test {
+
 namespace fs = std::filesystem;
 using namespace shadowlab;
 using shadowlab::testing::CliRun;
@@ -294,3 +296,5 @@ TEST(AppCli, SweepFileNamingAMissingSceneNamesFileAndPointer) {
   EXPECT_FALSE(fs::exists(dir / "out"));
   fs::remove_all(dir);
 }
+
+}  // namespace app_cli_test

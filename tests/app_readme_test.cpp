@@ -40,6 +40,8 @@
 #include "shadowlab/reference/reference.h"
 #include "shadowlab/scenes/loader.h"
 
+namespace app_readme_test {
+
 namespace {
 
 namespace fs = std::filesystem;
@@ -255,3 +257,5 @@ TEST(Readme, EveryShadowlabLineRunsAsWritten) {
 }
 
 }  // namespace
+
+}  // namespace app_readme_test

@@ -14,6 +14,8 @@
 #include "support/half_scene_reference.h"
 #include "support/reference_score.h"
 
+namespace compare_adaptive_bias_test {
+
 using namespace shadowlab;
 
 namespace {
@@ -117,3 +119,5 @@ TEST_F(AdaptiveBias, ContactOtherPixelsAreTheCrateGroundJunction) {
   EXPECT_GT(adaptiveOther, 5u);
   EXPECT_EQ(defaultOther, 0u);
 }
+
+}  // namespace compare_adaptive_bias_test

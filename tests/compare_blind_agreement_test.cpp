@@ -13,7 +13,7 @@
 #include "shadowlab/reference/reference.h"
 #include "support/raster_device.h"
 
-namespace shadowlab {
+namespace shadowlab::compare_blind_agreement_test {
 namespace {
 
 TEST(BlindAgreement, TheMainJobsWrongPixelsGetTheFullRulesClass) {
@@ -53,4 +53,4 @@ TEST(BlindAgreement, TheMainJobsWrongPixelsGetTheFullRulesClass) {
 }
 
 }  // namespace
-}  // namespace shadowlab
+}  // namespace shadowlab::compare_blind_agreement_test

@@ -20,7 +20,7 @@
 #include "shadowlab/scenes/io.h"
 #include "support/cli.h"
 
-namespace shadowlab {
+namespace shadowlab::compare_cli_test {
 namespace {
 
 namespace fs = std::filesystem;
@@ -423,4 +423,4 @@ TEST_F(CompareCli, ReadmeGateLinesWorkVerbatimInOrder) {
 }
 
 }  // namespace
-}  // namespace shadowlab
+}  // namespace shadowlab::compare_cli_test

@@ -18,6 +18,8 @@
 #include "support/raster_device.h"
 #include "support/tiny_scenes.h"
 
+namespace compare_context_test {
+
 using namespace shadowlab;
 
 namespace {
@@ -130,3 +132,5 @@ TEST_F(ContextOnFrames, AnotherGroupTakesTheFullPath) {
   EXPECT_FALSE(full.meta.contains("evidence_group"));
   EXPECT_FALSE(context.appliesTo(reference, full));
 }
+
+}  // namespace compare_context_test

@@ -14,7 +14,7 @@
 #include "shadowlab/scenes/io.h"
 #include "shadowlab/scenes/loader.h"
 
-namespace shadowlab {
+namespace shadowlab::compare_end_to_end_test {
 namespace {
 
 constexpr int kWidth = 480, kHeight = 270;
@@ -226,4 +226,4 @@ TEST(CompareEndToEnd, ReferenceCacheHoldsTheCompareSetUnderVersionTwo) {
 }
 
 }  // namespace
-}  // namespace shadowlab
+}  // namespace shadowlab::compare_end_to_end_test

@@ -18,6 +18,8 @@
 #include "shadowlab/scenes/loader.h"
 #include "support/raster_device.h"
 
+namespace compare_filterable_maps_test {
+
 using namespace shadowlab;
 
 namespace {
@@ -384,3 +386,5 @@ TEST_F(FilterableMaps, MsmBoundIsTheHamburgerReconstructionWhereTheFootprintIsUn
   std::printf("  the same interior with msm.moment_bias 3e-5: mean bound %.5f\n", sum / double(n));
   EXPECT_LT(sum / double(n), 0.01);
 }
+
+}  // namespace compare_filterable_maps_test

@@ -10,7 +10,7 @@
 #include "shadowlab/compare/compare.h"
 #include "shadowlab/compare/outside_frame.h"
 
-namespace shadowlab {
+namespace shadowlab::compare_metrics_blind_test {
 namespace {
 
 constexpr float kReceiver = 1;
@@ -152,4 +152,4 @@ TEST(BlindRule, CompareFramesUsesTheNarrowAcneBandAndTheContactPlane) {
 }
 
 }  // namespace
-}  // namespace shadowlab
+}  // namespace shadowlab::compare_metrics_blind_test

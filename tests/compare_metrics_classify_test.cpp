@@ -10,7 +10,7 @@
 #include "shadowlab/compare/classify.h"
 #include "shadowlab/scenes/error.h"
 
-namespace shadowlab {
+namespace shadowlab::compare_metrics_classify_test {
 namespace {
 
 constexpr float kReceiver = 1, kCaster = 2;
@@ -395,4 +395,4 @@ TEST(ClassTallies, ACodeOutsideTheTableIsRefused) {
 }
 
 }  // namespace
-}  // namespace shadowlab
+}  // namespace shadowlab::compare_metrics_classify_test

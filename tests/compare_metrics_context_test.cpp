@@ -13,7 +13,7 @@
 #include "shadowlab/compare/compare.h"
 #include "shadowlab/scenes/error.h"
 
-namespace shadowlab {
+namespace shadowlab::compare_metrics_context_test {
 namespace {
 
 constexpr float kPlane = 1, kCaster = 2, kThird = 3;
@@ -333,4 +333,4 @@ TEST(CompareContext, BadInputThrowsLikeCompareFrames) {
 }
 
 }  // namespace
-}  // namespace shadowlab
+}  // namespace shadowlab::compare_metrics_context_test

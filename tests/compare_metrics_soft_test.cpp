@@ -19,7 +19,7 @@
 #include "shadowlab/compare/classify.h"
 #include "shadowlab/compare/compare.h"
 
-namespace shadowlab {
+namespace shadowlab::compare_metrics_soft_test {
 namespace softtest {
 
 constexpr float kPlane = 1, kCaster = 2;
@@ -93,10 +93,10 @@ Pair hardPair(int w, int h, unsigned seed, bool filtered, bool cascaded) {
 }
 
 }  // namespace softtest
-}  // namespace shadowlab
+}  // namespace shadowlab::compare_metrics_soft_test
 
 #ifndef SHADOWLAB_SOFT_TEST_FRAMES_ONLY
-namespace shadowlab {
+namespace shadowlab::compare_metrics_soft_test {
 namespace {
 
 using namespace softtest;
@@ -436,5 +436,5 @@ TEST(SoftCompare, ContextPathGivesTheFullPathsBits) {
 }
 
 }  // namespace
-}  // namespace shadowlab
+}  // namespace shadowlab::compare_metrics_soft_test
 #endif

@@ -11,7 +11,7 @@
 #include "shadowlab/compare/compare.h"
 #include "shadowlab/scenes/error.h"
 
-namespace shadowlab {
+namespace shadowlab::compare_metrics_test {
 namespace {
 
 constexpr int kW = 64, kH = 48;
@@ -704,4 +704,4 @@ TEST(CompareMetrics, PerCascadeErrorRateAndFootprint) {
 }
 
 }  // namespace
-}  // namespace shadowlab
+}  // namespace shadowlab::compare_metrics_test

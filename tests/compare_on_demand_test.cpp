@@ -19,6 +19,8 @@
 #include "support/raster_device.h"
 #include "support/tiny_scenes.h"
 
+namespace compare_on_demand_test {
+
 using namespace shadowlab;
 
 namespace {
@@ -184,3 +186,5 @@ TEST_F(OnDemand, ABrokenSelectorIsCaught) {
   EXPECT_EQ(bad["acne"].get<uint64_t>(), 0u);
   EXPECT_EQ(bad["errors"], want["errors"]);  // the decisions are the same: only the classes move
 }
+
+}  // namespace compare_on_demand_test

@@ -24,7 +24,7 @@
 #include "support/cli.h"
 #include "support/raster_device.h"
 
-namespace shadowlab {
+namespace shadowlab::compare_outside_frame_test {
 namespace {
 
 namespace fs = std::filesystem;
@@ -470,4 +470,4 @@ TEST_F(OutsideFrame, OutsideOptionsOnShadowlabsOwnFramesAreRefused) {
 }
 
 }  // namespace
-}  // namespace shadowlab
+}  // namespace shadowlab::compare_outside_frame_test

@@ -15,6 +15,8 @@
 #include "shadowlab/compare/run_pipeline.h"
 #include "shadowlab/raster/raster.h"
 
+namespace compare_soft_selector_test {
+
 using namespace shadowlab;
 
 namespace {
@@ -127,3 +129,5 @@ TEST(SoftSelector, PartialFramesGiveTheFullFramesMetrics) {
 }
 
 }  // namespace
+
+}  // namespace compare_soft_selector_test

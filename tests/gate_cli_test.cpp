@@ -11,6 +11,8 @@
 #include <OpenImageIO/detail/pugixml/pugixml.hpp>
 #include <nlohmann/json.hpp>
 
+namespace gate_cli_test {
+
 namespace {
 
 namespace fs = std::filesystem;
@@ -518,3 +520,5 @@ TEST_F(GateCli, UpdateBaselineCreatesItsFolder) {
 }
 
 }  // namespace
+
+}  // namespace gate_cli_test

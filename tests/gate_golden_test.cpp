@@ -16,6 +16,8 @@
 
 #include <nlohmann/json.hpp>
 
+namespace gate_golden_test {
+
 namespace {
 
 namespace fs = std::filesystem;
@@ -183,3 +185,5 @@ TEST_F(Golden, TwoRunsOfTheSameSweepPassEachOtherExactly) {
 }
 
 }  // namespace
+
+}  // namespace gate_golden_test

@@ -10,7 +10,7 @@
 #include "shadowlab/compare/results.h"
 #include "shadowlab/scenes/error.h"
 
-namespace shadowlab {
+namespace shadowlab::gate_results_test {
 namespace {
 
 namespace fs = std::filesystem;
@@ -143,4 +143,4 @@ TEST_F(Results, RenamedTimingNamesAreRefusedWithTheNewName) {
 }
 
 }  // namespace
-}  // namespace shadowlab
+}  // namespace shadowlab::gate_results_test

@@ -6,7 +6,7 @@
 #include "shadowlab/scenes/error.h"
 #include "shadowlab/scenes/json_reader.h"
 
-namespace shadowlab {
+namespace shadowlab::gate_rules_test {
 namespace {
 
 ResultFile fileOf(const std::string& path, std::vector<ResultRow> rows) {
@@ -319,4 +319,4 @@ TEST(GateRules, JunitCountsTestcasesAndFailures) {
 }
 
 }  // namespace
-}  // namespace shadowlab
+}  // namespace shadowlab::gate_rules_test

@@ -10,7 +10,7 @@
 #include "shadowlab/compare/gate.h"
 #include "shadowlab/scenes/error.h"
 
-namespace shadowlab {
+namespace shadowlab::gate_soft_metrics_test {
 namespace {
 
 ResultFile fileOf(const std::string& path, std::vector<ResultRow> rows) {
@@ -117,4 +117,4 @@ TEST(GateSoftMetrics, ABaselineWithoutThemPassesAsNewMetrics) {
 }
 
 }  // namespace
-}  // namespace shadowlab
+}  // namespace shadowlab::gate_soft_metrics_test

@@ -17,6 +17,8 @@
 
 #include "support/cli.h"
 
+namespace gate_stability_golden_test {
+
 namespace {
 
 namespace fs = std::filesystem;
@@ -129,3 +131,5 @@ TEST_F(StabilityGolden, GoldenStabilityRunPassesTheGateAndDoctoredBaselinesFail)
 }
 
 }  // namespace
+
+}  // namespace gate_stability_golden_test

@@ -11,6 +11,8 @@
 
 #include "support/cli.h"
 
+namespace image_module_cli_test {
+
 namespace fs = std::filesystem;
 using shadowlab::testing::freshTempDir;
 using shadowlab::testing::runShadowlab;
@@ -109,3 +111,5 @@ TEST(ImageModule, WithoutItOnlyTheCommandsThatNeedImagesFailNamingIt) {
   EXPECT_TRUE(fs::is_regular_file(slideOut / "reference.exr"));
   fs::remove_all(dir);
 }
+
+}  // namespace image_module_cli_test

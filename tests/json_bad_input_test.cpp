@@ -15,6 +15,8 @@
 
 #include "support/cli.h"
 
+namespace json_bad_input_test {
+
 namespace fs = std::filesystem;
 using shadowlab::testing::CliRun;
 using shadowlab::testing::runShadowlab;
@@ -110,3 +112,5 @@ TEST_F(JsonBadInput, AFileThatIsNoJsonIsNeverQuoted) {
     EXPECT_EQ(r.err.find("secret"), std::string::npos) << r.err;
   }
 }
+
+}  // namespace json_bad_input_test

@@ -16,6 +16,8 @@
 #include "shadowlab/reference/reference.h"
 #include "shadowlab/scenes/loader.h"
 
+namespace raster_cascades_reference_test {
+
 using namespace shadowlab;
 
 namespace {
@@ -138,3 +140,5 @@ TEST_F(CascadesVsReference, CasterOutsideTheViewFrustumStillCastsIntoView) {
     }
   }
 }
+
+}  // namespace raster_cascades_reference_test

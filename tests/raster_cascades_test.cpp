@@ -9,6 +9,8 @@
 
 #include "shadowlab/raster/cascades.h"
 
+namespace raster_cascades_test {
+
 using namespace shadowlab;
 using namespace shadowlab::raster;
 
@@ -124,3 +126,5 @@ TEST(RasterCascades, StabilizedCropsKeepSizeAndSnapToWholeTexels) {
               plainSideMax);
   EXPECT_GT(plainSideMax - plainSideMin, 0.01f * plainSideMax) << "turning the camera must change an unstabilized crop";
 }
+
+}  // namespace raster_cascades_test

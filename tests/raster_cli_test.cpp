@@ -11,6 +11,8 @@
 
 #include <nlohmann/json.hpp>
 
+namespace raster_cli_test {
+
 namespace fs = std::filesystem;
 
 namespace {
@@ -95,3 +97,5 @@ TEST(RasterCli, BadMethodValuesExitTwoAndWriteNothing) {
     EXPECT_FALSE(fs::exists(out)) << c.args << " wrote " << out;
   }
 }
+
+}  // namespace raster_cli_test

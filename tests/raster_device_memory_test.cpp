@@ -12,6 +12,8 @@
 #include "shadowlab/scenes/loader.h"
 #include "support/raster_device.h"
 
+namespace raster_device_memory_test {
+
 using namespace shadowlab;
 
 namespace {
@@ -144,3 +146,5 @@ TEST(DeviceMemory, RasterizerRefusesTheTrackerCaseBeforeAllocating) {
     }
   }
 }
+
+}  // namespace raster_device_memory_test

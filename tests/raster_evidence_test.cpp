@@ -19,6 +19,8 @@
 #include "support/quad.h"
 #include "support/raster_device.h"
 
+namespace raster_evidence_test {
+
 using namespace shadowlab;
 
 namespace {
@@ -253,3 +255,5 @@ TEST_F(RasterEvidence, FullFrameWhereOnDemandDoesNotApply) {
   EXPECT_FALSE(t.partialEvidence);
   EXPECT_EQ(t.evidencePixels, uint64_t(sphere.camera.width) * uint64_t(sphere.camera.height));
 }
+
+}  // namespace raster_evidence_test

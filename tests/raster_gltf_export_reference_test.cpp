@@ -14,6 +14,8 @@
 #include "support/raster_device.h"
 #include "support/same_frames.h"
 
+namespace raster_gltf_export_reference_test {
+
 namespace fs = std::filesystem;
 using namespace shadowlab;
 
@@ -35,3 +37,5 @@ TEST_F(GltfExportRaster, EveryBundledSceneRastersTheSameAfterARoundTrip) {
     }
   }
 }
+
+}  // namespace raster_gltf_export_reference_test

@@ -21,6 +21,8 @@
 #include "support/raster_device.h"
 #include "support/same_frames.h"
 
+namespace raster_gltf_mirror_reference_test {
+
 namespace fs = std::filesystem;
 using namespace shadowlab;
 using shadowlab::testing::differingValues;
@@ -107,3 +109,5 @@ TEST_F(GltfMirror, AMirroredNodeCastsTheShadowOfItsMirrorImage) {
   EXPECT_EQ(differingValues(ra, rb, "raster"), 0u);
   fs::remove_all(dir);
 }
+
+}  // namespace raster_gltf_mirror_reference_test

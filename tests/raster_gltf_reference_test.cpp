@@ -24,6 +24,8 @@
 #include "support/same_frames.h"
 #include "support/test_models.h"
 
+namespace raster_gltf_reference_test {
+
 namespace fs = std::filesystem;
 using namespace shadowlab;
 using shadowlab::testing::differingValues;
@@ -209,3 +211,5 @@ TEST_F(GltfTruth, BoxTexturedGivesBitIdenticalTruthInItsThreeForms) {
   EXPECT_EQ(differingValues(a, truth(loadScene(embedded)), "embedded"), 0u);
   EXPECT_EQ(differingValues(a, truth(loadScene(binary)), "glb"), 0u);
 }
+
+}  // namespace raster_gltf_reference_test

@@ -15,6 +15,8 @@
 #include "support/raster_device.h"
 #include "support/reference_score.h"
 
+namespace raster_lispsm_reference_test {
+
 using namespace shadowlab;
 using shadowlab::testing::AlongTheLightCase;
 using shadowlab::testing::alongTheLightCases;
@@ -137,3 +139,5 @@ TEST_F(LispsmVsReference, CasterOutsideTheViewFrustumStillCastsIntoView) {
   EXPECT_NE(ft.get("light.sun.m"), fl.get("light.sun.m")) << "the warp must be on for this view";
   expectAllFinite(fl, "pole_behind");
 }
+
+}  // namespace raster_lispsm_reference_test

@@ -11,6 +11,8 @@
 
 #include "shadowlab/raster/lispsm.h"
 
+namespace raster_lispsm_test {
+
 using namespace shadowlab::raster;
 
 namespace {
@@ -233,3 +235,5 @@ TEST(RasterLispsm, ViewBoxIntersectionIsTheExactBody) {
   EXPECT_NEAR(lo, 0.1, 1e-6);
   EXPECT_TRUE(viewBoxIntersection(c, {-1, 0, 3}, {1, 2, 6}).empty());
 }
+
+}  // namespace raster_lispsm_test

@@ -17,6 +17,8 @@
 #include "shadowlab/scenes/loader.h"
 #include "support/raster_device.h"
 
+namespace raster_lookup_test {
+
 using namespace shadowlab;
 
 namespace {
@@ -223,3 +225,5 @@ TEST_F(RasterLookup, TheSurfaceFollowsItsGroup) {
   }
   EXPECT_GE(surfaceFrames, 14);
 }
+
+}  // namespace raster_lookup_test

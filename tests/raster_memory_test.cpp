@@ -19,6 +19,8 @@
 #include "shadowlab/scenes/loader.h"
 #include "support/raster_device.h"
 
+namespace raster_memory_test {
+
 using namespace shadowlab;
 
 namespace {
@@ -108,3 +110,5 @@ TEST_F(RasterMemory, RepeatedFramesDoNotGrowTheHeap) {
     }
   }
 }
+
+}  // namespace raster_memory_test

@@ -18,6 +18,8 @@
 #include "support/raster_device.h"
 #include "support/reference_score.h"
 
+namespace raster_ortho_camera_reference_test {
+
 using namespace shadowlab;
 
 namespace {
@@ -150,3 +152,5 @@ TEST_F(OrthoCamera, FrustumFitsAreRefused) {
     }
   }
 }
+
+}  // namespace raster_ortho_camera_reference_test

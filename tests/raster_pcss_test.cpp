@@ -30,6 +30,8 @@
 #include "support/cli.h"
 #include "support/raster_device.h"
 
+namespace raster_pcss_test {
+
 using namespace shadowlab;
 namespace fs = std::filesystem;
 
@@ -553,3 +555,5 @@ TEST(RasterPcssCli, DefaultCapDoesNotMakeASharperMapWorseOnSoftPost) {
   }
   EXPECT_LE(mae[1], mae[0] + 0.01) << "map 1024 against 512";
 }
+
+}  // namespace raster_pcss_test

@@ -20,6 +20,8 @@
 #include "support/raster_device.h"
 #include "support/reference_score.h"
 
+namespace raster_psm_reference_test {
+
 using namespace shadowlab;
 using shadowlab::testing::AlongTheLightCase;
 using shadowlab::testing::alongTheLightCases;
@@ -161,3 +163,5 @@ TEST_F(PsmVsReference, EveryBundledSceneRendersFinite) {
     }
   }
 }
+
+}  // namespace raster_psm_reference_test

@@ -16,6 +16,8 @@
 #include "shadowlab/raster/resolve_params.h"
 #include "shadowlab/scenes/loader.h"
 
+namespace raster_psm_test {
+
 using namespace shadowlab;
 using namespace shadowlab::raster;
 
@@ -287,3 +289,5 @@ TEST(RasterPsm, BundledScenesVisibleBodyInsideTheMap) {
   }
   EXPECT_GE(checked, 6);
 }
+
+}  // namespace raster_psm_test

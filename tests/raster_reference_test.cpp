@@ -16,6 +16,8 @@
 #include "shadowlab/reference/reference.h"
 #include "shadowlab/scenes/loader.h"
 
+namespace raster_reference_test {
+
 using namespace shadowlab;
 
 namespace {
@@ -201,3 +203,5 @@ TEST_F(RasterVsReference, ReverseGuardKeepsTheImageOffSurfacesBehindTheProjector
   EXPECT_GT(double(mirrored), 0.9 * double(refReverseCount));
   EXPECT_GE(agree, 0.995);
 }
+
+}  // namespace raster_reference_test

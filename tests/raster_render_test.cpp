@@ -12,6 +12,8 @@
 #include "support/raster_device.h"
 #include "shadowlab/scenes/error.h"
 
+namespace raster_render_test {
+
 using namespace shadowlab;
 
 namespace {
@@ -590,3 +592,5 @@ TEST_F(RasterTest, SceneWithoutLightsHasOnlyCameraChannels) {
   for (float h : f.get("hit")) hits += h;
   EXPECT_GT(hits, 1000);
 }
+
+}  // namespace raster_render_test

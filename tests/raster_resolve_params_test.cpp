@@ -7,6 +7,8 @@
 #include "shadowlab/raster/resolve_params.h"
 #include "support/quad.h"
 
+namespace raster_resolve_params_test {
+
 using namespace shadowlab;
 using namespace shadowlab::raster;
 
@@ -243,3 +245,5 @@ TEST(RasterResolveParams, KindTablesAgreeWithTheShaderCodes) {
   EXPECT_EQ(kindKeys(lightTypeKinds()), "directional, spot, point");
   for (const KindInfo<LightType>& k : lightTypeKinds()) EXPECT_NE(int(k.kind), raster::abi::kLightNone);
 }
+
+}  // namespace raster_resolve_params_test

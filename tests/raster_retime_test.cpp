@@ -13,6 +13,8 @@
 #include "shadowlab/scenes/loader.h"
 #include "support/raster_device.h"
 
+namespace raster_retime_test {
+
 using namespace shadowlab;
 
 namespace {
@@ -80,3 +82,5 @@ TEST_F(RasterRetime, TheNextFrameIsUnchanged) {
   const std::string vis = "light." + s.lights.front().name + ".vis";
   EXPECT_EQ(after.get(vis), reference.get(vis));
 }
+
+}  // namespace raster_retime_test

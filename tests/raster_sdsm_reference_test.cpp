@@ -17,6 +17,8 @@
 #include "support/raster_device.h"
 #include "support/reference_score.h"
 
+namespace raster_sdsm_reference_test {
+
 using namespace shadowlab;
 
 namespace {
@@ -134,3 +136,5 @@ TEST_F(SdsmVsReference, SamplesFollowTheFitCamera) {
   EXPECT_EQ(first.get(vis), plain.get(vis));
   EXPECT_EQ(fresh.validationMessages(), 0);
 }
+
+}  // namespace raster_sdsm_reference_test

@@ -13,6 +13,8 @@
 #include "shadowlab/raster/sdsm.h"
 #include "shadowlab/scenes/loader.h"
 
+namespace raster_sdsm_test {
+
 using namespace shadowlab;
 using namespace shadowlab::raster;
 
@@ -295,3 +297,5 @@ TEST(RasterSdsm, FitOnLongViewHoldsEverySampleInItsLayer) {
   EXPECT_FALSE(fitReadsVisiblePoints(&s.lights[0], cascades));
   EXPECT_FALSE(fitReadsVisiblePoints(nullptr, sdsm));
 }
+
+}  // namespace raster_sdsm_test

@@ -13,6 +13,8 @@
 #include "shadowlab/scenes/technique.h"
 #include "support/cli.h"
 
+namespace raster_technique_keys_test {
+
 using namespace shadowlab;
 
 namespace {
@@ -140,3 +142,5 @@ TEST(RasterTechniqueKeys, FileChecksAtLineAndColumn) {
   // A comment mentioning #include or another function is not code.
   EXPECT_EQ(errorFor("f.glsl", "/* #include \"x\"\nfloat shadowVisibilty(ShadowQuery q) {} */\n" + ok), "(no error)");
 }
+
+}  // namespace raster_technique_keys_test

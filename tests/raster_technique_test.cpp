@@ -19,6 +19,8 @@
 #include "support/cli.h"
 #include "support/raster_device.h"
 
+namespace raster_technique_test {
+
 using namespace shadowlab;
 
 namespace {
@@ -332,3 +334,5 @@ TEST(TechniqueFile, MomentsWithoutAskingNameTheLine) {
   m.technique = kExamples + "pcf.glsl";
   EXPECT_EQ(effectiveFilter(m), Filter::None);
 }
+
+}  // namespace raster_technique_test

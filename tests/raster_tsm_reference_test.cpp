@@ -17,6 +17,8 @@
 #include "support/raster_device.h"
 #include "support/reference_score.h"
 
+namespace raster_tsm_reference_test {
+
 using namespace shadowlab;
 using shadowlab::testing::AlongTheLightCase;
 using shadowlab::testing::alongTheLightCases;
@@ -176,3 +178,5 @@ TEST_F(TsmVsReference, EveryBundledSceneIsFiniteAndValidationClean) {
   }
   EXPECT_GE(warped, 5);
 }
+
+}  // namespace raster_tsm_reference_test

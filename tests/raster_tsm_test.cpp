@@ -14,6 +14,8 @@
 #include "shadowlab/raster/tsm.h"
 #include "support/quad.h"
 
+namespace raster_tsm_test {
+
 using namespace shadowlab;
 using namespace shadowlab::raster;
 
@@ -231,3 +233,5 @@ TEST(RasterTsm, ViewAlongTheLightFallsBackToTightsMatrix) {
   EXPECT_EQ(resolveSpecialization(s, &s.lights[0], tight, a)[raster::abi::kSpecLightDepth], 0u);
   EXPECT_EQ(packResolveParams(s, &s.lights[0], tsm, s.camera, b, {}).lightDepth, b.layers[0].depthFromWorld);
 }
+
+}  // namespace raster_tsm_test

@@ -21,6 +21,8 @@
 #include "shadowlab/reference/reference.h"
 #include "shadowlab/scenes/loader.h"
 
+namespace reference_analytic_test {
+
 namespace {
 
 using namespace shadowlab;
@@ -663,3 +665,5 @@ TEST(ReferenceAnalytic, NonSquareSppGivesMultiplesOfOneOverN) {
 }
 
 }  // namespace
+
+}  // namespace reference_analytic_test

@@ -17,6 +17,8 @@
 #include "shadowlab/scenes/frame.h"
 #include "shadowlab/scenes/loader.h"
 
+namespace reference_cli_test {
+
 namespace {
 
 namespace fs = std::filesystem;
@@ -261,3 +263,5 @@ TEST_F(ReferenceCli, AllChannelsAddsTheChannelsForPeople) {
 }
 
 }  // namespace
+
+}  // namespace reference_cli_test

@@ -20,6 +20,8 @@
 #include "shadowlab/scenes/loader.h"
 #include "support/cli.h"
 
+namespace reference_gltf_export_test {
+
 namespace fs = std::filesystem;
 using namespace shadowlab;
 using nlohmann::json;
@@ -454,3 +456,5 @@ TEST(GltfExportCli, BadInputExitsTwoAndWritesNothing) {
   EXPECT_TRUE(fs::is_directory(dir / "folder.glb"));
   EXPECT_TRUE(fs::is_empty(dir / "folder.glb"));
 }
+
+}  // namespace reference_gltf_export_test

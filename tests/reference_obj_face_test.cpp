@@ -12,6 +12,8 @@
 #include "shadowlab/scenes/io.h"
 #include "shadowlab/scenes/loader.h"
 
+namespace reference_obj_face_test {
+
 namespace fs = std::filesystem;
 using namespace shadowlab;
 
@@ -112,3 +114,5 @@ TEST(ReferenceObjFace, ConcaveFaceCastsItsOwnShape) {
   EXPECT_GT(armsShadowed, 400);
   EXPECT_GT(compared, 15000);
 }
+
+}  // namespace reference_obj_face_test

@@ -8,7 +8,7 @@
 #include "shadowlab/scenes/error.h"
 #include "shadowlab/scenes/loader.h"
 
-namespace shadowlab {
+namespace shadowlab::reference_pixel_offset_test {
 namespace {
 
 Scene smallScene() {
@@ -69,4 +69,4 @@ TEST(ReferencePixelOffset, AnOffsetBeyondOnePixelIsRefused) {
 }
 
 }  // namespace
-}  // namespace shadowlab
+}  // namespace shadowlab::reference_pixel_offset_test

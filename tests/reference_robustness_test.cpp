@@ -23,6 +23,8 @@
 #include "shadowlab/scenes/io.h"
 #include "shadowlab/scenes/loader.h"
 
+namespace reference_robustness_test {
+
 namespace {
 
 using namespace shadowlab;
@@ -595,3 +597,5 @@ TEST(ReferenceRobustness, RejectsBadOptions) {
 }
 
 }  // namespace
+
+}  // namespace reference_robustness_test

@@ -24,6 +24,8 @@
 #include "shadowlab/scenes/loader.h"
 #include "support/cli.h"
 
+namespace reference_soft_test {
+
 namespace {
 
 using namespace shadowlab;
@@ -487,3 +489,5 @@ TEST(ReferenceSoft, BadLightSamplesExitTwoNamingTheOptionOrTheFile) {
 }
 
 }  // namespace
+
+}  // namespace reference_soft_test

@@ -22,6 +22,8 @@
 #include "shadowlab/scenes/frame.h"
 #include "shadowlab/scenes/io.h"
 
+namespace report_chromium_test {
+
 namespace fs = std::filesystem;
 using namespace shadowlab;
 
@@ -636,3 +638,5 @@ TEST(ReportTimings, ReversedGridFindsTheSameParetoFrontsWithinTheSpread) {
   std::fprintf(stderr, "forward front: %s\nbackward front: %s\n", a.c_str(), b.c_str());
   fs::remove_all(dir);
 }
+
+}  // namespace report_chromium_test

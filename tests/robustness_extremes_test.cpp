@@ -30,6 +30,8 @@
 #include "support/cli.h"
 #include "support/raster_device.h"
 
+namespace robustness_extremes_test {
+
 using namespace shadowlab;
 namespace fs = std::filesystem;
 
@@ -247,3 +249,5 @@ TEST_F(Extremes, CameraPathsThatLeaveTheScene) {
     }
   fs::remove_all(dir);
 }
+
+}  // namespace robustness_extremes_test

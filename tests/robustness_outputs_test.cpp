@@ -11,6 +11,8 @@
 
 #include "support/cli.h"
 
+namespace robustness_outputs_test {
+
 namespace fs = std::filesystem;
 using shadowlab::testing::CliRun;
 using shadowlab::testing::runShadowlab;
@@ -216,3 +218,5 @@ TEST(DeviceFailure, FailingVulkanCallExitsThreeNamingIt) {
     EXPECT_FALSE(fs::exists(out)) << "a failed render left its folder";
   }
 }
+
+}  // namespace robustness_outputs_test

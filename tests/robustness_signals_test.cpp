@@ -16,6 +16,8 @@
 
 #include <gtest/gtest.h>
 
+namespace robustness_signals_test {
+
 namespace {
 
 namespace fs = std::filesystem;
@@ -127,3 +129,5 @@ TEST_F(Signals, RunInterruptedBySigintRemovesItsFolderAndLockAndTheNextRunSuccee
 }
 
 }  // namespace
+
+}  // namespace robustness_signals_test

@@ -19,6 +19,8 @@
 #include "shadowlab/scenes/io.h"
 #include "shadowlab/scenes/loader.h"
 
+namespace scenes_bad_input_test {
+
 namespace fs = std::filesystem;
 
 namespace {
@@ -156,3 +158,5 @@ TEST(ScenesCli, StopsAtTheFirstBadFileAndRejectsUsageErrors) {
   EXPECT_NE(missing.err.find("no_such_scene.json: error: cannot open scene file: no such file"), std::string::npos)
       << missing.err;
 }
+
+}  // namespace scenes_bad_input_test

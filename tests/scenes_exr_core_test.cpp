@@ -30,6 +30,8 @@
 
 #include "image_io.h"
 
+namespace scenes_exr_core_test {
+
 namespace fs = std::filesystem;
 using namespace shadowlab;
 
@@ -304,3 +306,5 @@ TEST(ExrCore, NeedsTheOpenExrReaders) {
 }
 
 #endif
+
+}  // namespace scenes_exr_core_test

@@ -10,6 +10,8 @@
 #include "shadowlab/scenes/frame.h"
 #include "shadowlab/scenes/io.h"
 
+namespace scenes_frame_test {
+
 namespace fs = std::filesystem;
 using namespace shadowlab;
 
@@ -198,3 +200,5 @@ TEST(ScenesError, Format) {
   EXPECT_EQ(formatError("s.json", "/lights/0", "got 2"), "s.json: /lights/0: error: got 2");
   EXPECT_EQ(formatError("s.json", "", "bad"), "s.json: error: bad");
 }
+
+}  // namespace scenes_frame_test

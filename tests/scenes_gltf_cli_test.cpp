@@ -12,6 +12,8 @@
 #include "support/gltf_builder.h"
 #include "support/test_models.h"
 
+namespace scenes_gltf_cli_test {
+
 namespace fs = std::filesystem;
 using shadowlab::testing::CliRun;
 using shadowlab::testing::freshTempDir;
@@ -187,3 +189,5 @@ TEST(GltfCli, AGltfPathRunsSweepsWithOverridesAndRefusesALightPath) {
   EXPECT_FALSE(fs::exists(dir / "stability"));
   fs::remove_all(dir);
 }
+
+}  // namespace scenes_gltf_cli_test

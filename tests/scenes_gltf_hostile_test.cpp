@@ -16,6 +16,8 @@
 #include "support/input_error.h"
 #include "support/test_models.h"
 
+namespace scenes_gltf_hostile_test {
+
 namespace fs = std::filesystem;
 using namespace shadowlab;
 using shadowlab::testing::GltfBuilder;
@@ -432,3 +434,5 @@ TEST_F(GltfHostile, ASceneFileThatIsADeviceIsNotRead) {
   fs::create_symlink("/dev/zero", dir_ / "zero.gltf");
   EXPECT_HAS(inputErrorOf([&] { loadScene(dir() + "/zero.gltf"); }), "a character device, not a regular file");
 }
+
+}  // namespace scenes_gltf_hostile_test

@@ -17,6 +17,8 @@
 #include "support/input_error.h"
 #include "support/test_models.h"
 
+namespace scenes_gltf_test {
+
 namespace fs = std::filesystem;
 using namespace shadowlab;
 using shadowlab::testing::GltfBuilder;
@@ -505,3 +507,5 @@ TEST_F(Gltf, CamerasAreChosenByNameOrIndexAndNoZfarReachesPastTheBounds) {
             std::string::npos)
       << both;
 }
+
+}  // namespace scenes_gltf_test

@@ -18,6 +18,8 @@
 #include "support/cli.h"
 #include "support/image_io_probe.h"
 
+namespace scenes_image_io_test {
+
 namespace fs = std::filesystem;
 using namespace shadowlab;
 
@@ -204,3 +206,5 @@ TEST(ImageIo, UnfilteredPngHoldsTheSamePixels) {
   EXPECT_NE(shadowlab::testing::slurp(adaptive), shadowlab::testing::slurp(unfiltered));
   fs::remove_all(dir);
 }
+
+}  // namespace scenes_image_io_test

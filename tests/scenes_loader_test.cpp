@@ -15,6 +15,8 @@
 #include "shadowlab/scenes/io.h"
 #include "shadowlab/scenes/loader.h"
 
+namespace scenes_loader_test {
+
 namespace fs = std::filesystem;
 using namespace shadowlab;
 
@@ -612,3 +614,5 @@ TEST(ScenesLoader, EveryFailureValueLoadsAndChangesTheScene) {
     EXPECT_EQ(hashes.size(), std::set<double>(base.failureValues.begin(), base.failureValues.end()).size()) << n;
   }
 }
+
+}  // namespace scenes_loader_test

@@ -12,6 +12,8 @@
 #include "shadowlab/scenes/json_reader.h"
 #include "shadowlab/scenes/method.h"
 
+namespace scenes_method_test {
+
 namespace fs = std::filesystem;
 using namespace shadowlab;
 
@@ -541,3 +543,5 @@ TEST(ScenesMethod, SoftFilterKeys) {
   bad.dpcfTaps = 0;
   EXPECT_THROW(validateMethod(bad, "m.json"), InputError);
 }
+
+}  // namespace scenes_method_test

@@ -19,6 +19,8 @@
 #include "support/input_error.h"
 #include "support/test_models.h"
 
+namespace scenes_obj_test {
+
 namespace fs = std::filesystem;
 using namespace shadowlab;
 using shadowlab::testing::inputErrorOf;
@@ -506,3 +508,5 @@ TEST(ErrorMessages, Latin1ByteInAnObjTokenIsEscaped) {
   const std::string u = errorOfObjText("v 0 0 0\nv 1 0 0\n\xE9t\xE9 1 2\nf 1 2 3\n", "latin1_keyword");
   EXPECT_NE(u.find("x.obj:3: error: unknown statement \"\\xE9t\\xE9\""), std::string::npos) << u;
 }
+
+}  // namespace scenes_obj_test

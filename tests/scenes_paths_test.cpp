@@ -15,6 +15,8 @@
 #include "shadowlab/scenes/loader.h"
 #include "support/input_error.h"
 
+namespace scenes_paths_test {
+
 using namespace shadowlab;
 using shadowlab::testing::inputErrorOf;
 namespace fs = std::filesystem;
@@ -141,3 +143,5 @@ TEST(ScenePaths, BadPathsNameTheFileAndThePointer) {
             std::string::npos);
   fs::remove_all(dir);
 }
+
+}  // namespace scenes_paths_test

@@ -15,6 +15,8 @@
 #include "shadowlab/scenes/loader.h"
 #include "support/raster_device.h"
 
+namespace stability_sdsm_test {
+
 using namespace shadowlab;
 
 TEST(SdsmShimmer, SdsmShimmersOnADollyAndTheSnapCutsIt) {
@@ -59,3 +61,5 @@ TEST(SdsmShimmer, SdsmShimmersOnADollyAndTheSnapCutsIt) {
   EXPECT_LT(rows[3].s.errorRateMean, rows[1].s.errorRateMean);
   std::printf("  [%.1f s]\n", std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
 }
+
+}  // namespace stability_sdsm_test

@@ -26,6 +26,8 @@
 #include "shadowlab/scenes/loader.h"
 #include "support/cli.h"
 
+namespace stability_test {
+
 using namespace shadowlab;
 namespace fs = std::filesystem;
 
@@ -514,3 +516,5 @@ TEST(StabilityCli, ScenePathFromTheFile) {
   EXPECT_EQ(j["metrics"]["shimmer_rate"], j["shimmer_rate"]);
   fs::remove_all(dir);
 }
+
+}  // namespace stability_test

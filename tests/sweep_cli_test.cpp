@@ -21,6 +21,8 @@
 #include "shadowlab/compare/results.h"
 #include "shadowlab/scenes/io.h"
 
+namespace sweep_cli_test {
+
 namespace fs = std::filesystem;
 using namespace shadowlab;
 
@@ -455,3 +457,5 @@ TEST(SweepCli, InterruptedAndKilledSweepResumesWithNothingLostOrRepeated) {
   EXPECT_LE(startedTwice, 1);
   fs::remove_all(dir);
 }
+
+}  // namespace sweep_cli_test

@@ -16,6 +16,8 @@
 #include "support/cli.h"
 #include "support/input_error.h"
 
+namespace sweep_config_name_test {
+
 namespace fs = std::filesystem;
 using namespace shadowlab;
 using shadowlab::testing::inputErrorOf;
@@ -210,3 +212,5 @@ TEST(ConfigName, SamplesPerPixelHaveOneRange) {
             "--spp: error: got 4096; expected an integer 1..1024 (reference samples per pixel)");
   fs::remove_all(dir);
 }
+
+}  // namespace sweep_config_name_test

@@ -20,6 +20,8 @@
 #include "shadowlab/compare/sweep_frontier.h"
 #include "shadowlab/scenes/error.h"
 
+namespace sweep_frontier_test {
+
 namespace fs = std::filesystem;
 using namespace shadowlab;
 
@@ -280,3 +282,5 @@ TEST(FrontierCli, GrazingElevationSweepFindsAcneFrontiersSlopeBiasHoldsLower) {
   EXPECT_TRUE(fs::exists(out + "/figures/frontiers.svg")) << slurp(out + "/figures/charts.log");
   fs::remove_all(dir);
 }
+
+}  // namespace sweep_frontier_test

@@ -13,6 +13,8 @@
 #include "shadowlab/scenes/io.h"
 #include "support/cli.h"
 
+namespace sweep_naming_cli_test {
+
 namespace fs = std::filesystem;
 using shadowlab::testing::CliRun;
 using shadowlab::testing::freshTempDir;
@@ -164,3 +166,5 @@ TEST(SweepNamingCli, AKeyGivenTwiceIsRefused) {
   EXPECT_FALSE(fs::exists(out));
   fs::remove_all(dir);
 }
+
+}  // namespace sweep_naming_cli_test

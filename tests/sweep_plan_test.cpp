@@ -15,6 +15,8 @@
 #include "shadowlab/scenes/json_reader.h"
 #include "support/input_error.h"
 
+namespace sweep_plan_test {
+
 namespace fs = std::filesystem;
 using namespace shadowlab;
 using shadowlab::testing::inputErrorOf;
@@ -453,3 +455,5 @@ TEST(SweepPlan, AGridOfAUnionRunsOnItsNamedScenesOnly) {
             std::string::npos);
   fs::remove_all(dir);
 }
+
+}  // namespace sweep_plan_test

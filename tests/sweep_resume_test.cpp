@@ -16,6 +16,8 @@
 #include "shadowlab/scenes/io.h"
 #include "support/fake_sweep_runner.h"
 
+namespace sweep_resume_test {
+
 namespace fs = std::filesystem;
 using namespace shadowlab;
 
@@ -306,3 +308,5 @@ TEST(SweepResume, RowsWithoutARecordedDeviceAreRefusedByADevice) {
   }
   fs::remove_all(dir);
 }
+
+}  // namespace sweep_resume_test

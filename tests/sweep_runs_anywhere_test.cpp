@@ -18,6 +18,8 @@
 #include "shadowlab/scenes/loader.h"
 #include "support/cli.h"
 
+namespace sweep_runs_anywhere_test {
+
 namespace fs = std::filesystem;
 using namespace shadowlab;
 
@@ -78,3 +80,5 @@ TEST(RunsAnywhere, ASceneNamingASharedAssetFailsWithoutTheSharedFolder) {
   EXPECT_FALSE(fs::exists(dir / "out" / "results.json"));
   fs::remove_all(dir);
 }
+
+}  // namespace sweep_runs_anywhere_test

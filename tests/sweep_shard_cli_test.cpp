@@ -27,6 +27,8 @@
 #include "shadowlab/scenes/io.h"
 #include "support/cli.h"
 
+namespace sweep_shard_cli_test {
+
 namespace fs = std::filesystem;
 using namespace shadowlab;
 using shadowlab::testing::runShadowlab;
@@ -466,3 +468,5 @@ TEST(SweepShardCli, AProcessMissingAReferenceAnotherIsTracingWaitsForItInsteadOf
   EXPECT_FALSE(fs::exists(lockPath)) << "the lock file is removed once the entry is there";
   fs::remove_all(dir);
 }
+
+}  // namespace sweep_shard_cli_test

@@ -15,6 +15,8 @@
 #include "shadowlab/scenes/io.h"
 #include "support/fake_sweep_runner.h"
 
+namespace sweep_shard_test {
+
 namespace fs = std::filesystem;
 using namespace shadowlab;
 
@@ -324,3 +326,5 @@ TEST(SweepShard, MergeWithNoShardsSaysWhatItExpected) {
   }
   fs::remove_all(dir);
 }
+
+}  // namespace sweep_shard_test

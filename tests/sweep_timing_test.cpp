@@ -14,6 +14,8 @@
 #include "shadowlab/scenes/io.h"
 #include "support/fake_sweep_runner.h"
 
+namespace sweep_timing_test {
+
 namespace fs = std::filesystem;
 using namespace shadowlab;
 
@@ -185,3 +187,5 @@ TEST(SweepTiming, NamedRowsAreTimedAgainWithoutTheFront) {
   EXPECT_EQ(s.retimedTimings.at(plan.jobs[1].key()), s.rows[1].timings);
   fs::remove_all(dir);
 }
+
+}  // namespace sweep_timing_test

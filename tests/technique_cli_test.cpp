@@ -16,6 +16,8 @@
 
 #include "support/cli.h"
 
+namespace technique_cli_test {
+
 namespace fs = std::filesystem;
 using shadowlab::testing::freshTempDir;
 using shadowlab::testing::runShadowlab;
@@ -471,3 +473,5 @@ TEST_F(TechniqueCli, StabilityAndAGridOfUndeclaredKeys) {
   EXPECT_NE(g.err.find("technique.taps: error: not declared by " + kExamples + "pcf.glsl"), std::string::npos) << g.err;
   EXPECT_FALSE(fs::exists(dir / "grid"));
 }
+
+}  // namespace technique_cli_test

@@ -15,6 +15,8 @@
 #include "shadowlab/scenes/io.h"
 #include "support/cli.h"
 
+namespace tune_cli_test {
+
 namespace fs = std::filesystem;
 using namespace shadowlab;
 using shadowlab::testing::CliRun;
@@ -211,3 +213,5 @@ TEST(TuneCli, MaxAcceptsTheSoftShadowMetrics) {
   EXPECT_NE(tune.dump().find("penumbra_mae"), std::string::npos) << "the target in tune.json";
   fs::remove_all(dir);
 }
+
+}  // namespace tune_cli_test

@@ -21,6 +21,8 @@
 #include "shadowlab/scenes/io.h"
 #include "support/input_error.h"
 
+namespace tune_search_test {
+
 namespace fs = std::filesystem;
 using namespace shadowlab;
 using shadowlab::testing::inputErrorOf;
@@ -392,3 +394,5 @@ TEST(TuneSearch, NamesConfigurationsLikeRunAndSweep) {
                                           "bias.slope=3,scene:/camera/width=240"}));
   fs::remove_all(dir);
 }
+
+}  // namespace tune_search_test
