@@ -6,6 +6,7 @@
 #include "command.h"
 #include "shadowlab/compare/compare.h"
 
+namespace cmd_classes {
 namespace {
 
 using namespace shadowlab;
@@ -33,3 +34,4 @@ shadowlab::app::Registrar reg{
     }};
 
 }  // namespace
+}  // namespace cmd_classes

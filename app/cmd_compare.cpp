@@ -25,6 +25,7 @@
 #include "shadowlab/scenes/loader.h"
 #include "shadowlab/scenes/number_text.h"
 
+namespace cmd_compare {
 namespace {
 
 namespace fs = std::filesystem;
@@ -284,3 +285,4 @@ app::Registrar reg{
     }};
 
 }  // namespace
+}  // namespace cmd_compare

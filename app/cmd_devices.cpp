@@ -7,6 +7,7 @@
 #include "command.h"
 #include "shadowlab/raster/devices.h"
 
+namespace cmd_devices {
 namespace {
 
 using namespace shadowlab;
@@ -45,3 +46,4 @@ app::Registrar reg{"devices", [](CLI::App& app) {
                    }};
 
 }  // namespace
+}  // namespace cmd_devices

@@ -13,6 +13,7 @@
 #include "shadowlab/scenes/io.h"
 #include "shadowlab/scenes/loader.h"
 
+namespace cmd_export {
 namespace {
 
 struct Options {
@@ -64,3 +65,4 @@ shadowlab::app::Registrar reg{
     }};
 
 }  // namespace
+}  // namespace cmd_export

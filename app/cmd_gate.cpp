@@ -11,6 +11,7 @@
 #include "shadowlab/scenes/error.h"
 #include "shadowlab/scenes/io.h"
 
+namespace cmd_gate {
 namespace {
 
 struct Options {
@@ -104,3 +105,4 @@ shadowlab::app::Registrar reg{
     }};
 
 }  // namespace
+}  // namespace cmd_gate

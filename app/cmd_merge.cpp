@@ -11,6 +11,7 @@
 #include "shadowlab/raster/raster.h"
 #include "shadowlab/scenes/error.h"
 
+namespace cmd_merge {
 namespace {
 
 namespace fs = std::filesystem;
@@ -63,3 +64,4 @@ app::Registrar reg{
     }};
 
 }  // namespace
+}  // namespace cmd_merge

@@ -12,6 +12,7 @@
 #include "shadowlab/scenes/method.h"
 #include "shadowlab/scenes/method_keys.h"
 
+namespace cmd_methods {
 namespace {
 
 using namespace shadowlab;
@@ -74,3 +75,4 @@ shadowlab::app::Registrar reg{"methods", [](CLI::App& app) {
                               }};
 
 }  // namespace
+}  // namespace cmd_methods

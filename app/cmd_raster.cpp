@@ -16,6 +16,7 @@
 #include "shadowlab/scenes/loader.h"
 #include "shadowlab/scenes/method.h"
 
+namespace cmd_raster {
 namespace {
 
 struct Options {
@@ -108,3 +109,4 @@ shadowlab::app::Registrar reg{
     }};
 
 }  // namespace
+}  // namespace cmd_raster

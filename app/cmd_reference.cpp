@@ -20,6 +20,7 @@
 #include "shadowlab/scenes/io.h"
 #include "shadowlab/scenes/loader.h"
 
+namespace cmd_reference {
 namespace {
 
 struct Options {
@@ -162,3 +163,4 @@ shadowlab::app::Registrar reg{
     }};
 
 }  // namespace
+}  // namespace cmd_reference

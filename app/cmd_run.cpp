@@ -23,6 +23,7 @@
 #include "shadowlab/scenes/io.h"
 #include "shadowlab/scenes/loader.h"
 
+namespace cmd_run {
 namespace {
 
 namespace fs = std::filesystem;
@@ -264,3 +265,4 @@ app::Registrar reg{"run", [](CLI::App& app) {
                    }};
 
 }  // namespace
+}  // namespace cmd_run

@@ -8,6 +8,7 @@
 #include "shadowlab/scenes/json_reader.h"
 #include "shadowlab/scenes/loader.h"
 
+namespace cmd_scenes {
 namespace {
 
 struct Options {
@@ -61,3 +62,4 @@ shadowlab::app::Registrar reg{
     }};
 
 }  // namespace
+}  // namespace cmd_scenes

@@ -38,6 +38,7 @@
 #include "shadowlab/scenes/loader.h"
 #include "shadowlab/scenes/number_text.h"
 
+namespace cmd_stability {
 namespace {
 
 // A .gltf or .glb path (any case): a scene of its own, not a JSON document (scenes/FORMAT.md).
@@ -333,3 +334,4 @@ app::Registrar reg{
     }};
 
 }  // namespace
+}  // namespace cmd_stability

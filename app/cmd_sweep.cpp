@@ -20,6 +20,7 @@
 #include "shadowlab/scenes/error.h"
 #include "shadowlab/scenes/io.h"
 
+namespace cmd_sweep {
 namespace {
 
 namespace fs = std::filesystem;
@@ -372,3 +373,4 @@ app::Registrar reg{
     }};
 
 }  // namespace
+}  // namespace cmd_sweep

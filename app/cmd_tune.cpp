@@ -19,6 +19,7 @@
 #include "shadowlab/scenes/error.h"
 #include "shadowlab/scenes/io.h"
 
+namespace cmd_tune {
 namespace {
 
 namespace fs = std::filesystem;
@@ -149,3 +150,4 @@ app::Registrar reg{
     }};
 
 }  // namespace
+}  // namespace cmd_tune

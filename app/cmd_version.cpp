@@ -3,6 +3,7 @@
 
 #include "command.h"
 
+namespace cmd_version {
 namespace {
 shadowlab::app::Registrar reg{"version", [](CLI::App& app) {
                                 app.add_subcommand("version", "Print the shadowlab version (as --version)");
@@ -12,3 +13,4 @@ shadowlab::app::Registrar reg{"version", [](CLI::App& app) {
                                 });
                               }};
 }  // namespace
+}  // namespace cmd_version
