@@ -48,10 +48,6 @@ constexpr uint32_t kChunkBin = 0x004E4942;   // "BIN\0"
 const std::vector<std::string> kSupportedRequired = {"KHR_lights_punctual", "KHR_texture_transform",
                                                      "KHR_mesh_quantization", "KHR_materials_unlit"};
 
-[[noreturn]] void fail(const std::string& file, const std::string& ptr, const std::string& what) {
-  throw InputError(formatError(file, ptr, what));
-}
-
 // "file: warning: what", the GCC style of formatError with "warning" for "error".
 std::string warningLine(const std::string& file, const std::string& what) { return file + ": warning: " + what; }
 

@@ -225,11 +225,11 @@ void check(const std::string& file, const json& j, const std::string& ptr, const
 
 void checkSchema(const std::string& file, const nlohmann::json& doc) { check(file, doc, "", "glTF"); }
 
-namespace {
-
 [[noreturn]] void fail(const std::string& file, const std::string& ptr, const std::string& what) {
   throw InputError(formatError(file, ptr, what));
 }
+
+namespace {
 
 // The value at `key` of object `o` (at `ptr`), which glTF 2.0 requires.
 const json& required(const std::string& file, const json& o, const std::string& ptr, const char* key,

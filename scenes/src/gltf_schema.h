@@ -21,4 +21,7 @@ void checkSchema(const std::string& file, const nlohmann::json& doc);
 // KHR_mesh_quantization. Throws InputError at the first value that breaks one.
 void checkRules(const std::string& file, const nlohmann::json& doc);
 
+// Throws InputError "file: ptr: error: what" (formatError): the glTF reader's one way to refuse.
+[[noreturn]] void fail(const std::string& file, const std::string& ptr, const std::string& what);
+
 }  // namespace shadowlab::gltf

@@ -168,4 +168,9 @@ std::string escapeMarkup(const std::string& text) {
   return out;
 }
 
+std::string joinPath(const std::string& dir, const std::string& name) {
+  if (dir.empty()) return name;
+  return dir.back() == '/' ? dir + name : dir + "/" + name;
+}
+
 }  // namespace shadowlab

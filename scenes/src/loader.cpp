@@ -193,12 +193,6 @@ class Reader {
   std::vector<SceneOverride> blamed_;
 };
 
-std::string numText(double v) {
-  std::ostringstream s;
-  s << v;
-  return s.str();
-}
-
 std::string vecText(glm::vec3 v) {
   std::ostringstream s;
   s << "[" << v.x << ", " << v.y << ", " << v.z << "]";
@@ -626,7 +620,7 @@ void readCamera(const Reader& r, const Node& root, Camera& cam) {
                                      vecText(glm::normalize(view)) + "; expected an up vector not parallel to it");
   if (!(cam.nearPlane < cam.farPlane))
     r.fail(r.child(c, "near").ptr,
-           "got near " + numText(cam.nearPlane) + " >= far " + numText(cam.farPlane) + "; expected near < far");
+           "got near " + numberText(cam.nearPlane) + " >= far " + numberText(cam.farPlane) + "; expected near < far");
 }
 
 void readMaterials(const Reader& r, const Node& root, const fs::path& dir, std::vector<Material>& materials) {
@@ -1066,7 +1060,7 @@ void readProjectors(const Reader& r, const Node& root, const fs::path& dir, Scen
     if (Node n = r.child(p, "far")) proj.farPlane = float(r.positive(n));
     if (!(proj.nearPlane < proj.farPlane))
       r.fail(r.child(p, "near").ptr,
-             "got near " + numText(proj.nearPlane) + " >= far " + numText(proj.farPlane) + "; expected near < far");
+             "got near " + numberText(proj.nearPlane) + " >= far " + numberText(proj.farPlane) + "; expected near < far");
     Node img = r.require(p, "image", "a path to an image");
     proj.image = rgbOf(readImage(r, img.ptr, resolvePath(r.string(img, "a path to an image"), dir), "projector image"));
     proj.aspect = float(proj.image.width) / float(proj.image.height);

@@ -4,6 +4,7 @@
 // its own bridge) and without its last-resort passes, which cut self-intersecting polygons into
 // something: such a face is refused instead.
 #include "shadowlab/scenes/polygon.h"
+#include "shadowlab/scenes/number_text.h"
 
 #include <algorithm>
 #include <cmath>
@@ -14,13 +15,6 @@ namespace shadowlab {
 namespace {
 
 constexpr double kTwoPi = 6.28318530717958647692;
-
-std::string numText(double v) {
-  std::ostringstream s;
-  s.precision(6);
-  s << v;
-  return s.str();
-}
 
 // The face seen along its normal: the two coordinates left when the normal's largest component is
 // dropped, ordered so that the face runs counter-clockwise (positive area). A parallel projection
@@ -256,8 +250,8 @@ PolygonTriangles triangulatePolygon(const std::vector<glm::vec3>& c) {
   }
   if (worstDistance > kPolygonPlanarTolerance * size) {
     out.error = "a non-convex face that is not flat (corner " + std::to_string(worst + 1) + " lies " +
-                numText(worstDistance) + " from its plane, more than " + numText(kPolygonPlanarTolerance * 100) +
-                "% of its size " + numText(size) + "); expected a flat face, or convex faces";
+                numberText(worstDistance) + " from its plane, more than " + numberText(kPolygonPlanarTolerance * 100) +
+                "% of its size " + numberText(size) + "); expected a flat face, or convex faces";
     return out;
   }
   for (size_t i = 0; i < n; ++i)

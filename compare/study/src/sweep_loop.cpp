@@ -36,11 +36,6 @@ using Clock = std::chrono::steady_clock;
 
 double secondsSince(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
 
-std::string joinPath(const std::string& dir, const std::string& name) {
-  if (dir.empty()) return name;
-  return dir.back() == '/' ? dir + name : dir + "/" + name;
-}
-
 // Folder name for one configuration's images: the config text with anything a file system or a
 // shell might trip on replaced.
 std::string slug(const std::string& text) {

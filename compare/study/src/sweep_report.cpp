@@ -37,11 +37,6 @@ namespace {
 
 namespace fs = std::filesystem;
 
-std::string joinPath(const std::string& dir, const std::string& name) {
-  if (dir.empty()) return name;
-  return dir.back() == '/' ? dir + name : dir + "/" + name;
-}
-
 std::string csvField(const std::string& s) {
   if (s.find_first_of(",\"\n\r") == std::string::npos) return s;
   std::string out = "\"";
@@ -87,7 +82,7 @@ std::string fmt(double v, const char* f = "%.4g") {
 }
 
 // A rate as a percentage with three significant digits (0.0123 -> "1.23%", 0.46 -> "46%").
-std::string pct(double rate) {
+std::string pctCell(double rate) {
   if (!std::isfinite(rate)) return "&ndash;";
   char buf[64];
   std::snprintf(buf, sizeof buf, "%.3g%%", rate * 100.0);
@@ -800,8 +795,8 @@ std::vector<std::string> writeSweepReport(const SweepPlan& plan, const std::vect
     for (size_t i : front) {
       const ResultRow& r = rows[i];
       h << "<tr><td>" << ++n << "</td><td>&le; " << timeWithSpread(r) << "</td><td class=\"t\"><a href=\"#row-" << i
-        << "\">" << breakable(r.config) << "</a></td><td>" << pct(num(r.metrics, "error_rate")) << "</td>";
-      for (const char* k : columns) h << "<td>" << pct(num(r.metrics, k)) << "</td>";
+        << "\">" << breakable(r.config) << "</a></td><td>" << pctCell(num(r.metrics, "error_rate")) << "</td>";
+      for (const char* k : columns) h << "<td>" << pctCell(num(r.metrics, k)) << "</td>";
       h << "<td>" << sig3(num(r.metrics, "m_p95")) << "</td>";
       for (const char* k : {timing::kCameraGpuMs, timing::kReadbackMs, timing::kCompareMs})
         h << "<td>" << sig3(num(r.timings, k)) << "</td>";
@@ -819,7 +814,7 @@ std::vector<std::string> writeSweepReport(const SweepPlan& plan, const std::vect
          "configuration, the values walked from easy to hard (the direction of the scene's declared "
          "<code>failure</code> values; the grid's order for other parameters) and the first value where <code>"
       << escapeMarkup(fr.value("metric", std::string("error_rate"))) << "</code> exceeds "
-      << pct(fr.value("threshold", 0.01))
+      << pctCell(fr.value("threshold", 0.01))
       << ".</p>\n<table>\n<tr><th class=\"t\">scene</th><th class=\"t\">parameter</th>"
          "<th class=\"t\">method</th><th>holds to</th><th>breaks at</th><th class=\"t\">frontier</th></tr>\n";
     for (const auto& f : frontiers) {
@@ -896,8 +891,8 @@ std::vector<std::string> writeSweepReport(const SweepPlan& plan, const std::vect
       std::string byClass;
       for (const PixelClassInfo& c : kPixelClasses)
         if (c.error && c.rateMetric)
-          byClass += (byClass.empty() ? "" : ", ") + std::string(c.key) + " " + pct(num(r.metrics, c.rateMetric));
-      h << "<figcaption>error_rate " << pct(num(r.metrics, "error_rate")) << " (" << escapeMarkup(byClass)
+          byClass += (byClass.empty() ? "" : ", ") + std::string(c.key) + " " + pctCell(num(r.metrics, c.rateMetric));
+      h << "<figcaption>error_rate " << pctCell(num(r.metrics, "error_rate")) << " (" << escapeMarkup(byClass)
         << "); method " << sig3(methodMs(r)) << " ms (method_gpu_ms).</figcaption>\n</figure>\n";
     }
   }
@@ -992,8 +987,8 @@ std::vector<std::string> writeSweepReport(const SweepPlan& plan, const std::vect
     h << "<tr id=\"row-" << i << "\"" << (comparedSomething(r) ? "" : " class=\"empty\"") << "><td class=\"t\">"
       << breakable(r.scene) << "</td><td class=\"t\">" << breakable(r.config) << "</td><td class=\"t\">"
       << breakable(methodFamily(r.method)) << "</td>";
-    h << "<td>" << pct(num(r.metrics, "error_rate")) << "</td>";
-    for (const char* k : allColumns) h << "<td>" << pct(num(r.metrics, k)) << "</td>";
+    h << "<td>" << pctCell(num(r.metrics, "error_rate")) << "</td>";
+    for (const char* k : allColumns) h << "<td>" << pctCell(num(r.metrics, k)) << "</td>";
     h << "<td>" << sig3(num(r.metrics, "m_p95")) << "</td><td>" << timeWithSpread(r) << "</td>";
     for (const char* k : {timing::kCameraGpuMs, timing::kReadbackMs, timing::kCompareMs, timing::kConfigWallMs})
       h << "<td>" << sig3(num(r.timings, k)) << "</td>";

@@ -24,11 +24,6 @@ namespace fs = std::filesystem;
 
 struct Interrupted {};
 
-double num(const nlohmann::json& j, const char* key) {
-  auto it = j.find(key);
-  return it != j.end() && it->is_number() ? it->get<double>() : std::numeric_limits<double>::quiet_NaN();
-}
-
 using Point = std::vector<size_t>;  // one value index per TunePlan::keys entry
 using CostKey = std::pair<double, double>;
 
@@ -97,7 +92,7 @@ class Engine {
       const TuneEvaluation& e = result_.evaluations[size_t(c.evaluation)];
       c.worstError = -1;
       for (size_t s : scenes) {
-        const double err = num(e.rows.at(s).metrics, "error_rate");
+        const double err = numberAt(e.rows.at(s).metrics, "error_rate");
         if (err > c.worstError) {
           c.worstError = err;
           c.worstScene = plan_.sweep.sceneNames[s];
@@ -253,7 +248,7 @@ class Engine {
       double worst = 0;
       std::string worstScene;
       for (size_t s : scenes) {
-        const double err = num(ev.rows.at(s).metrics, "error_rate");
+        const double err = numberAt(ev.rows.at(s).metrics, "error_rate");
         if (err >= worst) {
           worst = err;
           worstScene = plan_.sweep.sceneNames[s];
@@ -295,15 +290,15 @@ class Engine {
       };
       for (size_t sc : scenes) {
         const nlohmann::json& m = ev.rows.at(sc).metrics;
-        worst = std::max(worst, excess(num(m, "error_rate"), plan_.spec.maxError));
+        worst = std::max(worst, excess(numberAt(m, "error_rate"), plan_.spec.maxError));
         for (const auto& [key, limit] : plan_.spec.maxRates)
-          if (!tuneTargetVacuous(m, key)) worst = std::max(worst, excess(num(m, key.c_str()), limit));
+          if (!tuneTargetVacuous(m, key)) worst = std::max(worst, excess(numberAt(m, key.c_str()), limit));
       }
       s.objective = worst;
       s.feasible = worst <= 0;
     } else {
       double worst = 0;
-      for (size_t sc : scenes) worst = std::max(worst, num(ev.rows.at(sc).metrics, "error_rate"));
+      for (size_t sc : scenes) worst = std::max(worst, numberAt(ev.rows.at(sc).metrics, "error_rate"));
       s.objective = std::isfinite(worst) ? worst : std::numeric_limits<double>::infinity();
       s.feasible = tuneCost(ev, scenes).first <= plan_.spec.budgetMs;
     }
@@ -579,7 +574,7 @@ bool checkDenseGrid(const TunePlan& plan, SweepRunner& runner, const TuneOptions
   for (const auto& e : evals) {
     if (!tuneMeetsTarget(plan, e, all)) continue;
     double worst = 0;
-    for (size_t s : all) worst = std::max(worst, num(e.rows.at(s).metrics, "error_rate"));
+    for (size_t s : all) worst = std::max(worst, numberAt(e.rows.at(s).metrics, "error_rate"));
     const auto cost = tuneCost(e, all);
     const bool better =
         !best || (target ? cost < bestCost : (worst < bestWorst || (worst == bestWorst && cost < bestCost)));
@@ -615,9 +610,9 @@ bool tuneMeetsTarget(const TunePlan& plan, const TuneEvaluation& e, const std::v
     auto it = e.rows.find(s);
     if (it == e.rows.end()) return false;
     if (!std::isnan(plan.spec.maxError)) {
-      if (!(num(it->second.metrics, "error_rate") <= plan.spec.maxError)) return false;
+      if (!(numberAt(it->second.metrics, "error_rate") <= plan.spec.maxError)) return false;
       for (const auto& [key, limit] : plan.spec.maxRates)
-        if (!tuneTargetVacuous(it->second.metrics, key) && !(num(it->second.metrics, key.c_str()) <= limit))
+        if (!tuneTargetVacuous(it->second.metrics, key) && !(numberAt(it->second.metrics, key.c_str()) <= limit))
           return false;
     } else if (!(tuneCost(e, scenes).first <= plan.spec.budgetMs)) {
       return false;

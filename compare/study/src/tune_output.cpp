@@ -21,11 +21,6 @@ namespace {
 
 namespace fs = std::filesystem;
 
-double num(const nlohmann::json& j, const char* key) {
-  auto it = j.find(key);
-  return it != j.end() && it->is_number() ? it->get<double>() : std::numeric_limits<double>::quiet_NaN();
-}
-
 std::string fmt(const char* f, double v) {
   char b[64];
   std::snprintf(b, sizeof b, f, v);
@@ -60,7 +55,7 @@ std::string dominantClass(const nlohmann::json& metrics) {
   double bestRate = -1;
   for (const auto& c : kPixelClasses) {
     if (!c.error || !c.rateMetric) continue;
-    const double r = num(metrics, c.rateMetric);
+    const double r = numberAt(metrics, c.rateMetric);
     if (r > bestRate) {
       bestRate = r;
       best = c.key;
@@ -72,7 +67,7 @@ std::string dominantClass(const nlohmann::json& metrics) {
 double worstOf(const TuneEvaluation& e, const std::vector<size_t>& scenes, size_t* sceneOut = nullptr) {
   double worst = -1;
   for (size_t s : scenes) {
-    const double err = num(e.rows.at(s).metrics, "error_rate");
+    const double err = numberAt(e.rows.at(s).metrics, "error_rate");
     if (err > worst) {
       worst = err;
       if (sceneOut) *sceneOut = s;
@@ -380,9 +375,9 @@ std::string tuneHtml(const TunePlan& plan, const TuneResult& r,
         Series err{plan.sweep.sceneNames[s] + " error (dots)", colour, {}, false, false};
         for (const TuneEvaluation* e : line) {
           const double x = std::strtod(valueIn(*e, k.key).c_str(), nullptr);
-          acne.points.emplace_back(x, num(e->rows.at(s).metrics, "acne_rate"));
-          leak.points.emplace_back(x, num(e->rows.at(s).metrics, "leak_rate"));
-          err.points.emplace_back(x, num(e->rows.at(s).metrics, "error_rate"));
+          acne.points.emplace_back(x, numberAt(e->rows.at(s).metrics, "acne_rate"));
+          leak.points.emplace_back(x, numberAt(e->rows.at(s).metrics, "leak_rate"));
+          err.points.emplace_back(x, numberAt(e->rows.at(s).metrics, "error_rate"));
         }
         c.series.push_back(err);
         c.series.push_back(acne);
@@ -631,6 +626,11 @@ void writeTuneOutputs(TunePlan& plan, SweepRunner& runner, const TuneOptions& op
 
   result.tuneHtml = (fs::path(out) / "tune.html").string();
   writeFileAtomic(result.tuneHtml, tuneHtml(plan, result, triptychs));
+}
+
+double numberAt(const nlohmann::json& j, const char* key) {
+  auto it = j.find(key);
+  return it != j.end() && it->is_number() ? it->get<double>() : std::numeric_limits<double>::quiet_NaN();
 }
 
 }  // namespace shadowlab

@@ -29,6 +29,9 @@ std::string escapeMarkup(const std::string& text);
 // Creates `dir` and its parents; throws InputError naming it when that fails.
 void makeDirs(const std::string& dir);
 
+// dir + "/" + name (no second slash where dir ends in one; name alone where dir is empty).
+std::string joinPath(const std::string& dir, const std::string& name);
+
 // A command's output folder, claimed before any work: the constructor creates it (and missing
 // parents) and writes and removes a probe file there, so an unusable -o (under a file, under /proc,
 // read-only, a full disk) is an input error naming `flag` and the folder before anything is traced
