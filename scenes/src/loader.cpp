@@ -1059,8 +1059,8 @@ void readProjectors(const Reader& r, const Node& root, const fs::path& dir, Scen
     if (Node n = r.child(p, "near")) proj.nearPlane = float(r.positive(n));
     if (Node n = r.child(p, "far")) proj.farPlane = float(r.positive(n));
     if (!(proj.nearPlane < proj.farPlane))
-      r.fail(r.child(p, "near").ptr,
-             "got near " + numberText(proj.nearPlane) + " >= far " + numberText(proj.farPlane) + "; expected near < far");
+      r.fail(r.child(p, "near").ptr, "got near " + numberText(proj.nearPlane) + " >= far " + numberText(proj.farPlane) +
+                                         "; expected near < far");
     Node img = r.require(p, "image", "a path to an image");
     proj.image = rgbOf(readImage(r, img.ptr, resolvePath(r.string(img, "a path to an image"), dir), "projector image"));
     proj.aspect = float(proj.image.width) / float(proj.image.height);
