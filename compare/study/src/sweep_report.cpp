@@ -25,6 +25,7 @@
 #include <sstream>
 #include <thread>
 
+#include "json_number.h"
 #include "shadowlab/compare/compare.h"
 #include "shadowlab/compare/sweep.h"
 #include "shadowlab/compare/timings.h"
@@ -66,12 +67,6 @@ void flatten(const nlohmann::json& j, const std::string& prefix,
     if (it.value().is_object()) flatten(it.value(), name, out);
     else out.emplace_back(name, it.value());
   }
-}
-
-double num(const nlohmann::json& obj, const char* key, double fallback = NAN) {
-  auto it = obj.find(key);
-  if (it == obj.end() || !it->is_number()) return fallback;
-  return it->get<double>();
 }
 
 std::string fmt(double v, const char* f = "%.4g") {
@@ -120,7 +115,7 @@ std::vector<const char*> classColumns(const std::vector<const ResultRow*>& rows,
   for (const char* k : errorRateMetrics()) {
     bool any = false;
     for (const ResultRow* r : rows) {
-      const double v = num(r->metrics, k);
+      const double v = numberAt(r->metrics, k);
       any = any || (std::isfinite(v) && v != 0.0);
     }
     (any ? shown : *hidden).push_back(k);
@@ -400,12 +395,12 @@ std::unique_ptr<PrestartedCharts> prestartCharts(const SweepOptions& options) {
 // renderer_frame_ms. A row written before the
 // lookup pass existed (a resumed journal) has no method_gpu_ms: its shadow pass alone.
 double methodMs(const ResultRow& r) {
-  const double method = num(r.timings, timing::kMethodGpuMs);
+  const double method = numberAt(r.timings, timing::kMethodGpuMs);
   if (std::isfinite(method)) return method;
   // An outside renderer's row (adapters/README.md): the renderer's own time for its frame.
-  const double renderer = num(r.timings, timing::kRendererFrameMs);
+  const double renderer = numberAt(r.timings, timing::kRendererFrameMs);
   if (std::isfinite(renderer)) return renderer;
-  return num(r.timings, timing::kShadowGpuMs, 0.0) + num(r.timings, timing::kLookupGpuMs, 0.0);
+  return numberAt(r.timings, timing::kShadowGpuMs, 0.0) + numberAt(r.timings, timing::kLookupGpuMs, 0.0);
 }
 
 namespace {
@@ -426,7 +421,7 @@ std::string timeAxisSentence(const std::vector<ResultRow>& rows) {
 // row has them ("1.23 (1.2&ndash;1.31)").
 std::string timeWithSpread(const ResultRow& r) {
   std::string out = sig3(methodMs(r));
-  const double lo = num(r.timings, timing::kMethodGpuMsMin), hi = num(r.timings, timing::kMethodGpuMsMax);
+  const double lo = numberAt(r.timings, timing::kMethodGpuMsMin), hi = numberAt(r.timings, timing::kMethodGpuMsMax);
   if (std::isfinite(lo) && std::isfinite(hi))
     out += " <span class=\"spread\">(" + sig3(lo) + "&ndash;" + sig3(hi) + ")</span>";
   else out += "<sup class=\"spread\" title=\"one sample: the render's own timing\">1</sup>";
@@ -500,7 +495,7 @@ nlohmann::json methodFamilies(const std::vector<ResultRow>& rows) {
 bool comparedSomething(const ResultRow& r) {
   const auto marked = r.metrics.find("nothing_compared");
   if (marked != r.metrics.end() && marked->is_boolean() && marked->get<bool>()) return false;
-  const double pixels = num(r.metrics, "pixels_compared");
+  const double pixels = numberAt(r.metrics, "pixels_compared");
   return !(std::isfinite(pixels) && pixels == 0.0);
 }
 
@@ -551,17 +546,17 @@ void writeResultsCsv(const std::string& path, const std::vector<ResultRow>& rows
 std::vector<size_t> paretoFront(const std::vector<ResultRow>& rows, const std::string& scene) {
   std::vector<size_t> idx;
   for (size_t i = 0; i < rows.size(); ++i)
-    if (rows[i].scene == scene && comparedSomething(rows[i]) && std::isfinite(num(rows[i].metrics, "error_rate")))
+    if (rows[i].scene == scene && comparedSomething(rows[i]) && std::isfinite(numberAt(rows[i].metrics, "error_rate")))
       idx.push_back(i);
   std::stable_sort(idx.begin(), idx.end(), [&](size_t a, size_t b) {
     double ta = methodMs(rows[a]), tb = methodMs(rows[b]);
     if (ta != tb) return ta < tb;
-    return num(rows[a].metrics, "error_rate") < num(rows[b].metrics, "error_rate");
+    return numberAt(rows[a].metrics, "error_rate") < numberAt(rows[b].metrics, "error_rate");
   });
   std::vector<size_t> front;
   double best = INFINITY;
   for (size_t i : idx) {
-    double e = num(rows[i].metrics, "error_rate");
+    double e = numberAt(rows[i].metrics, "error_rate");
     if (e < best) {
       front.push_back(i);
       best = e;
@@ -641,12 +636,12 @@ std::vector<std::string> writeSweepReport(const SweepPlan& plan, const std::vect
       std::optional<size_t> best, worst;
       for (size_t i = 0; i < rows.size(); ++i) {
         if (rows[i].scene != name) continue;
-        double e = num(rows[i].metrics, "error_rate");
+        double e = numberAt(rows[i].metrics, "error_rate");
         if (!std::isfinite(e) || !comparedSomething(rows[i])) continue;
         // The best: the first lowest error in row order, as the runner keeps it (keepForTriptych)
         // and as the findings name it.
-        if (!best || e < num(rows[*best].metrics, "error_rate")) best = i;
-        if (!worst || e > num(rows[*worst].metrics, "error_rate")) worst = i;
+        if (!best || e < numberAt(rows[*best].metrics, "error_rate")) best = i;
+        if (!worst || e > numberAt(rows[*worst].metrics, "error_rate")) worst = i;
       }
       if (!best) continue;
       std::vector<Pick> list{{"best", *best, ""}};
@@ -795,11 +790,11 @@ std::vector<std::string> writeSweepReport(const SweepPlan& plan, const std::vect
     for (size_t i : front) {
       const ResultRow& r = rows[i];
       h << "<tr><td>" << ++n << "</td><td>&le; " << timeWithSpread(r) << "</td><td class=\"t\"><a href=\"#row-" << i
-        << "\">" << breakable(r.config) << "</a></td><td>" << pctCell(num(r.metrics, "error_rate")) << "</td>";
-      for (const char* k : columns) h << "<td>" << pctCell(num(r.metrics, k)) << "</td>";
-      h << "<td>" << sig3(num(r.metrics, "m_p95")) << "</td>";
+        << "\">" << breakable(r.config) << "</a></td><td>" << pctCell(numberAt(r.metrics, "error_rate")) << "</td>";
+      for (const char* k : columns) h << "<td>" << pctCell(numberAt(r.metrics, k)) << "</td>";
+      h << "<td>" << sig3(numberAt(r.metrics, "m_p95")) << "</td>";
       for (const char* k : {timing::kCameraGpuMs, timing::kReadbackMs, timing::kCompareMs})
-        h << "<td>" << sig3(num(r.timings, k)) << "</td>";
+        h << "<td>" << sig3(numberAt(r.timings, k)) << "</td>";
       h << "</tr>\n";
     }
     h << "</table>\n";
@@ -891,8 +886,9 @@ std::vector<std::string> writeSweepReport(const SweepPlan& plan, const std::vect
       std::string byClass;
       for (const PixelClassInfo& c : kPixelClasses)
         if (c.error && c.rateMetric)
-          byClass += (byClass.empty() ? "" : ", ") + std::string(c.key) + " " + pctCell(num(r.metrics, c.rateMetric));
-      h << "<figcaption>error_rate " << pctCell(num(r.metrics, "error_rate")) << " (" << escapeMarkup(byClass)
+          byClass +=
+              (byClass.empty() ? "" : ", ") + std::string(c.key) + " " + pctCell(numberAt(r.metrics, c.rateMetric));
+      h << "<figcaption>error_rate " << pctCell(numberAt(r.metrics, "error_rate")) << " (" << escapeMarkup(byClass)
         << "); method " << sig3(methodMs(r)) << " ms (method_gpu_ms).</figcaption>\n</figure>\n";
     }
   }
@@ -987,11 +983,11 @@ std::vector<std::string> writeSweepReport(const SweepPlan& plan, const std::vect
     h << "<tr id=\"row-" << i << "\"" << (comparedSomething(r) ? "" : " class=\"empty\"") << "><td class=\"t\">"
       << breakable(r.scene) << "</td><td class=\"t\">" << breakable(r.config) << "</td><td class=\"t\">"
       << breakable(methodFamily(r.method)) << "</td>";
-    h << "<td>" << pctCell(num(r.metrics, "error_rate")) << "</td>";
-    for (const char* k : allColumns) h << "<td>" << pctCell(num(r.metrics, k)) << "</td>";
-    h << "<td>" << sig3(num(r.metrics, "m_p95")) << "</td><td>" << timeWithSpread(r) << "</td>";
+    h << "<td>" << pctCell(numberAt(r.metrics, "error_rate")) << "</td>";
+    for (const char* k : allColumns) h << "<td>" << pctCell(numberAt(r.metrics, k)) << "</td>";
+    h << "<td>" << sig3(numberAt(r.metrics, "m_p95")) << "</td><td>" << timeWithSpread(r) << "</td>";
     for (const char* k : {timing::kCameraGpuMs, timing::kReadbackMs, timing::kCompareMs, timing::kConfigWallMs})
-      h << "<td>" << sig3(num(r.timings, k)) << "</td>";
+      h << "<td>" << sig3(numberAt(r.timings, k)) << "</td>";
     h << "</tr>\n";
   }
   h << "</table>\n</details>\n";

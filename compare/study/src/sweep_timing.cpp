@@ -4,6 +4,7 @@
 #include <cmath>
 #include <map>
 
+#include "json_number.h"
 #include "shadowlab/compare/method_cost.h"
 #include "shadowlab/compare/sweep.h"
 #include "shadowlab/compare/timings.h"
@@ -12,10 +13,7 @@ namespace shadowlab {
 
 std::vector<size_t> rowsWhoseTimeDecides(const std::vector<const ResultRow*>& rows, const std::vector<double>& modelMs,
                                          double noiseFactor) {
-  auto errorOf = [&](size_t i) {
-    const auto e = rows[i]->metrics.find("error_rate");
-    return e != rows[i]->metrics.end() && e->is_number() ? e->get<double>() : NAN;
-  };
+  auto errorOf = [&](size_t i) { return numberAt(rows[i]->metrics, "error_rate"); };
   std::map<std::string, std::vector<size_t>> byScene;  // the rankable rows of each scene
   for (size_t i = 0; i < rows.size(); ++i)
     if (comparedSomething(*rows[i]) && std::isfinite(errorOf(i)) && std::isfinite(methodMs(*rows[i])))
@@ -49,10 +47,7 @@ std::vector<size_t> rowsWhoseTimeDecides(const std::vector<const ResultRow*>& ro
 
 nlohmann::json withMedianTiming(const nlohmann::json& timings, const std::vector<MethodSample>& more) {
   if (more.empty()) return timings;
-  auto ms = [&](const char* key) {
-    const auto it = timings.find(key);
-    return it != timings.end() && it->is_number() ? it->get<double>() : 0.0;
-  };
+  auto ms = [&](const char* key) { return numberAt(timings, key, 0.0); };
   std::vector<MethodSample> runs = more;
   runs.push_back({ms(timing::kShadowGpuMs), ms(timing::kLookupGpuMs), ms(timing::kMomentsGpuMs), ms(timing::kSdsmGpuMs)});
   std::stable_sort(runs.begin(), runs.end(),

@@ -12,6 +12,7 @@
 
 #include "shadowlab/compare/classes.h"
 #include "shadowlab/compare/tune.h"
+#include "json_number.h"
 #include "tune_output.h"
 #include "shadowlab/scenes/error.h"
 #include "shadowlab/scenes/io.h"

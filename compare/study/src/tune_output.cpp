@@ -14,6 +14,7 @@
 #include "shadowlab/compare/classes.h"
 #include "shadowlab/scenes/error.h"
 #include "shadowlab/scenes/io.h"
+#include "json_number.h"
 #include "tune_output.h"
 
 namespace shadowlab {
@@ -626,11 +627,6 @@ void writeTuneOutputs(TunePlan& plan, SweepRunner& runner, const TuneOptions& op
 
   result.tuneHtml = (fs::path(out) / "tune.html").string();
   writeFileAtomic(result.tuneHtml, tuneHtml(plan, result, triptychs));
-}
-
-double numberAt(const nlohmann::json& j, const char* key) {
-  auto it = j.find(key);
-  return it != j.end() && it->is_number() ? it->get<double>() : std::numeric_limits<double>::quiet_NaN();
 }
 
 }  // namespace shadowlab

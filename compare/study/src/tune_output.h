@@ -5,9 +5,6 @@
 
 namespace shadowlab {
 
-// j[key] where it is a number, else NaN (the rows of tune.json read back).
-double numberAt(const nlohmann::json& j, const char* key);
-
 void writeTuneOutputs(TunePlan& plan, SweepRunner& runner, const TuneOptions& options, TuneResult& result);
 
 }  // namespace shadowlab
