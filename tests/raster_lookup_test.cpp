@@ -45,13 +45,16 @@ int expectedByte(float vis) {
 
 struct Agreement {
   size_t mismatches = 0, fractional = 0, lit = 0, shadowed = 0;
-  std::string first;  // the first mismatch, for the failure message
+  size_t outsideMap = 0;  // pixels with a hit whose lookup lies outside the map (in_map 0)
+  std::string first;      // the first mismatch, for the failure message
 };
 
 // Renders and compares the lookup's bytes with the frame's vis channel, pixel by pixel.
-Agreement renderAndCompare(Rasterizer& r, const Scene& s, const Method& m, RasterTimings* timings = nullptr) {
+Agreement renderAndCompare(Rasterizer& r, const Scene& s, const Method& m, RasterTimings* timings = nullptr,
+                           const Camera* fitCamera = nullptr) {
   RasterTimings local;
-  Frame f = r.render(s, m, "", timings ? timings : &local);
+  Frame f = r.render(s, m, "", timings ? timings : &local, fitCamera);
+  const std::vector<float>& inMap = f.get("light." + s.lights.front().name + ".in_map");
   const std::vector<float>& vis = f.get("light." + s.lights.front().name + ".vis");
   const std::vector<uint8_t> bytes = r.lookupVisibility();
   Agreement a;
@@ -66,6 +69,7 @@ Agreement renderAndCompare(Rasterizer& r, const Scene& s, const Method& m, Raste
     a.lit += expected == 255;
     a.shadowed += f.get("hit")[i] > 0.5f && expected == 0;
     a.fractional += expected != 0 && expected != 255;
+    a.outsideMap += f.get("hit")[i] > 0.5f && inMap[i] < 0.5f;
   }
   return a;
 }
@@ -107,7 +111,8 @@ TEST_F(RasterLookup, EqualsTheResolveVisibilityForEveryFilter) {
 }
 
 // The other code paths of the shared lookup: cascades with a blend band, the receiver plane and
-// normal offset, spot and point lights (cube faces), a float depth map.
+// normal offset, points outside the map (a tight fit to a camera that sees less), spot and point
+// lights (cube faces), a float depth map.
 TEST_F(RasterLookup, EqualsTheResolveVisibilityOnEveryLookupPath) {
   REQUIRE_DEVICE();
   const Scene sphere = quarterScene("sphere_on_plane");
@@ -133,6 +138,23 @@ TEST_F(RasterLookup, EqualsTheResolveVisibilityOnEveryLookupPath) {
     const Agreement a = renderAndCompare(*R, sphere, m);
     EXPECT_EQ(a.mismatches, 0u) << "receiver plane, normal offset, D32F; first: " << a.first;
   }
+  {
+    // A tight fit to a camera that sees less than the evaluation camera: the points it does not
+    // see lie outside the map (lit by policy), the rest inside; the lookup must tell them apart
+    // as the resolve does.
+    Camera ahead = sphere.camera;
+    ahead.position += 0.6f * (sphere.camera.lookAt - sphere.camera.position);
+    for (Filter filter : {Filter::None, Filter::Pcf}) {
+      Method m;
+      m.mapSize = 512;
+      m.fit = Fit::Tight;
+      m.filter = filter;
+      const Agreement a = renderAndCompare(*R, sphere, m, nullptr, &ahead);
+      EXPECT_EQ(a.mismatches, 0u) << "fit=tight to a camera ahead, " << toString(filter) << "; first: " << a.first;
+      EXPECT_GT(a.outsideMap, 100u) << toString(filter);
+      EXPECT_GT(a.shadowed, 100u) << toString(filter);
+    }
+  }
   for (LightType type : {LightType::Spot, LightType::Point}) {
     Scene s = sphere;
     Light& l = s.lights.front();
@@ -153,15 +175,18 @@ TEST_F(RasterLookup, EqualsTheResolveVisibilityOnEveryLookupPath) {
 }
 
 // The lookup of a method without a normal (no normal offset, receiver plane or adaptive bias)
-// reads its visible point from the group's surface image: the planes pass draws it at a group's
-// first frame on demand (and again where it was not kept), a full frame's resolve writes it, and
-// the rasterizer keeps the surfaces of 4 groups (rasterizer.cpp, surfaceFor) beside the planes of
-// 4 groups on demand. Six groups that differ in what the surface holds (the camera's rays; the
-// light, which decides which sides it reaches; a spot's cone; its direction), in a sequence where full frames
-// evict surfaces whose planes stay kept, so that a frame on demand finds its planes but not its
-// surface, and frames that read no surface (normal offset) come between: every frame's bytes must
-// equal those of a full frame on a rasterizer of its own. A surface read under the wrong group
-// puts another camera's points, or another light's facing, into the lookup.
+// reads its visible point from the group's surface image (with one map layer, the point's map
+// coordinates): the planes pass draws it at a group's first frame on demand (and again where it
+// was not kept), a full frame's resolve writes it, and the rasterizer keeps the surfaces of 4
+// groups (rasterizer.cpp, surfaceFor) beside the planes of 4 groups on demand. Six groups that
+// differ in what the surface holds (the camera's rays; the light, which decides which sides it
+// reaches; a spot's cone; its direction), in a sequence where full frames evict surfaces whose
+// planes stay kept, so that a frame on demand finds its planes but not its surface; where a full
+// frame with a normal offset rewrites a surface that a frame on demand then reads (it must hold
+// the point's own coordinates, not the offset point's); and where frames that read no surface
+// (normal offset) come between: every frame's bytes must equal those of a full frame on a
+// rasterizer of its own. A surface read under the wrong group puts another camera's points, or
+// another light's facing, into the lookup.
 TEST_F(RasterLookup, TheSurfaceFollowsItsGroup) {
   REQUIRE_DEVICE();
   const Scene base = quarterScene("sphere_on_plane");
@@ -191,6 +216,8 @@ TEST_F(RasterLookup, TheSurfaceFollowsItsGroup) {
       {5, true, none, false}, {1, false, none, false},  // another camera, full: evicts group 0's surface
       {0, true, none, false},                           // its planes kept, its surface not: drawn again
       {4, true, none, false},                           // planes and surface kept
+      {0, false, none, true},                           // full, normal offset: writes group 0's surface
+      {0, true, none, false},                           // planes kept: reads what the full frame wrote
       {3, true, none, true},  {2, false, hw, false},   {5, true, hw, false},
       {2, true, none, false}, {0, false, none, true},  {1, true, hw, false},
       {4, true, none, false}, {3, false, none, false}, {0, true, none, false}};
@@ -223,7 +250,7 @@ TEST_F(RasterLookup, TheSurfaceFollowsItsGroup) {
     EXPECT_GT(shadowed, 100u) << what;
     surfaceFrames += !st.normalOffset;
   }
-  EXPECT_GE(surfaceFrames, 14);
+  EXPECT_GE(surfaceFrames, 15);
 }
 
 }  // namespace raster_lookup_test

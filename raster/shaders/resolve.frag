@@ -56,11 +56,13 @@ layout(constant_id = kSpecCompact) const bool kCompact = false;
 // alone, as outA.x and outA.y (the full resolve's outA.w and outB.w), the rest dead code.
 layout(constant_id = kSpecPlanesOnly) const bool kPlanesOnly = false;
 // The lookup pass of a method that needs no normal: the visible point from the group's surface
-// image (the planes pass or the full resolve writes it, surfaceTexel: the camera ray's t and
-// whether the light reaches the point)
-// rather than from the visibility buffer and the triangle's plane, one fetch instead of two, like
-// a deferred renderer reconstructing the point from its depth buffer. The same p, bit for bit: the
-// point is origin + dir * t with the t the planes pass computed by the same expression.
+// image (the planes pass or the full resolve writes it, surfaceTexel) rather than from the
+// visibility buffer and the triangle's plane, one fetch instead of two, like a deferred renderer
+// reconstructing the point from its depth buffer. With one map layer (kProjectedSurface) the
+// surface holds the point's map coordinates (u, v, depth) as the writer computed them, bit for bit
+// what the lookup would compute from the point: the lookup reads them and projects nothing.
+// Cascades and point lights pick the layer from the point: their surface holds the camera ray's t,
+// and the point is origin + dir * t with the t the writer computed by the same expression.
 layout(constant_id = kSpecSurface) const bool kSurface = false;
 // A technique file (method key technique; raster/METHODS.md "Your own technique"): compiled at run
 // time with SHADOWLAB_TECHNIQUE defined (raster/src/technique_compiler.cpp), its shadowVisibility()
@@ -113,6 +115,9 @@ layout(location = 2) out vec4 outC;
 // moments, outD's with them (the planes pass: outB's).
 layout(location = 3) out vec4 outD;
 
+// The group's surface holds map coordinates (one layer: no cascades, not a point light's cube).
+const bool kProjectedSurface = !kCascaded && kLightType != kLightPoint && kLightType != kLightNone;
+
 const bool kMomentFilter =
     kFilter == kFilterVsm || kFilter == kFilterEvsm2 || kFilter == kFilterEvsm4 || kFilter == kFilterMsm;
 
@@ -121,6 +126,8 @@ const bool kMomentFilter =
 struct Surface {
   bool hit;       // a triangle covers the pixel (kSurface: and the light reaches its visible side)
   bool covered;   // a triangle covers the pixel
+  vec3 uvz;       // kSurface with kProjectedSurface: the point's map coordinates (the rest unread)
+  bool inMap;     //   and whether they lie in the map (LayerHit's)
   vec4 plane;     // the triangle's plane (n, dot(n, v0 - camera origin))
   vec3 dir;       // the (unnormalized) ray direction through the pixel center
   float t;        // p = camera origin + dir * t
@@ -521,6 +528,23 @@ LayerHit lookUp(int layerIndex, Surface s) {
   return h;
 }
 
+// lookUp's answer from the group's surface (kSurface with kProjectedSurface: no normal offset, no
+// receiver plane, no adaptive bias, nothing that reads the plane's slope): the map coordinates
+// and inMap as the writer's lookUp computed them; what they do not give only feeds the evidence,
+// which the lookup does not write.
+LayerHit surfaceHit(int layerIndex, Surface s) {
+  LayerHit h;
+  Layer l = layerAt(layerIndex);
+  h.uvz = s.uvz;
+  h.inMap = s.inMap;
+  h.tP = vec4(s.uvz, 1.0);
+  h.tQ = h.tP;
+  h.texelWorld = 0.0;
+  h.planeSlope = vec2(0.0);
+  h.lookup = Lookup(l, h.uvz.xy * l.size, h.uvz.z - P.bias.x, vec2(0.0), vec2(0.0));
+  return h;
+}
+
 // The blend band's lookup (the next cascade): filtered like the pixel's own, policy lit outside
 // the map; hw2x2 through filterVisibility's textureGrad, since this sits in non-uniform control flow.
 float blendVisibility(LayerHit h) {
@@ -569,12 +593,15 @@ int cubeFace(vec3 v) {
 Surface visibleSurface(ivec2 px) {
   Surface s;
   if (kSurface) {
-    vec2 surface = texelFetch(surfaceMap, px, 0).xy;
-    s.hit = surface.y > 0.0;
-    s.covered = surface.y != 0.0;
-    s.dir = rayThrough(vec2(px) + 0.5);
-    s.t = surface.x;
-    s.p = rayPoint(s.dir, s.t, vec2(px) + 0.5);
+    vec4 surface = texelFetch(surfaceMap, px, 0);
+    float reach = kProjectedSurface ? surface.w : surface.y;  // surfaceTexel's
+    s.hit = reach > 0.0;
+    s.covered = reach != 0.0;
+    s.uvz = surface.xyz;
+    s.inMap = abs(reach) > 1.5;
+    s.dir = kProjectedSurface ? vec3(0.0, 0.0, 1.0) : rayThrough(vec2(px) + 0.5);
+    s.t = kProjectedSurface ? 0.0 : surface.x;
+    s.p = kProjectedSurface ? vec3(0.0) : rayPoint(s.dir, s.t, vec2(px) + 0.5);
     s.plane = vec4(0.0);  // unread: nothing the lookup computes without a normal reads them
     s.normal = vec3(0.0, 0.0, 1.0);
     s.e1 = vec3(1.0, 0.0, 0.0);
@@ -582,6 +609,8 @@ Surface visibleSurface(ivec2 px) {
   }
   uint id = texelFetch(cameraIds, px, 0).x;  // global triangle + 1, 0: no hit
   s.hit = id != 0u;
+  s.uvz = vec3(0.0);
+  s.inMap = false;
   s.covered = s.hit;
   s.plane = texelFetch(trianglePlanes, int(id));
   vec2 pixelCenter = vec2(px) + 0.5;
@@ -603,13 +632,17 @@ struct LightChannels {
   vec4 b;  // bias_depth, bias_world, occluder (id), 2 * cascade + in_map
   vec4 c;  // filterable maps: moment mean, variance, bound (0 outside the map)
   bool unreached;  // the light cannot reach the visible side (facing away, outside a spot's cone)
+  vec3 uvz;        // the visible point's map coordinates, and whether they lie in the map, without
+  bool inMap;      // the normal offset: what a surface with kProjectedSurface holds
 };
 
 LightChannels shadeLight(Surface s) {
   vec3 p = s.p, normal = s.normal, dir = s.dir;
   vec3 lightPos = P.lightPosType.xyz;
   CascadePick pick = pickCascade(p);
-  LayerHit h = lookUp(kLightType == kLightPoint ? cubeFace(p - lightPos) : pick.cascade, s);
+  LayerHit h;
+  if (kSurface && kProjectedSurface) h = surfaceHit(pick.cascade, s);
+  else h = lookUp(kLightType == kLightPoint ? cubeFace(p - lightPos) : pick.cascade, s);
   Lookup L = h.lookup;
   Layer layer = L.layer;
   vec4 tP = h.tP;
@@ -695,14 +728,23 @@ LightChannels shadeLight(Surface s) {
   o.a = vec4(vis, h.uvz.z, mapDepthCenter, m);
   o.b = vec4(biasDepth, biasDepth * worldPerDepth, occluder, float(2 * pick.cascade + (h.inMap ? 1 : 0)));
   o.c = momentEvidence;
+  // The point's own coordinates: with the normal offset, tP's, as lookUp derives tQ's.
+  o.uvz = kNormalOffset ? tP.xyz / tP.w : h.uvz;
+  o.inMap = kNormalOffset
+                ? tP.w > 0.0 && all(greaterThanEqual(o.uvz.xy, vec2(0.0))) && all(lessThanEqual(o.uvz.xy, vec2(1.0)))
+                : h.inMap;
   return o;
 }
 
 // The group's surface at a pixel, as the planes pass and the full resolve write it (kSurface's
-// image): the camera ray's t, and 1 where a triangle covers the pixel and the light reaches it, -1
-// where one covers it and the light does not, 0 where none does.
+// image). Its reach: 1 where a triangle covers the pixel and the light reaches it, -1 where one
+// covers it and the light does not, 0 where none does. kProjectedSurface: (u, v, depth, reach),
+// reach doubled where (u, v) lie in the map (0 where no triangle covers it); else (the camera ray's
+// t, reach, 0, 0).
 vec4 surfaceTexel(Surface s, LightChannels light) {
-  return vec4(s.t, !s.hit ? 0.0 : light.unreached ? -1.0 : 1.0, 0.0, 0.0);
+  float reach = !s.hit ? 0.0 : light.unreached ? -1.0 : 1.0;
+  if (kProjectedSurface) return s.hit ? vec4(light.uvz, light.inMap ? 2.0 * reach : reach) : vec4(0.0);
+  return vec4(s.t, reach, 0.0, 0.0);
 }
 
 // Each projector's channels of a surface into outPlanes (pixel `pixel` of planes of `planeSize`).

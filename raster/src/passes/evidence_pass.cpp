@@ -75,13 +75,14 @@ std::string footprintKey(const std::string& cameraKey, const abi::Params& p, con
   uint64_t h = fnv1a64(p.texFromWorld, sizeof(glm::mat4) * size_t(lightLayers));
   h = fnv1a64(p.layerInfo, sizeof(glm::vec4) * size_t(lightLayers), h);
   for (const glm::vec4* v : {&p.lightPosType, &p.lightDirCos, &p.cameraOrigin, &p.rayX, &p.rayY, &p.rayC,
-                             &p.cascadeView, &p.cascadeFar[0], &p.cascadeFar[1]})
+                             &p.cascadeView, &p.cascadeFar[0], &p.cascadeFar[1], &p.lightDepth})
     h = fnv1a64(v, sizeof(glm::vec4), h);
   const float splits[2] = {p.cascadeInfo.y, p.cascadeInfo.z};  // not x: the blend band
   h = fnv1a64(splits, sizeof(splits), h);
   const int32_t sizes[2] = {p.sizes.x, p.sizes.y};
   h = fnv1a64(sizes, sizeof(sizes), h);
-  for (int k : {abi::kSpecLightType, abi::kSpecCascaded, abi::kSpecAffine}) h = fnv1a64(&spec[size_t(k)], 4, h);
+  for (int k : {abi::kSpecLightType, abi::kSpecCascaded, abi::kSpecAffine, abi::kSpecLightDepth})
+    h = fnv1a64(&spec[size_t(k)], 4, h);
   return cameraKey + "/" + hashHex(h);
 }
 

@@ -29,10 +29,11 @@
 
 namespace shadowlab::raster {
 
-// Evidence on demand's group: everything m and the cascade index are computed from in resolve.frag
-// (the visible point, the pixel's layer and its projection, the cascade splits, the cube face),
-// none of which is a bias or a filter. The specialization constants that change that code (light
-// type, cascaded, affine) are part of it; the filter's is not (the same bits whatever the filter:
+// Evidence on demand's group: everything m, the cascade index and the group's surface (the point's
+// map coordinates) are computed from in resolve.frag (the visible point, the pixel's layer and its
+// projection, the light-depth row, the cascade splits, the cube face), none of which is a bias or a
+// filter. The specialization constants that change that code (light type, cascaded, affine, light
+// depth) are part of it; the filter's is not (the same bits whatever the filter:
 // tests/compare_on_demand_test.cpp). `cameraKey`: VisibilityPass::cameraKey.
 std::string footprintKey(const std::string& cameraKey, const abi::Params& params, const ResolveSpecialization& spec);
 

@@ -68,11 +68,12 @@ inline constexpr VkFormat kResolveFormats[kResolveAttachments] = {
 inline int resolveAttachments(Filter filter) { return isMomentFilter(filter) ? 3 : 2; }
 // The lookup pass's one attachment: the visibility, 1 byte per pixel.
 inline constexpr VkFormat kLookupFormat = VK_FORMAT_R8_UNORM;
-// A group's surface (resolve.frag's kSpecSurface), the planes pass's second attachment and the full
-// resolve's last: the camera ray's t at the visible point, and 1 where the light reaches it (-1
-// where it does not, 0 where no triangle covers the pixel). Kept
-// per group, as many as the footprints (8 bytes per pixel: 17 MB at 1080p each).
-inline constexpr VkFormat kSurfaceFormat = VK_FORMAT_R32G32_SFLOAT;
+// A group's surface (resolve.frag's kSpecSurface, surfaceTexel), the planes pass's second attachment
+// and the full resolve's last: with one map layer the visible point's map coordinates (u, v,
+// depth) and whether the light reaches it and they lie in the map; with cascades or a point light
+// the camera ray's t at the point and whether the light reaches it. Kept per group, as many as
+// the footprints (16 bytes per pixel: 33 MB at 1080p each).
+inline constexpr VkFormat kSurfaceFormat = VK_FORMAT_R32G32B32A32_SFLOAT;
 // How many groups' planes (m, cascade) and surfaces evidence on demand keeps: a sweep whose
 // fastest axis is a bias or a filter needs one; a grid with map.size fastest, one per size.
 inline constexpr size_t kKeptFootprints = 4;
