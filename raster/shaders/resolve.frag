@@ -61,8 +61,8 @@ layout(constant_id = kSpecPlanesOnly) const bool kPlanesOnly = false;
 // reconstructing the point from its depth buffer. With one map layer (kProjectedSurface) the
 // surface holds the point's map coordinates (u, v, depth) as the writer computed them, bit for bit
 // what the lookup would compute from the point: the lookup reads them and projects nothing.
-// Cascades and point lights pick the layer from the point: their surface holds the camera ray's t,
-// and the point is origin + dir * t with the t the writer computed by the same expression.
+// Cascades and point lights pick the layer from the point: their surface holds the point itself,
+// as the writer computed it.
 layout(constant_id = kSpecSurface) const bool kSurface = false;
 // A technique file (method key technique; raster/METHODS.md "Your own technique"): compiled at run
 // time with SHADOWLAB_TECHNIQUE defined (raster/src/technique_compiler.cpp), its shadowVisibility()
@@ -80,9 +80,7 @@ layout(set = 0, binding = kBindingMapIds) uniform usampler2DArray mapIds;
 // Filterable maps: the blurred moments of each light layer (moments_rows/cols.frag), LINEAR.
 layout(set = 0, binding = kBindingMoments) uniform sampler2DArray momentsMap;
 layout(set = 0, binding = kBindingCameraIds) uniform usampler2D cameraIds;
-// The group's surface (kSurface): x the camera ray's t at the visible point, y 1 where a triangle
-// covers the pixel and the light reaches its visible side (not facing away, inside a spot's cone),
-// -1 where one covers it and the light does not, 0 where none does.
+// The group's surface (kSurface; surfaceTexel says what it holds).
 layout(set = 0, binding = kBindingSurface) uniform sampler2D surfaceMap;
 
 // Per triangle (at its global index + 1, as in the id attachments; texel 0 a placeholder), its
@@ -126,8 +124,8 @@ const bool kMomentFilter =
 struct Surface {
   bool hit;       // a triangle covers the pixel (kSurface: and the light reaches its visible side)
   bool covered;   // a triangle covers the pixel
-  vec3 uvz;       // kSurface with kProjectedSurface: the point's map coordinates (the rest unread)
-  bool inMap;     //   and whether they lie in the map (LayerHit's)
+  vec3 uvz;       // kSurface with kProjectedSurface: the point's map coordinates (the rest unread;
+  bool inMap;     //   without it p alone) and whether they lie in the map (LayerHit's)
   vec4 plane;     // the triangle's plane (n, dot(n, v0 - camera origin))
   vec3 dir;       // the (unnormalized) ray direction through the pixel center
   float t;        // p = camera origin + dir * t
@@ -594,14 +592,14 @@ Surface visibleSurface(ivec2 px) {
   Surface s;
   if (kSurface) {
     vec4 surface = texelFetch(surfaceMap, px, 0);
-    float reach = kProjectedSurface ? surface.w : surface.y;  // surfaceTexel's
+    float reach = surface.w;  // surfaceTexel's
     s.hit = reach > 0.0;
     s.covered = reach != 0.0;
     s.uvz = surface.xyz;
     s.inMap = abs(reach) > 1.5;
-    s.dir = kProjectedSurface ? vec3(0.0, 0.0, 1.0) : rayThrough(vec2(px) + 0.5);
-    s.t = kProjectedSurface ? 0.0 : surface.x;
-    s.p = kProjectedSurface ? vec3(0.0) : rayPoint(s.dir, s.t, vec2(px) + 0.5);
+    s.dir = vec3(0.0, 0.0, 1.0);  // unread, as t
+    s.t = 0.0;
+    s.p = kProjectedSurface ? vec3(0.0) : surface.xyz;
     s.plane = vec4(0.0);  // unread: nothing the lookup computes without a normal reads them
     s.normal = vec3(0.0, 0.0, 1.0);
     s.e1 = vec3(1.0, 0.0, 0.0);
@@ -739,12 +737,12 @@ LightChannels shadeLight(Surface s) {
 // The group's surface at a pixel, as the planes pass and the full resolve write it (kSurface's
 // image). Its reach: 1 where a triangle covers the pixel and the light reaches it, -1 where one
 // covers it and the light does not, 0 where none does. kProjectedSurface: (u, v, depth, reach),
-// reach doubled where (u, v) lie in the map (0 where no triangle covers it); else (the camera ray's
-// t, reach, 0, 0).
+// reach doubled where (u, v) lie in the map (0 where no triangle covers it); else (the visible
+// point, reach).
 vec4 surfaceTexel(Surface s, LightChannels light) {
   float reach = !s.hit ? 0.0 : light.unreached ? -1.0 : 1.0;
-  if (kProjectedSurface) return s.hit ? vec4(light.uvz, light.inMap ? 2.0 * reach : reach) : vec4(0.0);
-  return vec4(s.t, reach, 0.0, 0.0);
+  if (!s.hit) return vec4(0.0);
+  return kProjectedSurface ? vec4(light.uvz, light.inMap ? 2.0 * reach : reach) : vec4(s.p, reach);
 }
 
 // Each projector's channels of a surface into outPlanes (pixel `pixel` of planes of `planeSize`).
