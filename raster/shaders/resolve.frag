@@ -108,9 +108,9 @@ layout(location = 1) out vec4 outB;  // bias_depth, bias_world, occluder (id), 2
 // Filterable maps only (the pipeline has this third attachment for them alone): the moments'
 // evidence at the lookup: mean depth, variance, the bound before the bleed cut.
 layout(location = 2) out vec4 outC;
-// The group's surface (kSurface's image: the camera ray's t, 1 where the light reaches the point),
-// which the full resolve writes for the lookup after it, as the next attachment: outC's without
-// moments, outD's with them (the planes pass: outB's).
+// The group's surface (kSurface's image, surfaceTexel), which the full resolve writes for the lookup
+// after it, as the next attachment: outC's without moments, outD's with them (the planes pass:
+// outB's).
 layout(location = 3) out vec4 outD;
 
 // The group's surface holds map coordinates (one layer: no cascades, not a point light's cube).
@@ -587,7 +587,7 @@ int cubeFace(vec3 v) {
 }
 
 // The pixel's visible surface, from the visibility buffer (kSurface: from the surface image, the
-// point alone; hit then also says that the light reaches it).
+// point or its map coordinates alone; hit then also says that the light reaches it).
 Surface visibleSurface(ivec2 px) {
   Surface s;
   if (kSurface) {

@@ -16,7 +16,8 @@ namespace shadowlab::raster {
 // after it reads it), not in the evidence pass (kSpecCompact).
 bool resolveWritesSurface(const ResolveSpecialization& spec);
 // Whether the lookup pass of a specialization reads the group's surface: it needs no normal (no
-// normal offset, no receiver plane, no adaptive bias), the surface image holds the visible point.
+// normal offset, no receiver plane, no adaptive bias), the surface image holds the visible point (or
+// its map coordinates).
 bool lookupReadsSurface(const ResolveSpecialization& spec);
 
 class ResolvePipelines {

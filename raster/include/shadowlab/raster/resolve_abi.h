@@ -81,9 +81,9 @@ SHADOWLAB_CONST(int, kSpecPcfSize, 13)
 // per pixel only the planes that depend on no bias or filter, m and 2 * cascade + in_map, into one
 // attachment; the lookup, the evidence and the projectors compiled out.
 SHADOWLAB_CONST(int, kSpecPlanesOnly, 14)
-// 0/1: the lookup pass reads the pixel's visible point from the group's surface image (Surface
-// below: the camera ray's parameter t and whether the light can reach the point, written by the
-// planes pass or the full resolve) instead of the visibility buffer and the triangle's plane. Only
+// 0/1: the lookup pass reads the pixel's visible point from the group's surface image (the point's
+// map coordinates, or with cascades or a point light the point, and whether the light can reach
+// it, written by the planes pass or the full resolve: resolve.frag's surfaceTexel) instead of the visibility buffer and the triangle's plane. Only
 // where the lookup needs no normal: no normal offset, no receiver plane, no adaptive bias
 // (rasterizer.cpp, lookupReadsSurface).
 SHADOWLAB_CONST(int, kSpecSurface, 15)
