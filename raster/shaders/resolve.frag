@@ -509,6 +509,12 @@ float adaptiveEpsilon(Layer l, vec3 q, vec4 tQ, float depthQ) {
   return max(depthQ - tE.z / tE.w, 0.0) + depthResolution(depthQ);
 }
 
+// Whether a point projected to t (map coordinates uvz = t.xyz / t.w) lies in front of the light,
+// inside the map.
+bool inMapAt(vec4 t, vec3 uvz) {
+  return t.w > 0.0 && all(greaterThanEqual(uvz.xy, vec2(0.0))) && all(lessThanEqual(uvz.xy, vec2(1.0)));
+}
+
 // The one lookup of a surface point in a light layer, for the pixel's own layer and for the next
 // cascade of a blend band: the normal offset, the projection, the receiver plane.
 LayerHit lookUp(int layerIndex, Surface s) {
@@ -519,7 +525,7 @@ LayerHit lookUp(int layerIndex, Surface s) {
   vec3 q = kNormalOffset ? s.p + s.normal * (P.bias.y * h.texelWorld) : s.p;  // normal-offset lookup point
   h.tQ = kNormalOffset ? project(l, q) : h.tP;
   h.uvz = h.tQ.xyz / h.tQ.w;
-  h.inMap = h.tQ.w > 0.0 && all(greaterThanEqual(h.uvz.xy, vec2(0.0))) && all(lessThanEqual(h.uvz.xy, vec2(1.0)));
+  h.inMap = inMapAt(h.tQ, h.uvz);
   h.planeSlope = planeSlope(l, h.tQ, s.normal, s.e1, h.texelWorld);
   float ref = kAdaptive ? h.uvz.z - adaptiveEpsilon(l, q, h.tQ, h.uvz.z) : h.uvz.z - P.bias.x;
   h.lookup = Lookup(l, h.uvz.xy * l.size, ref, kReceiverPlane || kAdaptive ? h.planeSlope : vec2(0.0), h.planeSlope);
@@ -728,9 +734,7 @@ LightChannels shadeLight(Surface s) {
   o.c = momentEvidence;
   // The point's own coordinates: with the normal offset, tP's, as lookUp derives tQ's.
   o.uvz = kNormalOffset ? tP.xyz / tP.w : h.uvz;
-  o.inMap = kNormalOffset
-                ? tP.w > 0.0 && all(greaterThanEqual(o.uvz.xy, vec2(0.0))) && all(lessThanEqual(o.uvz.xy, vec2(1.0)))
-                : h.inMap;
+  o.inMap = kNormalOffset ? inMapAt(tP, o.uvz) : h.inMap;
   return o;
 }
 
@@ -740,8 +744,8 @@ LightChannels shadeLight(Surface s) {
 // reach doubled where (u, v) lie in the map (0 where no triangle covers it); else (the visible
 // point, reach).
 vec4 surfaceTexel(Surface s, LightChannels light) {
-  float reach = !s.hit ? 0.0 : light.unreached ? -1.0 : 1.0;
   if (!s.hit) return vec4(0.0);
+  float reach = light.unreached ? -1.0 : 1.0;
   return kProjectedSurface ? vec4(light.uvz, light.inMap ? 2.0 * reach : reach) : vec4(s.p, reach);
 }
 

@@ -71,8 +71,8 @@ inline constexpr VkFormat kLookupFormat = VK_FORMAT_R8_UNORM;
 // A group's surface (resolve.frag's kSpecSurface, surfaceTexel), the planes pass's second attachment
 // and the full resolve's last: with one map layer the visible point's map coordinates (u, v,
 // depth) and whether the light reaches it and they lie in the map; with cascades or a point light
-// the point itself and whether the light reaches it. Kept per group, as many as
-// the footprints (16 bytes per pixel: 33 MB at 1080p each).
+// the point itself and whether the light reaches it. Kept per group, as many as the footprints
+// (16 bytes per pixel: 33 MB at 1080p each).
 inline constexpr VkFormat kSurfaceFormat = VK_FORMAT_R32G32B32A32_SFLOAT;
 // How many groups' planes (m, cascade) and surfaces evidence on demand keeps: a sweep whose
 // fastest axis is a bias or a filter needs one; a grid with map.size fastest, one per size.

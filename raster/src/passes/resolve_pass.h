@@ -1,8 +1,8 @@
 #pragma once
 // Pass 3a (planes, a group's first frame on demand): resolve.frag specialized to kSpecPlanesOnly:
 //   m and 2 * cascade + in_map (evidence on demand keeps them per group) and the group's surface
-//   (kSurfaceFormat: the visible point's map coordinates or the point, whether the light reaches it), kept
-//   for up to kKeptFootprints groups (surfaceFor).
+//   (kSurfaceFormat: the visible point's map coordinates or the point, whether the light reaches
+//   it), kept for up to kKeptFootprints groups (surfaceFor).
 // Pass 3 (resolve, a full-screen fragment pass): per pixel, the visible point, the map lookup with
 //   the method's bias and filter, the evidence channels into two color attachments
 //   (kResolveFormats), the projectors into a storage buffer (one plane per channel), with a light

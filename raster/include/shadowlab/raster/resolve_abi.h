@@ -83,9 +83,9 @@ SHADOWLAB_CONST(int, kSpecPcfSize, 13)
 SHADOWLAB_CONST(int, kSpecPlanesOnly, 14)
 // 0/1: the lookup pass reads the pixel's visible point from the group's surface image (the point's
 // map coordinates, or with cascades or a point light the point, and whether the light can reach
-// it, written by the planes pass or the full resolve: resolve.frag's surfaceTexel) instead of the visibility buffer and the triangle's plane. Only
-// where the lookup needs no normal: no normal offset, no receiver plane, no adaptive bias
-// (rasterizer.cpp, lookupReadsSurface).
+// it, written by the planes pass or the full resolve: resolve.frag's surfaceTexel) instead of the
+// visibility buffer and the triangle's plane. Only where the lookup needs no normal: no normal
+// offset, no receiver plane, no adaptive bias (rasterizer.cpp, lookupReadsSurface).
 SHADOWLAB_CONST(int, kSpecSurface, 15)
 // 0/1: the method's technique file reads ShadowQuery::planeSlope, which needs the triangle's normal:
 // its lookup pass then reads the visibility buffer, not the surface image (rasterizer.cpp,
