@@ -16,7 +16,13 @@
 //                      one closest-hit rtcIntersect8 per packet that also gives occluder_dist, the
 //                      vis and occluder_dist writes)
 //     bare_primary_ms  rtcIntersect8 over the same camera rays: the same 16 x 16 tiles of 4 x 2
-//                      pixel packets, CameraRays::direction per lane (as the reference), nothing kept
+//                      pixel packets, CameraRays::direction per lane (a division and a square root
+//                      per ray in turn), nothing kept
+//     bare_primary_packed_ms  the same loop with each packet's directions made as the reference
+//                      makes them, in one go over its lanes (CameraRays::perspectiveDirection on 8
+//                      doubles), in the bench's baseline (SSE2) compilation
+//     primary_ratio_packed, primary_ratio_packed_baseline  ref_primary_ms and the baseline trace's
+//                      against it: what the trace costs beyond a bare loop that makes its rays alike
 //     bare_shadow_ms   rtcOccluded8 over the same shadow rays, bit for bit: origins P + N * offset
 //                      rebuilt from the reference's own P, N, object_id, prim_id planes with its
 //                      rule (shadowOriginOffset), the same directions and tfar, the same packets
@@ -65,6 +71,7 @@
 #include <vector>
 
 #include <embree3/rtcore.h>
+#include <experimental/simd>
 #include <sys/resource.h>
 
 #include "bench_scene.h"
@@ -249,6 +256,46 @@ double bareIntersect(const Camera& camera, RTCScene scene) {
   return processCpuSeconds() - start;
 }
 
+// bareIntersect with each packet's directions made as the reference makes them: in one go over
+// its 8 lanes (CameraRays::perspectiveDirection), here in the baseline (SSE2) compilation.
+double bareIntersectPacked(const Camera& camera, RTCScene scene) {
+  namespace stdx = std::experimental;
+  using DoubleN = stdx::fixed_size_simd<double, 8>;
+  using FloatN = stdx::fixed_size_simd<float, 8>;
+  const double start = processCpuSeconds();
+  RTCIntersectContext context;
+  rtcInitIntersectContext(&context);
+  context.flags = RTC_INTERSECT_CONTEXT_FLAG_COHERENT;
+  const CameraRays rays(camera);
+  forEachPacket(camera.width, camera.height, [&](const int* px, const int* py, const bool* active) {
+    RTCRayHit8 rh;
+    alignas(32) int valid[8];
+    const DoubleN x([&](auto lane) { return double(float(px[lane]) + 0.5f); });
+    const DoubleN y([&](auto lane) { return double(float(py[lane]) + 0.5f); });
+    DoubleN d[3];
+    rays.perspectiveDirection(x, y, d);
+    stdx::static_simd_cast<FloatN>(d[0]).copy_to(rh.ray.dir_x, stdx::element_aligned);
+    stdx::static_simd_cast<FloatN>(d[1]).copy_to(rh.ray.dir_y, stdx::element_aligned);
+    stdx::static_simd_cast<FloatN>(d[2]).copy_to(rh.ray.dir_z, stdx::element_aligned);
+    for (int lane = 0; lane < 8; ++lane) {
+      valid[lane] = active[lane] ? -1 : 0;
+      rh.ray.org_x[lane] = camera.position.x;
+      rh.ray.org_y[lane] = camera.position.y;
+      rh.ray.org_z[lane] = camera.position.z;
+      rh.ray.tnear[lane] = 0;
+      rh.ray.tfar[lane] = INFINITY;
+      rh.ray.mask[lane] = ~0u;
+      rh.ray.time[lane] = 0;
+      rh.ray.id[lane] = lane;
+      rh.ray.flags[lane] = 0;
+      rh.hit.geomID[lane] = RTC_INVALID_GEOMETRY_ID;
+    }
+    rtcIntersect8(valid, scene, &context, &rh);
+    benchmark::DoNotOptimize(rh.hit.geomID[0]);
+  });
+  return processCpuSeconds() - start;
+}
+
 // rtcIntersect8 (closest hit) over the same shadow rays: what a bare loop that also needs the
 // occluder's distance (occluder_dist) pays.
 double bareClosest(const std::vector<ShadowPacket>& packets, RTCScene scene) {
@@ -320,7 +367,7 @@ void BM_Ratios(benchmark::State& state, const std::string& name) {
 
   double refPrimary = 1e30, refFull = 1e30, allPrimary = 1e30, allFull = 1e30, barePrimary = 1e30, bareShadow = 1e30,
          barePrimaryRobust = 1e30, bareShadowRobust = 1e30, bareClosestHit = 1e30, bareSetup = 1e30,
-         baselinePrimary = 1e30, baselineFull = 1e30;
+         baselinePrimary = 1e30, baselineFull = 1e30, barePacked = 1e30;
   for (auto _ : state) {
     double total = 0;
     for (int round = 0; round < kRounds; ++round) {
@@ -342,6 +389,7 @@ void BM_Ratios(benchmark::State& state, const std::string& name) {
                                  bareIntersect(scene.camera, bareRobust.scene),
                                  bareOccluded(packets, bareRobust.scene)};
       barePrimary = std::min(barePrimary, seconds[0]);
+      barePacked = std::min(barePacked, bareIntersectPacked(scene.camera, bare.scene));
       bareShadow = std::min(bareShadow, seconds[1]);
       bareClosestHit = std::min(bareClosestHit, bareClosest(packets, bare.scene));
       bareSetup = std::min(bareSetup, bareShadowSetup(packets));
@@ -353,6 +401,9 @@ void BM_Ratios(benchmark::State& state, const std::string& name) {
   }
   const double refShadow = refFull - refPrimary;
   state.counters["primary_ratio"] = refPrimary / barePrimary;
+  state.counters["bare_primary_packed_ms"] = barePacked * 1e3;
+  state.counters["primary_ratio_packed"] = refPrimary / barePacked;
+  state.counters["primary_ratio_packed_baseline"] = baselinePrimary / barePacked;
   state.counters["shadow_ratio"] = refShadow / bareShadow;
   state.counters["shadow_ratio_closest"] = refShadow / bareClosestHit;
   state.counters["bare_shadow_closest_ms"] = bareClosestHit * 1e3;

@@ -3,6 +3,8 @@
 
 #include <cmath>
 #include <cstdlib>
+#include <cstring>
+#include <experimental/simd>
 #include <filesystem>
 #include <map>
 #include <random>
@@ -216,6 +218,68 @@ TEST(ScenesCamera, RaysThroughPixelCenters) {
   glm::vec3 first = cam.rayDirection(0.5f, 0.5f), last = cam.rayDirection(w - 0.5f, h - 0.5f);
   EXPECT_NEAR(glm::dot(first, forward), glm::dot(last, forward), 1e-6f);
   EXPECT_NEAR(glm::length(first), 1.0f, 1e-6f);
+}
+
+// CameraRays::perspectiveDirection over a packet of 8 lanes (as the reference traces a 4 x 2 block)
+// gives each lane direction(x, y)'s bits, and direction keeps the formula it always had (glm's
+// normalize of f + (ndc.x aspect t) s - (ndc.y t) u): on every pixel of three bundled cameras and of
+// an odd-sized wide one, at the pixel centers and at off-center sample positions.
+TEST(ScenesCamera, PacketDirectionsHaveDirectionsBits) {
+  namespace stdx = std::experimental;
+  using DoubleN = stdx::fixed_size_simd<double, 8>;
+  std::vector<Camera> cameras;
+  for (const char* name : {"sphere_on_plane", "long_view", "projector"}) {
+    Camera c = loadScene(resolveScenePath(name)).camera;
+    c.width = 160;
+    c.height = 90;
+    cameras.push_back(c);
+  }
+  Camera wide;
+  wide.position = {0.3f, 2.1f, -4.7f};
+  wide.lookAt = {-1.0f, 0.2f, 0.5f};
+  wide.vfovDeg = 83.0f;
+  wide.width = 37;
+  wide.height = 23;
+  cameras.push_back(wide);
+  for (const Camera& cam : cameras) {
+    const CameraRays rays(cam);
+    const glm::dvec3 f = glm::normalize(glm::dvec3(cam.lookAt) - glm::dvec3(cam.position));
+    const glm::dvec3 r = glm::normalize(glm::cross(f, glm::dvec3(cam.up)));
+    const glm::dvec3 u = glm::cross(r, f);
+    const double t = std::tan(double(glm::radians(cam.vfovDeg)) * 0.5), aspect = double(float(cam.width) / float(cam.height));
+    size_t packetDiffers = 0, formulaDiffers = 0, checked = 0;
+    for (const glm::vec2 shift : {glm::vec2(0.5f), glm::vec2(0.125f, 0.875f), glm::vec2(0.9375f, 0.0625f)}) {
+      for (int y0 = 0; y0 < cam.height; y0 += 2)
+        for (int x0 = 0; x0 < cam.width; x0 += 4) {
+          float x[8], y[8];
+          for (int lane = 0; lane < 8; ++lane) {
+            x[lane] = float(x0 + lane % 4) + shift.x;
+            y[lane] = float(y0 + lane / 4) + shift.y;
+          }
+          const DoubleN xs([&](auto lane) { return double(x[lane]); });
+          const DoubleN ys([&](auto lane) { return double(y[lane]); });
+          DoubleN out[3];
+          rays.perspectiveDirection(xs, ys, out);
+          for (int lane = 0; lane < 8; ++lane) {
+            // In double, before the rounding to float (which would hide a changed last bit).
+            double scalar[3];
+            rays.perspectiveDirection(double(x[lane]), double(y[lane]), scalar);
+            const double packet[3] = {out[0][lane], out[1][lane], out[2][lane]};
+            const double ndcX = 2.0 * x[lane] / cam.width - 1.0, ndcY = 2.0 * y[lane] / cam.height - 1.0;
+            const glm::dvec3 formula = glm::normalize(f + (ndcX * aspect * t) * r - (ndcY * t) * u);
+            packetDiffers += std::memcmp(scalar, packet, sizeof scalar) != 0;
+            formulaDiffers += std::memcmp(scalar, &formula[0], sizeof scalar) != 0;
+            // And direction is that result as float.
+            const glm::vec3 one = rays.direction(x[lane], y[lane]), rounded = glm::vec3(formula);
+            formulaDiffers += std::memcmp(&one, &rounded, sizeof one) != 0;
+            ++checked;
+          }
+        }
+    }
+    EXPECT_EQ(packetDiffers, 0u) << cam.width << "x" << cam.height;
+    EXPECT_EQ(formulaDiffers, 0u) << cam.width << "x" << cam.height;
+    EXPECT_GE(checked, size_t(3 * cam.width * cam.height));
+  }
 }
 
 // The rasterizer's matrices must put a point seen through image position (x, y) at exactly

@@ -272,29 +272,45 @@ class Tracer {
                     HitPacket& hits) {
     RTCRayHit8 rayHit;
     alignas(kSimdAlign) int valid[kLanes];
-    const bool parallel = scene_.camera.orthographic();
-    const glm::vec3 position = scene_.camera.position;
-    for (int lane = 0; lane < kLanes; ++lane) {
-      valid[lane] = active[lane] ? -1 : 0;
-      const glm::vec3 dir = active[lane] ? rays_.direction(px[lane] + dx, py[lane] + dy) : glm::vec3(0, 0, 1);
-      // Orthographic: parallel rays, each from its point of the image plane (Camera::rayOrigin).
-      const glm::vec3 org = parallel && active[lane] ? rays_.origin(px[lane] + dx, py[lane] + dy) : position;
-      rayHit.ray.org_x[lane] = org.x;
-      rayHit.ray.org_y[lane] = org.y;
-      rayHit.ray.org_z[lane] = org.z;
-      rayHit.ray.dir_x[lane] = dir.x;
-      rayHit.ray.dir_y[lane] = dir.y;
-      rayHit.ray.dir_z[lane] = dir.z;
-      rayHit.ray.tnear[lane] = 0.0f;
-      rayHit.ray.tfar[lane] = kInf;
-      rayHit.ray.time[lane] = 0.0f;
-      rayHit.ray.mask[lane] = ~0u;
-      rayHit.ray.id[lane] = unsigned(lane);
-      rayHit.ray.flags[lane] = 0;
-      rayHit.hit.geomID[lane] = RTC_INVALID_GEOMETRY_ID;
-      rayHit.hit.primID[lane] = RTC_INVALID_GEOMETRY_ID;
-      primaryRays += active[lane] ? 1 : 0;
+    const MaskN activeMask(active, stdx::element_aligned);
+    if (scene_.camera.orthographic()) {
+      // Parallel rays, each from its point of the image plane (Camera::rayOrigin).
+      for (int lane = 0; lane < kLanes; ++lane) {
+        const glm::vec3 dir = active[lane] ? rays_.direction(px[lane] + dx, py[lane] + dy) : glm::vec3(0, 0, 1);
+        const glm::vec3 org = active[lane] ? rays_.origin(px[lane] + dx, py[lane] + dy) : scene_.camera.position;
+        rayHit.ray.org_x[lane] = org.x;
+        rayHit.ray.org_y[lane] = org.y;
+        rayHit.ray.org_z[lane] = org.z;
+        rayHit.ray.dir_x[lane] = dir.x;
+        rayHit.ray.dir_y[lane] = dir.y;
+        rayHit.ray.dir_z[lane] = dir.z;
+      }
+    } else {
+      // The packet's directions in one go (CameraRays::perspectiveDirection: direction's bits).
+      const DoubleN x([&](auto lane) { return double(float(px[lane]) + dx); });
+      const DoubleN y([&](auto lane) { return double(float(py[lane]) + dy); });
+      DoubleN dir[3];
+      rays_.perspectiveDirection(x, y, dir);
+      select(activeMask, stdx::static_simd_cast<FloatN>(dir[0]), FloatN(0.0f)).copy_to(rayHit.ray.dir_x, kAligned);
+      select(activeMask, stdx::static_simd_cast<FloatN>(dir[1]), FloatN(0.0f)).copy_to(rayHit.ray.dir_y, kAligned);
+      select(activeMask, stdx::static_simd_cast<FloatN>(dir[2]), FloatN(1.0f)).copy_to(rayHit.ray.dir_z, kAligned);
+      const glm::vec3& position = scene_.camera.position;
+      FloatN(position.x).copy_to(rayHit.ray.org_x, kAligned);
+      FloatN(position.y).copy_to(rayHit.ray.org_y, kAligned);
+      FloatN(position.z).copy_to(rayHit.ray.org_z, kAligned);
     }
+    IntN validN = 0;
+    stdx::where(activeMask, validN) = -1;
+    validN.copy_to(valid, kAligned);
+    FloatN(0.0f).copy_to(rayHit.ray.tnear, kAligned);
+    FloatN(kInf).copy_to(rayHit.ray.tfar, kAligned);
+    FloatN(0.0f).copy_to(rayHit.ray.time, kAligned);
+    IntN(-1).copy_to(reinterpret_cast<int*>(rayHit.ray.mask), kAligned);
+    IntN([](int lane) { return lane; }).copy_to(reinterpret_cast<int*>(rayHit.ray.id), kAligned);
+    IntN(0).copy_to(reinterpret_cast<int*>(rayHit.ray.flags), kAligned);
+    IntN(int(RTC_INVALID_GEOMETRY_ID)).copy_to(reinterpret_cast<int*>(rayHit.hit.geomID), kAligned);
+    IntN(int(RTC_INVALID_GEOMETRY_ID)).copy_to(reinterpret_cast<int*>(rayHit.hit.primID), kAligned);
+    primaryRays += unsigned(stdx::popcount(activeMask));
     TraceContext context(RayKind::Camera);
     rtcIntersect8(valid, embree_.handle(), &context.rtc, &rayHit);
     const IntN geom = load(reinterpret_cast<const int*>(rayHit.hit.geomID));

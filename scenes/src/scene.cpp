@@ -113,9 +113,9 @@ CameraRays::CameraRays(const Camera& camera)
 //   origin = position + ndc.x * aspect * h * s - ndc.y * h * u,  h = orthoHeight / 2.
 glm::vec3 CameraRays::direction(float x, float y) const {
   if (halfHeight_ > 0) return glm::vec3(forward_);
-  const double ndcX = 2.0 * x / width_ - 1.0;
-  const double ndcY = 2.0 * y / height_ - 1.0;
-  return glm::vec3(glm::normalize(forward_ + (ndcX * aspect_ * tanHalfFov_) * right_ - (ndcY * tanHalfFov_) * trueUp_));
+  double out[3];
+  perspectiveDirection(double(x), double(y), out);
+  return glm::vec3(out[0], out[1], out[2]);
 }
 
 glm::vec3 CameraRays::origin(float x, float y) const {

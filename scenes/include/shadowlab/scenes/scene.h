@@ -7,6 +7,7 @@
 // Conventions (both renderers): right-handed world, y up. Camera pixel (i, j): i = column from
 // the left, j = row from the top (row 0 is the top row); its ray passes through the pixel center
 // (i + 0.5, j + 0.5). Image textures: texel (0, 0) is the top-left, u grows right, v grows down.
+#include <cmath>
 #include <cstdint>
 #include <string>
 #include <utility>
@@ -129,6 +130,22 @@ class CameraRays {
   explicit CameraRays(const Camera& camera);
   glm::vec3 direction(float x, float y) const;
   glm::vec3 origin(float x, float y) const;  // Camera::rayOrigin
+  // A perspective camera's direction(x, y) over the lanes of D: double (what direction itself
+  // runs), or a std::experimental::simd of double, which gives a packet's rays in a few vector
+  // operations instead of a division and a square root per ray in turn. The same IEEE operations in
+  // the same order in every instantiation, so each lane has direction's bits (where no compilation
+  // fuses a multiply and an add: shadowlab_scenes and shadowlab_reference are built with
+  // -ffp-contract=off). out[a] holds the double result before its rounding to float.
+  template <class D>
+  void perspectiveDirection(const D& x, const D& y, D (&out)[3]) const {
+    using std::sqrt;
+    const D ndcX = 2.0 * x / double(width_) - 1.0;
+    const D ndcY = 2.0 * y / double(height_) - 1.0;
+    const D across = ndcX * aspect_ * tanHalfFov_, down = ndcY * tanHalfFov_;
+    for (int a = 0; a < 3; ++a) out[a] = (forward_[a] + across * right_[a]) - down * trueUp_[a];
+    const D inverseLength = 1.0 / sqrt((out[0] * out[0] + out[1] * out[1]) + out[2] * out[2]);
+    for (int a = 0; a < 3; ++a) out[a] = out[a] * inverseLength;
+  }
 
  private:
   glm::dvec3 position_, forward_, right_, trueUp_;
