@@ -224,7 +224,27 @@ std::vector<ShadowPacket> shadowPackets(const Scene& scene, const Frame& frame) 
   return packets;
 }
 
-double bareIntersect(const Camera& camera, RTCScene scene) {
+// A camera packet's fields other than its directions: every ray from the camera over [0, inf).
+inline void fillCameraRays(const Camera& camera, const bool* active, RTCRayHit8& rh, int valid[8]) {
+  for (int lane = 0; lane < 8; ++lane) {
+    valid[lane] = active[lane] ? -1 : 0;
+    rh.ray.org_x[lane] = camera.position.x;
+    rh.ray.org_y[lane] = camera.position.y;
+    rh.ray.org_z[lane] = camera.position.z;
+    rh.ray.tnear[lane] = 0;
+    rh.ray.tfar[lane] = INFINITY;
+    rh.ray.mask[lane] = ~0u;
+    rh.ray.time[lane] = 0;
+    rh.ray.id[lane] = lane;
+    rh.ray.flags[lane] = 0;
+    rh.hit.geomID[lane] = RTC_INVALID_GEOMETRY_ID;
+  }
+}
+
+// rtcIntersect8 over the camera's packets, their directions filled by setDirections(rays, px, py,
+// active, rh).
+template <class SetDirections>
+double bareCameraLoop(const Camera& camera, RTCScene scene, SetDirections&& setDirections) {
   const double start = processCpuSeconds();
   RTCIntersectContext context;
   rtcInitIntersectContext(&context);
@@ -233,43 +253,34 @@ double bareIntersect(const Camera& camera, RTCScene scene) {
   forEachPacket(camera.width, camera.height, [&](const int* px, const int* py, const bool* active) {
     RTCRayHit8 rh;
     alignas(32) int valid[8];
-    for (int lane = 0; lane < 8; ++lane) {
-      valid[lane] = active[lane] ? -1 : 0;
-      const glm::vec3 d = active[lane] ? rays.direction(px[lane] + 0.5f, py[lane] + 0.5f) : glm::vec3(0, 0, 1);
-      rh.ray.org_x[lane] = camera.position.x;
-      rh.ray.org_y[lane] = camera.position.y;
-      rh.ray.org_z[lane] = camera.position.z;
-      rh.ray.dir_x[lane] = d.x;
-      rh.ray.dir_y[lane] = d.y;
-      rh.ray.dir_z[lane] = d.z;
-      rh.ray.tnear[lane] = 0;
-      rh.ray.tfar[lane] = INFINITY;
-      rh.ray.mask[lane] = ~0u;
-      rh.ray.time[lane] = 0;
-      rh.ray.id[lane] = lane;
-      rh.ray.flags[lane] = 0;
-      rh.hit.geomID[lane] = RTC_INVALID_GEOMETRY_ID;
-    }
+    setDirections(rays, px, py, active, rh);
+    fillCameraRays(camera, active, rh, valid);
     rtcIntersect8(valid, scene, &context, &rh);
     benchmark::DoNotOptimize(rh.hit.geomID[0]);
   });
   return processCpuSeconds() - start;
 }
 
+double bareIntersect(const Camera& camera, RTCScene scene) {
+  return bareCameraLoop(camera, scene, [](const CameraRays& rays, const int* px, const int* py, const bool* active,
+                                          RTCRayHit8& rh) {
+    for (int lane = 0; lane < 8; ++lane) {
+      const glm::vec3 d = active[lane] ? rays.direction(px[lane] + 0.5f, py[lane] + 0.5f) : glm::vec3(0, 0, 1);
+      rh.ray.dir_x[lane] = d.x;
+      rh.ray.dir_y[lane] = d.y;
+      rh.ray.dir_z[lane] = d.z;
+    }
+  });
+}
+
 // bareIntersect with each packet's directions made as the reference makes them: in one go over
 // its 8 lanes (CameraRays::perspectiveDirection), here in the baseline (SSE2) compilation.
 double bareIntersectPacked(const Camera& camera, RTCScene scene) {
-  namespace stdx = std::experimental;
-  using DoubleN = stdx::fixed_size_simd<double, 8>;
-  using FloatN = stdx::fixed_size_simd<float, 8>;
-  const double start = processCpuSeconds();
-  RTCIntersectContext context;
-  rtcInitIntersectContext(&context);
-  context.flags = RTC_INTERSECT_CONTEXT_FLAG_COHERENT;
-  const CameraRays rays(camera);
-  forEachPacket(camera.width, camera.height, [&](const int* px, const int* py, const bool* active) {
-    RTCRayHit8 rh;
-    alignas(32) int valid[8];
+  return bareCameraLoop(camera, scene, [](const CameraRays& rays, const int* px, const int* py, const bool*,
+                                          RTCRayHit8& rh) {
+    namespace stdx = std::experimental;
+    using DoubleN = stdx::fixed_size_simd<double, 8>;
+    using FloatN = stdx::fixed_size_simd<float, 8>;
     const DoubleN x([&](auto lane) { return double(float(px[lane]) + 0.5f); });
     const DoubleN y([&](auto lane) { return double(float(py[lane]) + 0.5f); });
     DoubleN d[3];
@@ -277,23 +288,7 @@ double bareIntersectPacked(const Camera& camera, RTCScene scene) {
     stdx::static_simd_cast<FloatN>(d[0]).copy_to(rh.ray.dir_x, stdx::element_aligned);
     stdx::static_simd_cast<FloatN>(d[1]).copy_to(rh.ray.dir_y, stdx::element_aligned);
     stdx::static_simd_cast<FloatN>(d[2]).copy_to(rh.ray.dir_z, stdx::element_aligned);
-    for (int lane = 0; lane < 8; ++lane) {
-      valid[lane] = active[lane] ? -1 : 0;
-      rh.ray.org_x[lane] = camera.position.x;
-      rh.ray.org_y[lane] = camera.position.y;
-      rh.ray.org_z[lane] = camera.position.z;
-      rh.ray.tnear[lane] = 0;
-      rh.ray.tfar[lane] = INFINITY;
-      rh.ray.mask[lane] = ~0u;
-      rh.ray.time[lane] = 0;
-      rh.ray.id[lane] = lane;
-      rh.ray.flags[lane] = 0;
-      rh.hit.geomID[lane] = RTC_INVALID_GEOMETRY_ID;
-    }
-    rtcIntersect8(valid, scene, &context, &rh);
-    benchmark::DoNotOptimize(rh.hit.geomID[0]);
   });
-  return processCpuSeconds() - start;
 }
 
 // rtcIntersect8 (closest hit) over the same shadow rays: what a bare loop that also needs the
