@@ -71,12 +71,12 @@ inline IntN load(const int* p) { return IntN(p, kAligned); }
   return no;
 }
 
-// The 8-ray packet of a shadow query, one setup for the hard lights' traceShadow and the sized
-// lights' traceOccluded: the active lanes valid, each ray from `origin` along `dir` over [0, tfar]
-// with its lane as id; an inactive lane's ray has length 0 along +y (never traced, and no zero
-// direction for Embree to check).
-[[gnu::always_inline]] inline void setShadowPacket(RTCRay8& ray, int (&valid)[kLanes], const FloatN (&origin)[3],
-                                                   const FloatN (&dir)[3], const FloatN& tfar, const MaskN& active) {
+// The 8-ray packet of a query, one setup for the camera rays (tracePrimary), the hard lights'
+// traceShadow and the sized lights' traceOccluded: the active lanes valid, each ray from `origin`
+// along `dir` over [0, tfar] with its lane as id; an inactive lane's ray has length 0 along +y
+// (never traced, and no zero direction for Embree to check).
+[[gnu::always_inline]] inline void setRayPacket(RTCRay8& ray, int (&valid)[kLanes], const FloatN (&origin)[3],
+                                                const FloatN (&dir)[3], const FloatN& tfar, const MaskN& active) {
   IntN validN = 0;
   stdx::where(active, validN) = -1;
   validN.copy_to(valid, kAligned);
@@ -273,41 +273,30 @@ class Tracer {
     RTCRayHit8 rayHit;
     alignas(kSimdAlign) int valid[kLanes];
     const MaskN activeMask(active, stdx::element_aligned);
+    FloatN origin[3] = {0.0f, 0.0f, 0.0f}, dir[3] = {0.0f, 0.0f, 0.0f};  // inactive lanes: zeros
     if (scene_.camera.orthographic()) {
       // Parallel rays, each from its point of the image plane (Camera::rayOrigin).
       for (int lane = 0; lane < kLanes; ++lane) {
-        const glm::vec3 dir = active[lane] ? rays_.direction(px[lane] + dx, py[lane] + dy) : glm::vec3(0, 0, 1);
-        const glm::vec3 org = active[lane] ? rays_.origin(px[lane] + dx, py[lane] + dy) : scene_.camera.position;
-        rayHit.ray.org_x[lane] = org.x;
-        rayHit.ray.org_y[lane] = org.y;
-        rayHit.ray.org_z[lane] = org.z;
-        rayHit.ray.dir_x[lane] = dir.x;
-        rayHit.ray.dir_y[lane] = dir.y;
-        rayHit.ray.dir_z[lane] = dir.z;
+        if (!active[lane]) continue;
+        const glm::vec3 laneOrigin = rays_.origin(px[lane] + dx, py[lane] + dy);
+        const glm::vec3 laneDir = rays_.direction(px[lane] + dx, py[lane] + dy);
+        for (int a = 0; a < 3; ++a) {
+          origin[a][lane] = laneOrigin[a];
+          dir[a][lane] = laneDir[a];
+        }
       }
     } else {
       // The packet's directions in one go (CameraRays::perspectiveDirection: direction's bits).
       const DoubleN x([&](auto lane) { return double(float(px[lane]) + dx); });
       const DoubleN y([&](auto lane) { return double(float(py[lane]) + dy); });
-      DoubleN dir[3];
-      rays_.perspectiveDirection(x, y, dir);
-      select(activeMask, stdx::static_simd_cast<FloatN>(dir[0]), FloatN(0.0f)).copy_to(rayHit.ray.dir_x, kAligned);
-      select(activeMask, stdx::static_simd_cast<FloatN>(dir[1]), FloatN(0.0f)).copy_to(rayHit.ray.dir_y, kAligned);
-      select(activeMask, stdx::static_simd_cast<FloatN>(dir[2]), FloatN(1.0f)).copy_to(rayHit.ray.dir_z, kAligned);
-      const glm::vec3& position = scene_.camera.position;
-      FloatN(position.x).copy_to(rayHit.ray.org_x, kAligned);
-      FloatN(position.y).copy_to(rayHit.ray.org_y, kAligned);
-      FloatN(position.z).copy_to(rayHit.ray.org_z, kAligned);
+      DoubleN dir64[3];
+      rays_.perspectiveDirection(x, y, dir64);
+      for (int a = 0; a < 3; ++a) {
+        dir[a] = stdx::static_simd_cast<FloatN>(dir64[a]);
+        origin[a] = scene_.camera.position[a];
+      }
     }
-    IntN validN = 0;
-    stdx::where(activeMask, validN) = -1;
-    validN.copy_to(valid, kAligned);
-    FloatN(0.0f).copy_to(rayHit.ray.tnear, kAligned);
-    FloatN(kInf).copy_to(rayHit.ray.tfar, kAligned);
-    FloatN(0.0f).copy_to(rayHit.ray.time, kAligned);
-    IntN(-1).copy_to(reinterpret_cast<int*>(rayHit.ray.mask), kAligned);
-    IntN([](int lane) { return lane; }).copy_to(reinterpret_cast<int*>(rayHit.ray.id), kAligned);
-    IntN(0).copy_to(reinterpret_cast<int*>(rayHit.ray.flags), kAligned);
+    setRayPacket(rayHit.ray, valid, origin, dir, FloatN(kInf), activeMask);
     IntN(int(RTC_INVALID_GEOMETRY_ID)).copy_to(reinterpret_cast<int*>(rayHit.hit.geomID), kAligned);
     IntN(int(RTC_INVALID_GEOMETRY_ID)).copy_to(reinterpret_cast<int*>(rayHit.hit.primID), kAligned);
     primaryRays += unsigned(stdx::popcount(activeMask));
@@ -346,7 +335,7 @@ class Tracer {
     const FloatN zero = 0.0f;
     const FloatN origin[3] = {select(active, load(hits.origin[0]), zero), select(active, load(hits.origin[1]), zero),
                               select(active, load(hits.origin[2]), zero)};
-    setShadowPacket(ray, valid, origin, dir, tfar, active);
+    setRayPacket(ray, valid, origin, dir, tfar, active);
     if (!wantDistance) {
       rtcOccluded8(valid, embree_.handle(), &shadowContext_.rtc, &ray);
       // Embree marks an occluded ray by setting tfar to -inf.
@@ -630,7 +619,7 @@ class Tracer {
     RTCRay8 ray;
     alignas(kSimdAlign) int validLanes[kLanes];
     const FloatN packetOrigin[3] = {FloatN(origin.x), FloatN(origin.y), FloatN(origin.z)};
-    setShadowPacket(ray, validLanes, packetOrigin, dir, tfar, valid);
+    setRayPacket(ray, validLanes, packetOrigin, dir, tfar, valid);
     rtcOccluded8(validLanes, embree_.handle(), &shadowContext_.rtc, &ray);
     return valid && load(ray.tfar) < 0.0f;
   }
